@@ -1,0 +1,75 @@
+"""Identifiable combinations q ((4) of 000) from the coefficient structure of the linearised residual.
+
+Each entry of dz/dp is a trigonometric polynomial in the read angles. Written in the canonical basis
+cos^k(x) sin^e(x) (e in {0, 1}, from sin^2 = 1 - cos^2), the map p -> z(., .) becomes an exact
+rational matrix M whose rows are (component, basis function). Its row space is the space of
+identifiable functionals; the reduced row-echelon form in the model's preferred order of parameters
+is the canonical choice of q, and its null space lists what no plan can separate.
+"""
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+def trig_basis(expr, angles):
+    """Split a trigonometric polynomial into {canonical monomial: rational coefficient}."""
+    cs = {a: (sp.Symbol(f"c_{a}"), sp.Symbol(f"s_{a}")) for a in angles}
+    poly = sp.expand(expr.subs({f(a): v for a, pair in cs.items()
+                                for f, v in zip((sp.cos, sp.sin), pair)}))
+    gens = [v for pair in cs.values() for v in pair]
+    if poly.free_symbols - set(gens):
+        raise ValueError(f"not a trigonometric polynomial in the angles: {expr}")
+    rules = [s**2 + c**2 - 1 for c, s in cs.values()]
+    order = [s for _, s in cs.values()] + [c for c, _ in cs.values()]
+    _, rem = sp.reduced(poly, rules, *order, order="lex") if rules else (None, poly)
+    back = {v: f(a) for a, pair in cs.items() for f, v in zip((sp.cos, sp.sin), pair)}
+    out = {}
+    for monom, coeff in sp.Poly(rem, *gens).terms():
+        term = sp.Mul(*[g**k for g, k in zip(gens, monom)]).subs(back)
+        out[term] = sp.Rational(coeff)
+    return out
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Result of the rank analysis: rows of (4), the functions of (3), the unseparable directions."""
+
+    parameters: tuple[str, ...]      # physical parameters, in the model's own order
+    leading: tuple[str, ...]         # leading (pivot) parameter of each q
+    R: sp.Matrix                     # q = R p: the combinations (4), rows q_1..q_m
+    H: sp.Matrix                     # 3 x m: z^(p) = H[p, :] q at first order, (2)-(3)
+    null_space: tuple[sp.Matrix, ...]  # directions dp with R dp = 0, one per free parameter
+    free: tuple[str, ...]            # parameters that appear only inside combinations
+
+
+def identify(J, names, preferred, angles):
+    """Rank analysis of J (3 x n, trig entries): combinations q, linearised H, null space."""
+    index = [names.index(n) for n in preferred]
+    rows, keys = [], []
+    for p in range(J.rows):
+        parts = [trig_basis(J[p, k], angles) for k in range(J.cols)]
+        for term in sorted({t for d in parts for t in d}, key=sp.default_sort_key):
+            keys.append((p, term))
+            rows.append([parts[k].get(term, 0) for k in index])
+    M = sp.Matrix(rows)
+    rref, pivots = M.rref()
+    rank = len(pivots)
+    R_pref = rref[:rank, :]
+    B = M.extract(list(range(M.rows)), list(pivots))
+    H = sp.zeros(J.rows, rank)
+    for (p, term), row in zip(keys, B.tolist()):
+        for nu in range(rank):
+            H[p, nu] += row[nu] * term
+    back = [index.index(k) for k in range(len(names))]
+    R = R_pref.extract(list(range(rank)), back)
+    free = [k for k in range(len(preferred)) if k not in pivots]
+    null = []
+    for f in free:
+        v = sp.zeros(len(names), 1)
+        v[index[f]] = 1
+        for r, pc in enumerate(pivots):
+            v[index[pc]] = -R_pref[r, f]
+        null.append(v)
+    return Identification(
+        parameters=tuple(names), leading=tuple(preferred[k] for k in pivots), R=R, H=H,
+        null_space=tuple(null), free=tuple(preferred[k] for k in free))

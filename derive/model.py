@@ -1,0 +1,164 @@
+"""Models as data: a stand is a chain of rotations with named small errors, a block its error model.
+
+The residual (1) of 000 is built from the description alone, so a new stand type is a new
+description, not a new derivation.
+"""
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from .rotations import C, small_turn
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One physical error parameter: its symbol name, LaTeX, unit and meaning."""
+
+    name: str
+    latex: str
+    unit: str
+    meaning: str
+
+    @property
+    def symbol(self):
+        return sp.Symbol(self.name, real=True)
+
+
+@dataclass(frozen=True)
+class Angle:
+    """A stand angle as read from its encoder (the argument of H)."""
+
+    name: str
+    latex: str
+    meaning: str
+
+    @property
+    def symbol(self):
+        return sp.Symbol(self.name, real=True)
+
+
+@dataclass(frozen=True)
+class Link:
+    """One elementary rotation C_axis of the chain from the instrument frame to the base.
+
+    With `angle` set, the link turns by the read angle less its encoder offset `error`
+    (true = read - offset); without it, the link is a fixed small error `sign * error`.
+    """
+
+    axis: int
+    angle: str | None = None
+    error: str | None = None
+    sign: int = 1
+
+
+@dataclass(frozen=True)
+class Stand:
+    """A stand: its read angles, its chain (instrument side first), and its error parameters.
+
+    The up-vector of the base is e3; the mounting misalignment `theta` (three parameters) turns
+    the instrument frame z relative to the table frame j; `gravity_error` is Delta_g/g.
+    """
+
+    name: str
+    title: str
+    angles: tuple[Angle, ...]
+    chain: tuple[Link, ...]
+    parameters: tuple[Parameter, ...]
+    theta: tuple[str, str, str]
+    gravity_error: str
+    source: str
+
+
+@dataclass(frozen=True)
+class Block:
+    """Accelerometer block error model: f = (E + Gamma) w + Delta_f0 ((1) of 000)."""
+
+    parameters: tuple[Parameter, ...] = field(default_factory=lambda: tuple(_block_parameters()))
+
+
+def _block_parameters():
+    for i in range(1, 4):
+        for j in range(1, 4):
+            kind = "scale-factor error" if i == j else "misalignment"
+            yield Parameter(f"Gamma{i}{j}", rf"\Gamma_{{{i}{j}}}", "1",
+                            f"{kind} of accelerometer {i} towards axis {j}")
+    for i in range(1, 4):
+        yield Parameter(f"bias{i}", rf"\Delta f^0_{i}/g", "1", f"bias of accelerometer {i} over g")
+
+
+@dataclass(frozen=True)
+class Model:
+    """A stand with a block on it, and the preferred order that names the combinations q."""
+
+    stand: Stand
+    block: Block
+    preferred: tuple[str, ...]
+    plan_deg: tuple[tuple[int, int], ...] = ()
+
+    @property
+    def parameters(self):
+        return self.stand.parameters + self.block.parameters
+
+    @property
+    def symbols(self):
+        return {p.name: p.symbol for p in self.parameters}
+
+    @property
+    def angle_symbols(self):
+        return tuple(a.symbol for a in self.stand.angles)
+
+
+def table_from_base(stand, symbols, angles, *, nominal=False):
+    """Matrix taking base axes to instrument axes: the product of the chain's links (000, section 2)."""
+    zero = {s: 0 for s in symbols.values()} if nominal else {}
+    R = sp.eye(3)
+    for link in stand.chain:
+        error = symbols[link.error] if link.error else 0
+        if link.angle is None:
+            x = link.sign * error
+        else:
+            x = link.sign * (angles[link.angle] - error)
+        R = R * C(link.axis, sp.sympify(x).subs(zero))
+    return R
+
+
+def up_nominal(model):
+    """Nominal up-vector u(alpha, beta) in instrument axes: ideal stand, read angles."""
+    angles = {a.name: a.symbol for a in model.stand.angles}
+    return table_from_base(model.stand, model.symbols, angles, nominal=True) * sp.Matrix([0, 0, 1])
+
+
+def up_true(model):
+    """True up-vector in instrument axes, exact rotations for every stand error."""
+    s = model.symbols
+    angles = {a.name: a.symbol for a in model.stand.angles}
+    turn = small_turn([s[n] for n in model.stand.theta])
+    return turn * table_from_base(model.stand, s, angles) * sp.Matrix([0, 0, 1])
+
+
+def block_matrices(model):
+    """(E + Gamma) and the biases over g, from the block parameters."""
+    s = model.symbols
+    Gamma = sp.Matrix(3, 3, lambda i, j: s[f"Gamma{i + 1}{j + 1}"])
+    bias = sp.Matrix([s[f"bias{i}"] for i in range(1, 4)])
+    return sp.eye(3) + Gamma, bias
+
+
+def specific_force_over_g(model):
+    """Readings over model gravity g: (E + Gamma)(1 - Delta_g/g) u_true + Delta_f0/g ((1) of 000)."""
+    EG, bias = block_matrices(model)
+    dg = model.symbols[model.stand.gravity_error]
+    return EG * (1 - dg) * up_true(model) + bias
+
+
+def residual(model):
+    """Exact residual z(alpha, beta) of (1) of 000: measured over g minus the nominal up-vector."""
+    return specific_force_over_g(model) - up_nominal(model)
+
+
+def jacobian(model):
+    """First-order part of (1): dz/dp at p = 0, a 3 x n matrix of trigonometric functions."""
+    z = residual(model)
+    syms = [p.symbol for p in model.parameters]
+    zero = {s: 0 for s in syms}
+    return sp.Matrix(3, len(syms), lambda i, k: sp.expand(sp.diff(z[i], syms[k]).subs(zero)))

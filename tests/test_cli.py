@@ -1,0 +1,97 @@
+"""The garant command as a user runs it: plan, estimate, verify, and one-line errors on bad input."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import simulate, write_csv
+from verify.cli import main
+
+SIGMA = 1e-5
+PLAN10 = [(0, 0), (0, 180), (180, 90), (180, 270), (90, 90), (270, 90), (90, 270), (90, 180), (270, 180), (90, 0)]
+
+
+def truth(seed=0, size=1e-4):
+    return np.random.default_rng(seed).uniform(-size, size, 21)
+
+
+def run(argv, capsys):
+    rc = main(argv)
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def test_plan_json(tmp_path, capsys):
+    rc, out, _ = run(["plan", "two-axis", "--json", str(tmp_path / "p.json")], capsys)
+    d = json.loads((tmp_path / "p.json").read_text())
+    assert rc == 0
+    assert d["q_names"] == [f"q{i}" for i in range(1, 16)]
+    assert d["guaranteed_errors"] == [1.0] * 15          # 000, section 4: sigma for every q
+    assert d["min_positions"] == 10 and d["optimal_plans_count"] == 64
+    assert d["plan"] == [list(p) for p in PLAN10]
+
+
+@pytest.mark.parametrize("positions, seed", [(PLAN10, 1), ([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], 2)])
+def test_estimate_recovers_q_within_bound(tmp_path, capsys, mod, positions, seed):
+    p = truth(seed)
+    f = simulate(mod, positions, p, SIGMA, seed=seed)
+    path = write_csv(tmp_path / "d.csv", positions, f, extra={"note": ["x"] * len(positions)})
+    rc, out, err = run(["estimate", "--model", "two-axis", str(path), "--sigma", str(SIGMA),
+                        "--json", str(tmp_path / "e.json")], capsys)
+    assert rc == 0, err
+    d = json.loads((tmp_path / "e.json").read_text())
+    q_true = mod.PHYSICAL_TO_Q @ p
+    q_hat = np.array([d["q"][n] for n in mod.Q_NAMES])
+    bound = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
+    # Guaranteed bound plus the second-order linearisation remainder (|p| <= 1e-4: < 1e-7).
+    assert np.all(np.abs(q_hat - q_true) <= bound + 1e-7)
+    if positions == PLAN10:
+        np.testing.assert_allclose(bound, SIGMA, rtol=1e-6)
+    assert d["residual_max"] >= 0
+
+
+def write(tmp_path, text):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    return str(path)
+
+
+GOOD = "".join(f"{a},{b},0,0,9.81\n" for a, b in PLAN10)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("alpha_deg,beta_deg,f1,f2\n0,0,0,0\n", "missing column(s) f3"),
+    ("alpha_deg,beta_deg,f1,f2,f3\n0,0,0,nan,9.81\n" + GOOD, "line 2: column f2: nan is not a finite"),
+    ("alpha_deg,beta_deg,f1,f2,f3\n0,0,0,abc,9.81\n", "line 2: column f2: 'abc' is not a number"),
+    ("alpha_deg,beta_deg,f1,f2,f3\n" + "".join(f"{np.deg2rad(a)},{np.deg2rad(b)},0,0,9.81\n" for a, b in PLAN10),
+     "look like radians"),
+    ("alpha_deg,beta_deg,f1,f2,f3\n0,0,0,0,9.81\n0,180,0,0,9.81\n0,0,0,0,9.81\n", "cannot identify"),
+    ("alpha_deg,beta_deg,f1,f2,f3\n", "no data rows"),
+    ("", "empty file"),
+])
+def test_bad_input_one_line_exit_2(tmp_path, capsys, text, message):
+    rc, out, err = run(["estimate", "--model", "two-axis", write(tmp_path, text), "--sigma", "1e-5"], capsys)
+    assert rc == 2
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_unidentifiable_plan_names_the_combinations(tmp_path, capsys):
+    text = "alpha_deg,beta_deg,f1,f2,f3\n" + "".join(f"{a},{b},0,0,9.81\n" for a, b in PLAN10[:4])
+    rc, _, err = run(["estimate", "--model", "two-axis", write(tmp_path, text), "--sigma", "1e-5"], capsys)
+    assert rc == 2 and "q5 = Gamma11 - Delta_g" in err
+
+
+def test_missing_file(capsys):
+    rc, _, err = run(["estimate", "--model", "two-axis", "/nonexistent.csv", "--sigma", "1e-5"], capsys)
+    assert rc == 2 and "cannot read" in err
+
+
+def test_garant_verify_console_script(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "verify", "--json", str(tmp_path / "v.json")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-2000:] + out.stderr
+    d = json.loads((tmp_path / "v.json").read_text())
+    assert d["checks"] and all(set(c) == {"name", "source", "expected", "got", "passed"} for c in d["checks"])
+    assert all(c["passed"] for c in d["checks"])

@@ -1,0 +1,122 @@
+"""The checks `garant verify` runs: each returns rows (name, source, expected, got, passed)."""
+from dataclasses import asdict, dataclass
+from fractions import Fraction
+
+import numpy as np
+
+from derive import published
+
+from . import exact, lp, plans
+
+GRID_STEP_DEG = 15
+
+
+@dataclass(frozen=True)
+class Check:
+    name: str
+    source: str
+    expected: str
+    got: str
+    passed: bool
+
+    def as_dict(self):
+        return asdict(self)
+
+
+def _e(nu, m):
+    return [int(i == nu) for i in range(m)]
+
+
+def closed_forms(mod):
+    """Published (section 4.3 of 000) and derived estimators: unbiased and sum |Psi| = 1, exactly."""
+    m = len(mod.Q_NAMES)
+    for nu, name in enumerate(mod.Q_NAMES):
+        for label, terms, source in (
+                ("published", exact.terms_from_published(published.ESTIMATORS_000[name]),
+                 "000, section 4.3"),
+                ("derived", exact.terms_from_generated(mod, nu), "generated/two_axis.py")):
+            unbiased = exact.unbiased_image(mod.H, terms) == _e(nu, m)
+            err = exact.l1(terms)
+            yield Check(f"{label} estimator of {name}: unbiased, sum|Psi| (exact)", source,
+                        "unbiased, 1", f"{'unbiased' if unbiased else 'BIASED'}, {err}",
+                        unbiased and err == 1)
+
+
+def continuum_optimum(mod):
+    """Optimal guaranteed error of every q_nu on the whole square, proven: primal = dual bound = 1."""
+    m = len(mod.Q_NAMES)
+    for nu, name in enumerate(mod.Q_NAMES):
+        upper = exact.l1(exact.terms_from_generated(mod, nu))
+        lower = exact.dual_lower_bound(mod.H_SUP, _e(nu, m), _e(nu, m))
+        yield Check(f"optimal guaranteed error of {name} on the continuum (units of sigma)",
+                    "000, section 4: sigma for every q_nu", "1",
+                    f"{lower} <= opt <= {upper}", lower == upper == 1)
+
+
+def grid_lp(mod, step=GRID_STEP_DEG):
+    """Primal (7)-(8) = dual (9)-(10) = 1/L_nu (12) on a grid of the square (Theorem 3)."""
+    g = np.deg2rad(np.arange(0, 360, step))
+    A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
+    _, primal = lp.primal(A)
+    _, dual = lp.dual(A)
+    L, _ = lp.chebyshev(A)
+    for nu, name in enumerate(mod.Q_NAMES):
+        vals = (primal[nu], dual[nu], 1 / L[nu])
+        yield Check(f"{name} on the {step} deg grid: primal = dual = 1/L", "000, (7)-(12), Theorem 3",
+                    "1 = 1 = 1", " = ".join(f"{v:.9f}" for v in vals),
+                    bool(np.allclose(vals, 1, atol=1e-7)))
+
+
+def _same_sets(found, listed):
+    return {frozenset(s) for s in found} == {frozenset(s) for s in listed}
+
+
+def plan_checks(mod, search=None):
+    """Minimal plan, count of optimal plans, Tables 1 and 2 of 000 (exact search on the quarter grid)."""
+    r = search or plans.search(mod.H)
+    yield Check("minimal number of positions optimal for all 15 q (quarter-turn grid)",
+                "000, section 4.3: fewer than 10 cannot be optimal", str(published.MIN_POSITIONS_000),
+                str(r.min_positions), r.min_positions == published.MIN_POSITIONS_000)
+    n = len(r.optimal_plans)
+    yield Check("number of optimal 10-position plans (quarter-turn grid, exact)",
+                "000, section 4.3: 'at least 64'", f">= {published.AT_LEAST_PLANS_000}", str(n),
+                n >= published.AT_LEAST_PLANS_000)
+    for name, listed in published.TABLE1_000.items():
+        nu = mod.Q_NAMES.index(name)
+        found = [r.plan_deg(ms.positions) for ms in r.minimal[nu]]
+        yield Check(f"Table 1: necessary position sets of {name}", "000, Table 1",
+                    f"{len(listed)} sets as printed", f"{len(found)} sets",
+                    _same_sets([map(tuple, f) for f in found], listed))
+    for group, alternatives in published.TABLE2_000:
+        ok = all(r.is_optimal_for(mod.Q_NAMES.index(q), [plans.QUARTER_DEG.index(p) for p in alt])
+                 for q in group for alt in alternatives)
+        yield Check(f"Table 2: each set of group {','.join(group)} is optimal for all of it",
+                    "000, Table 2", "optimal", "optimal" if ok else "NOT optimal", ok)
+    starred = tuple(sorted(plans.QUARTER_DEG.index(p) for p in published.PLAN_000))
+    yield Check("starred plan of Table 2 is among the optimal 10-position plans", "000, Table 2",
+                "yes", "yes" if starred in r.optimal_plans else "no", starred in r.optimal_plans)
+
+
+def additivity(mod):
+    """Gamma_ij + Gamma_ji: the sum of the optimal estimators is optimal (000, section 4.3)."""
+    m = len(mod.Q_NAMES)
+    A = lp.measurement_matrix(mod.H, np.deg2rad(np.asarray(mod.PLAN_DEG, float)))
+    for i, j in ((6, 9), (4, 12), (8, 13)):
+        a = np.array(_e(i - 1, m)) + np.array(_e(j - 1, m))
+        terms = (exact.terms_from_published(published.ESTIMATORS_000[f"q{i}"])
+                 + exact.terms_from_published(published.ESTIMATORS_000[f"q{j}"]))
+        summed = {}
+        for w, p, pos in terms:
+            summed[(p, pos)] = summed.get((p, pos), Fraction(0)) + w
+        err = sum(abs(w) for w in summed.values())
+        lower = exact.dual_lower_bound(mod.H_SUP, a, a)
+        _, val = lp.primal(A, a)
+        ok = bool(lower == err and abs(val[0] - float(err)) < 1e-7)
+        yield Check(f"q{i} + q{j}: sum of optimal estimators is optimal", "000, section 4.3",
+                    f"LP = exact = dual bound = {err}", f"{val[0]:.9f}, {err}, {lower}", ok)
+
+
+def all_checks(mod):
+    """Every check of the two-axis model, in report order."""
+    for group in (closed_forms, continuum_optimum, grid_lp, plan_checks, additivity):
+        yield from group(mod)

@@ -1,0 +1,109 @@
+"""The `garant` command: verify, plan, estimate."""
+import argparse
+import sys
+import time
+import warnings
+
+from . import checks, estimate as estimate_mod, exact, models, plans, report
+from .data import DataError, read_positions
+from .lp import LPFailed
+
+G_DEFAULT = 9.81  # m/s^2
+
+
+def cmd_verify(args):
+    mod = models.load("two-axis")
+    rows = []
+    for group in (checks.closed_forms, checks.continuum_optimum, checks.grid_lp, checks.plan_checks,
+                  checks.additivity):
+        t0 = time.perf_counter()
+        got = list(group(mod))
+        rows += got
+        print(f"[{group.__name__}] {len(got)} checks in {time.perf_counter() - t0:.2f} s", file=sys.stderr)
+    report.table(("check", "source", "expected", "got", "pass"),
+                 [(r.name, r.source, r.expected, r.got, "PASS" if r.passed else "FAIL") for r in rows])
+    failed = [r for r in rows if not r.passed]
+    print(f"\n{len(rows) - len(failed)} passed, {len(failed)} failed")
+    if args.json:
+        report.write_json(args.json, {"checks": [
+            {"name": r.name, "source": r.source, "expected": r.expected, "got": r.got,
+             "passed": bool(r.passed)} for r in rows]})
+    return 1 if failed else 0
+
+
+def cmd_plan(args):
+    mod = models.load(args.model)
+    m = len(mod.Q_NAMES)
+    errors = []
+    for nu in range(m):
+        e = [int(i == nu) for i in range(m)]
+        lower = exact.dual_lower_bound(mod.H_SUP, e, e)
+        upper = exact.l1(exact.terms_from_generated(mod, nu))
+        errors.append(float(upper) if lower == upper else None)
+    r = plans.search(mod.H)
+    plan = [[int(a), int(b)] for a, b in mod.PLAN_DEG]
+    report.table(("q", "definition", "optimal guaranteed error (sigma)"),
+                 [(q, d, "unproven" if e is None else f"{e:g}")
+                  for q, d, e in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, errors)])
+    print(f"\nminimal number of positions optimal for every q (quarter-turn grid): {r.min_positions}")
+    print(f"optimal plans of {r.min_positions} positions on the quarter-turn grid: {len(r.optimal_plans)}")
+    print("plan (alpha_deg, beta_deg): " + ", ".join(f"({a}, {b})" for a, b in plan))
+    if args.json:
+        report.write_json(args.json, {
+            "model": args.model, "q_names": list(mod.Q_NAMES), "definitions": list(mod.Q_DEFINITIONS),
+            "guaranteed_errors": errors, "min_positions": r.min_positions,
+            "optimal_plans_count": len(r.optimal_plans), "plan": plan,
+            "optimal_plans": [[list(p) for p in r.plan_deg(pl)] for pl in r.optimal_plans]})
+    return 0
+
+
+def cmd_estimate(args):
+    mod = models.load(args.model)
+    res = estimate_mod.estimate(mod, read_positions(args.data), args.sigma, args.g)
+    report.table(("q", "definition", "estimate", "guaranteed error", "unit"),
+                 [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
+                   res["units"][q]) for q in mod.Q_NAMES])
+    print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {args.g} m/s^2, "
+          f"sigma = {args.sigma:g} (dimensionless, units of g)")
+    print(f"max |residual| after the fit: {res['residual_max']:.3e} ({res['residual_max'] / args.sigma:.2f} sigma)")
+    if args.json:
+        report.write_json(args.json, res)
+    return 0
+
+
+def parser():
+    ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    v = sub.add_parser("verify", help="run every check of the built-in models against the papers")
+    v.add_argument("--json", metavar="FILE", help="also write the checks as JSON")
+    v.set_defaults(run=cmd_verify)
+    p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
+    p.add_argument("model", choices=sorted(models.MODELS))
+    p.add_argument("--json", metavar="FILE")
+    p.set_defaults(run=cmd_plan)
+    e = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
+    e.add_argument("data", metavar="DATA.csv", help="CSV: alpha_deg,beta_deg,f1,f2,f3 (f in m/s^2)")
+    e.add_argument("--model", required=True, choices=sorted(models.MODELS))
+    e.add_argument("--sigma", type=float, required=True,
+                   help="bound on each residual component, dimensionless (units of g), (5) of 000")
+    e.add_argument("--g", type=float, default=G_DEFAULT, help="model gravity, m/s^2 (default 9.81)")
+    e.add_argument("--json", metavar="FILE")
+    e.set_defaults(run=cmd_estimate)
+    return ap
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    warnings.filterwarnings("ignore", category=RuntimeWarning, module="cvxpy")
+    try:
+        return args.run(args)
+    except (DataError, LPFailed) as e:
+        print(f"garant: error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"garant: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
