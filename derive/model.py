@@ -108,18 +108,28 @@ class Model:
         return tuple(a.symbol for a in self.stand.angles)
 
 
-def table_from_base(stand, symbols, angles, *, nominal=False):
-    """Matrix taking base axes to instrument axes: the product of the chain's links (000, section 2)."""
-    zero = {s: 0 for s in symbols.values()} if nominal else {}
-    R = sp.eye(3)
+def chain_factors(stand, symbols, angles):
+    """The chain's link matrices, instrument side first (000, section 2); their product is table_from_base."""
+    out = []
     for link in stand.chain:
         error = symbols[link.error] if link.error else 0
-        if link.angle is None:
-            x = link.sign * error
-        else:
-            x = link.sign * (angles[link.angle] - error)
-        R = R * C(link.axis, sp.sympify(x).subs(zero))
+        x = link.sign * error if link.angle is None else link.sign * (angles[link.angle] - error)
+        out.append(C(link.axis, x))
+    return out
+
+
+def _product(mats):
+    """Product of the matrices, multiplied from the right (matrix-vector when the last is e3)."""
+    R = mats[-1]
+    for M in reversed(mats[:-1]):
+        R = M * R
     return R
+
+
+def table_from_base(stand, symbols, angles, *, nominal=False):
+    """Matrix taking base axes to instrument axes: the product of the chain's links."""
+    R = _product(chain_factors(stand, symbols, angles))
+    return R.subs({s: 0 for s in symbols.values()}) if nominal else R
 
 
 def up_nominal(model):
@@ -128,12 +138,19 @@ def up_nominal(model):
     return table_from_base(model.stand, model.symbols, angles, nominal=True) * sp.Matrix([0, 0, 1])
 
 
-def up_true(model):
-    """True up-vector in instrument axes, exact rotations for every stand error."""
+def _force_factors(model):
+    """Factors whose product is the readings over g less the biases: (E + Gamma), (1 - dg), turn, links, e3."""
     s = model.symbols
     angles = {a.name: a.symbol for a in model.stand.angles}
-    turn = small_turn([s[n] for n in model.stand.theta])
-    return turn * table_from_base(model.stand, s, angles) * sp.Matrix([0, 0, 1])
+    EG, _ = block_matrices(model)
+    dg = s[model.stand.gravity_error]
+    return [EG, (1 - dg) * sp.eye(3), small_turn([s[n] for n in model.stand.theta]),
+            *chain_factors(model.stand, s, angles), sp.Matrix([0, 0, 1])]
+
+
+def up_true(model):
+    """True up-vector in instrument axes, exact rotations for every stand error."""
+    return _product(_force_factors(model)[2:])
 
 
 def block_matrices(model):
@@ -146,9 +163,7 @@ def block_matrices(model):
 
 def specific_force_over_g(model):
     """Readings over model gravity g: (E + Gamma)(1 - Delta_g/g) u_true + Delta_f0/g ((1) of 000)."""
-    EG, bias = block_matrices(model)
-    dg = model.symbols[model.stand.gravity_error]
-    return EG * (1 - dg) * up_true(model) + bias
+    return _product(_force_factors(model)) + block_matrices(model)[1]
 
 
 def residual(model):
@@ -157,8 +172,23 @@ def residual(model):
 
 
 def jacobian(model):
-    """First-order part of (1): dz/dp at p = 0, a 3 x n matrix of trigonometric functions."""
-    z = residual(model)
+    """First-order part of (1): dz/dp at p = 0, a 3 x n matrix of trigonometric functions.
+
+    By the product rule over the factors, each differentiated alone and the rest taken at p = 0,
+    which is much faster than differentiating the expanded product.
+    """
     syms = [p.symbol for p in model.parameters]
-    zero = {s: 0 for s in syms}
-    return sp.Matrix(3, len(syms), lambda i, k: sp.expand(sp.diff(z[i], syms[k]).subs(zero)))
+    zero = {x: 0 for x in syms}
+    factors = _force_factors(model)
+    at0 = [f.subs(zero) for f in factors]
+    bias = block_matrices(model)[1]
+    cols = []
+    for x in syms:
+        col = bias.diff(x)
+        for i, f in enumerate(factors):
+            df = f.diff(x)
+            if df.is_zero_matrix:
+                continue
+            col += _product(at0[:i] + [df.subs(zero)] + at0[i + 1:])
+        cols.append(col.applyfunc(sp.expand))
+    return sp.Matrix.hstack(*cols)

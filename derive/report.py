@@ -5,12 +5,20 @@ import sympy as sp
 
 from . import published
 from .model import Link
+from .printer import linear_text
 
 
 def _latex(expr, model):
     names = {p.symbol: p.latex for p in model.parameters}
     names.update({a.symbol: a.latex for a in model.stand.angles})
     return sp.latex(sp.sympify(expr), symbol_names=names)
+
+
+def _linear_latex(coeffs, model):
+    """A linear combination in the preferred order, leading term first, with LaTeX names."""
+    by_name = dict(zip((p.name for p in model.parameters), coeffs))
+    latex = {p.name: p.latex for p in model.parameters}
+    return linear_text([by_name[n] for n in model.preferred], [latex[n] for n in model.preferred])
 
 
 def _parse(text, model):
@@ -70,8 +78,10 @@ def report_context(d):
     for nu in range(ident.R.rows):
         q = sum(c * s for c, s in zip(ident.R.row(nu), syms))
         pub = _parse(published.Q_000[nu], m)
-        q_rows.append((nu + 1, _latex(q, m), _latex(pub, m), "yes" if sp.expand(q - pub) == 0 else "**no**"))
-    null_rows = [_latex(sum(c * s for c, s in zip(v, syms)), m) for v in ident.null_space]
+        pub_coeffs = [pub.coeff(s) for s in syms]
+        q_rows.append((nu + 1, _linear_latex(list(ident.R.row(nu)), m), _linear_latex(pub_coeffs, m),
+                       "yes" if sp.expand(q - pub) == 0 else "**no**"))
+    null_rows = [_linear_latex(list(v), m) for v in ident.null_space]
     est_rows = []
     for nu, psi in enumerate(d.estimators):
         ours = [(Fraction(int(w.p), int(w.q)), p + 1, *m.plan_deg[s]) for (s, p), w in sorted(psi.items())]
@@ -85,7 +95,7 @@ def report_context(d):
         chain=" ".join(_link_latex(link, m) for link in m.stand.chain),
         theta=", ".join(_latex(sp.Symbol(n), m) for n in m.stand.theta),
         up_nominal=_latex(d.up_nominal, m), H_rows=H_rows, h_notes=h_notes, q_rows=q_rows,
-        null_rows=null_rows, free=[_latex(sp.Symbol(n), m) for n in ident.free],
+        null_rows=null_rows, free=[{p.name: p.latex for p in m.parameters}[n] for n in ident.free],
         counts=counts, n_params=len(syms), rank=ident.R.rows, est_rows=est_rows,
         plan=m.plan_deg,
     )

@@ -188,26 +188,26 @@ def readings(alpha, beta, physical, g):
     t9 = np.sin(t8)
     t10 = np.cos(alpha_star)
     t11 = np.cos(t8)
-    t12 = t3*t4 + t5*t6*(-t10*t11 + t7*t9)
-    t13 = np.sin(theta2)
-    t14 = Delta_beta - beta
-    t15 = np.cos(t14)
-    t16 = t4*t5
-    t17 = np.sin(t14)
-    t18 = t11*t17
-    t19 = t15*t9
-    t20 = -t15*t16 + t6*(t10*(-t11*t15*t3 + t17*t9) + t7*(t18 + t19*t3))
+    t12 = -t10*t11 + t7*t9
+    t13 = t12*t5*t6 + t3*t4
+    t14 = np.sin(theta2)
+    t15 = Delta_beta - beta
+    t16 = np.sin(t15)
+    t17 = t6*(t10*t9 + t11*t7)
+    t18 = np.cos(t15)
+    t19 = -t12*t3*t6 + t4*t5
+    t20 = t16*t17 - t18*t19
     t21 = np.sin(theta1)
-    t22 = t16*t17 + t6*(t10*(t18*t3 + t19) + t7*(t11*t15 - t17*t3*t9))
-    t23 = t0*(-t1*t12*t2 + t13*t20 + t2*t21*t22)
+    t22 = t16*t19 + t17*t18
+    t23 = t0*(-t1*t13*t2 + t14*t20 + t2*t21*t22)
     t24 = np.cos(theta3)
     t25 = t21*t24
     t26 = np.sin(theta3)
     t27 = t1*t26
     t28 = t1*t24
     t29 = t21*t26
-    t30 = t0*(-t12*(t13*t27 + t25) - t2*t20*t26 + t22*(t13*t29 - t28))
-    t31 = t0*(-t12*(-t13*t28 + t29) + t2*t20*t24 - t22*(t13*t25 + t27))
+    t30 = t0*(-t13*(t14*t27 + t25) - t2*t20*t26 + t22*(t14*t29 - t28))
+    t31 = t0*(-t13*(-t14*t28 + t29) + t2*t20*t24 - t22*(t14*t25 + t27))
     return g * np.array([-Gamma12*t30 - Gamma13*t23 + bias1 - t31*(Gamma11 + 1), -Gamma21*t31 - Gamma23*t23 + bias2 - t30*(Gamma22 + 1), -Gamma31*t31 - Gamma32*t30 + bias3 - t23*(Gamma33 + 1)])
 
 

@@ -1,0 +1,97 @@
+"""python -m verify.bench: speed figures, each as a ratio against a baseline measured in the same run.
+
+Baselines are the straightforward way of doing the same job on the same machine, so the ratios
+do not depend on the machine: a dense-grid LP for the guaranteed errors, LP-per-subset enumeration
+(timed on a sample, extrapolated to every subset) for the minimal-plan proof, and a naive
+Jacobian (`simplify` on each entry) for the derivation.
+"""
+import random
+import subprocess
+import sys
+import time
+import warnings
+from itertools import combinations
+from math import comb
+from pathlib import Path
+
+import numpy as np
+
+from . import checks, lp, plans
+from .models import load
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def timed(fn, repeat=1):
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def bench_derive():
+    """Derivation and rendering of all models (in process, cache cleared) vs a naive Jacobian."""
+    import sympy as sp
+    from derive import codegen, derivation
+
+    def run():
+        derivation.derive.cache_clear()
+        return codegen.outputs()
+
+    t, _ = timed(run)
+    from derive.model import residual
+    from derive.stands import TWO_AXIS_MODEL
+    z = residual(TWO_AXIS_MODEL)
+    syms = [p.symbol for p in TWO_AXIS_MODEL.parameters]
+    zero = {s: 0 for s in syms}
+    base, _ = timed(lambda: [sp.simplify(sp.diff(z[i], s).subs(zero)) for i in range(3) for s in syms])
+    return ("derivation + generation, all models", t,
+            "naive Jacobian: sp.simplify on each of its 63 entries", base)
+
+
+def bench_guaranteed_errors(mod):
+    """Exact continuum proof of the 15 optimal errors vs a 5-degree grid LP (primal only)."""
+    t, rows = timed(lambda: list(checks.continuum_optimum(mod)), repeat=3)
+    assert all(r.passed for r in rows)
+    g = np.deg2rad(np.arange(0, 360, 5))
+    A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
+    base, _ = timed(lambda: lp.primal(A))
+    return "15 optimal guaranteed errors, proven on the continuum", t, "primal LP on a 5 deg grid", base
+
+
+def bench_plan_search(mod, sample=40):
+    """Exact minimal-plan proof and count vs LP-per-subset enumeration (sampled, extrapolated)."""
+    t, r = timed(lambda: plans.search(mod.H), repeat=3)
+    assert r.min_positions == 10 and len(r.optimal_plans) == 64
+    grid = np.deg2rad(np.asarray(plans.QUARTER_DEG, float))
+    subsets = list(combinations(range(16), 10))
+    random.Random(0).shuffle(subsets)
+
+    def one(sub):
+        A = lp.measurement_matrix(mod.H, grid[list(sub)])
+        if not lp.unidentifiable(A):
+            lp.primal(A)
+
+    per, _ = timed(lambda: [one(s) for s in subsets[:sample]])
+    base = per / sample * (comb(16, 10) + comb(16, 9))
+    return "minimal plan (10) and count of optimal plans (64)", t, \
+        "LP per subset of 9 and 10 positions (extrapolated)", base
+
+
+def main():
+    warnings.filterwarnings("ignore", category=RuntimeWarning)
+    mod = load("two-axis")
+    fresh, _ = timed(lambda: subprocess.run([sys.executable, "-m", "derive", "--check"], cwd=ROOT,
+                                            check=True, capture_output=True))
+    rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod)]
+    width = max(len(r[0]) for r in rows)
+    print(f"{'figure'.ljust(width)}  {'time, s':>9}  {'baseline, s':>11}  {'speed-up':>9}  baseline")
+    for name, t, bname, base in rows:
+        print(f"{name.ljust(width)}  {t:9.3f}  {base:11.3f}  {base / t:8.1f}x  {bname}")
+    print(f"\n`python -m derive --check` in a fresh process, interpreter start included: {fresh:.2f} s")
+
+
+if __name__ == "__main__":
+    main()
