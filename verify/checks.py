@@ -1,6 +1,7 @@
 """The checks `garant verify` runs: each returns rows (name, source, expected, got, passed)."""
 from dataclasses import asdict, dataclass
 from fractions import Fraction
+from itertools import product
 
 import numpy as np
 
@@ -92,6 +93,11 @@ def plan_checks(mod, search=None):
                  for q in group for alt in alternatives)
         yield Check(f"Table 2: each set of group {','.join(group)} is optimal for all of it",
                     "000, Table 2", "optimal", "optimal" if ok else "NOT optimal", ok)
+    combos = {frozenset().union(*(frozenset(plans.QUARTER_DEG.index(p) for p in alt) for alt in pick))
+              for pick in product(*(alts for _, alts in published.TABLE2_000))}
+    same = combos == {frozenset(pl) for pl in r.optimal_plans}
+    yield Check("optimal 10-position plans = one set of each row of Table 2", "000, Table 2",
+                f"{len(combos)} combinations", f"{n} plans, {'same' if same else 'different'} sets", same)
     starred = tuple(sorted(plans.QUARTER_DEG.index(p) for p in published.PLAN_000))
     yield Check("starred plan of Table 2 is among the optimal 10-position plans", "000, Table 2",
                 "yes", "yes" if starred in r.optimal_plans else "no", starred in r.optimal_plans)
