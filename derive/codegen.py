@@ -81,6 +81,12 @@ def outputs():
                                             f"derive/stands.py:{key.upper()}_MODEL", ".py")
         out[f"docs/derivation_{key}.md"] = render("report/REPORT.md.jinja", report_context(d),
                                                   f"derive/stands.py:{key.upper()}_MODEL", ".md")
+        if model.remount:
+            ctx = remount_context(d)
+            out[f"generated/{key}_remount.py"] = render("remount/REMOUNT.py.jinja", ctx,
+                                                        f"derive/remount.py on {key.upper()}_MODEL", ".py")
+            out[f"docs/remount_{key}.md"] = render("remount/REMOUNT.md.jinja", ctx,
+                                                   f"derive/remount.py on {key.upper()}_MODEL", ".md")
     return out
 
 
@@ -103,3 +109,28 @@ def drift(root=ROOT):
             diffs.append("".join(difflib.unified_diff(
                 old.splitlines(True), text.splitlines(True), f"a/{rel}", f"b/{rel} (regenerated)")))
     return diffs
+
+
+def remount_context(d):
+    """Template context of the remount module and its docs page."""
+    from .remount import derive_remount, mountings, physical
+    r = derive_remount(d)
+    dg, db = (d.model.symbols[n] for n in (d.model.stand.gravity_error, "Delta_beta"))
+    names = {p.symbol: p.latex for p in d.model.parameters}
+    rows = []
+    for name, Q in mountings().items():
+        S, _, bias = physical(r, Q)
+        rows.append((name, sp.latex(Q), sp.latex(S), sp.latex(bias)))
+    N = -r.D.diff(db)
+    return dict(
+        title=d.model.stand.title, m=len(r.q),
+        mounts=[(n, Q.tolist()) for n, Q in mountings().items()],
+        G=[[str(v) for v in r.G.row(i)] for i in range(3)],
+        G_index=[[r.q.index(v) for v in r.G.row(i)] for i in range(3)],
+        bias=list(r.bias),
+        stand=[({"Delta_alpha": "dalpha_plus_astar"}.get(n, n), k, str(defn))
+               for n, (k, defn) in r.stand.items()],
+        D_g=[[pycode(v) for v in r.D.diff(dg).row(i)] for i in range(3)],
+        D_beta=[[pycode(v) for v in r.D.diff(db).row(i)] for i in range(3)],
+        D=sp.latex(r.D, symbol_names=names), N=sp.latex(N), rows=rows,
+    )

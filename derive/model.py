@@ -94,6 +94,7 @@ class Model:
     block: Block
     preferred: tuple[str, ...]
     plan_deg: tuple[tuple[int, int], ...] = ()
+    remount: bool = False          # derive (25)-(29): the block may be mounted by any turn Q
 
     @property
     def parameters(self):

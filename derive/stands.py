@@ -45,6 +45,7 @@ TWO_AXIS_MODEL = Model(
                "Gamma23", "Gamma21", "Gamma22", "bias2", "Gamma31", "Gamma32", "Gamma33", "bias3",
                "alpha_star", "Delta_beta", "theta1", "theta2", "theta3", "Delta_g"),
     plan_deg=OPTIMAL10,
+    remount=True,
 )
 
 MODELS = {"two_axis": TWO_AXIS_MODEL}

@@ -14,10 +14,9 @@ G_DEFAULT = 9.81  # m/s^2
 def cmd_verify(args):
     mod = models.load("two-axis")
     rows = []
-    for group in (checks.closed_forms, checks.continuum_optimum, checks.grid_lp, checks.plan_checks,
-                  checks.additivity):
+    for group, group_args in checks.all_groups(mod, models.load_remount("two-axis")):
         t0 = time.perf_counter()
-        got = list(group(mod))
+        got = list(group(*group_args))
         rows += got
         print(f"[{group.__name__}] {len(got)} checks in {time.perf_counter() - t0:.2f} s", file=sys.stderr)
     report.table(("check", "source", "expected", "got", "pass"),
@@ -59,16 +58,35 @@ def cmd_plan(args):
 
 def cmd_estimate(args):
     mod = models.load(args.model)
-    res = estimate_mod.estimate(mod, read_positions(args.data), args.sigma, args.g)
+    remount = models.load_remount(args.model)
+    if args.mount and args.mount not in remount.MOUNTS:
+        raise DataError(f"unknown mounting {args.mount!r}; use one of {', '.join(remount.MOUNTS)}")
+    res = estimate_mod.estimate(mod, read_positions(args.data), args.sigma, args.g, remount=remount,
+                                mount=args.mount, gamma=args.gamma)
+    print(f"method: {res['method']}")
     report.table(("q", "definition", "estimate", "guaranteed error", "unit"),
                  [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
                    res["units"][q]) for q in mod.Q_NAMES])
     print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {args.g} m/s^2, "
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
     print(f"max |residual| after the fit: {res['residual_max']:.3e} ({res['residual_max'] / args.sigma:.2f} sigma)")
+    if args.mount:
+        print_physical(res)
     if args.json:
         report.write_json(args.json, res)
     return 0
+
+
+def print_physical(res):
+    phys, bound = res["physical"], res["physical_bound"]
+    rows = [(k, f"{phys[k]:+.6e}", f"{bound[k]:.3e}", "rad") for k in ("kappa", "dalpha_plus_astar", "epsilon")]
+    rows += [(f"bias{i + 1}", f"{phys['bias'][i]:+.6e}", f"{bound['bias'][i]:.3e}", "m/s^2") for i in range(3)]
+    rows += [(f"Gamma{i + 1}{j + 1}", f"{phys['Gamma'][i][j]:+.6e}", f"{bound['Gamma'][i][j]:.3e}", "1")
+             for i in range(3) for j in range(3)]
+    rows += [(f"theta_k{i + 1}", f"{phys['theta_k'][i]:+.6e}", f"{bound['theta_k'][i]:.3e}", "rad") for i in range(3)]
+    print(f"\nblock errors in block axes, mounting {res['mount']}, Gamma {res['gamma']} (29) of 000:")
+    report.table(("parameter", "estimate", "guaranteed error", "unit"), rows)
+    print(res["physical_note"])
 
 
 def parser():
@@ -87,6 +105,10 @@ def parser():
     e.add_argument("--sigma", type=float, required=True,
                    help="bound on each residual component, dimensionless (units of g), (5) of 000")
     e.add_argument("--g", type=float, default=G_DEFAULT, help="model gravity, m/s^2 (default 9.81)")
+    e.add_argument("--mount", metavar="Q", help="mounting of the block, e.g. +y+z+x (block axis 1 along "
+                   "table +y, ...): also report the block's physical errors, (28)-(29) of 000")
+    e.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
+                   help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
     e.add_argument("--json", metavar="FILE")
     e.set_defaults(run=cmd_estimate)
     return ap

@@ -11,3 +11,9 @@ def load(name):
     if name not in MODELS:
         raise DataError(f"unknown model {name!r}; built-in models: {', '.join(MODELS)}")
     return importlib.import_module(MODELS[name])
+
+
+def load_remount(name):
+    """The generated remount module (25)-(29) of a built-in model."""
+    load(name)
+    return importlib.import_module(MODELS[name] + "_remount")

@@ -1,0 +1,100 @@
+"""Other mountings, (25)-(29) of 000: derived substitutions, round trips, and recovery from data."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import generated.two_axis_remount as rm
+from conftest import write_csv
+from derive.derivation import derive
+from derive.remount import derive_remount, mountings, substitution_holds
+from derive.stands import TWO_AXIS_MODEL
+from verify import mounting
+from verify.data import read_positions
+from verify.estimate import estimate
+
+NAMES = sorted(rm.MOUNTS)
+STAND = ("kappa", "epsilon", "Delta_alpha", "Delta_beta", "alpha_star", "Delta_g")
+
+
+def test_24_proper_mountings():
+    Qs = mountings()
+    assert len(Qs) == 24 and set(Qs) == set(rm.MOUNTS)
+    assert len({tuple(np.array(Q, int).ravel()) for Q in Qs.values()}) == 24
+
+
+def test_substitutions_26_27_hold_for_every_mounting():
+    d = derive(TWO_AXIS_MODEL)
+    assert all(substitution_holds(d, Q) for Q in mountings().values())
+
+
+def test_unseen_part_is_E_dg_minus_N_dbeta():
+    # (29) of 000: E Delta_g/g - Q N Q^-1 Delta_beta, N = [[0,-1,0],[1,0,0],[0,0,0]].
+    np.testing.assert_array_equal(rm.D_DELTA_G, np.eye(3))
+    np.testing.assert_array_equal(rm.D_DELTA_BETA, -np.array([[0, -1, 0], [1, 0, 0], [0, 0, 0]]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.sampled_from(NAMES))
+def test_Q_is_a_proper_rotation(name):
+    Q = rm.MOUNTS[name]
+    np.testing.assert_array_equal(Q.T @ Q, np.eye(3))
+    assert round(np.linalg.det(Q)) == 1
+    axis = {"x": 0, "y": 1, "z": 2}
+    for i in range(3):
+        sign, ax = name[2 * i], name[2 * i + 1]
+        assert Q[i, axis[ax]] == (1 if sign == "+" else -1)
+
+
+def block_to_table(mod, Q, stand, Gamma, bias, theta_k):
+    """Physical vector of the base model for a block mounted by Q ((26)-(27) of 000)."""
+    v = dict(stand)
+    Gt, bt, tt = Q.T @ Gamma @ Q, Q.T @ bias, Q.T @ theta_k
+    v.update({f"Gamma{i + 1}{j + 1}": Gt[i, j] for i in range(3) for j in range(3)})
+    v.update({f"bias{i + 1}": bt[i] for i in range(3)})
+    v.update(dict(zip(("theta1", "theta2", "theta3"), tt)))
+    return np.array([v[n] for n in mod.PARAMETER_NAMES])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.sampled_from(NAMES), st.sampled_from(["lower", "symmetric"]), st.integers(0, 10**6))
+def test_recovery_round_trip(mod, name, gamma, seed):
+    rng = np.random.default_rng(seed)
+    Q = rm.MOUNTS[name]
+    stand = dict(zip(STAND, rng.normal(size=6)))
+    Gamma = rng.normal(size=(3, 3))
+    Gamma = np.tril(Gamma) if gamma == "lower" else Gamma + Gamma.T
+    bias, theta_k = rng.normal(size=3), rng.normal(size=3)
+    q = mod.PHYSICAL_TO_Q @ block_to_table(mod, Q, stand, Gamma, bias, theta_k)
+    got = rm.recovery_matrix(name, gamma) @ q + rm.neglected(name, stand["Delta_g"], stand["Delta_beta"], gamma)
+    want = np.concatenate([[stand["kappa"], stand["Delta_alpha"] + stand["alpha_star"], stand["epsilon"]],
+                           bias, Gamma.ravel(), theta_k])
+    np.testing.assert_allclose(got, want, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_simulate_estimate_recover_within_bounds(mod, tmp_path, seed):
+    rng = np.random.default_rng(seed)
+    name, gamma = NAMES[rng.integers(24)], ("lower", "symmetric")[seed % 2]
+    sigma, g, size = 1e-5, 9.81, 1e-4
+    stand = dict(zip(STAND, rng.uniform(-size, size, 6)))
+    Gamma = rng.uniform(-size, size, (3, 3))
+    Gamma = np.tril(Gamma) if gamma == "lower" else (Gamma + Gamma.T) / 2
+    bias, theta_k = rng.uniform(-1e-3, 1e-3, 3), rng.uniform(-size, size, 3)
+    P = np.array(mod.PLAN_DEG, float) + (rng.uniform(-0.5, 0.5, (10, 2)) if seed >= 2 else 0)
+    f = mounting.mounted_readings(mod, rm, *np.deg2rad(P.T), stand, Gamma, bias, theta_k, name, g).T
+    f += g * rng.uniform(-sigma, sigma, f.shape)
+    res = estimate(mod, read_positions(write_csv(tmp_path / "d.csv", P, f)), sigma, g,
+                   remount=rm, mount=name, gamma=gamma)
+    assert ("(23)" in res["method"]) == (seed >= 2)
+    ph, bd = res["physical"], res["physical_bound"]
+    neg = dict(zip(rm.OUTPUTS, rm.neglected(name, stand["Delta_g"], stand["Delta_beta"], gamma)))
+    rem = 1e-7                                   # second-order remainder, |errors| <= 1e-4
+    for key, true in (("kappa", stand["kappa"]), ("epsilon", stand["epsilon"]),
+                      ("dalpha_plus_astar", stand["Delta_alpha"] + stand["alpha_star"])):
+        assert abs(ph[key] - true) <= bd[key] + rem
+    for i in range(3):
+        assert abs(ph["bias"][i] - g * bias[i]) <= bd["bias"][i] + g * rem
+        assert abs(ph["theta_k"][i] - theta_k[i] + neg[f"theta_k{i + 1}"]) <= bd["theta_k"][i] + rem
+        for j in range(3):
+            err = ph["Gamma"][i][j] - Gamma[i, j] + neg[f"Gamma{i + 1}{j + 1}"]
+            assert abs(err) <= bd["Gamma"][i][j] + rem
