@@ -87,6 +87,10 @@ def outputs():
                                                         f"derive/remount.py on {key.upper()}_MODEL", ".py")
             out[f"docs/remount_{key}.md"] = render("remount/REMOUNT.md.jinja", ctx,
                                                    f"derive/remount.py on {key.upper()}_MODEL", ".md")
+    from .stands import NORM_MODELS
+    for key, model in NORM_MODELS.items():
+        out[f"generated/{key}.py"] = render("norm/NORM.py.jinja", norm_context(model),
+                                            f"derive/norm.py, axes {model.axes}", ".py")
     return out
 
 
@@ -133,4 +137,29 @@ def remount_context(d):
         D_g=[[pycode(v) for v in r.D.diff(dg).row(i)] for i in range(3)],
         D_beta=[[pycode(v) for v in r.D.diff(db).row(i)] for i in range(3)],
         D=sp.latex(r.D, symbol_names=names), N=sp.latex(N), rows=rows,
+    )
+
+
+def norm_context(model):
+    """Template context of the coarse-stand module (001)."""
+    from . import norm
+    ni, nj, nk = sp.symbols("n_i n_j n_k")
+    n1, n2, n3 = norm.n_sym
+    Hg = [n1**2, n2**2, n3**2, n1 * n2, n1 * n3, n2 * n3, n1, n2, n3, n1**2 * ni, n2**2 * nj, n3**2 * nk]
+    bound_args = {norm.kmax: sp.Symbol("k_max"), norm.vmax: sp.Symbol("v_max")}
+    est = norm.estimators(model)
+    return dict(
+        axes=list(model.axes), q_names=list(norm.Q_NAMES),
+        q_units=["1"] * 3 + ["rad"] * 3 + ["1"] * 6,
+        params=[(str(p), u, mng) for p, u, mng in zip(norm.PARAMS, norm.PARAM_UNITS, norm.PARAM_MEANINGS)],
+        param_names=[str(p) for p in norm.PARAMS],
+        H=[pycode(h) for h in Hg], F=[pycode(f) for f in norm.readings(model)],
+        H_exponents=[list(sp.Poly(h, *norm.n_sym).monoms()[0]) for h in norm.H(model)],
+        q=[pycode(v) for v in norm.q_of_params()],
+        bound=pycode(norm.remainder_bound().subs(bound_args)),
+        published=pycode(norm.published_bound().subs(bound_args)),
+        plan=[[pycode(sp.N(v, 17)) for v in d] for d in norm.plan(model)],
+        plan_exact=[", ".join(str(v) for v in d) for d in norm.plan(model)],
+        duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
+        estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
     )

@@ -66,3 +66,24 @@ TABLE2_000 = (
 #: Section 4.3 of 000: "at least 64" optimal 10-position plans; fewer than 10 cannot be optimal.
 AT_LEAST_PLANS_000 = 64
 MIN_POSITIONS_000 = 10
+
+#: The table of 001 (section 4): optimal estimators of the 9 linear parameters on 18 directions.
+#: Directions as exact strings (components), terms (weight, direction index 1..18).
+DIRECTIONS_001 = (
+    "1, 0, 0", "-1, 0, 0", "0, 1, 0", "0, -1, 0", "0, 0, 1", "0, 0, -1",
+    "sqrt(2)/2, sqrt(2)/2, 0", "sqrt(2)/2, -sqrt(2)/2, 0", "-sqrt(2)/2, -sqrt(2)/2, 0", "-sqrt(2)/2, sqrt(2)/2, 0",
+    "sqrt(2)/2, 0, sqrt(2)/2", "sqrt(2)/2, 0, -sqrt(2)/2", "-sqrt(2)/2, 0, -sqrt(2)/2", "-sqrt(2)/2, 0, sqrt(2)/2",
+    "0, sqrt(2)/2, sqrt(2)/2", "0, -sqrt(2)/2, sqrt(2)/2", "0, -sqrt(2)/2, -sqrt(2)/2", "0, sqrt(2)/2, -sqrt(2)/2",
+)
+ESTIMATORS_001 = {
+    "lambda1_star": (("1/2", 1), ("1/2", 2)), "eps1_over_g": (("1/2", 1), ("-1/2", 2)),
+    "lambda2_star": (("1/2", 3), ("1/2", 4)), "eps2_over_g": (("1/2", 3), ("-1/2", 4)),
+    "lambda3_star": (("1/2", 5), ("1/2", 6)), "eps3_over_g": (("1/2", 5), ("-1/2", 6)),
+    "alpha": (("1/2", 7), ("-1/2", 8), ("1/2", 9), ("-1/2", 10)),
+    "beta": (("1/2", 11), ("-1/2", 12), ("1/2", 13), ("-1/2", 14)),
+    "gamma": (("1/2", 15), ("-1/2", 16), ("1/2", 17), ("-1/2", 18)),
+}
+#: Section 4 of 001: guaranteed errors in units of delta_sigma_max, in the order of q.
+ERRORS_001 = (1, 1, 1, 2, 2, 2, 1, 1, 1, 4, 4, 4)
+#: Sections 4 and 6 of 001: 18 tests for the 9 linear parameters; "42" optimal directions in all.
+DIRECTIONS_COUNT_001 = {"linear": 18, "all": 42}

@@ -1,5 +1,6 @@
 """Built-in stand descriptions. Each is data: angles, chain of links, named small errors."""
 from .model import Angle, Block, Link, Model, Parameter, Stand
+from .norm import NormModel
 
 TWO_AXIS = Stand(
     name="two_axis",
@@ -49,3 +50,6 @@ TWO_AXIS_MODEL = Model(
 )
 
 MODELS = {"two_axis": TWO_AXIS_MODEL}
+
+# The coarse stand of 001; pendulosity axes (i, j, k) = (2, 3, 1).
+NORM_MODELS = {"norm": NormModel(axes=(2, 3, 1))}

@@ -4,7 +4,7 @@ import sys
 import time
 import warnings
 
-from . import checks, estimate as estimate_mod, exact, models, plans, report
+from . import checks, estimate as estimate_mod, exact, models, norm_checks, plans, report
 from .data import DataError, read_positions
 from .lp import LPFailed
 
@@ -12,13 +12,15 @@ G_DEFAULT = 9.81  # m/s^2
 
 
 def cmd_verify(args):
-    mod = models.load("two-axis")
+    groups = (checks.all_groups(models.load("two-axis"), models.load_remount("two-axis"))
+              + norm_checks.all_groups(models.load("norm")))
     rows = []
-    for group, group_args in checks.all_groups(mod, models.load_remount("two-axis")):
+    for group, group_args in groups:
         t0 = time.perf_counter()
         got = list(group(*group_args))
         rows += got
-        print(f"[{group.__name__}] {len(got)} checks in {time.perf_counter() - t0:.2f} s", file=sys.stderr)
+        print(f"[{group.__module__.rsplit('.', 1)[-1]}.{group.__name__}] {len(got)} checks in "
+              f"{time.perf_counter() - t0:.2f} s", file=sys.stderr)
     report.table(("check", "source", "expected", "got", "pass"),
                  [(r.name, r.source, r.expected, r.got, "PASS" if r.passed else "FAIL") for r in rows])
     failed = [r for r in rows if not r.passed]
@@ -96,12 +98,12 @@ def parser():
     v.add_argument("--json", metavar="FILE", help="also write the checks as JSON")
     v.set_defaults(run=cmd_verify)
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
-    p.add_argument("model", choices=sorted(models.MODELS))
+    p.add_argument("model", choices=models.STANDS)
     p.add_argument("--json", metavar="FILE")
     p.set_defaults(run=cmd_plan)
     e = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
     e.add_argument("data", metavar="DATA.csv", help="CSV: alpha_deg,beta_deg,f1,f2,f3 (f in m/s^2)")
-    e.add_argument("--model", required=True, choices=sorted(models.MODELS))
+    e.add_argument("--model", required=True, choices=models.STANDS)
     e.add_argument("--sigma", type=float, required=True,
                    help="bound on each residual component, dimensionless (units of g), (5) of 000")
     e.add_argument("--g", type=float, default=G_DEFAULT, help="model gravity, m/s^2 (default 9.81)")

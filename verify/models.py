@@ -3,7 +3,8 @@ import importlib
 
 from .data import DataError
 
-MODELS = {"two-axis": "generated.two_axis"}
+MODELS = {"two-axis": "generated.two_axis", "norm": "generated.norm"}
+STANDS = ["two-axis"]            # models with stand angles (plan, estimate)
 
 
 def load(name):

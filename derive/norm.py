@@ -1,0 +1,230 @@
+"""The coarse stand of 001: the norm relation (2.2), its exact remainder, and a proven bound.
+
+Everything is normalised by the measured gravity g: F = f/g, and the block model (1.3) reads
+F = c (E + A) m + e + c^2 D(m) + u,  c = g0/g = 1 - Delta_g/g,
+with m the true direction of -gravity in block axes (|m| = 1), A lower-triangular
+[[lambda1,0,0],[alpha,lambda2,0],[beta,gamma,lambda3]], e = eps/g, D(m)_l = (delta_l g) m_idx(l) m_l
+(pendulosity, idx = (i, j, k) with idx(l) != l) and u = delta_f/g the noise.
+"""
+from dataclasses import dataclass
+from functools import lru_cache
+
+import sympy as sp
+
+SQ2, SQ3 = sp.sqrt(2), sp.sqrt(3)
+
+
+@dataclass(frozen=True)
+class NormModel:
+    """The 001 block on a coarse stand; `axes` = (i, j, k) of B(w) in (1.3)."""
+
+    axes: tuple[int, int, int] = (2, 3, 1)
+    source: str = "001, (1.3), (2.2)-(2.4)"
+
+    def __post_init__(self):
+        if any(a == l + 1 for l, a in enumerate(self.axes)) or not set(self.axes) <= {1, 2, 3}:
+            raise ValueError(f"pendulosity axes (i, j, k) need i != 1, j != 2, k != 3, got {self.axes}")
+
+
+Q_NAMES = ("lambda1_star", "lambda2_star", "lambda3_star", "alpha", "beta", "gamma",
+           "eps1_over_g", "eps2_over_g", "eps3_over_g", "delta1_g", "delta2_g", "delta3_g")
+Q_LATEX = (r"\lambda_1^*", r"\lambda_2^*", r"\lambda_3^*", r"\alpha", r"\beta", r"\gamma",
+           r"\varepsilon_1/g", r"\varepsilon_2/g", r"\varepsilon_3/g", r"\delta_1 g", r"\delta_2 g",
+           r"\delta_3 g")
+PARAMS = sp.symbols("lambda1 lambda2 lambda3 alpha beta gamma e1 e2 e3 d1 d2 d3 dg u1 u2 u3", real=True)
+PARAM_UNITS = ("1",) * 3 + ("rad",) * 3 + ("1",) * 10
+PARAM_MEANINGS = (
+    "scale-factor error 1", "scale-factor error 2", "scale-factor error 3",
+    "misalignment alpha", "misalignment beta", "misalignment gamma",
+    "bias 1 over g", "bias 2 over g", "bias 3 over g",
+    "nonlinearity delta1 times g", "nonlinearity delta2 times g", "nonlinearity delta3 times g",
+    "relative gravity error Delta_g/g", "noise 1 over g", "noise 2 over g", "noise 3 over g")
+m_sym = sp.symbols("m1:4", real=True)
+n_sym = sp.symbols("n1:4", real=True)
+
+
+def block(model):
+    lam1, lam2, lam3, al, be, ga, e1, e2, e3, d1, d2, d3, dg, u1, u2, u3 = PARAMS
+    A = sp.Matrix([[lam1, 0, 0], [al, lam2, 0], [be, ga, lam3]])
+    return A, sp.Matrix([e1, e2, e3]), (d1, d2, d3), dg, sp.Matrix([u1, u2, u3])
+
+
+def pendulosity(model, v, d):
+    """D(v)_l = d_l v_idx(l) v_l: the B(w) w term of (1.3) over g, for a unit-scaled v."""
+    return sp.Matrix([d[l] * v[model.axes[l] - 1] * v[l] for l in range(3)])
+
+
+def readings(model):
+    """Exact F = f/g of (1.3) for true direction m: c (E + A) m + e + c^2 D(m) + u."""
+    A, e, d, dg, u = block(model)
+    m = sp.Matrix(m_sym)
+    c = 1 - dg
+    return c * (sp.eye(3) + A) * m + e + c**2 * pendulosity(model, m, d) + u
+
+
+def sigma(F):
+    """The measured quantity of (2.2), as the derivation decides: (|f|^2 - g^2) / (2 |f|^2)."""
+    r2 = sum(x**2 for x in F)
+    return (r2 - 1) / (2 * r2)
+
+
+def sigma_as_printed(F):
+    """(2.2) as transcribed, |f|^2 - g^2/|f|^2 (in units of g): four times the linear part, see the docs."""
+    r2 = sum(x**2 for x in F)
+    return r2 - 1 / r2
+
+
+def H(model, n=n_sym):
+    """H(n) of (2.2): (n1^2, n2^2, n3^2, n1 n2, n1 n3, n2 n3, n1, n2, n3, n1^2 n_i, n2^2 n_j, n3^2 n_k)."""
+    n1, n2, n3 = n
+    i, j, k = (n[a - 1] for a in model.axes)
+    return sp.Matrix([n1**2, n2**2, n3**2, n1 * n2, n1 * n3, n2 * n3, n1, n2, n3,
+                      n1**2 * i, n2**2 * j, n3**2 * k])
+
+
+def q_of_params():
+    """q of (2.2) from the physical parameters: lambda_i* = lambda_i - Delta_g/g."""
+    lam1, lam2, lam3, al, be, ga, e1, e2, e3, d1, d2, d3, dg, *_ = PARAMS
+    return sp.Matrix([lam1 - dg, lam2 - dg, lam3 - dg, al, be, ga, e1, e2, e3, d1, d2, d3])
+
+
+def first_order(expr):
+    """Linear part of expr in all parameters: sum_p p d(expr)/dp at p = 0."""
+    zero = {p: 0 for p in PARAMS}
+    return sp.expand(sum(p * sp.diff(expr, p).subs(zero) for p in PARAMS))
+
+
+def on_sphere(expr):
+    """Numerator of a rational function of m reduced modulo |m|^2 = 1: 0 iff it vanishes on the sphere
+    (denominators here are powers of |m|^2, never 0 there)."""
+    m1, m2, m3 = m_sym
+    num, _ = sp.fraction(sp.together(expr))
+    num = sp.expand(num)
+    rest = sorted((x for x in num.free_symbols if x not in m_sym), key=str)
+    _, r = sp.reduced(num, [m3**2 + m1**2 + m2**2 - 1], m3, m1, m2, *rest, order="lex")
+    return sp.expand(r)
+
+
+@lru_cache(maxsize=None)
+def first_order_checks(model):
+    """(linear part of sigma) - H(m)^T q - m.u, and (linear part of the printed sigma) - 4 (H(m)^T q + m.u).
+
+    Both are 0 on the sphere: the printed form is four times the linear relation, the derived one is it.
+    """
+    F = readings(model)
+    m = sp.Matrix(m_sym)
+    *_, u = block(model)
+    target = (H(model, m_sym).T * q_of_params())[0] + (m.T * u)[0]
+    ours = on_sphere(first_order(sigma(F)) - target)
+    printed = on_sphere(first_order(sigma_as_printed(F)) - 4 * target)
+    return ours, printed
+
+
+# The bound: symbols for the a priori maxima of (1.2), (1.4), (2.1); K is ||A_max|| (spectral norm).
+K, kmax, vmax, emax, dmax, fmax, Gmax = sp.symbols(
+    "K k_max v_max eps_max delta_max df_max dg_max", nonnegative=True)
+
+
+def remainder_bound():
+    """A bound of |delta_sigma(n)| on the whole sphere that provably holds; proof in docs/norm_001.md.
+
+    delta_sigma = rho1 - h^2 (3/2 + h)/(1 + h)^2 exactly, h = |F| - 1, with
+    rho1 = -r n^T A n - c (|n - m|^2/2 + n^T A (n - m)) + (c^2 n.D(m) - n.D(n)) + n.u;
+    each piece is bounded with |a| = |F - m| <= a_max, |n - m| <= sqrt2 a_max / (1 - a_max),
+    |D(v)| <= delta_max g / sqrt2 on the unit sphere, |D(m) - D(n)| <= sqrt2 delta_max g |n - m|.
+    """
+    a = (1 + Gmax) * K + Gmax + SQ3 * emax + (1 + Gmax)**2 * dmax / SQ2 + SQ3 * fmax
+    dn = SQ2 * a / (1 - a)
+    return (Gmax * K + (2 * Gmax + Gmax**2) * dmax / SQ2 + SQ2 * dmax * dn + SQ3 * fmax
+            + (1 + Gmax) * (dn**2 / 2 + K * dn) + a**2 * (sp.Rational(3, 2) + a) / (1 - a)**2)
+
+
+def published_bound():
+    """(2.4) of 001 as printed, with the unbalanced last brace read as a product (see docs)."""
+    half = (3 * K**2 + 8 * K * dmax + 5 * dmax**2 + 3 * emax**2 + 4 * emax * K + 6 * emax * dmax
+            + 2 * SQ3 * fmax + 2 * K * fmax + 4 * fmax * dmax + 3 * fmax**2 + Gmax**2) / 2
+    return half + (SQ3 * emax + dmax / SQ2 + Gmax) * (K + dmax / 2 + SQ3 * (emax + fmax + Gmax))
+
+
+def second_order_terms(expr):
+    """Coefficients of the Taylor expansion of a bound to second order in the maxima."""
+    t = sp.Symbol("t")
+    small = (K, emax, dmax, fmax, Gmax)
+    poly = sp.expand(sp.series(expr.subs({s: t * s for s in small}), t, 0, 3).removeO().subs(t, 1))
+    return sp.Poly(poly, *small).as_dict(), small
+
+
+# The optimal plan: the 18 directions of the table of 001 and the 12 of the nonlinearity coefficients.
+def plan(model):
+    """Directions (exact) and their role; the nonlinearity ones follow from the dual certificates."""
+    e = [sp.Matrix([int(i == j) for j in range(3)]) for i in range(3)]
+    dirs = []
+    for i in range(3):
+        dirs += [e[i], -e[i]]
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        for s1, s2 in ((1, 1), (1, -1), (-1, -1), (-1, 1)):
+            dirs.append((s1 * e[a] + s2 * e[b]) / SQ2)
+    for l, i in enumerate(model.axes):          # delta_l: n_l^2 n_i, touching points n_l^2 = 3/4
+        for s1, s2 in ((1, 1), (-1, 1), (1, -1), (-1, -1)):
+            dirs.append(s1 * SQ3 / 2 * e[l] + s2 * e[i - 1] / 2)
+    return dirs
+
+
+def duals(model):
+    """Optimal dual vectors lambda (Chebyshev polynomials of 001, section 4), one per q."""
+    out = []
+    for nu in range(12):
+        lam = [0] * 12
+        if nu in (3, 4, 5):
+            lam[nu] = 2
+        elif nu >= 9:
+            lam[nu], lam[6 + model.axes[nu - 9] - 1] = 4, -1
+        else:
+            lam[nu] = 1
+        out.append(lam)
+    return out
+
+
+def touching(model, lam, directions):
+    """Indices and signs of the plan directions where |H(n)^T lambda| reaches 1."""
+    out = []
+    for k, n in enumerate(directions):
+        v = sp.nsimplify(sp.expand((H(model, list(n)).T * sp.Matrix(lam))[0]))
+        if abs(v) == 1:
+            out.append((k, int(sp.sign(v))))
+    return out
+
+
+def estimators(model):
+    """Smallest-support optimal estimator of each q on the plan, exactly: {direction index: weight}.
+
+    Complementary slackness with the dual certificates `duals`: only directions where the
+    Chebyshev polynomial touches +-1 are used, with its sign; any nonnegative solution there of the
+    unbiasedness equations (3.2) has sum |x| = a^T lambda, the optimum.
+    """
+    from itertools import combinations
+    dirs = plan(model)
+    out = []
+    for nu, lam in enumerate(duals(model)):
+        cand = touching(model, lam, dirs)
+        e = sp.Matrix([int(i == nu) for i in range(12)])
+        found = None
+        for size in range(1, len(cand) + 1):
+            for subset in combinations(cand, size):
+                A = sp.Matrix.hstack(*[s * H(model, list(dirs[k])) for k, s in subset])
+                if A.rank() < size:
+                    continue
+                try:
+                    x, params = A.gauss_jordan_solve(e)
+                except ValueError:
+                    continue
+                x = x.applyfunc(sp.nsimplify)
+                if not params and all(v > 0 for v in x):
+                    found = {k: s * v for (k, s), v in zip(subset, x)}
+                    break
+            if found:
+                break
+        if found is None:
+            raise ValueError(f"no optimal estimator of {Q_NAMES[nu]} on the plan")
+        out.append(found)
+    return out
