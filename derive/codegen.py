@@ -91,6 +91,8 @@ def outputs():
     for key, model in NORM_MODELS.items():
         out[f"generated/{key}.py"] = render("norm/NORM.py.jinja", norm_context(model),
                                             f"derive/norm.py, axes {model.axes}", ".py")
+        out[f"docs/derivation_{key}.md"] = render("norm/REPORT.md.jinja", norm_report_context(model),
+                                                  f"derive/norm.py, axes {model.axes}", ".md")
     return out
 
 
@@ -163,3 +165,23 @@ def norm_context(model):
         duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
         estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
     )
+
+
+def norm_report_context(model):
+    """Template context of the 001 derivation report."""
+    from . import norm
+    ours, printed = norm.first_order_checks(model)
+    t_ours, small = norm.second_order_terms(norm.remainder_bound())
+    t_pub, _ = norm.second_order_terms(norm.published_bound())
+    terms = []
+    for key in sorted(set(t_ours) | set(t_pub), key=lambda k: (sum(k), [-x for x in k])):
+        mono = sp.Mul(*[s**k for s, k in zip(small, key)])
+        terms.append((sp.latex(mono, symbol_names=norm.LATEX_NAMES), sp.latex(sp.nsimplify(t_ours.get(key, 0))),
+                      sp.latex(sp.nsimplify(t_pub.get(key, 0)))))
+    B, parts = norm.remainder_bound_parts()
+    return dict(
+        axes=tuple(model.axes), A=sp.latex(norm.block(model)[0]), ours=ours, printed=printed,
+        H=sp.latex(norm.H(model).T), q=", ".join(norm.Q_LATEX),
+        bound=sp.latex(B, symbol_names=norm.LATEX_NAMES),
+        parts=[(sp.latex(k, symbol_names=norm.LATEX_NAMES), sp.latex(v, symbol_names=norm.LATEX_NAMES))
+               for k, v in parts.items()], terms=terms)

@@ -133,10 +133,21 @@ def remainder_bound():
     each piece is bounded with |a| = |F - m| <= a_max, |n - m| <= sqrt2 a_max / (1 - a_max),
     |D(v)| <= delta_max g / sqrt2 on the unit sphere, |D(m) - D(n)| <= sqrt2 delta_max g |n - m|.
     """
+    B, parts = remainder_bound_parts()
+    return B.subs(A_MAX, parts[A_MAX]).subs(parts)
+
+
+A_MAX, DN_MAX = sp.symbols("a_max Delta_n_max", positive=True)
+LATEX_NAMES = {K: "K", emax: r"\varepsilon_{\max}", dmax: r"\delta_{\max}", fmax: r"\delta f_{\max}",
+               Gmax: r"\Delta g_{\max}", A_MAX: r"a_{\max}", DN_MAX: r"\Delta n_{\max}"}
+
+
+def remainder_bound_parts():
+    """The bound in terms of a_max >= |F - m| and Delta_n_max >= |n - m|, and those two."""
     a = (1 + Gmax) * K + Gmax + SQ3 * emax + (1 + Gmax)**2 * dmax / SQ2 + SQ3 * fmax
-    dn = SQ2 * a / (1 - a)
-    return (Gmax * K + (2 * Gmax + Gmax**2) * dmax / SQ2 + SQ2 * dmax * dn + SQ3 * fmax
-            + (1 + Gmax) * (dn**2 / 2 + K * dn) + a**2 * (sp.Rational(3, 2) + a) / (1 - a)**2)
+    B = (Gmax * K + (2 * Gmax + Gmax**2) * dmax / SQ2 + SQ2 * dmax * DN_MAX + SQ3 * fmax
+         + (1 + Gmax) * (DN_MAX**2 / 2 + K * DN_MAX) + A_MAX**2 * (sp.Rational(3, 2) + A_MAX) / (1 - A_MAX)**2)
+    return B, {A_MAX: a, DN_MAX: SQ2 * A_MAX / (1 - A_MAX)}
 
 
 def published_bound():

@@ -4,7 +4,7 @@ import sys
 import time
 import warnings
 
-from . import checks, estimate as estimate_mod, exact, models, norm_checks, plans, report
+from . import calibrate, checks, estimate as estimate_mod, exact, models, norm_checks, plans, recordings, report
 from .data import DataError, read_positions
 from .lp import LPFailed
 
@@ -91,6 +91,39 @@ def print_physical(res):
     print(res["physical_note"])
 
 
+def cmd_calibrate_norm(args):
+    mod = models.load("norm")
+    log = recordings.read_log(args.log, args.format, args.sensor)
+    stills, note = recordings.still_intervals(log, window=args.window, k=args.k, min_still=args.min_still)
+    print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})",
+          file=sys.stderr)
+    res = calibrate.run(mod, stills, args.g, args.params, args.log, args.delta_sigma)
+    print(f"calibration a = M (raw - b), {res['intervals']} still intervals, {res['iterations']} iterations "
+          f"({res['start']})")
+    print("M (m/s^2 per raw unit):")
+    for row in res["matrix"]:
+        print("   " + "  ".join(f"{v:+.6e}" for v in row))
+    print("b (raw units): " + "  ".join(f"{v:+.6e}" for v in res["bias"]))
+    dsig = res["delta_sigma_max"]
+    print(f"minimax residual of the fit: {res['delta_sigma_fit']:.3e}; delta_sigma_max = {dsig:.3e} "
+          f"(x g = {dsig * args.g:.3e} m/s^2) from the {res['delta_sigma_source']}")
+    pars = res["parameters"] or {}
+    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan"),
+                 [(k, f"{pars[k]:+.4e}" if k in pars else "-", f"{v:.3e}",
+                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}") for k, v in res["guaranteed_error"].items()])
+    if res["directions_to_add"]:
+        print(f"\nto reach the optimal bounds, add {len(res['directions_to_add'])} orientation(s) "
+              "(unit vectors in sensor axes, -gravity direction):")
+        for d in res["directions_to_add"]:
+            print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+    if args.json:
+        report.write_json(args.json, res)
+    if args.plot:
+        calibrate.plot(res, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -113,6 +146,23 @@ def parser():
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
     e.add_argument("--json", metavar="FILE")
     e.set_defaults(run=cmd_estimate)
+    c = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
+    c.add_argument("log", metavar="LOG")
+    c.add_argument("--format", choices=recordings.FORMATS, help="log format (guessed when omitted)")
+    c.add_argument("--sensor", choices=sorted(recordings.SENSORS), default="adxl355",
+                   help="accelerometer of an OpenAXES log")
+    c.add_argument("--g", type=float, default=G_DEFAULT, help="local gravity, m/s^2 (default 9.81)")
+    c.add_argument("--params", type=int, choices=(9, 12), default=9,
+                   help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
+    c.add_argument("--window", type=float, default=1.0, help="moving-variance window, s")
+    c.add_argument("--k", type=float, default=10.0, help="still when the moving variance < k x the initial one")
+    c.add_argument("--min-still", type=float, default=2.0, help="shortest still interval kept, s")
+    c.add_argument("--delta-sigma", type=float, metavar="D",
+                   help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; "
+                   "default: the minimax residual of the fit, the smallest bound the data allow")
+    c.add_argument("--json", metavar="FILE")
+    c.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
+    c.set_defaults(run=cmd_calibrate_norm)
     return ap
 
 

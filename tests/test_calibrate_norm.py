@@ -1,0 +1,97 @@
+"""garant calibrate-norm: synthetic logs with known errors, and the real recordings of shared/data/real."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import generated.norm as N
+from verify import calibrate, recordings
+from verify.cli import main
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+G = 9.81744                      # the value the recordings' authors used (shared/data/real/README.md)
+needs_real = pytest.mark.skipif(not REAL.is_dir(), reason="../shared/data/real is not present")
+
+
+def synthetic_log(path, params, directions, noise, seed=0, still_s=3.0, move_s=2.0, rate=100):
+    """A log of still intervals along `directions` joined by moves, readings from the exact (1.3)."""
+    rng = np.random.default_rng(seed)
+    t, rows, now = [], [], 0.0
+    for n in directions:
+        m = n / np.linalg.norm(n)
+        f = G * N.readings(m, params)
+        for _ in range(int(still_s * rate)):
+            rows.append(f + G * rng.uniform(-noise, noise, 3))
+            t.append(now)
+            now += 1 / rate
+        for _ in range(int(move_s * rate)):
+            rows.append(G * rng.normal(size=3))
+            t.append(now)
+            now += 1 / rate
+    np.savetxt(path, np.column_stack([t, rows]))
+    return path
+
+
+def test_synthetic_log_recovers_errors_within_bounds(tmp_path):
+    rng = np.random.default_rng(1)
+    truth = np.concatenate([rng.uniform(-2e-3, 2e-3, 9), np.zeros(3), [0.0], np.zeros(3)])
+    dirs = list(N.PLAN[:18]) + list(rng.normal(size=(6, 3)))
+    path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
+    log = recordings.read_log(str(path), "imu_tk")
+    stills, _ = recordings.still_intervals(log)
+    assert len(stills) == len(dirs) + 1
+    box = dict(k_max=2e-3, v_max=2e-3, eps_max=2e-3, delta_max=0.0, df_max=1e-5, dg_max=0.0)   # hard bound of the mean noise
+    res = calibrate.run(N, stills, G, 9, str(path), delta_sigma=N.remainder_bound(**box))
+    got = np.array(list(res["parameters"].values()))
+    bound = np.array(list(res["guaranteed_error"].values()))
+    assert np.all(np.abs(got - truth[:9]) <= bound)
+
+
+def test_too_few_intervals_is_refused(tmp_path, capsys):
+    path = synthetic_log(tmp_path / "log.txt", np.zeros(16), [np.array([0, 0, 1.0])] * 3, noise=1e-5)
+    assert main(["calibrate-norm", str(path)]) == 2
+    assert "found only" in capsys.readouterr().err
+
+
+def test_bad_log_one_line(tmp_path, capsys):
+    path = tmp_path / "bad.txt"
+    path.write_text("0 1 2 x\n" * 200)
+    assert main(["calibrate-norm", str(path), "--format", "imu_tk"]) == 2
+    err = capsys.readouterr().err
+    assert "'x' is not a number" in err and err.count("\n") == 1
+
+
+@needs_real
+@pytest.mark.parametrize("name, args", [
+    ("imu_tk_xsens_acc.txt", []), ("repeat_session2_acc.txt", []), ("repeat_session3_acc.txt", []),
+    ("repeat_session4_acc.txt", ["--params", "12"]), ("openaxes_imu9.csv", ["--sensor", "adxl355"]),
+    ("openaxes_imu9.csv", ["--sensor", "bmi160"])])
+def test_real_recordings_calibrate(tmp_path, name, args):
+    out = tmp_path / "r.json"
+    assert main(["calibrate-norm", str(REAL / name), "--g", str(G), "--json", str(out),
+                 "--plot", str(tmp_path / "r.png"), *args]) == 0
+    res = json.loads(out.read_text())
+    assert res["intervals"] >= 20 and (tmp_path / "r.png").stat().st_size > 10000
+    assert all(abs(r["residual_after_ms2"]) <= G * res["delta_sigma_fit"] * (1 + 1e-6) for r in res["per_interval"])
+    if name.startswith("imu_tk"):                 # raw counts: about 415 counts per m/s^2 (datasheet)
+        assert 1 / res["matrix"][0][0] == pytest.approx(415, rel=0.02)
+
+
+@needs_real
+def test_real_session1_is_too_short(capsys):
+    assert main(["calibrate-norm", str(REAL / "repeat_session1_acc.txt"), "--g", str(G)]) == 2
+    assert "found only 1 still interval" in capsys.readouterr().err
+
+
+@needs_real
+def test_repeat_sessions_agree_within_bounds():
+    res = {}
+    for s in (2, 3, 4):
+        log = recordings.read_log(str(REAL / f"repeat_session{s}_acc.txt"))
+        stills, _ = recordings.still_intervals(log)
+        res[s] = calibrate.run(N, stills, G, 9, log.path)
+    for a, b in ((2, 3), (2, 4), (3, 4)):
+        for k in res[a]["parameters"]:
+            diff = abs(res[a]["parameters"][k] - res[b]["parameters"][k])
+            assert diff <= res[a]["guaranteed_error"][k] + res[b]["guaranteed_error"][k], (a, b, k)
