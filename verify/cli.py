@@ -4,7 +4,7 @@ import sys
 import time
 import warnings
 
-from . import calibrate, checks, estimate as estimate_mod, exact, models, norm_checks, plans, recordings, report
+from . import calibrate, checks, estimate as estimate_mod, exact, models, norm_checks, plans, recordings, redundancy_checks, report
 from .data import DataError, read_positions
 from .lp import LPFailed
 
@@ -13,7 +13,7 @@ G_DEFAULT = 9.81  # m/s^2
 
 def cmd_verify(args):
     groups = (checks.all_groups(models.load("two-axis"), models.load_remount("two-axis"))
-              + norm_checks.all_groups(models.load("norm")))
+              + norm_checks.all_groups(models.load("norm")) + redundancy_checks.all_groups())
     rows = []
     for group, group_args in groups:
         t0 = time.perf_counter()
@@ -124,6 +124,15 @@ def cmd_calibrate_norm(args):
     return 0
 
 
+def cmd_identify(args):
+    from . import identify
+    res = identify.report(args.model, args.plan)
+    identify.print_report(res)
+    if args.json:
+        report.write_json(args.json, res)
+    return 0
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -163,6 +172,11 @@ def parser():
     c.add_argument("--json", metavar="FILE")
     c.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     c.set_defaults(run=cmd_calibrate_norm)
+    i = sub.add_parser("identify", help="estimable combinations, confounded parameters, a plan's blind spots")
+    i.add_argument("model", choices=("two-axis", "003-example1", "003-example2"))
+    i.add_argument("--plan", metavar="FILE", help="CSV with alpha_deg, beta_deg: what this plan cannot separate")
+    i.add_argument("--json", metavar="FILE")
+    i.set_defaults(run=cmd_identify)
     return ap
 
 

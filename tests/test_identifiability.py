@@ -1,0 +1,63 @@
+"""Identifiability service and limiting accuracy (003)."""
+import json
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from derive import identifiability as I
+from verify import redundancy as rd
+from verify import redundancy_checks
+from verify.cli import main
+
+
+def test_example1_dependent_with_printed_relation():
+    # 003, Example 1: phi2 + phi4 - a phi3 + phi6 = 0 (theta_d, theta_x, c_x, theta_y).
+    res = I.analyse_example("003-example1")
+    assert [r.text() for r in res["relations"]] == ["-a*phi[c_x] + phi[theta_d] + phi[theta_x] + phi[theta_y] = 0"]
+
+
+def test_example2_additive_independent_degenerate_on_alpha_const():
+    res = I.analyse_example("003-example2", multiplicative=False)
+    assert res["relations"] == []
+    assert [t for t, _ in res["degenerate"]] == ["alpha = const"]
+
+
+def test_example2_full_basis_has_common_scale_relation():
+    # 003 says "independent"; x dV/dx + R dV/dR = V = 0 on the constraint (Euler, degree 1 in x, R).
+    res = I.analyse_example("003-example2")
+    assert [r.text() for r in res["relations"]] == ["phi[theta_R] + phi[theta_x] = 0"]
+
+
+def test_two_axis_relations_explain_q():
+    from derive.derivation import derive
+    from derive.stands import TWO_AXIS_MODEL
+    rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
+    assert {"Delta_g", "Gamma11", "Gamma22", "Gamma33"} in [set(g) for g in groups]
+    assert "phi[Delta_g] + phi[Gamma11] + phi[Gamma22] + phi[Gamma33] = 0" in [r.text() for r in rel]
+
+
+def test_identify_cli_with_plan(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    plan.write_text("alpha_deg,beta_deg\n0,0\n0,180\n180,90\n180,270\n90,90\n")
+    out = tmp_path / "i.json"
+    assert main(["identify", "two-axis", "--plan", str(plan), "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    assert [s.split(" =")[0] for s in res["plan"]["not_identifiable"]] == ["q6", "q10", "q13"]
+    assert main(["identify", "two-axis", "--plan", str(tmp_path / "missing.csv")]) == 2
+
+
+@pytest.mark.parametrize("r, q, N", [(3, 1, 4), (4, 2, 5), (6, 4, 3)])
+def test_trace_identity_exact_random_geometries(r, q, N):
+    # 003, (5): trace(B_C^-1) = N (r - q) / sigma^2 whatever the geometry.
+    rng = np.random.default_rng(r * 100 + q * 10 + N)
+    for _ in range(2):
+        B = rd.covariance_4(rd.random_rational_geometry(r, q, N, rng), sp.Integer(1))
+        assert B.inv().trace() == N * (r - q)
+        assert all(v * N >= 1 for v in B.diagonal())        # (7): never below sigma^2/N
+
+
+@pytest.mark.parametrize("group", [g for g, _ in redundancy_checks.all_groups()])
+def test_003_checks_pass(group):
+    rows = list(group())
+    assert rows and all(r.passed for r in rows), [r for r in rows if not r.passed]
