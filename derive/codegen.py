@@ -8,8 +8,8 @@ import sympy as sp
 from .derivation import derive
 from .estimators import sup_bound
 from .printer import linear_text, pycode
-from .report import report_context
-from .stands import MODELS
+from .report import report_context, stand_report_context
+from .builtin import MODELS
 
 ROOT = Path(__file__).resolve().parent.parent
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -46,48 +46,70 @@ def model_context(d):
     """Template context of the MODEL.py template for one derivation."""
     ident, m = d.ident, d.model
     names = list(d.names)
-    cse, forward = sp.cse(list(d.force_over_g), symbols=sp.numbered_symbols("t"), optimizations="basic")
     return dict(
         title=m.stand.title, source=m.stand.source,
         angles=[a.name for a in m.stand.angles], parameters=m.parameters,
+        ranges=[[_num(v) for v in a.range_deg] for a in m.stand.angles],
+        detents=[[_num(v) for v in a.detents_deg] for a in m.stand.angles],
         q_names=[f"q{i + 1}" for i in range(ident.R.rows)],
         q_definitions=[linear_text(_ordered(ident.R.row(i), names, m.preferred), m.preferred)
                        for i in range(ident.R.rows)],
         q_units=[m.parameters[names.index(n)].unit for n in ident.leading],
         R=[[pycode(v) for v in ident.R.row(i)] for i in range(ident.R.rows)],
         null_space=[[pycode(v) for v in vec] for vec in ident.null_space],
-        H=[[_array_code(ident.H[p, nu]) for nu in range(ident.H.cols)] for p in range(ident.H.rows)],
+        mounts=[_mount_context(d, k, name) for k, name in enumerate(m.mountings)],
         H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) for nu in range(ident.H.cols)]
                for p in range(ident.H.rows)],
-        up=[_array_code(v) for v in d.up_nominal],
-        forward_cse=[(pycode(s), pycode(e)) for s, e in cse],
-        forward=[_array_code(v) for v in forward],
         plan_deg=[list(pos) for pos in m.plan_deg],
         estimator_terms=[[(s, p, w.p, w.q) for (s, p), w in sorted(psi.items())]
                          for psi in d.estimators],
     )
 
 
+def _num(v):
+    return str(int(v)) if float(v).is_integer() else repr(float(v))
+
+
+def _mount_context(d, k, name):
+    """H rows, nominal up-vector and exact readings (with CSE) of one mounting."""
+    H = d.ident.H
+    cse, forward = sp.cse(list(d.force_over_g[k]), symbols=sp.numbered_symbols("t"), optimizations="basic")
+    return dict(name=name,
+                H=[[_array_code(H[3 * k + p, nu]) for nu in range(H.cols)] for p in range(3)],
+                up=[_array_code(v) for v in d.up_nominal[k]],
+                forward_cse=[(pycode(s), pycode(e)) for s, e in cse],
+                forward=[_array_code(v) for v in forward])
+
+
 def _ordered(row, names, preferred):
     return [row[names.index(n)] for n in preferred]
+
+
+def model_files(model, module_dir="generated", docs_dir="docs"):
+    """The generated module and derivation report of one stand model (and its remount files)."""
+    d = derive(model)
+    key = model.stand.name
+    out = {f"{module_dir}/{key}.py": render("model/MODEL.py.jinja", model_context(d), model.source_file, ".py")}
+    if key == "two_axis":            # the stand of 000: compare with the published results
+        out[f"{docs_dir}/derivation_{key}.md"] = render("report/REPORT.md.jinja", report_context(d),
+                                                        model.source_file, ".md")
+    else:
+        out[f"{docs_dir}/derivation_{key}.md"] = render("report/STAND.md.jinja", stand_report_context(d),
+                                                        model.source_file, ".md")
+    if model.remount:
+        ctx = remount_context(d)
+        source = f"derive/remount.py on {model.source_file}"
+        out[f"{module_dir}/{key}_remount.py"] = render("remount/REMOUNT.py.jinja", ctx, source, ".py")
+        out[f"{docs_dir}/remount_{key}.md"] = render("remount/REMOUNT.md.jinja", ctx, source, ".md")
+    return out
 
 
 def outputs():
     """Every generated file, path relative to the repository root -> text."""
     out = {}
     for key, model in MODELS.items():
-        d = derive(model)
-        out[f"generated/{key}.py"] = render("model/MODEL.py.jinja", model_context(d),
-                                            f"derive/stands.py:{key.upper()}_MODEL", ".py")
-        out[f"docs/derivation_{key}.md"] = render("report/REPORT.md.jinja", report_context(d),
-                                                  f"derive/stands.py:{key.upper()}_MODEL", ".md")
-        if model.remount:
-            ctx = remount_context(d)
-            out[f"generated/{key}_remount.py"] = render("remount/REMOUNT.py.jinja", ctx,
-                                                        f"derive/remount.py on {key.upper()}_MODEL", ".py")
-            out[f"docs/remount_{key}.md"] = render("remount/REMOUNT.md.jinja", ctx,
-                                                   f"derive/remount.py on {key.upper()}_MODEL", ".md")
-    from .stands import NORM_MODELS
+        out.update(model_files(model))
+    from .builtin import NORM_MODELS
     for key, model in NORM_MODELS.items():
         out[f"generated/{key}.py"] = render("norm/NORM.py.jinja", norm_context(model),
                                             f"derive/norm.py, axes {model.axes}", ".py")

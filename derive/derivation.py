@@ -4,16 +4,16 @@ from functools import lru_cache
 
 import sympy as sp
 
-from . import estimators, identify, model as model_mod
+from . import combinations, estimators, model as model_mod
 
 
 @dataclass(frozen=True)
 class Derivation:
     model: model_mod.Model
-    up_nominal: sp.Matrix        # u(alpha, beta), instrument axes
-    force_over_g: sp.Matrix      # exact readings over g, (1) of 000
+    up_nominal: tuple            # per mounting: u(angles) in block axes
+    force_over_g: tuple          # per mounting: exact readings over g, (1) of 000
     J: sp.Matrix                 # dz/dp at p = 0
-    ident: identify.Identification
+    ident: combinations.Identification
     estimators: tuple            # per q_nu: {(position index, component): Rational}
 
     @property
@@ -29,10 +29,13 @@ class Derivation:
 def derive(model):
     """Run the whole symbolic pipeline for a model description (cached per model)."""
     J = model_mod.jacobian(model)
+    from .description import check_observable
+    check_observable(model, J)
     names = [p.name for p in model.parameters]
-    ident = identify.identify(J, names, model.preferred, model.angle_symbols)
+    ident = combinations.identify(J, names, model.preferred, model.angle_symbols)
     est = (estimators.optimal_estimators(ident.H, model.angle_symbols, model.plan_deg)
            if model.plan_deg else ())
-    return Derivation(model=model, up_nominal=model_mod.up_nominal(model),
-                      force_over_g=model_mod.specific_force_over_g(model), J=J, ident=ident,
-                      estimators=tuple(est))
+    Qs = model_mod.mount_matrices(model)
+    return Derivation(model=model, up_nominal=tuple(model_mod.up_nominal(model, Q) for Q in Qs),
+                      force_over_g=tuple(model_mod.specific_force_over_g(model, Q) for Q in Qs), J=J,
+                      ident=ident, estimators=tuple(est))

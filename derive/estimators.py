@@ -11,7 +11,7 @@ from itertools import combinations
 
 import sympy as sp
 
-from .identify import trig_basis
+from .combinations import trig_basis
 
 
 def sup_bound(expr, angles):

@@ -26,11 +26,14 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Angle:
-    """A stand angle as read from its encoder (the argument of H)."""
+    """A stand angle as read from its encoder (the argument of H), and the values it can take:
+    `range_deg` (continuous) or `detents_deg` (a finite set), in degrees."""
 
     name: str
     latex: str
     meaning: str
+    range_deg: tuple[float, float] = (0.0, 360.0)
+    detents_deg: tuple[float, ...] = ()
 
     @property
     def symbol(self):
@@ -49,6 +52,7 @@ class Link:
     angle: str | None = None
     error: str | None = None
     sign: int = 1
+    harmonic: tuple[str, str] | None = None   # encoder error a_s sin(read) + a_c cos(read)
 
 
 @dataclass(frozen=True)
@@ -95,6 +99,8 @@ class Model:
     preferred: tuple[str, ...]
     plan_deg: tuple[tuple[int, int], ...] = ()
     remount: bool = False          # derive (25)-(29): the block may be mounted by any turn Q
+    mountings: tuple[str, ...] = ("+x+y+z",)   # exact turns Q the block is used in (v_block = Q v_table)
+    source_file: str = ""          # the description file, for generated headers
 
     @property
     def parameters(self):
@@ -109,14 +115,29 @@ class Model:
         return tuple(a.symbol for a in self.stand.angles)
 
 
+def mount_matrices(model):
+    """Q of each mounting of the model, by name ((25) of 000)."""
+    from .remount import mountings
+    table = mountings()
+    return [table[name] for name in model.mountings]
+
+
+def link_angle(link, symbols, angles):
+    """The true turn of a link: sign * (read - offset - harmonic error), or sign * fixed error."""
+    error = symbols[link.error] if link.error else 0
+    if link.angle is None:
+        return link.sign * error
+    read = angles[link.angle]
+    wobble = 0
+    if link.harmonic:
+        a_s, a_c = (symbols[n] for n in link.harmonic)
+        wobble = a_s * sp.sin(read) + a_c * sp.cos(read)
+    return link.sign * (read - error - wobble)
+
+
 def chain_factors(stand, symbols, angles):
     """The chain's link matrices, instrument side first (000, section 2); their product is table_from_base."""
-    out = []
-    for link in stand.chain:
-        error = symbols[link.error] if link.error else 0
-        x = link.sign * error if link.angle is None else link.sign * (angles[link.angle] - error)
-        out.append(C(link.axis, x))
-    return out
+    return [C(link.axis, link_angle(link, symbols, angles)) for link in stand.chain]
 
 
 def _product(mats):
@@ -133,24 +154,27 @@ def table_from_base(stand, symbols, angles, *, nominal=False):
     return R.subs({s: 0 for s in symbols.values()}) if nominal else R
 
 
-def up_nominal(model):
-    """Nominal up-vector u(alpha, beta) in instrument axes: ideal stand, read angles."""
+def up_nominal(model, Q=None):
+    """Nominal up-vector u in block axes: ideal stand, read angles, block mounted by Q."""
     angles = {a.name: a.symbol for a in model.stand.angles}
-    return table_from_base(model.stand, model.symbols, angles, nominal=True) * sp.Matrix([0, 0, 1])
+    u = table_from_base(model.stand, model.symbols, angles, nominal=True) * sp.Matrix([0, 0, 1])
+    return u if Q is None or Q == sp.eye(3) else Q * u
 
 
-def _force_factors(model):
-    """Factors whose product is the readings over g less the biases: (E + Gamma), (1 - dg), turn, links, e3."""
+def _force_factors(model, Q=None):
+    """Factors whose product is the readings over g less the biases: (E + Gamma), (1 - dg), Q, turn,
+    links, e3."""
     s = model.symbols
     angles = {a.name: a.symbol for a in model.stand.angles}
     EG, _ = block_matrices(model)
     dg = s[model.stand.gravity_error]
-    return [EG, (1 - dg) * sp.eye(3), small_turn([s[n] for n in model.stand.theta]),
+    mount = [] if Q is None or Q == sp.eye(3) else [Q]
+    return [EG, (1 - dg) * sp.eye(3), *mount, small_turn([s[n] for n in model.stand.theta]),
             *chain_factors(model.stand, s, angles), sp.Matrix([0, 0, 1])]
 
 
 def up_true(model):
-    """True up-vector in instrument axes, exact rotations for every stand error."""
+    """True up-vector in table axes, exact rotations for every stand error."""
     return _product(_force_factors(model)[2:])
 
 
@@ -162,25 +186,29 @@ def block_matrices(model):
     return sp.eye(3) + Gamma, bias
 
 
-def specific_force_over_g(model):
-    """Readings over model gravity g: (E + Gamma)(1 - Delta_g/g) u_true + Delta_f0/g ((1) of 000)."""
-    return _product(_force_factors(model)) + block_matrices(model)[1]
+def specific_force_over_g(model, Q=None):
+    """Readings over model gravity g: (E + Gamma)(1 - Delta_g/g) Q u_true + Delta_f0/g ((1) of 000)."""
+    return _product(_force_factors(model, Q)) + block_matrices(model)[1]
 
 
-def residual(model):
-    """Exact residual z(alpha, beta) of (1) of 000: measured over g minus the nominal up-vector."""
-    return specific_force_over_g(model) - up_nominal(model)
+def residual(model, Q=None):
+    """Exact residual z of (1) of 000: measured over g minus the nominal up-vector (block axes)."""
+    return specific_force_over_g(model, Q) - up_nominal(model, Q)
 
 
 def jacobian(model):
-    """First-order part of (1): dz/dp at p = 0, a 3 x n matrix of trigonometric functions.
+    """First-order part of (1) for every mounting: dz/dp at p = 0, stacked, (3 x mountings) x n.
 
     By the product rule over the factors, each differentiated alone and the rest taken at p = 0,
     which is much faster than differentiating the expanded product.
     """
+    return sp.Matrix.vstack(*[_jacobian(model, Q) for Q in mount_matrices(model)])
+
+
+def _jacobian(model, Q):
     syms = [p.symbol for p in model.parameters]
     zero = {x: 0 for x in syms}
-    factors = _force_factors(model)
+    factors = _force_factors(model, Q)
     at0 = [f.subs(zero) for f in factors]
     bias = block_matrices(model)[1]
     cols = []

@@ -14,7 +14,7 @@ H_000 = (
      "sin(alpha)*sin(beta)", "sin(alpha)*cos(beta)", "cos(alpha)", "1"),
 )
 
-#: (4) of 000: q_nu as printed, in the names of derive/stands.py.
+#: (4) of 000: q_nu as printed, in the names of derive/stands/two_axis.toml.
 Q_000 = (
     "kappa", "Delta_alpha + alpha_star", "epsilon", "Gamma13 - theta2", "Gamma11 - Delta_g",
     "Gamma12 - Delta_beta + theta3", "bias1", "Gamma23 + theta1", "Gamma21 + Delta_beta - theta3",

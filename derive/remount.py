@@ -78,7 +78,7 @@ def substitution_holds(d, Q):
     syms = [p.symbol for p in d.model.parameters]
     z_base = (d.J * sp.Matrix(syms)).subs(sub, simultaneous=True)
     # Mounted block, first order: z_b = (Gk - E dg) Q u + Q hat(theta') u... written directly:
-    u = d.up_nominal
+    u = d.up_nominal[0]
     stand_only = d.J * sp.Matrix([x if p.name in {q.name for q in d.model.stand.parameters}
                                   and p.name not in d.model.stand.theta else 0
                                   for x, p in zip(syms, d.model.parameters)])

@@ -34,6 +34,10 @@ def _link_latex(link: Link, model):
         arg = ("-" if link.sign < 0 else "") + s[link.error]
     else:
         arg = a[link.angle] + (f" - {s[link.error]}" if link.error else "")
+        if link.harmonic:
+            hs, hc = (s[n] for n in link.harmonic)
+            arg += rf" - {hs}\sin {a[link.angle]} - {hc}\cos {a[link.angle]}"
+        arg = f"-({arg})" if link.sign < 0 else arg
     return rf"C_{link.axis}({arg})"
 
 
@@ -94,8 +98,23 @@ def report_context(d):
         title=m.stand.title, source=m.stand.source, model=m,
         chain=" ".join(_link_latex(link, m) for link in m.stand.chain),
         theta=", ".join(_latex(sp.Symbol(n), m) for n in m.stand.theta),
-        up_nominal=_latex(d.up_nominal, m), H_rows=H_rows, h_notes=h_notes, q_rows=q_rows,
+        up_nominal=_latex(d.up_nominal[0], m), H_rows=H_rows, h_notes=h_notes, q_rows=q_rows,
         null_rows=null_rows, free=[{p.name: p.latex for p in m.parameters}[n] for n in ident.free],
         counts=counts, n_params=len(syms), rank=ident.R.rows, est_rows=est_rows,
         plan=m.plan_deg,
     )
+
+
+def stand_report_context(d):
+    """Context of the report of a stand with no published results: what the derivation found."""
+    m, ident = d.model, d.ident
+    syms = [p.symbol for p in m.parameters]
+    H_rows = [(k, name, [(nu + 1, [_latex(ident.H[3 * k + p, nu], m) for p in range(3)])
+                         for nu in range(ident.H.cols)]) for k, name in enumerate(m.mountings)]
+    return dict(
+        title=m.stand.title, source=m.source_file, model=m,
+        chain=" ".join(_link_latex(link, m) for link in m.stand.chain),
+        H_rows=H_rows, rank=ident.R.rows, n_params=len(syms),
+        q_rows=[(nu + 1, _linear_latex(list(ident.R.row(nu)), m)) for nu in range(ident.R.rows)],
+        null_rows=[_linear_latex(list(v), m) for v in ident.null_space],
+        free=[{p.name: p.latex for p in m.parameters}[n] for n in ident.free])

@@ -31,7 +31,7 @@ def test_example2_full_basis_has_common_scale_relation():
 
 def test_two_axis_relations_explain_q():
     from derive.derivation import derive
-    from derive.stands import TWO_AXIS_MODEL
+    from derive.builtin import TWO_AXIS_MODEL
     rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
     assert {"Delta_g", "Gamma11", "Gamma22", "Gamma33"} in [set(g) for g in groups]
     assert "phi[Delta_g] + phi[Gamma11] + phi[Gamma22] + phi[Gamma33] = 0" in [r.text() for r in rel]

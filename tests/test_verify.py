@@ -31,7 +31,7 @@ def test_a_wrong_estimator_is_caught(mod):
 
 def test_plan_search(mod):
     # 000, section 4.3: fewer than 10 positions cannot be optimal; "at least 64" plans of 10.
-    r = plans.search(mod.H)
+    r = plans.search(mod, np.array(plans.QUARTER_DEG, float))
     assert r.min_positions == 10
     assert len(r.optimal_plans) == 64          # exact count on the quarter-turn grid
     starred = tuple(sorted(plans.QUARTER_DEG.index(p) for p in published.PLAN_000))

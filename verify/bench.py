@@ -42,7 +42,7 @@ def bench_derive():
 
     t, _ = timed(run)
     from derive.model import residual
-    from derive.stands import TWO_AXIS_MODEL
+    from derive.builtin import TWO_AXIS_MODEL
     z = residual(TWO_AXIS_MODEL)
     syms = [p.symbol for p in TWO_AXIS_MODEL.parameters]
     zero = {s: 0 for s in syms}
@@ -63,7 +63,7 @@ def bench_guaranteed_errors(mod):
 
 def bench_plan_search(mod, sample=40):
     """Exact minimal-plan proof and count vs LP-per-subset enumeration (sampled, extrapolated)."""
-    t, r = timed(lambda: plans.search(mod.H), repeat=3)
+    t, r = timed(lambda: plans.search(mod, np.array(plans.QUARTER_DEG, float)), repeat=3)
     assert r.min_positions == 10 and len(r.optimal_plans) == 64
     grid = np.deg2rad(np.asarray(plans.QUARTER_DEG, float))
     subsets = list(combinations(range(16), 10))
@@ -85,12 +85,17 @@ def main():
     mod = load("two-axis")
     fresh, _ = timed(lambda: subprocess.run([sys.executable, "-m", "derive", "--check"], cwd=ROOT,
                                             check=True, capture_output=True))
+    from derive import description
+    from derive.builtin import STANDS_DIR
+    from derive.derivation import derive as derive_model
+    three, _ = timed(lambda: derive_model(description.load(STANDS_DIR / "three_axis.toml")))
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod)]
     width = max(len(r[0]) for r in rows)
     print(f"{'figure'.ljust(width)}  {'time, s':>9}  {'baseline, s':>11}  {'speed-up':>9}  baseline")
     for name, t, bname, base in rows:
         print(f"{name.ljust(width)}  {t:9.3f}  {base:11.3f}  {base / t:8.1f}x  {bname}")
     print(f"\n`python -m derive --check` in a fresh process, interpreter start included: {fresh:.2f} s")
+    print(f"derivation of the three-axis stand with its errors: {three:.2f} s")
 
 
 if __name__ == "__main__":

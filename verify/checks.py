@@ -74,7 +74,7 @@ def _same_sets(found, listed):
 
 def plan_checks(mod, search=None):
     """Minimal plan, count of optimal plans, Tables 1 and 2 of 000 (exact search on the quarter grid)."""
-    r = search or plans.search(mod.H)
+    r = search or plans.search(mod, np.array(plans.QUARTER_DEG, float))
     yield Check("minimal number of positions optimal for all 15 q (quarter-turn grid)",
                 "000, section 4.3: fewer than 10 cannot be optimal", str(published.MIN_POSITIONS_000),
                 str(r.min_positions), r.min_positions == published.MIN_POSITIONS_000)

@@ -1,6 +1,8 @@
 """The `garant` command: verify, plan, estimate."""
 import argparse
 import sys
+
+import numpy as np
 import time
 import warnings
 
@@ -34,37 +36,56 @@ def cmd_verify(args):
 
 def cmd_plan(args):
     mod = models.load(args.model)
-    m = len(mod.Q_NAMES)
-    errors = []
-    for nu in range(m):
-        e = [int(i == nu) for i in range(m)]
-        lower = exact.dual_lower_bound(mod.H_SUP, e, e)
-        upper = exact.l1(exact.terms_from_generated(mod, nu))
-        errors.append(float(upper) if lower == upper else None)
-    r = plans.search(mod.H)
-    plan = [[int(a), int(b)] for a, b in mod.PLAN_DEG]
-    report.table(("q", "definition", "optimal guaranteed error (sigma)"),
-                 [(q, d, "unproven" if e is None else f"{e:g}")
-                  for q, d, e in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, errors)])
-    print(f"\nminimal number of positions optimal for every q (quarter-turn grid): {r.min_positions}")
-    print(f"optimal plans of {r.min_positions} positions on the quarter-turn grid: {len(r.optimal_plans)}")
-    print("plan (alpha_deg, beta_deg): " + ", ".join(f"({a}, {b})" for a, b in plan))
+    names, mounts = models.layout(mod)
+    r = plans.search(mod)
+    plan = _preferred_plan(mod, r)
+    multi = len(mounts) > 1
+
+    def fmt(s):
+        return [*(float(v) for v in r.angles_deg[s]), *([mounts[r.mounts[s]]] if multi else [])]
+    report.table(("q", "definition", "optimal guaranteed error (sigma)", "on the continuum"),
+                 [(q, d, f"{e:g}", "proven" if pr else "on the grid only")
+                  for q, d, e, pr in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, r.errors, r.proven)])
+    where = "grid of " + ("detents/quarter turns" if not multi else "quarter turns x mountings")
+    print(f"\nminimal number of positions optimal for every q ({where}, {len(r.angles_deg)} positions): "
+          f"{r.min_positions}")
+    if r.exhaustive:
+        print(f"optimal plans of {r.min_positions} positions on that grid: {len(r.optimal_plans)}")
+    else:
+        print("optimal plan found by a mixed-integer program (too many candidate sets to count every plan)")
+    print(f"plan ({', '.join(a + '_deg' for a in names)}{', mounting' if multi else ''}): "
+          + ", ".join("(" + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in fmt(s)) + ")"
+                      for s in plan))
     if args.json:
         report.write_json(args.json, {
-            "model": args.model, "q_names": list(mod.Q_NAMES), "definitions": list(mod.Q_DEFINITIONS),
-            "guaranteed_errors": errors, "min_positions": r.min_positions,
-            "optimal_plans_count": len(r.optimal_plans), "plan": plan,
-            "optimal_plans": [[list(p) for p in r.plan_deg(pl)] for pl in r.optimal_plans]})
+            "model": args.model, "angles": names, "mountings": mounts, "q_names": list(mod.Q_NAMES),
+            "definitions": list(mod.Q_DEFINITIONS), "guaranteed_errors": list(r.errors),
+            "proven_on_continuum": list(r.proven), "min_positions": r.min_positions,
+            "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
+            "plan": [fmt(s) for s in plan],
+            "optimal_plans": [[fmt(s) for s in pl] for pl in r.optimal_plans]})
     return 0
+
+
+def _preferred_plan(mod, r):
+    """The model's own plan (PLAN_DEG) when it is among the optimal ones, else the first found."""
+    own = getattr(mod, "PLAN_DEG", np.zeros((0, 0)))
+    if len(own):
+        idx = tuple(sorted(int(np.flatnonzero(np.all(r.angles_deg == p, axis=1))[0]) for p in own))
+        if idx in r.optimal_plans:
+            return [int(np.flatnonzero(np.all(r.angles_deg == p, axis=1))[0]) for p in own]
+    return list(r.optimal_plans[0])
 
 
 def cmd_estimate(args):
     mod = models.load(args.model)
-    remount = models.load_remount(args.model)
-    if args.mount and args.mount not in remount.MOUNTS:
-        raise DataError(f"unknown mounting {args.mount!r}; use one of {', '.join(remount.MOUNTS)}")
-    res = estimate_mod.estimate(mod, read_positions(args.data), args.sigma, args.g, remount=remount,
-                                mount=args.mount, gamma=args.gamma)
+    remount = None if args.model.endswith(".toml") else models.load_remount(args.model)
+    if args.mount and (remount is None or args.mount not in remount.MOUNTS):
+        raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
+                        f"+y+z+x; got {args.mount!r}")
+    names, mounts = models.layout(mod)
+    res = estimate_mod.estimate(mod, read_positions(args.data, names, mounts), args.sigma, args.g,
+                                remount=remount, mount=args.mount, gamma=args.gamma)
     print(f"method: {res['method']}")
     report.table(("q", "definition", "estimate", "guaranteed error", "unit"),
                  [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
@@ -133,6 +154,29 @@ def cmd_identify(args):
     return 0
 
 
+def cmd_derive(args):
+    from pathlib import Path
+
+    from derive import codegen, description
+    try:
+        model = description.load(args.stand)
+        t0 = time.perf_counter()
+        files = codegen.model_files(model, module_dir=args.out, docs_dir=args.out)
+    except description.DescriptionError as e:
+        raise DataError(str(e)) from None
+    for rel, text in files.items():
+        Path(rel).parent.mkdir(parents=True, exist_ok=True)
+        Path(rel).write_text(text)
+        print(f"wrote {rel}")
+    mod = models.from_description(args.stand)
+    print(f"{model.stand.title}: {len(model.parameters)} physical parameters, {len(mod.Q_NAMES)} "
+          f"identifiable combinations, {len(mod.UNSEPARABLE)} unseparable directions "
+          f"(derived in {time.perf_counter() - t0:.1f} s)")
+    for q, d in zip(mod.Q_NAMES, mod.Q_DEFINITIONS):
+        print(f"  {q} = {d}")
+    return 0
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -140,12 +184,13 @@ def parser():
     v.add_argument("--json", metavar="FILE", help="also write the checks as JSON")
     v.set_defaults(run=cmd_verify)
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
-    p.add_argument("model", choices=models.STANDS)
+    p.add_argument("model", help=f"a built-in stand ({', '.join(models.STANDS)}) or a STAND.toml")
     p.add_argument("--json", metavar="FILE")
     p.set_defaults(run=cmd_plan)
     e = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
-    e.add_argument("data", metavar="DATA.csv", help="CSV: alpha_deg,beta_deg,f1,f2,f3 (f in m/s^2)")
-    e.add_argument("--model", required=True, choices=models.STANDS)
+    e.add_argument("data", metavar="DATA.csv", help="CSV: <angle>_deg for each angle (alpha_deg,beta_deg on the "
+                   "two-axis stand), f1,f2,f3 in m/s^2, and mount when the stand uses several mountings")
+    e.add_argument("--model", required=True, help=f"a built-in stand ({', '.join(models.STANDS)}) or a STAND.toml")
     e.add_argument("--sigma", type=float, required=True,
                    help="bound on each residual component, dimensionless (units of g), (5) of 000")
     e.add_argument("--g", type=float, default=G_DEFAULT, help="model gravity, m/s^2 (default 9.81)")
@@ -177,6 +222,10 @@ def parser():
     i.add_argument("--plan", metavar="FILE", help="CSV with alpha_deg, beta_deg: what this plan cannot separate")
     i.add_argument("--json", metavar="FILE")
     i.set_defaults(run=cmd_identify)
+    dv = sub.add_parser("derive", help="derive a stand description: generated module and derivation report")
+    dv.add_argument("stand", metavar="STAND.toml")
+    dv.add_argument("--out", default=".", help="directory for the module and report (default: here)")
+    dv.set_defaults(run=cmd_derive)
     return ap
 
 
@@ -185,7 +234,7 @@ def main(argv=None):
     warnings.filterwarnings("ignore", category=RuntimeWarning, module="cvxpy")
     try:
         return args.run(args)
-    except (DataError, LPFailed) as e:
+    except (DataError, LPFailed, ValueError) as e:
         print(f"garant: error: {e}", file=sys.stderr)
         return 2
     except OSError as e:

@@ -27,7 +27,7 @@ def terms_from_generated(mod, nu):
 def unbiased_image(H, terms):
     """sum_k Psi_k H^(p_k)(position_k), exactly: a list of Fractions (the a of the estimator)."""
     positions = sorted({pos for _, _, pos in terms})
-    cols = integer_columns(H, positions)
+    cols = integer_columns(H, positions)            # H: a model's H function of the angles
     out = [Fraction(0)] * cols.shape[2]
     for w, p, pos in terms:
         h = cols[positions.index(pos), p]

@@ -60,7 +60,7 @@ def report(model, plan_path=None):
     from derive import identifiability as I
     if model == "two-axis":
         from derive.derivation import derive
-        from derive.stands import TWO_AXIS_MODEL
+        from derive.builtin import TWO_AXIS_MODEL
         import generated.two_axis as mod
         rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
         res = {"model": model, "estimable": [f"{q} = {d}" for q, d in zip(mod.Q_NAMES, mod.Q_DEFINITIONS)],

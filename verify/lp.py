@@ -50,10 +50,17 @@ def chebyshev(A):
     return t.value, Y.value
 
 
-def measurement_matrix(H, positions):
-    """Columns H^(p)(alpha_s, beta_s), ordered (s, p); positions in radians, shape (S, 2)."""
-    positions = np.asarray(positions, float)
-    Hs = H(positions[:, 0], positions[:, 1])          # (3, m, S)
+def measurement_matrix(H, positions, mounts=None):
+    """Columns H^(p) at the positions, ordered (s, p); positions in radians, shape (S, n_angles).
+
+    H is a model's H function (or a module, for stands with several mountings: then `mounts`
+    gives each position's mounting index)."""
+    positions = np.atleast_2d(np.asarray(positions, float))
+    if callable(H):
+        Hs = H(*[positions[:, i] for i in range(positions.shape[1])])          # (3, m, S)
+    else:
+        from .models import H_at
+        Hs = H_at(H, positions, mounts)
     return np.transpose(Hs, (1, 2, 0)).reshape(Hs.shape[1], -1)
 
 

@@ -1,20 +1,59 @@
-"""Names of the built-in generated models, as the command line spells them."""
+"""The models the command line knows: built-in generated modules, or a stand description file."""
 import importlib
+import types
+from pathlib import Path
+
+import numpy as np
 
 from .data import DataError
 
-MODELS = {"two-axis": "generated.two_axis", "norm": "generated.norm"}
-STANDS = ["two-axis"]            # models with stand angles (plan, estimate)
+MODELS = {"two-axis": "generated.two_axis", "single-axis": "generated.single_axis",
+          "three-axis": "generated.three_axis", "norm": "generated.norm"}
+STANDS = ["two-axis", "single-axis", "three-axis"]       # models with stand angles (plan, estimate)
 
 
 def load(name):
-    """The generated module of a built-in model."""
+    """The generated module of a built-in model, or of a description file (derived in memory)."""
+    if str(name).endswith(".toml"):
+        return from_description(name)
     if name not in MODELS:
-        raise DataError(f"unknown model {name!r}; built-in models: {', '.join(MODELS)}")
+        raise DataError(f"unknown model {name!r}; built-in models: {', '.join(MODELS)}, or a STAND.toml")
     return importlib.import_module(MODELS[name])
 
 
+def from_description(path):
+    """Derive a stand description and execute the rendered module (no file is written)."""
+    from derive import codegen, description
+    try:
+        model = description.load(path)
+        files = codegen.model_files(model)
+    except description.DescriptionError as e:
+        raise DataError(str(e)) from None
+    key = f"generated/{model.stand.name}.py"
+    mod = types.ModuleType(model.stand.name)
+    mod.__file__ = str(Path(path).resolve())
+    exec(compile(files[key], key, "exec"), mod.__dict__)
+    return mod
+
+
 def load_remount(name):
-    """The generated remount module (25)-(29) of a built-in model."""
+    """The generated remount module (25)-(29) of a built-in model, or None."""
     load(name)
-    return importlib.import_module(MODELS[name] + "_remount")
+    try:
+        return importlib.import_module(MODELS[name] + "_remount")
+    except (KeyError, ModuleNotFoundError):
+        return None
+
+
+def layout(mod):
+    """Angle names and mounting names of a stand module (one mounting: ('+x+y+z',))."""
+    return list(mod.ANGLES), list(getattr(mod, "MOUNTINGS", ("+x+y+z",)))
+
+
+def H_at(mod, angles_rad, mounts=None):
+    """H at positions: angles (S, n_angles) in radians, mounts (S,) indices -> (3, m, S)."""
+    angles_rad = np.atleast_2d(np.asarray(angles_rad, float))
+    cols = [angles_rad[:, i] for i in range(angles_rad.shape[1])]
+    if hasattr(mod, "MOUNTINGS"):
+        return mod.H(*cols, mount=np.zeros(len(angles_rad), int) if mounts is None else np.asarray(mounts))
+    return mod.H(*cols)

@@ -69,7 +69,7 @@ def examples():
     """Identical linear dependence (003, (9)-(16)) found by the service, and the two-axis stand."""
     from derive import identifiability as I
     from derive.derivation import derive
-    from derive.stands import TWO_AXIS_MODEL
+    from derive.builtin import TWO_AXIS_MODEL
     ex1 = I.analyse_example("003-example1")
     got = [r.text() for r in ex1["relations"]]
     want = "-a*phi[c_x] + phi[theta_d] + phi[theta_x] + phi[theta_y] = 0"

@@ -31,7 +31,7 @@ def analyse(mod, stand_idx):
     def H_reduced(alpha, beta):
         return mod.H(alpha, beta)[:, keep]
 
-    cols = plans.integer_columns(mod.H, plans.QUARTER_DEG)
+    cols = plans.integer_columns(mod, plans.QUARTER_DEG)
     reduced_cols = cols[:, :, keep]
     out = []
     for j, nu in enumerate(keep):

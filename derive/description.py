@@ -1,0 +1,186 @@
+"""Stand descriptions in TOML, read safely: plain data, no code, every name checked.
+
+The chain is written from the base to the table, as one builds a stand; each link is a turn about a
+coordinate axis of the frame it carries (x, y, z, or -x, -y, -z): either a read angle less its
+encoder offset (and optional once-per-turn harmonic), or a fixed small error. Errors raise
+DescriptionError with the file and the place in it.
+"""
+import re
+import tomllib
+from pathlib import Path
+
+from .model import Angle, Block, Link, Model, Parameter, Stand
+
+AXES = {"x": 1, "y": 2, "z": 3}
+KEYS = {
+    "stand": {"name", "title", "source"},
+    "angle": {"name", "latex", "meaning", "range_deg", "detents_deg"},
+    "parameter": {"name", "latex", "unit", "meaning"},
+    "link": {"axis", "angle", "offset", "harmonic", "error"},
+    "block": {"misalignment", "gravity_error", "mountings"},
+    "estimation": {"preferred", "plan_deg", "remount"},
+}
+NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+
+
+class DescriptionError(ValueError):
+    """A problem in a stand description: the message names the file and the place in it."""
+
+
+def _fail(path, where, msg):
+    raise DescriptionError(f"{path}: {where}: {msg}")
+
+
+def _keys(path, where, table, allowed):
+    if not isinstance(table, dict):
+        _fail(path, where, "expected a table")
+    for k in table:
+        if k not in allowed:
+            _fail(path, where, f"unknown key {k!r} (allowed: {', '.join(sorted(allowed))})")
+
+
+def _name(path, where, value):
+    if not isinstance(value, str) or not NAME.match(value):
+        _fail(path, where, f"{value!r} is not a valid name (letters, digits, _; starts with a letter)")
+    return value
+
+
+def _axis(path, where, value):
+    if isinstance(value, list):
+        if len(value) != 3 or not all(isinstance(v, (int, float)) for v in value):
+            _fail(path, where, "an axis vector needs three numbers")
+        if not any(value):
+            _fail(path, where, "an axis of zero length")
+        nz = [i for i, v in enumerate(value) if v]
+        if len(nz) != 1:
+            _fail(path, where, f"{value} is not a coordinate axis; only x, y, z (and their negatives) are supported")
+        return nz[0] + 1, 1 if value[nz[0]] > 0 else -1
+    if not isinstance(value, str) or value.lstrip("+-") not in AXES or len(value) > 2:
+        _fail(path, where, f"{value!r} is not an axis (x, y, z, -x, -y, -z)")
+    return AXES[value.lstrip("+-")], -1 if value.startswith("-") else 1
+
+
+def _angle(path, where, a):
+    _keys(path, where, a, KEYS["angle"])
+    name = _name(path, f"{where}.name", a.get("name"))
+    lo, hi = a.get("range_deg", [0, 360])
+    if not (isinstance(lo, (int, float)) and isinstance(hi, (int, float)) and lo < hi and hi - lo <= 360):
+        _fail(path, f"{where}.range_deg", f"[{lo}, {hi}] is not a range of at most one turn")
+    detents = a.get("detents_deg", [])
+    for d in detents:
+        if not isinstance(d, (int, float)) or not lo <= d <= hi:
+            _fail(path, f"{where}.detents_deg", f"{d} is outside the range [{lo}, {hi}]")
+    return Angle(name, a.get("latex", name), a.get("meaning", f"{name}, as read"), (lo, hi), tuple(detents))
+
+
+def load(path, source_file=None):
+    """Read a description file into a Model; DescriptionError on any problem."""
+    path = Path(path)
+    shown = source_file or str(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as e:
+        raise DescriptionError(f"{path}: cannot read ({e.strerror})") from None
+    except tomllib.TOMLDecodeError as e:
+        raise DescriptionError(f"{path}: not valid TOML ({e})") from None
+    return from_data(data, shown)
+
+
+def from_data(data, path="<description>"):
+    for k in data:
+        if k not in KEYS:
+            _fail(path, k, f"unknown table (allowed: {', '.join(KEYS)})")
+    stand = data.get("stand", {})
+    _keys(path, "stand", stand, KEYS["stand"])
+    name = _name(path, "stand.name", stand.get("name"))
+    angles = [_angle(path, f"angle[{i}]", a) for i, a in enumerate(data.get("angle", []), 1)]
+    if not angles:
+        _fail(path, "angle", "a stand needs at least one [[angle]]")
+    params = []
+    for i, p in enumerate(data.get("parameter", []), 1):
+        _keys(path, f"parameter[{i}]", p, KEYS["parameter"])
+        pname = _name(path, f"parameter[{i}].name", p.get("name"))
+        if pname in {q.name for q in params} or pname in {a.name for a in angles}:
+            _fail(path, f"parameter[{i}].name", f"{pname!r} is declared twice")
+        params.append(Parameter(pname, p.get("latex", pname), p.get("unit", "rad"), p.get("meaning", pname)))
+    declared = {p.name for p in params}
+    used = set()
+
+    def ref(where, value):
+        _name(path, where, value)
+        if value not in declared:
+            _fail(path, where, f"parameter {value!r} is not declared in [[parameter]]")
+        used.add(value)
+        return value
+
+    links = []
+    for i, l in enumerate(data.get("link", []), 1):
+        where = f"link[{i}]"
+        _keys(path, where, l, KEYS["link"])
+        axis, sign = _axis(path, f"{where}.axis", l.get("axis"))
+        if "angle" in l:
+            if l["angle"] not in {a.name for a in angles}:
+                _fail(path, f"{where}.angle", f"{l['angle']!r} is not an [[angle]]")
+            if "error" in l:
+                _fail(path, where, "a link with an angle takes 'offset', not 'error'")
+            harmonic = l.get("harmonic")
+            if harmonic is not None and (not isinstance(harmonic, list) or len(harmonic) != 2):
+                _fail(path, f"{where}.harmonic", "give two parameters [a_sin, a_cos]")
+            links.append(Link(axis, l["angle"], ref(f"{where}.offset", l["offset"]) if "offset" in l else None,
+                              sign, tuple(ref(f"{where}.harmonic", h) for h in harmonic) if harmonic else None))
+        elif "error" in l:
+            if "offset" in l or "harmonic" in l:
+                _fail(path, where, "a fixed link takes 'error' only")
+            links.append(Link(axis, None, ref(f"{where}.error", l["error"]), sign))
+        else:
+            _fail(path, where, "a link needs an 'angle' (turning) or an 'error' (fixed small turn)")
+    if not links:
+        _fail(path, "link", "a stand needs at least one [[link]]")
+    block = data.get("block", {})
+    _keys(path, "block", block, KEYS["block"])
+    theta = block.get("misalignment")
+    if not isinstance(theta, list) or len(theta) != 3:
+        _fail(path, "block.misalignment", "give the three mounting-misalignment parameters")
+    theta = tuple(ref(f"block.misalignment[{i}]", t) for i, t in enumerate(theta, 1))
+    dg = ref("block.gravity_error", block.get("gravity_error"))
+    from .remount import mountings
+    mounts = tuple(block.get("mountings", ["+x+y+z"]))
+    for i, m in enumerate(mounts, 1):
+        if m not in mountings():
+            _fail(path, f"block.mountings[{i}]", f"{m!r} is not a proper mounting like +x+y+z or +y+z+x")
+    unused = declared - used
+    if unused:
+        _fail(path, "parameter", f"declared but used nowhere: {', '.join(sorted(unused))}")
+    est = data.get("estimation", {})
+    _keys(path, "estimation", est, KEYS["estimation"])
+    block_params = [p.name for p in Block().parameters]
+    default = ([l.error for l in links if l.error and l.error not in theta and l.error != dg]
+               + [h for l in links if l.harmonic for h in l.harmonic] + block_params + [*theta, dg])
+    preferred = est.get("preferred", default)
+    if sorted(preferred) != sorted(declared | set(block_params)):
+        missing = (declared | set(block_params)) - set(preferred)
+        extra = set(preferred) - (declared | set(block_params))
+        _fail(path, "estimation.preferred", f"must list every parameter once (missing: {sorted(missing)}, "
+              f"unknown: {sorted(extra)})")
+    plan = tuple(tuple(p) for p in est.get("plan_deg", []))
+    for i, p in enumerate(plan, 1):
+        if len(p) != len(angles):
+            _fail(path, f"estimation.plan_deg[{i}]", f"needs {len(angles)} angles")
+    st = Stand(name=name, title=stand.get("title", name), angles=tuple(angles), chain=tuple(links[::-1]),
+               parameters=tuple(params), theta=theta, gravity_error=dg, source=stand.get("source", path))
+    return Model(stand=st, block=Block(), preferred=tuple(preferred), plan_deg=plan,
+                 remount=bool(est.get("remount", False)), mountings=mounts, source_file=path)
+
+
+def check_observable(model, J):
+    """Every physical parameter must move the readings to first order; else name it and its link."""
+    n = len(model.stand.chain)
+    for k, p in enumerate(model.parameters):
+        if all(v == 0 for v in J.col(k)):
+            where = next((f"link[{n - i}].{'offset' if l.angle and l.error == p.name else 'error'}"
+                          if p.name == l.error else f"link[{n - i}].harmonic"
+                          for i, l in enumerate(model.stand.chain) if p.name in (l.error, *(l.harmonic or ()))),
+                         "block")
+            raise DescriptionError(f"{model.source_file}: {where}: parameter {p.name!r} cannot be observed: "
+                                   "the readings do not depend on it to first order (e.g. a turn about "
+                                   "the vertical); remove it from the description")

@@ -1,0 +1,101 @@
+"""Stand descriptions (TOML): the built-in stands derive, plan and round-trip; bad files are named."""
+import json
+
+import numpy as np
+import pytest
+
+from conftest import write_csv
+from derive import description
+from derive.builtin import MODELS, STANDS_DIR
+from verify import models, plans
+from verify.cli import main
+
+SIGMA, G = 1e-5, 9.81
+
+
+def test_two_axis_description_reproduces_the_spine(mod):
+    # The TOML of 000 gives the published (3) and (4) (tests/test_derive.py) and the same plans.
+    r = plans.search(mod)
+    assert r.min_positions == 10 and len(r.optimal_plans) == 64 and all(r.proven)
+
+
+@pytest.mark.parametrize("name, m, n_min", [("single-axis", 15, 8), ("three-axis", 17, 9)])
+def test_builtin_stands_plan(name, m, n_min, tmp_path):
+    out = tmp_path / "p.json"
+    assert main(["plan", name, "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    assert len(res["q_names"]) == m and res["min_positions"] == n_min
+    assert all(e >= 1 for e in res["guaranteed_errors"])
+
+
+def write_multi_csv(path, angles, mounts, names, mount_names, f):
+    cols = [f"{a}_deg" for a in names] + ["f1", "f2", "f3"] + (["mount"] if len(mount_names) > 1 else [])
+    with open(path, "w") as fh:
+        fh.write(",".join(cols) + "\n")
+        for a, k, row in zip(angles, mounts, f):
+            cells = [repr(float(v)) for v in a] + [repr(float(v)) for v in row]
+            fh.write(",".join(cells + ([mount_names[k]] if len(mount_names) > 1 else [])) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("name", ["single-axis", "three-axis"])
+def test_simulate_estimate_round_trip(name, tmp_path):
+    mod = models.load(name)
+    names, mount_names = models.layout(mod)
+    r = plans.search(mod)
+    plan = list(r.optimal_plans[0])
+    angles, mounts = r.angles_deg[plan], r.mounts[plan]
+    rng = np.random.default_rng(3)
+    p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    rad = np.deg2rad(angles)
+    kw = {"mount": mounts} if len(mount_names) > 1 else {}
+    f = mod.readings(*rad.T, p, G, **kw).T + G * rng.uniform(-SIGMA, SIGMA, (len(plan), 3))
+    path = write_multi_csv(tmp_path / "d.csv", angles, mounts, names, mount_names, f)
+    out = tmp_path / "e.json"
+    assert main(["estimate", "--model", name, str(path), "--sigma", str(SIGMA), "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    q_hat = np.array([res["q"][q] for q in mod.Q_NAMES])
+    bound = np.array([res["guaranteed_error"][q] for q in mod.Q_NAMES])
+    np.testing.assert_allclose(bound, SIGMA * np.array(r.errors), rtol=1e-6)   # optimal on this plan
+    assert np.all(np.abs(q_hat - mod.PHYSICAL_TO_Q @ p) <= bound + 1e-7)
+
+
+def test_description_file_as_model(tmp_path, capsys):
+    src = STANDS_DIR / "single_axis.toml"
+    assert main(["derive", str(src), "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "single_axis.py").exists() and (tmp_path / "derivation_single_axis.md").exists()
+    assert main(["plan", str(src)]) == 0
+    assert "minimal number of positions" in capsys.readouterr().out
+
+
+BASE = (STANDS_DIR / "single_axis.toml").read_text()
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace('axis = "y"\nerror = "kappa"', 'axis = "y"\nerror = "kappa"\nangel = "phi"'),
+     "link[1]: unknown key 'angel'"),
+    (lambda t: t.replace('axis = "y"\nerror = "kappa"', 'axis = [0, 0, 0]\nerror = "kappa"'),
+     "link[1].axis: an axis of zero length"),
+    (lambda t: t.replace('axis = "y"\nerror = "kappa"', 'axis = "w"\nerror = "kappa"'),
+     "link[1].axis: 'w' is not an axis"),
+    (lambda t: t.replace("detents_deg = [0, 90, 180, 270]", "detents_deg = [0, 90, 400]"),
+     "angle[1].detents_deg: 400 is outside the range"),
+    (lambda t: t.replace('offset = "Delta_phi"', 'offset = "Delta_psi"'),
+     "link[2].offset: parameter 'Delta_psi' is not declared"),
+    (lambda t: t.replace('axis = "y"\nerror = "kappa"', 'axis = "z"\nerror = "kappa"'),
+     "link[1].error: parameter 'kappa' cannot be observed"),
+    (lambda t: t + "\n[extra]\nx = 1\n", "extra: unknown table"),
+    (lambda t: t.replace("[stand]", "[stand"), "not valid TOML"),
+])
+def test_bad_description_names_the_place(tmp_path, capsys, edit, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(edit(BASE))
+    assert main(["derive", str(path), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_builtin_files_are_the_registered_models():
+    assert set(MODELS) == {p.stem for p in STANDS_DIR.glob("*.toml")} == {"two_axis", "single_axis", "three_axis"}
+    for key, m in MODELS.items():
+        assert description.load(STANDS_DIR / f"{key}.toml").stand == m.stand
