@@ -83,21 +83,24 @@ class MinimalSet:
 
 
 def dual_on_grid(cols, nu):
-    """An optimal dual vector of (9)-(10) for q_nu on the grid, rational when it can be made so.
+    """An optimal dual vector of (9)-(10) for q_nu on the grid (rational when it can be made so),
+    and the minimal optimal sets it gives (None when too many to enumerate).
 
     First lambda = e_nu / max|H_nu| (the Chebyshev polynomial with y = 0); if the grid has no
     estimator reaching its value, the LP's own dual, rationalised and checked exactly on the grid."""
     S, _, m = cols.shape
     top = int(np.abs(cols[:, :, nu]).max())
     lam = [Fraction(int(i == nu), top) for i in range(m)]
-    if _minimal(cols, nu, lam):
-        return lam
+    sets = _minimal(cols, nu, lam)
+    if sets:
+        return lam, sets
     from . import lp
     A = cols.reshape(S * 3, m).T.astype(float)
     L, _ = lp.dual(A, np.eye(m)[nu])
     lam = [Fraction(v).limit_denominator(1000) for v in L[:, 0]]
     ok = all(abs(sum(l * int(h) for l, h in zip(lam, col))) <= 1 for col in A.T.astype(int))
-    return lam if ok else [float(v) for v in L[:, 0]]
+    lam = lam if ok else [float(v) for v in L[:, 0]]
+    return lam, _minimal(cols, nu, lam)
 
 
 ENUMERATION_LIMIT = 200_000
@@ -166,7 +169,7 @@ def _minimal(cols, nu, lam):
 
 def minimal_sets(cols, nu, lam=None):
     """All minimal optimal position sets of q_nu on the grid (cols: integer (S, 3, m))."""
-    return _minimal(cols, nu, dual_on_grid(cols, nu) if lam is None else lam)
+    return dual_on_grid(cols, nu)[1] if lam is None else _minimal(cols, nu, lam)
 
 
 def exact_lower_bound(H_sup, nu, lam):
@@ -250,8 +253,7 @@ def search(mod, angles_deg=None, mounts=None):
     mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
     cols = integer_columns(mod, angles_deg, mounts)
     m = cols.shape[2]
-    lams = [dual_on_grid(cols, nu) for nu in range(m)]
-    per_nu = [_minimal(cols, nu, lam) for nu, lam in enumerate(lams)]
+    lams, per_nu = zip(*[dual_on_grid(cols, nu) for nu in range(m)])
     if any(sets == [] for sets in per_nu):
         bad = ", ".join(f"q{nu + 1}" for nu, sets in enumerate(per_nu) if sets == [])
         raise ValueError(f"the grid has no optimal estimator of {bad} (not identifiable there?)")
