@@ -6,6 +6,7 @@ import jinja2
 import sympy as sp
 
 from .derivation import derive
+from .effects import VARIABLE_DEFAULTS
 from .estimators import sup_bound
 from .printer import linear_text, pycode
 from .report import report_context, stand_report_context
@@ -49,6 +50,9 @@ def model_context(d):
     return dict(
         title=m.stand.title, source=m.stand.source,
         angles=[a.name for a in m.stand.angles], parameters=m.parameters,
+        signature=[a.name for a in m.stand.angles] + [f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
+        variable_sig=[f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
+        row_args=[a.name for a in m.stand.angles] + [str(v) for v in m.variables],
         ranges=[[_num(v) for v in a.range_deg] for a in m.stand.angles],
         detents=[[_num(v) for v in a.detents_deg] for a in m.stand.angles],
         q_names=[f"q{i + 1}" for i in range(ident.R.rows)],
@@ -58,8 +62,8 @@ def model_context(d):
         R=[[pycode(v) for v in ident.R.row(i)] for i in range(ident.R.rows)],
         null_space=[[pycode(v) for v in vec] for vec in ident.null_space],
         mounts=[_mount_context(d, k, name) for k, name in enumerate(m.mountings)],
-        H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) for nu in range(ident.H.cols)]
-               for p in range(ident.H.rows)],
+        H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) if not m.variables else "np.inf"
+                for nu in range(ident.H.cols)] for p in range(ident.H.rows)],
         plan_deg=[list(pos) for pos in m.plan_deg],
         estimator_terms=[[(s, p, w.p, w.q) for (s, p), w in sorted(psi.items())]
                          for psi in d.estimators],

@@ -11,18 +11,29 @@ from dataclasses import dataclass
 import sympy as sp
 
 
-def trig_basis(expr, angles):
-    """Split a trigonometric polynomial into {canonical monomial: rational coefficient}."""
+def trig_basis(expr, angles, others=()):
+    """Split a trigonometric polynomial into {canonical monomial: rational coefficient}.
+
+    `others` are further variables (time, temperature) taken as plain polynomial generators; an
+    absolute value |e| is a function of its own (it is no trigonometric polynomial), keyed by the
+    canonical form of e."""
     cs = {a: (sp.Symbol(f"c_{a}"), sp.Symbol(f"s_{a}")) for a in angles}
-    poly = sp.expand(expr.subs({f(a): v for a, pair in cs.items()
-                                for f, v in zip((sp.cos, sp.sin), pair)}))
-    gens = [v for pair in cs.values() for v in pair]
+    trig = {f(a): v for a, pair in cs.items() for f, v in zip((sp.cos, sp.sin), pair)}
+    absolutes = {}
+    for k, node in enumerate(sorted(expr.atoms(sp.Abs), key=sp.default_sort_key)):
+        inner = sp.expand(node.args[0].subs(trig))
+        absolutes[node] = sp.Symbol(f"abs_{k}")
+        absolutes[absolutes[node]] = node
+    poly = sp.expand(expr.subs({k: v for k, v in absolutes.items() if isinstance(k, sp.Abs)}).subs(trig))
+    gens = [v for pair in cs.values() for v in pair] + list(others) + [
+        v for k, v in absolutes.items() if isinstance(k, sp.Abs)]
     if poly.free_symbols - set(gens):
         raise ValueError(f"not a trigonometric polynomial in the angles: {expr}")
     rules = [s**2 + c**2 - 1 for c, s in cs.values()]
     order = [s for _, s in cs.values()] + [c for c, _ in cs.values()]
     _, rem = sp.reduced(poly, rules, *order, order="lex") if rules else (None, poly)
     back = {v: f(a) for a, pair in cs.items() for f, v in zip((sp.cos, sp.sin), pair)}
+    back.update({v: k for k, v in absolutes.items() if isinstance(k, sp.Abs)})
     out = {}
     for monom, coeff in sp.Poly(rem, *gens).terms():
         term = sp.Mul(*[g**k for g, k in zip(gens, monom)]).subs(back)
@@ -42,12 +53,12 @@ class Identification:
     free: tuple[str, ...]            # parameters that appear only inside combinations
 
 
-def identify(J, names, preferred, angles):
+def identify(J, names, preferred, angles, others=()):
     """Rank analysis of J (3 x n, trig entries): combinations q, linearised H, null space."""
     index = [names.index(n) for n in preferred]
     rows, keys = [], []
     for p in range(J.rows):
-        parts = [trig_basis(J[p, k], angles) for k in range(J.cols)]
+        parts = [trig_basis(J[p, k], angles, others) for k in range(J.cols)]
         for term in sorted({t for d in parts for t in d}, key=sp.default_sort_key):
             keys.append((p, term))
             rows.append([parts[k].get(term, 0) for k in index])

@@ -32,7 +32,7 @@ def derive(model):
     from .description import check_observable
     check_observable(model, J)
     names = [p.name for p in model.parameters]
-    ident = combinations.identify(J, names, model.preferred, model.angle_symbols)
+    ident = combinations.identify(J, names, model.preferred, model.angle_symbols, model.variables)
     est = (estimators.optimal_estimators(ident.H, model.angle_symbols, model.plan_deg)
            if model.plan_deg else ())
     Qs = model_mod.mount_matrices(model)

@@ -101,10 +101,27 @@ class Model:
     remount: bool = False          # derive (25)-(29): the block may be mounted by any turn Q
     mountings: tuple[str, ...] = ("+x+y+z",)   # exact turns Q the block is used in (v_block = Q v_table)
     source_file: str = ""          # the description file, for generated headers
+    effects: tuple[str, ...] = ()  # sensor effects of the catalogue (derive/effects.py) added to the block
 
     @property
     def parameters(self):
-        return self.stand.parameters + self.block.parameters
+        from .effects import CATALOGUE
+        return self.stand.parameters + self.block.parameters + tuple(
+            p for name in self.effects for p in CATALOGUE[name].params)
+
+    @property
+    def variables(self):
+        """Row variables besides the angles that the model depends on (time, temperature)."""
+        from .effects import TEMP, TIME
+        names = set()
+        for name in self.effects:
+            names |= {TIME, TEMP} & self._effect_term(name).free_symbols
+        return tuple(v for v in (TIME, TEMP) if v in names)
+
+    def _effect_term(self, name):
+        from .effects import CATALOGUE
+        w = sp.Matrix(sp.symbols("w1:4", real=True))
+        return CATALOGUE[name].term(w, self.symbols)
 
     @property
     def symbols(self):
@@ -187,8 +204,21 @@ def block_matrices(model):
 
 
 def specific_force_over_g(model, Q=None):
-    """Readings over model gravity g: (E + Gamma)(1 - Delta_g/g) Q u_true + Delta_f0/g ((1) of 000)."""
-    return _product(_force_factors(model, Q)) + block_matrices(model)[1]
+    """Readings over model gravity g: (E + Gamma)(1 - Delta_g/g) Q u_true + Delta_f0/g ((1) of 000),
+    plus the sensor effects of the catalogue as functions of the true specific force over g."""
+    return _product(_force_factors(model, Q)) + block_matrices(model)[1] + _effects_over_g(model, Q)
+
+
+def _effects_over_g(model, Q, nominal=False):
+    """Sensor effects over g; with `nominal`, at the nominal specific force (enough at first order,
+    since every effect term is an effect parameter times a function of w)."""
+    from .effects import CATALOGUE
+    out = sp.zeros(3, 1)
+    if model.effects:
+        w = up_nominal(model, Q) if nominal else _product(_force_factors(model, Q)[1:])
+        for name in model.effects:
+            out += CATALOGUE[name].term(w, model.symbols)
+    return out
 
 
 def residual(model, Q=None):
@@ -210,10 +240,10 @@ def _jacobian(model, Q):
     zero = {x: 0 for x in syms}
     factors = _force_factors(model, Q)
     at0 = [f.subs(zero) for f in factors]
-    bias = block_matrices(model)[1]
+    bias = block_matrices(model)[1] + _effects_over_g(model, Q, nominal=True)
     cols = []
     for x in syms:
-        col = bias.diff(x)
+        col = bias.diff(x).subs(zero)
         for i, f in enumerate(factors):
             df = f.diff(x)
             if df.is_zero_matrix:

@@ -81,6 +81,36 @@ def bench_plan_search(mod, sample=40):
         "LP per subset of 9 and 10 positions (extrapolated)", base
 
 
+def bench_diagnose(mod):
+    """A diagnosis with the whole catalogue on 96 positions (fresh caches) vs rendering every
+    extended model's module (what scoring would cost without the derived-H path)."""
+    import tempfile
+
+    from derive import codegen, derivation, effects
+    from derive.builtin import TWO_AXIS_MODEL
+
+    from . import diagnose, simulate
+    from .data import read_positions
+    P, f, t, T, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:30x45", [("scale_quadratic", [1e-4, 0, 0])],
+                                      1e-5, 0)
+    with tempfile.TemporaryDirectory() as tmp:
+        simulate.write(f"{tmp}/d.csv", P, f, t, T)
+        pos = read_positions(f"{tmp}/d.csv")
+
+        def run():
+            derivation.derive.cache_clear()
+            effects.numeric_H.cache_clear()
+            return diagnose.diagnose(TWO_AXIS_MODEL, mod, pos, 1e-5, 9.81, prior=2e-4)
+        t_run, res = timed(run)
+    assert res["effects"] == ["scale_quadratic"]
+    def render_all():
+        derivation.derive.cache_clear()
+        return [codegen.model_files(effects.extend(TWO_AXIS_MODEL, [e]), "x", "x") for e in effects.CATALOGUE]
+    base, _ = timed(render_all)
+    return ("diagnosis, whole catalogue, 96 positions (target < 10 s)", t_run,
+            "derive and render every extended module", base)
+
+
 def codegen_outputs():
     from derive import codegen
     return codegen.outputs()
@@ -95,7 +125,7 @@ def main():
     from derive.builtin import STANDS_DIR
     from derive.derivation import derive as derive_model
     three, _ = timed(lambda: derive_model(description.load(STANDS_DIR / "three_axis.toml")))
-    rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod)]
+    rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod), bench_diagnose(mod)]
     width = max(len(r[0]) for r in rows)
     print(f"{'figure'.ljust(width)}  {'time, s':>9}  {'baseline, s':>11}  {'speed-up':>9}  baseline")
     for name, t, bname, base in rows:

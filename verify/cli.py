@@ -177,6 +177,84 @@ def cmd_derive(args):
     return 0
 
 
+def _base_model(name):
+    from derive import description
+    from derive.builtin import MODELS as BUILTIN
+    if name.endswith(".toml"):
+        try:
+            return description.load(name)
+        except description.DescriptionError as e:
+            raise DataError(str(e)) from None
+    key = name.replace("-", "_")
+    if key not in BUILTIN:
+        raise DataError(f"unknown stand {name!r}; use {', '.join(models.STANDS)} or a STAND.toml")
+    return BUILTIN[key]
+
+
+def cmd_simulate(args):
+    from derive.effects import CATALOGUE
+    from . import simulate
+    base = _base_model(args.model)
+    mod = models.load(args.model)
+    effects = [simulate.parse_effect(e, CATALOGUE) for e in args.effect]
+    P, f, t, T, _ = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g, args.size)
+    simulate.write(args.output, P, f, t, T)
+    hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects) or "none"
+    print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}")
+    return 0
+
+
+def cmd_diagnose(args):
+    from . import diagnose
+    base = _base_model(args.model)
+    mod = models.load(args.model)
+    names, mounts = models.layout(mod)
+    if len(mounts) > 1 or len(names) != 2:
+        raise DataError("diagnose works on two-angle stands with one mounting for now")
+    pos = read_positions(args.data, names, mounts)
+    t0 = time.perf_counter()
+    res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior)
+    study = res.pop("_study")
+    lim = args.sigma + res["remainder_allowance"]
+    print(f"current model: minimax residual {res['max_residual_before'] / args.sigma:.2f} sigma "
+          f"(limit {lim / args.sigma:.2f} with the linearisation remainder): "
+          + ("consistent" if res["consistent_before"] else "INCONSISTENT"))
+    if res["disagreements"]:
+        worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:8]
+        report.table(("position", "alpha_deg", "beta_deg", "component", "residual/sigma"),
+                     [(d["position"], f"{d['alpha_deg']:g}", f"{d['beta_deg']:g}", d["component"],
+                       f"{d['residual'] / args.sigma:+.2f}") for d in worst])
+        print(f"({len(res['disagreements'])} residual components exceed the limit; largest shown)")
+    for h in res["history"]:
+        print(f"step {h['step']}: " + ", ".join(f"{e} {v / args.sigma:.2f}" for e, v in
+                                               sorted(h["scores"].items(), key=lambda kv: kv[1])))
+    if res["effects"]:
+        print("added: " + ", ".join(res["effects"]))
+        report.table(("parameter", "estimate", "guaranteed error", "unit", "combination"),
+                     [(k, f"{v['value']:+.4e}", f"{v['bound']:.3e}", v["unit"], v["q"])
+                      for k, v in res["estimates"].items()])
+    for group in res["indistinguishable"]:
+        print("indistinguishable on this plan: " + " / ".join(group))
+    for s in res["separating_positions"]:
+        print(f"  to separate {' and '.join(s['effects'])}, measure at (alpha, beta) = "
+              + "; ".join(f"({p['alpha_deg']:g}, {p['beta_deg']:g}) [differ by "
+                          f"{p['predicted_difference'] / args.sigma:.1f} sigma]" for p in s["positions"]))
+    print(f"after: minimax residual {res['max_residual_after'] / args.sigma:.2f} sigma: "
+          + ("consistent" if res["consistent_after"] else "still INCONSISTENT"))
+    print("this plan is blind to: " + (", ".join(res["blind_to"]) or "nothing in the catalogue"))
+    for e, why in res["skipped"].items():
+        print(f"not tried: {e} ({why})")
+    print(f"diagnosis took {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    if args.report:
+        for f in diagnose.write_module(study, res["effects"], args.report):
+            print(f"wrote {f}")
+    if args.plot:
+        diagnose.plot(res, args.plot, f"{args.data}: residuals before and after")
+    if args.json:
+        report.write_json(args.json, res)
+    return 0
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -226,6 +304,28 @@ def parser():
     dv.add_argument("stand", metavar="STAND.toml")
     dv.add_argument("--out", default=".", help="directory for the module and report (default: here)")
     dv.set_defaults(run=cmd_derive)
+    sm = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
+    sm.add_argument("--model", required=True)
+    sm.add_argument("--plan", required=True, help="optimal10, quarter16 or grid:AxB (alpha, beta steps in degrees)")
+    sm.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
+                    help="a catalogue effect and its parameter values (repeatable)")
+    sm.add_argument("--sigma", type=float, required=True, help="noise bound, units of g")
+    sm.add_argument("--seed", type=int, default=0)
+    sm.add_argument("--g", type=float, default=G_DEFAULT)
+    sm.add_argument("--size", type=float, default=1e-4, help="bound of the random stand and block errors")
+    sm.add_argument("-o", "--output", required=True, metavar="DATA.csv")
+    sm.set_defaults(run=cmd_simulate)
+    dg = sub.add_parser("diagnose", help="find the effect missing from the model, add it, show the gap shrink")
+    dg.add_argument("data", metavar="DATA.csv", help="as for estimate; optional columns time_s, temp_c")
+    dg.add_argument("--model", required=True)
+    dg.add_argument("--sigma", type=float, required=True, help="noise bound, units of g")
+    dg.add_argument("--g", type=float, default=G_DEFAULT)
+    dg.add_argument("--prior", type=float, default=1e-3,
+                    help="size of the stand and block errors, for the linearisation remainder")
+    dg.add_argument("--json", metavar="FILE")
+    dg.add_argument("--plot", metavar="FILE.png")
+    dg.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
+    dg.set_defaults(run=cmd_diagnose)
     return ap
 
 

@@ -1,0 +1,95 @@
+"""The model-discrepancy workflow: hidden effects are named, clean data raises no alarm."""
+import json
+
+import numpy as np
+import pytest
+
+import generated.two_axis as mod
+from derive.builtin import TWO_AXIS_MODEL as base
+from derive.effects import CATALOGUE
+from verify import diagnose, simulate
+from verify.cli import main
+from verify.data import read_positions
+
+S = 1e-5
+# Parameter scale that makes a value of k mean "k sigma" of effect on z (time up to ~96 min,
+# temperature within about +-4.5 C of 20 C in simulated rows).
+SCALE = {"bias_drift": 1 / 5760, "bias_temperature": 1 / 4.0}
+
+
+def run(tmp_path, plan, effects, seed):
+    P, f, t, T, _ = simulate.simulate(base, mod, plan, effects, S, seed)
+    path = tmp_path / "d.csv"
+    simulate.write(path, P, f, t, T)
+    res = diagnose.diagnose(base, mod, read_positions(str(path)), S, 9.81, prior=2e-4)
+    res.pop("_study")
+    return res
+
+
+def values(name, k):
+    n, s = len(CATALOGUE[name].params), SCALE.get(name, 1.0)
+    return [k * S * s] + [0.0] * (n - 2) + ([-0.6 * k * S * s] if n > 1 else [])
+
+
+@pytest.mark.parametrize("name", list(CATALOGUE))
+@pytest.mark.parametrize("k, seed", [(3, 0), (10, 1), (20, 2)])
+def test_hidden_effect_is_named(tmp_path, name, k, seed):
+    res = run(tmp_path, "grid:30x45", [(name, values(name, k))], seed)
+    assert not res["consistent_before"] and res["consistent_after"]
+    assert res["effects"] == [name]
+    first = CATALOGUE[name].params[0].name
+    est = res["estimates"][first]
+    assert abs(est["value"] - values(name, k)[0]) <= est["bound"] + 1e-7 * SCALE.get(name, 1)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_no_effect_no_alarm(tmp_path, seed):
+    res = run(tmp_path, "grid:30x45", [], seed)
+    assert res["consistent_before"] and res["effects"] == [] and res["consistent_after"]
+
+
+def test_two_hidden_effects_both_named(tmp_path):
+    res = run(tmp_path, "grid:30x45", [("scale_quadratic", [8 * S, 0, 0]),
+                                       ("bias_drift", [10 * S / 5760, 0, -5 * S / 5760])], 3)
+    assert sorted(res["effects"]) == ["bias_drift", "scale_quadratic"] and res["consistent_after"]
+
+
+def test_invisible_effect_is_blind_not_guessed(tmp_path):
+    # u_i u_j = 0 at every quarter-turn position: cross-coupling cannot show on quarter16.
+    res = run(tmp_path, "quarter16", [("cross_coupling", [10 * S] * 6)], 0)
+    assert "cross_coupling" in res["blind_to"] and res["effects"] == [] and res["consistent_before"]
+
+
+def test_indistinguishable_on_quarter_turns(tmp_path):
+    # |u_i| = u_i^2 on quarter turns: asymmetry and quadratic scale explain the data equally.
+    res = run(tmp_path, "quarter16", [("scale_asymmetry", [10 * S, 0, 0])], 0)
+    assert sorted(res["indistinguishable"][0]) == ["scale_asymmetry", "scale_quadratic"]
+    sep = res["separating_positions"][0]["positions"]
+    assert all((p["alpha_deg"] % 90, p["beta_deg"] % 90) != (0, 0) for p in sep)
+
+
+def test_cli_simulate_and_diagnose(tmp_path, capsys):
+    data, out = tmp_path / "d.csv", tmp_path / "r.json"
+    assert main(["simulate", "--model", "two-axis", "--plan", "grid:30x45", "--effect",
+                 "beta_encoder_harmonic=8e-5,-4e-5", "--sigma", str(S), "--seed", "4", "-o", str(data)]) == 0
+    assert main(["diagnose", "--model", "two-axis", str(data), "--sigma", str(S), "--prior", "2e-4",
+                 "--json", str(out), "--plot", str(tmp_path / "p.png"), "--report", str(tmp_path / "rep")]) == 0
+    res = json.loads(out.read_text())
+    for key in ("consistent_before", "max_residual_before", "effects", "indistinguishable", "consistent_after",
+                "max_residual_after", "estimates", "blind_to"):
+        assert key in res
+    assert res["effects"] == ["beta_encoder_harmonic"]
+    assert (tmp_path / "rep" / "two_axis_beta_encoder_harmonic.py").exists()
+    assert (tmp_path / "p.png").stat().st_size > 10000
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["simulate", "--model", "two-axis", "--plan", "grid:7x45", "--sigma", "1e-5", "-o", "x.csv"], "must divide 360"),
+    (["simulate", "--model", "two-axis", "--plan", "optimal10", "--effect", "warp=1", "--sigma", "1e-5", "-o", "x.csv"],
+     "unknown effect 'warp'"),
+    (["simulate", "--model", "two-axis", "--plan", "optimal10", "--effect", "bias_drift=1", "--sigma", "1e-5",
+      "-o", "x.csv"], "takes 3 values"),
+])
+def test_bad_arguments(capsys, argv, message):
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err
