@@ -239,3 +239,20 @@ def estimators(model):
             raise ValueError(f"no optimal estimator of {Q_NAMES[nu]} on the plan")
         out.append(found)
     return out
+
+
+def effect_columns(model, name):
+    """First-order columns of sigma(n) for a catalogue effect: n . d(term)/d(parameter) at w = n.
+
+    A reading error dF (units of g) changes sigma by n . dF to first order ((2.2)); sensor effects are
+    functions of the true specific force, here w/g = n. Time enters as the symbol time_s. Returns
+    (parameter names, expressions in n1, n2, n3, time_s) or None when the effect has no meaning here
+    (encoder harmonics need stand angles)."""
+    from .effects import CATALOGUE
+    e = CATALOGUE[name]
+    if e.term is None:
+        return None
+    syms = {p.name: p.symbol for p in e.params}
+    n = sp.Matrix(n_sym)
+    term = e.term(n, syms)
+    return [p.name for p in e.params], [sp.expand((n.T * term.diff(p.symbol))[0]) for p in e.params]

@@ -95,3 +95,17 @@ def test_repeat_sessions_agree_within_bounds():
         for k in res[a]["parameters"]:
             diff = abs(res[a]["parameters"][k] - res[b]["parameters"][k])
             assert diff <= res[a]["guaranteed_error"][k] + res[b]["guaranteed_error"][k], (a, b, k)
+
+
+@needs_real
+def test_real_diagnosis_is_reported(tmp_path):
+    # The BMI160 of OpenAXES is far outside its own noise until a bias drift is added; the repeat
+    # sessions are consistent with the 9-parameter model (docs/norm_001.md).
+    out = tmp_path / "d.json"
+    assert main(["calibrate-norm", str(REAL / "openaxes_imu9.csv"), "--sensor", "bmi160", "--g", str(G),
+                 "--diagnose", "--json", str(out)]) == 0
+    d = json.loads(out.read_text())["diagnosis"]
+    assert not d["consistent_before"] and d["effects"][0] == "bias_drift" and d["consistent_after"]
+    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--diagnose",
+                 "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["diagnosis"]["consistent_before"]

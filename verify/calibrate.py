@@ -164,3 +164,54 @@ def plot(result, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def weighted_fit(Hk, s, bounds):
+    """min over q of max_k |s_k - Hk[:, k] . q| / bounds_k (LP): the fit in units of each noise bound."""
+    q, t = cp.Variable(Hk.shape[0]), cp.Variable()
+    cp.Problem(cp.Minimize(t), [cp.abs(s - Hk.T @ q) <= t * bounds]).solve(solver=cp.HIGHS)
+    return q.value, float(t.value)
+
+
+def diagnose_norm(mod, stills, res, g, params, k_se=3.0):
+    """The model-discrepancy test on a real log: is the calibrated norm model consistent with each
+    interval's own noise (k_se standard errors of its mean), and which catalogue effect helps?"""
+    import sympy as sp
+    from derive.effects import CATALOGUE
+    from derive.norm import NormModel, effect_columns, n_sym
+    s, n = res["sigma"], res["n"]
+    se = np.array([np.linalg.norm(res["M"] @ st.std_error) for st in stills]) / g   # units of g
+    bounds = k_se * se
+    t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
+    base = mod.H(n)[:params]
+    _, t0 = weighted_fit(base, s, bounds)
+    cols, skipped = {}, {}
+    for name in CATALOGUE:
+        out = effect_columns(NormModel(mod.AXES), name)
+        if out is None:
+            skipped[name] = "needs stand angles"
+            continue
+        names, exprs = out
+        if any(sym.name == "temp_c" for e in exprs for sym in e.free_symbols):
+            skipped[name] = "the log has no temperature"
+            continue
+        f = sp.lambdify([*n_sym, sp.Symbol("time_s", real=True)], exprs, "numpy")
+        cols[name] = np.array([np.broadcast_to(v, t_mid.shape) for v in f(*n, t_mid)], float)
+    chosen, score, history, tied = [], t0, [], []
+    while score > 1 and len(chosen) < len(cols):
+        scores = {e: weighted_fit(np.vstack([base] + [cols[c] for c in chosen + [e]]), s, bounds)[1]
+                  for e in cols if e not in chosen}
+        best = min(scores, key=scores.get)
+        history.append(scores)
+        if scores[best] >= score * 0.95:
+            break
+        ties = [e for e, v in scores.items() if e != best and v <= scores[best] + 0.02]
+        if ties and scores[best] <= 1:
+            tied.append([best] + ties)
+        chosen.append(best)
+        score = scores[best]
+    return {"noise_bound": f"{k_se:g} standard errors of each interval's mean",
+            "indistinguishable": tied,
+            "consistent_before": bool(t0 <= 1), "max_residual_before": t0, "effects": chosen,
+            "consistent_after": bool(score <= 1), "max_residual_after": score,
+            "scores": [{k: float(v) for k, v in h.items()} for h in history], "skipped": skipped}

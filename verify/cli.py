@@ -137,6 +137,21 @@ def cmd_calibrate_norm(args):
               "(unit vectors in sensor axes, -gravity direction):")
         for d in res["directions_to_add"]:
             print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+    if args.diagnose:
+        raw = np.array([st.mean for st in stills])
+        fit = calibrate.fit(mod, raw, args.g, args.params)
+        d = calibrate.diagnose_norm(mod, stills, fit, args.g, args.params)
+        res["diagnosis"] = d
+        print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
+        print(f"  {args.params}-parameter model: worst {d['max_residual_before']:.1f} -> "
+              + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
+        for step in d["scores"]:
+            print("  try: " + ", ".join(f"{k} {v:.1f}" for k, v in sorted(step.items(), key=lambda kv: kv[1])))
+        for group in d["indistinguishable"]:
+            print("  indistinguishable with these orientations: " + " / ".join(group))
+        print("  added: " + (", ".join(d["effects"]) or "nothing") + f"; worst now {d['max_residual_after']:.1f} -> "
+              + ("consistent" if d["consistent_after"] else "still INCONSISTENT: an effect outside the catalogue, "
+                 "or a noise bound too tight"))
     if args.json:
         report.write_json(args.json, res)
     if args.plot:
@@ -292,6 +307,8 @@ def parser():
     c.add_argument("--delta-sigma", type=float, metavar="D",
                    help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; "
                    "default: the minimax residual of the fit, the smallest bound the data allow")
+    c.add_argument("--diagnose", action="store_true",
+                   help="test the model against each interval's noise and try the effect catalogue")
     c.add_argument("--json", metavar="FILE")
     c.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     c.set_defaults(run=cmd_calibrate_norm)
