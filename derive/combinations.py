@@ -37,7 +37,7 @@ def trig_basis(expr, angles, others=()):
     out = {}
     for monom, coeff in sp.Poly(rem, *gens).terms():
         term = sp.Mul(*[g**k for g, k in zip(gens, monom)]).subs(back)
-        out[term] = sp.Rational(coeff)
+        out[term] = sp.nsimplify(coeff)
     return out
 
 

@@ -15,7 +15,8 @@ G_DEFAULT = 9.81  # m/s^2
 
 def cmd_verify(args):
     groups = (checks.all_groups(models.load("two-axis"), models.load_remount("two-axis"))
-              + norm_checks.all_groups(models.load("norm")) + redundancy_checks.all_groups())
+              + norm_checks.all_groups(models.load("norm")) + redundancy_checks.all_groups()
+              + [(checks.certificates, (args.certificates,))])
     rows = []
     for group, group_args in groups:
         t0 = time.perf_counter()
@@ -270,11 +271,30 @@ def cmd_diagnose(args):
     return 0
 
 
+def cmd_check_certificate(args):
+    from . import certificate
+    try:
+        cert = certificate.read(args.file)
+    except (OSError, ValueError) as e:
+        raise DataError(f"{args.file}: cannot read a certificate ({e})") from None
+    try:
+        steps = certificate.check(cert)
+    except (KeyError, TypeError, IndexError, SyntaxError) as e:
+        raise DataError(f"{args.file}: malformed certificate ({type(e).__name__}: {e})") from None
+    print(f"{cert.get('claim', '?')} ({cert.get('model', '?')}), value {cert.get('value', '?')}")
+    for step, ok, detail in steps:
+        print(f"  {'PASS' if ok else 'FAIL'} {step}: {detail}")
+    ok = all(ok for _, ok, _ in steps)
+    print("certificate holds" if ok else "certificate REJECTED")
+    return 0 if ok else 1
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
     v = sub.add_parser("verify", help="run every check of the built-in models against the papers")
     v.add_argument("--json", metavar="FILE", help="also write the checks as JSON")
+    v.add_argument("--certificates", metavar="DIR", help="write every optimality certificate (JSON) here")
     v.set_defaults(run=cmd_verify)
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
     p.add_argument("model", help=f"a built-in stand ({', '.join(models.STANDS)}) or a STAND.toml")
@@ -343,6 +363,9 @@ def parser():
     dg.add_argument("--plot", metavar="FILE.png")
     dg.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
     dg.set_defaults(run=cmd_diagnose)
+    cc = sub.add_parser("check-certificate", help="re-check an optimality certificate, independently of any solver")
+    cc.add_argument("file", metavar="FILE.json")
+    cc.set_defaults(run=cmd_check_certificate)
     return ap
 
 

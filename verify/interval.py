@@ -60,6 +60,12 @@ class Iv:
     def sqrt(self):
         return Iv(*_out(np.sqrt(np.maximum(self.lo, 0)), np.sqrt(self.hi)))
 
+    def sin(self):
+        return _trig(self, np.sin, np.pi / 2)
+
+    def cos(self):
+        return _trig(self, np.cos, 0.0)
+
     def hull(self, o):
         return Iv(np.minimum(self.lo, o.lo), np.maximum(self.hi, o.hi))
 
@@ -72,6 +78,23 @@ class Iv:
 
 def _iv(x):
     return x if isinstance(x, Iv) else Iv(x)
+
+
+def _trig(x, f, peak):
+    """sin or cos of an interval: the endpoint values, widened to +-1 where the interval holds a
+    maximum (peak + 2k pi) or minimum (peak + pi + 2k pi); libm's ~1 ulp error is covered by the
+    outward rounding done twice."""
+    a, b = f(x.lo), f(x.hi)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    k_max = np.ceil((x.lo - peak) / (2 * np.pi))
+    has_max = peak + 2 * np.pi * k_max <= x.hi
+    k_min = np.ceil((x.lo - peak - np.pi) / (2 * np.pi))
+    has_min = peak + np.pi + 2 * np.pi * k_min <= x.hi
+    wide = (x.hi - x.lo) >= 2 * np.pi
+    hi = np.where(has_max | wide, 1.0, hi)
+    lo = np.where(has_min | wide, -1.0, lo)
+    lo, hi = _out(*_out(lo, hi))
+    return Iv(np.maximum(lo, -1.0), np.minimum(hi, 1.0))
 
 
 class Grad:
@@ -107,25 +130,52 @@ class Grad:
         r2 = r.square()
         return Grad(r, [-(a * r2) for a in self.d])
 
+    def __pow__(self, k):
+        if not (isinstance(k, int) or float(k).is_integer()) or k < 1:
+            raise ValueError("only positive integer powers")
+        out = self
+        for _ in range(int(k) - 1):
+            out = out * self
+        return out
+
     def sqrt(self):
         r = self.v.sqrt()
         half = (r * 2).recip()
         return Grad(r, [a * half for a in self.d])
 
+    def sin(self):
+        c = self.v.cos()
+        return Grad(self.v.sin(), [a * c for a in self.d])
+
+    def cos(self):
+        s = -self.v.sin()
+        return Grad(self.v.cos(), [a * s for a in self.d])
+
+
+def box_variables(lo, hi):
+    """Box enclosures of n coordinates (lists of arrays) with unit derivatives."""
+    n = len(lo)
+    out = []
+    for i in range(n):
+        x = Iv(lo[i], hi[i])
+        one, zero = Iv(np.ones_like(x.lo)), Iv(np.zeros_like(x.lo))
+        out.append(Grad(x, [one if j == i else zero for j in range(n)]))
+    return out
+
 
 def variables(s_lo, s_hi, t_lo, t_hi):
-    """Box enclosures of (s, t) with unit derivatives, and the box centres as points."""
-    s, t = Iv(s_lo, s_hi), Iv(t_lo, t_hi)
-    one, zero = Iv(np.ones_like(s.lo)), Iv(np.zeros_like(s.lo))
-    return Grad(s, [one, zero]), Grad(t, [zero, one])
+    """Box enclosures of (s, t) with unit derivatives (two coordinates)."""
+    return box_variables([s_lo, t_lo], [s_hi, t_hi])
 
 
-def mean_value_enclosure(f, s_lo, s_hi, t_lo, t_hi):
-    """Enclosure of f over boxes: the naive one intersected with f(c) + grad f(box) . (box - c)."""
-    S, T = variables(s_lo, s_hi, t_lo, t_hi)
-    box = f(S, T)
-    cs, ct = (s_lo + s_hi) / 2, (t_lo + t_hi) / 2
-    Cs, Ct = variables(cs, cs, ct, ct)
-    centre = f(Cs, Ct).v
-    mv = centre + box.d[0] * Iv(s_lo - cs, s_hi - cs) + box.d[1] * Iv(t_lo - ct, t_hi - ct)
+def mean_value_enclosure(f, *bounds):
+    """Enclosure of f over boxes given as lo1, hi1, lo2, hi2, ...: the naive one intersected with the
+    mean-value form f(c) + grad f(box) . (box - c)."""
+    lo, hi = list(bounds[0::2]), list(bounds[1::2])
+    box = f(*box_variables(lo, hi))
+    c = [(a + b) / 2 for a, b in zip(lo, hi)]
+    centre = f(*box_variables(c, c)).v
+    mv = centre
+    for d, a, b, ci in zip(box.d, lo, hi, c):
+        mv = mv + d * Iv(a - ci, b - ci)
     return box.v.intersect(mv)

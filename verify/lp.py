@@ -41,6 +41,19 @@ def dual(A, targets=None):
     return Lam.value, (T * Lam.value).sum(axis=0)
 
 
+def sparse_dual(A, targets=None, slack=1e-9):
+    """Among the optimal duals of (9)-(10), the one of least sum |lambda| (per target): on a finite set
+    the optimal dual is rarely unique, and the sparse one is the one that tends to stay feasible
+    between the points (the Chebyshev polynomial of fewest terms)."""
+    m, K = A.shape
+    T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
+    _, value = dual(A, T)
+    Lam = cp.Variable((m, T.shape[1]))
+    cons = [cp.abs(A.T @ Lam) <= 1, cp.sum(cp.multiply(T, Lam), axis=0) >= value - slack * np.maximum(1, value)]
+    _solve(cp.Problem(cp.Minimize(cp.sum(cp.abs(Lam))), cons), "sparse dual")
+    return Lam.value, value
+
+
 def chebyshev(A):
     """L_nu and the minimising y (column nu, y_nu = 1) of the Chebyshev polynomial (12)."""
     m, K = A.shape
@@ -57,7 +70,7 @@ def measurement_matrix(H, positions, mounts=None):
     gives each position's mounting index)."""
     positions = np.atleast_2d(np.asarray(positions, float))
     if callable(H):
-        Hs = H(*[positions[:, i] for i in range(positions.shape[1])])          # (3, m, S)
+        Hs = H(*[positions[:, i] for i in range(positions.shape[1])])          # (rows, m, S)
     else:
         from .models import H_at
         Hs = H_at(H, positions, mounts)

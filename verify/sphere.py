@@ -36,7 +36,10 @@ def _face_direction(axis, sign, s, t):
 
 def polynomial(exponents, lam):
     """p(n) = sum_nu lam_nu n^exponents_nu, a function of Grad components."""
-    terms = [(float(c), e) for c, e in zip(lam, exponents) if c != 0]
+    return _terms_function([(float(c), e) for c, e in zip(lam, exponents) if c != 0])
+
+
+def _terms_function(terms):
 
     def p(n):
         total = None
@@ -45,19 +48,24 @@ def polynomial(exponents, lam):
             for comp, k in zip(n, (a, b, d)):
                 for _ in range(k):
                     term = comp if term is None else term * comp
-            term = term * c
+            term = (n[0] * 0.0 + c) if term is None else term * c
             total = term if total is None else total + term
         return total
     return p
 
 
-def prove_dual(exponents, lam, eta=1e-9, max_boxes=2_000_000, start=8, locate=1e-3):
+def prove_terms(terms, eta=1e-9):
+    """prove_dual for a polynomial given as [(coefficient, (a, b, c))] terms n1^a n2^b n3^c."""
+    return prove_dual(None, None, eta=eta, p=_terms_function(terms))
+
+
+def prove_dual(exponents, lam, eta=1e-9, max_boxes=2_000_000, start=8, locate=1e-3, p=None):
     """Prove |p(n)| <= 1 + eta on the sphere; returns (proven, boxes evaluated, near-touching boxes).
 
     Boxes where |p| may exceed 1 - 1e-6 are split further down to width `locate`, so the returned
     near-touching boxes locate the touching set to that size.
     """
-    p = polynomial(exponents, lam)
+    p = p or polynomial(exponents, lam)
     evaluated, touching = 0, []
     for axis, sign in FACES:
         edges = np.linspace(-1, 1, start + 1)

@@ -1,0 +1,87 @@
+"""Optimality certificates: produced for the optimal values, re-checked independently, and a wrong
+one is rejected with the reason (issue 8)."""
+import copy
+import json
+
+import numpy as np
+import pytest
+
+from verify import certificate, continuum, models
+from verify.checks import certificates
+from verify.cli import main
+
+
+@pytest.fixture(scope="module")
+def two_axis():
+    return certificate.for_model("two-axis")
+
+
+@pytest.fixture(scope="module")
+def norm():
+    return certificate.for_model("norm")
+
+
+def test_two_axis_all_15_certified_exactly(two_axis):
+    # 000, section 4: the optimal guaranteed error of every q_nu is sigma, on the whole square.
+    assert len(two_axis) == 15
+    for cert in two_axis:
+        steps = certificate.check(cert)
+        assert cert["value"] == "1" and all(ok for _, ok, _ in steps) and "exact" in steps[2][2]
+
+
+def test_norm_all_12_certified(norm):
+    # 001, section 4: 1, 1, 1, 2, 2, 2, 1, 1, 1, 4, 4, 4 (units of delta_sigma_max), on the sphere.
+    assert [c["value"] for c in norm] == ["1", "1", "1", "2", "2", "2", "1", "1", "1", "4", "4", "4"]
+    assert all(all(ok for _, ok, _ in certificate.check(c)) for c in norm)
+
+
+@pytest.mark.parametrize("tamper, step, reason", [
+    (lambda c: c["primal"][0].update(weight="-" + c["primal"][0]["weight"].lstrip("-")) if not
+     c["primal"][0]["weight"].startswith("-") else c["primal"][0].update(weight=c["primal"][0]["weight"][1:]),
+     "(a) unbiased", "component"),
+    (lambda c: c.update(value="1/2"), "(b) primal = dual = value", "value = 1/2"),
+    (lambda c: c.update(dual=["2" if x == "1" else x for x in c["dual"]], value="2"), "(c) dual feasible", ""),
+])
+def test_wrong_certificate_is_rejected_with_reason(two_axis, tamper, step, reason):
+    cert = copy.deepcopy(two_axis[6])           # q7 = bias1
+    tamper(cert)
+    steps = {s: (ok, detail) for s, ok, detail in certificate.check(cert)}
+    assert not steps[step][0] and reason in steps[step][1]
+
+
+def test_wrong_sphere_dual_is_rejected(norm):
+    cert = copy.deepcopy(norm[9])               # delta1_g: lambda = 4 e10 - e8
+    cert["dual"] = ["0" if x == "-1" else x for x in cert["dual"]]
+    steps = {s: ok for s, ok, _ in certificate.check(cert)}
+    assert not steps["(c) dual feasible"]
+
+
+def test_check_certificate_cli(two_axis, tmp_path, capsys):
+    good, bad = tmp_path / "good.json", tmp_path / "bad.json"
+    certificate.write(two_axis[0], good)
+    cert = copy.deepcopy(two_axis[0])
+    cert["value"] = "2"
+    certificate.write(cert, bad)
+    assert main(["check-certificate", str(good)]) == 0
+    assert main(["check-certificate", str(bad)]) == 1
+    assert "REJECTED" in capsys.readouterr().out
+    (tmp_path / "junk.json").write_text("{")
+    assert main(["check-certificate", str(tmp_path / "junk.json")]) == 2
+
+
+def test_every_certificate_in_verify_holds(tmp_path):
+    rows = list(certificates(tmp_path))
+    assert rows and all(r.passed for r in rows)
+    files = sorted(p.name for p in tmp_path.glob("*.json"))
+    assert "two-axis_q1.json" in files and "norm_delta3_g.json" in files
+    for f in tmp_path.glob("*.json"):
+        json.loads(f.read_text())
+
+
+def test_continuum_solver_matches_the_proven_optima():
+    mod = models.load("two-axis")
+    sol = continuum.solve(mod.H, 2, np.eye(15))
+    np.testing.assert_allclose(sol.values, 1, atol=1e-7)
+    single = models.load("single-axis")
+    sol = continuum.solve(certificate.stacked_H(single), 1, np.eye(15))
+    assert sol.values[14] == pytest.approx(2 + np.sqrt(2), abs=1e-6)   # better than 4 on quarter turns

@@ -1,0 +1,374 @@
+"""Optimality certificates, checkable without trusting any solver.
+
+A certificate claims that the optimal guaranteed error of a^T q over a whole continuum of positions
+(a box of stand angles, or the unit sphere of 001) equals a value v. It carries the measurement
+functions H as exact expressions, a primal estimator (positions, components, weights) and a dual
+vector lambda, all exact (rationals, or algebraic numbers like sqrt(3)/2). The check:
+(a) unbiasedness: sum_k w_k H^(p_k)(x_k) = a, exactly;
+(b) value: sum_k |w_k| = a^T lambda = v, exactly;
+(c) dual feasibility: |H^(p)(x)^T lambda| <= 1 for every x of the continuum and every p: exactly
+    when the trigonometric form gives it (sum of |coefficients| of canonical monomials <= 1), else by
+    rigorous interval branch and bound, which proves it to 1 + ETA.
+By weak duality (a)-(c) prove v/(1 + ETA) <= optimum <= v (= v when (c) closes exactly).
+"""
+import json
+from fractions import Fraction
+
+import numpy as np
+import sympy as sp
+
+from .interval import mean_value_enclosure
+
+ETA = 1e-9
+FORMAT = "garant-certificate-1"
+
+
+def _s(x):
+    return sp.sstr(sp.nsimplify(x))
+
+
+def make(model, claim, domain, H_rows, target, value, primal, dual):
+    """A certificate as a JSON-ready dict. H_rows: list of rows (one per component and mounting) of
+    expression strings; primal: (position strings, row index, weight); dual: exact numbers."""
+    return {"format": FORMAT, "model": model, "claim": claim, "domain": domain, "H": H_rows,
+            "target": [_s(a) for a in target], "value": _s(value),
+            "primal": [{"at": list(at), "row": int(row), "weight": _s(w)} for at, row, w in primal],
+            "dual": [_s(l) for l in dual]}
+
+
+def _symbols(domain):
+    names = domain["names"]
+    return [sp.Symbol(n, real=True) for n in names]
+
+
+def _parse(text, syms):
+    return sp.sympify(text, locals={str(s): s for s in syms})
+
+
+def check(cert):
+    """[(step, passed, detail)] for the steps (a), (b), (c); a certificate holds iff all pass."""
+    if cert.get("format") != FORMAT:
+        return [("format", False, f"not a {FORMAT} certificate")]
+    dom = cert["domain"]
+    syms = _symbols(dom)
+    H = [[_parse(e, syms) for e in row] for row in cert["H"]]
+    m = len(H[0])
+    a = [sp.nsimplify(sp.sympify(x)) for x in cert["target"]]
+    lam = [sp.nsimplify(sp.sympify(x)) for x in cert["dual"]]
+    v = sp.nsimplify(sp.sympify(cert["value"]))
+    out = []
+    image = [sp.Integer(0)] * m
+    for term in cert["primal"]:
+        at = {s: sp.sympify(x) for s, x in zip(syms, term["at"])}
+        w = sp.nsimplify(sp.sympify(term["weight"]))
+        row = H[term["row"]]
+        image = [sp.nsimplify(sp.simplify(i + w * h.subs(at))) for i, h in zip(image, row)]
+    bad = [(k, i, t) for k, (i, t) in enumerate(zip(image, a)) if sp.simplify(i - t) != 0]
+    out.append(("(a) unbiased", not bad, "sum w H = a exactly" if not bad else
+                f"component {bad[0][0] + 1} of sum w H is {bad[0][1]}, the target has {bad[0][2]}"))
+    l1 = sum((abs(sp.nsimplify(sp.sympify(t["weight"]))) for t in cert["primal"]), sp.Integer(0))
+    dual_value = sp.nsimplify(sum(x * y for x, y in zip(a, lam)))
+    ok = sp.simplify(l1 - v) == 0 and sp.simplify(dual_value - v) == 0
+    out.append(("(b) primal = dual = value", ok, f"sum|w| = {l1}, a.lambda = {dual_value}, value = {v}"))
+    out.append(("(c) dual feasible",) + feasible(H, lam, dom, syms))
+    return out
+
+
+def feasible(H, lam, dom, syms, max_boxes=1_500_000):
+    """|H^T lambda| <= 1 on the whole domain: (passed, detail)."""
+    polys = [sp.expand(sum((l * h for l, h in zip(lam, row) if l != 0), sp.Integer(0))) for row in H]
+    if dom["kind"] == "angles":
+        from derive.combinations import trig_basis
+        sup = max(sum((abs(c) for c in trig_basis(p, syms).values()), sp.Integer(0)) for p in polys)
+        if sup <= 1:
+            return True, f"exact: every |H^T lambda| <= {sup} (sum of |coefficients| of canonical monomials)"
+        if all(harmonic_bound(p, syms) for p in polys):
+            return True, ("exact: each H^T lambda is A cos x + B sin x in one angle x, with A^2 + B^2 <= 1 "
+                          "by the sum of |coefficients|")
+        lo = [float(sp.sympify(r[0])) for r in dom["ranges"]]
+        hi = [float(sp.sympify(r[1])) for r in dom["ranges"]]
+        etas = []
+        for k, p in enumerate(polys):
+            for eta in (ETA, 1e-6):
+                ok, detail = box_bound(p, syms, lo, hi, eta=eta, max_boxes=max_boxes)
+                if ok or "not closed" not in detail:
+                    break
+            if not ok:
+                return False, f"row {k}: {detail}"
+            etas.append(eta)
+        return True, f"interval branch and bound over the box: |H^T lambda| <= 1 + {max(etas):g}"
+    if dom["kind"] == "sphere":
+        from .sphere import prove_terms
+        for k, p in enumerate(polys):
+            terms = [(float(c), m) for m, c in sp.Poly(p, *syms).terms()]
+            ok, boxes, _ = prove_terms(terms, eta=ETA)
+            if not ok:
+                return False, f"row {k}: |H^T lambda| exceeds 1 + {ETA:g} somewhere on the sphere"
+        return True, f"interval branch and bound over the sphere: |H^T lambda| <= 1 + {ETA:g}"
+    return False, f"unknown domain {dom['kind']!r}"
+
+
+def harmonic_bound(p, syms):
+    """Exact proof of |p| <= 1 when p = A cos x + B sin x in some angle x (A, B free of x) and the
+    coefficient bound shows A^2 + B^2 <= 1 (Cauchy-Schwarz: |A cos x + B sin x| <= sqrt(A^2 + B^2))."""
+    from derive.combinations import trig_basis
+    if p == 0:
+        return True
+    for x in syms:
+        c, s_ = sp.Wild("c"), sp.Wild("s")
+        expanded = sp.expand(p)
+        A = sp.expand(expanded.coeff(sp.cos(x)))
+        B = sp.expand(expanded.coeff(sp.sin(x)))
+        rest = sp.expand(expanded - A * sp.cos(x) - B * sp.sin(x))
+        if rest != 0 or x in (A.free_symbols | B.free_symbols) or A.has(sp.cos(x), sp.sin(x)) or B.has(sp.cos(x), sp.sin(x)):
+            continue
+        q = sp.expand(A**2 + B**2)
+        if sum((abs(v) for v in trig_basis(q, syms).values()), sp.Integer(0)) <= 1:
+            return True
+    return False
+
+
+def box_bound(expr, syms, lo, hi, eta=ETA, max_boxes=1_500_000, start=8):
+    """Prove |expr| <= 1 + eta over the box by branch and bound (mean-value form); or find a point."""
+    f = sp.lambdify(syms, expr, modules=[{"sin": lambda x: x.sin(), "cos": lambda x: x.cos()}])
+    n = len(syms)
+    edges = [np.linspace(l, h, start + 1) for l, h in zip(lo, hi)]
+    grids = np.meshgrid(*[e[:-1] for e in edges], indexing="ij")
+    los = [g.ravel() for g in grids]
+    w = [np.full(los[0].shape, (h - l) / start) for l, h in zip(lo, hi)]
+    evaluated = 0
+    while los[0].size:
+        evaluated += los[0].size
+        if evaluated > max_boxes:
+            return False, f"not closed within {max_boxes} boxes"
+        bounds = [x for i in range(n) for x in (los[i], los[i] + w[i])]
+        enc = mean_value_enclosure(lambda *v: _as_grad(f(*v), v[0]), *bounds)
+        from .interval import box_variables
+        c = [los[i] + w[i] / 2 for i in range(n)]
+        at_c = _as_grad(f(*box_variables(c, c)), None).v
+        viol = np.minimum(np.abs(at_c.lo), np.abs(at_c.hi)) > 1 + eta
+        if viol.any():
+            k = int(np.flatnonzero(viol)[0])
+            where = ", ".join(f"{s}={c[i][k]:.6g}" for i, s in enumerate(syms))
+            return False, f"|H^T lambda| = {max(abs(at_c.lo[k]), abs(at_c.hi[k])):.6g} > 1 at {where}"
+        bad = enc.mag() > 1 + eta
+        if not bad.any():
+            return True, f"{evaluated} boxes"
+        if np.any(bad & (w[0] < 1e-9)):
+            return False, "boxes too small without closing (a touching point with zero curvature?)"
+        keep = np.flatnonzero(bad)
+        los = [x[keep] for x in los]
+        w = [x[keep] / 2 for x in w]
+        for i in range(n):                              # split every box in 2^n
+            los = [np.concatenate([x, x + (w[i] if j == i else 0)]) for j, x in enumerate(los)]
+            w = [np.concatenate([x, x]) for x in w]
+    return True, f"{evaluated} boxes"
+
+
+def _as_grad(value, like):
+    """lambdify returns a plain number for constant expressions: lift it to an interval Grad."""
+    from .interval import Grad, Iv
+    if isinstance(value, Grad):
+        return value
+    ref = like.v.lo if like is not None else np.zeros(1)
+    zero = Iv(np.zeros_like(ref))
+    n = len(like.d) if like is not None else 0
+    return Grad(Iv(np.full_like(ref, float(value))), [zero] * n)
+
+
+def write(cert, path):
+    with open(path, "w") as fh:
+        json.dump(cert, fh, indent=1)
+        fh.write("\n")
+
+
+def read(path):
+    with open(path) as fh:
+        return json.load(fh)
+
+
+def _angle(deg):
+    return sp.sstr(sp.nsimplify(sp.pi * sp.Rational(str(deg)) / 180))
+
+
+def for_stand(key):
+    """Certificates of every optimal value of a built-in stand (derive/stands/KEY.toml)."""
+    from derive.builtin import MODELS
+    from derive.derivation import derive
+
+    from . import models, plans
+    model = MODELS[key]
+    d = derive(model)
+    mod = models.load(key.replace("_", "-"))
+    names = [a.name for a in model.stand.angles]
+    rows = [[sp.sstr(e) for e in d.ident.H.row(r)] for r in range(d.ident.H.rows)]
+    domain = {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names)}
+    m = d.ident.H.cols
+    out = []
+    if key == "two_axis":
+        for nu in range(m):
+            primal = [([_angle(v) for v in mod.PLAN_DEG[s]], p, Fraction(num, den))
+                      for s, p, num, den in mod.ESTIMATOR_TERMS[nu]]
+            out.append((mod.Q_NAMES[nu], [int(i == nu) for i in range(m)], primal,
+                        [int(i == nu) for i in range(m)]))
+    else:
+        out = _continuum_certificates(mod, d, rows, names, m)
+    return [make(key, f"optimal guaranteed error of {q} = {mod.Q_DEFINITIONS[mod.Q_NAMES.index(q)]} on "
+                 f"the whole box of angles", domain, rows, a, sum(abs(w) for _, _, w in primal), primal, lam)
+            for q, a, primal, lam in out]
+
+
+def stacked_H(mod):
+    """H of a stand module with all mountings stacked as rows: (3 x mountings, m, ...)."""
+    if not hasattr(mod, "MOUNTINGS"):
+        return mod.H
+    return lambda *a: np.concatenate([mod.H(*a, mount=k) for k in range(len(mod.MOUNTINGS))], axis=0)
+
+
+def _continuum_certificates(mod, d, rows, names, m, step=sp.pi / 24):
+    """Exact certificates from the exchange solution. The primal: the exact grid estimator when the
+    continuum value equals the quarter-turn one, else an exact solve on the exchange positions
+    (snapped to multiples of pi/24). The dual: the exchange dual, rationalised, or made exact by
+    complementary slackness; the checker decides whether it holds."""
+    from . import continuum, lp, plans
+    H = stacked_H(mod)
+    sol = continuum.solve(H, len(names), np.eye(m))
+    r = plans.search(mod)
+    cols_grid = plans.integer_columns(mod, r.angles_deg, r.mounts)
+    k = np.rint(sol.positions / float(step))
+    keep = np.all(np.abs(sol.positions - k * float(step)) < 1e-7, axis=1)
+    X, K = sol.positions[keep], k[keep].astype(int)
+    Phi, _ = lp.primal(lp.measurement_matrix(H, X))
+    syms = [sp.Symbol(n, real=True) for n in names]
+    R = d.ident.H.rows
+    out = []
+    for nu in range(m):
+        a = [int(i == nu) for i in range(m)]
+        if abs(sol.values[nu] - r.errors[nu]) < 1e-7:
+            lam_g, sets = plans.dual_on_grid(cols_grid, nu)
+            weights = sets[0].weights if sets else exact_primal(cols_grid, nu, lam_g)
+            if weights is None:
+                continue
+            primal = [([_angle(v) for v in r.angles_deg[s_]], 3 * int(r.mounts[s_]) + p, w) for s_, p, w in weights]
+        else:
+            primal = _snapped_primal(d, syms, X, K, Phi[:, nu], nu, step, R)
+            if primal is None:
+                continue
+        value = sum((abs(sp.nsimplify(w)) for _, _, w in primal), sp.Integer(0))
+        Hs = [list(d.ident.H.row(i)) for i in range(R)]
+        dom = {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names)}
+        for lam in _dual_candidates(sol.lam[:, nu], primal, d, syms, R, step):
+            if (sp.simplify(sum(x * y for x, y in zip(a, lam)) - value) == 0
+                    and feasible(Hs, lam, dom, syms, max_boxes=100_000)[0]):
+                out.append((mod.Q_NAMES[nu], a, primal, lam))
+                break
+    return out
+
+
+def _snapped_primal(d, syms, X, K, phi, nu, step, R):
+    """Exact weights on the exchange positions carrying the LP estimator of q_nu."""
+    m = d.ident.H.cols
+    support = [j for j in np.argsort(-np.abs(phi)) if abs(phi[j]) > 1e-9]
+    chosen, cols = [], []
+    for j in support:
+        at = {s: ki * step for s, ki in zip(syms, K[j // R])}
+        col = sp.Matrix([sp.nsimplify(d.ident.H[j % R, c].subs(at)) for c in range(m)])
+        if sp.Matrix.hstack(*(cols + [col])).rank() == len(cols) + 1:
+            chosen, cols = chosen + [j], cols + [col]
+    try:
+        w, free = sp.Matrix.hstack(*cols).gauss_jordan_solve(sp.Matrix([int(i == nu) for i in range(m)]))
+    except ValueError:
+        return None
+    if free:
+        return None
+    return [([sp.sstr(ki * step) for ki in K[j // R]], j % R, sp.nsimplify(sp.radsimp(wi)))
+            for j, wi in zip(chosen, w)]
+
+
+def _dual_candidates(lam, primal, d, syms, R, step):
+    """Exact versions of a float dual: rationalised, with surds of 2 and 3, then by slackness."""
+    yield [sp.Rational(str(round(v, 9))).limit_denominator(1000) if abs(v) > 1e-9 else sp.Integer(0) for v in lam]
+    yield [sp.nsimplify(v, [sp.sqrt(2), sp.sqrt(3)], tolerance=1e-8) if abs(v) > 1e-9 else sp.Integer(0) for v in lam]
+    cols, signs = [], []
+    for at, row, w in primal:
+        sub = {s: sp.sympify(x) for s, x in zip(syms, at)}
+        cols.append([sp.nsimplify(d.ident.H[row, c].subs(sub)) for c in range(d.ident.H.cols)])
+        signs.append(1 if sp.nsimplify(w) > 0 else -1)
+    exact = exact_dual(lam, cols, signs)
+    if exact is not None:
+        yield exact
+
+
+def exact_dual(lam, cols, signs):
+    """lambda made exact by complementary slackness: on its support J, the active constraints
+    h_k . lambda = sign_k of the primal's measurements, solved exactly; None if they do not fix it."""
+    J = [i for i, v in enumerate(lam) if abs(v) > 1e-6]
+    M = sp.Matrix([[c[i] for i in J] for c in cols])
+    rhs = sp.Matrix([int(s) for s in signs])
+    try:
+        x, free = M.gauss_jordan_solve(rhs)
+    except ValueError:
+        return None
+    if free:
+        x = x.subs({f: sp.nsimplify(lam[J[k]], [sp.sqrt(2), sp.sqrt(3)], tolerance=1e-9)
+                    for k, f in enumerate(free) if False} or {f: 0 for f in free})
+    out = [sp.Integer(0)] * len(lam)
+    for i, v in zip(J, x):
+        out[i] = sp.nsimplify(sp.simplify(v))
+    return out
+
+
+def exact_primal(cols, nu, lam):
+    """An exact optimal estimator on the grid: a vertex of {w >= 0 : sum w sign H = e_nu} among the
+    measurements where the dual touches (any such w is optimal), made exact in rationals."""
+    import cvxpy as cp
+
+    from .plans import solve_exact, touching
+    cand, signs = touching(cols, lam)
+    V = np.array([cols[s, p] * g for (s, p), g in zip(cand, signs)], float)
+    w = cp.Variable(len(cand), nonneg=True)
+    prob = cp.Problem(cp.Minimize(0), [V.T @ w == np.eye(V.shape[1])[nu]])
+    prob.solve(solver=cp.HIGHS)
+    if prob.status != cp.OPTIMAL:
+        return None
+    support = [k for k in np.argsort(-w.value) if w.value[k] > 1e-9]
+    chosen = []
+    for k in support:                                       # an independent subset carrying e_nu
+        trial = chosen + [k]
+        if np.linalg.matrix_rank(V[trial]) == len(trial):
+            chosen = trial
+    e = [int(i == nu) for i in range(V.shape[1])]
+    x = solve_exact([V[k].astype(int) for k in chosen], e)
+    if x is None or min(x) < 0:
+        return None
+    return [(cand[k][0], cand[k][1], xi * signs[k]) for k, xi in zip(chosen, x) if xi != 0]
+
+
+def for_norm():
+    """Certificates of the twelve optimal values of 001 on the unit sphere."""
+    import generated.norm as mod
+    from derive import norm
+    model = norm.NormModel(mod.AXES)
+    rows = [[sp.sstr(e) for e in norm.H(model)]]
+    domain = {"kind": "sphere", "names": ["n1", "n2", "n3"]}
+    out = []
+    for nu, q in enumerate(mod.Q_NAMES):
+        primal = [([x.strip() for x in mod.PLAN_EXACT[k].split(",")], 0, Fraction(num, den))
+                  for k, num, den in mod.ESTIMATOR_TERMS[nu]]
+        lam = [int(v) for v in mod.DUALS[nu]]
+        a = [int(i == nu) for i in range(len(mod.Q_NAMES))]
+        out.append(make("norm", f"optimal guaranteed error of {q} on the unit sphere (units of "
+                        "delta_sigma_max)", domain, rows, a, sum(abs(w) for _, _, w in primal), primal, lam))
+    return out
+
+
+MODELS = {"two-axis": "two_axis", "single-axis": "single_axis", "three-axis": "three_axis", "norm": None}
+
+
+def for_model(name):
+    return for_norm() if name == "norm" else for_stand(MODELS[name])
+
+
+def file_name(cert):
+    q = cert["claim"].split(" of ", 1)[1].split(" ", 1)[0]
+    return f"{cert['model'].replace('_', '-')}_{q}.json"
