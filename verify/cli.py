@@ -44,9 +44,12 @@ def cmd_plan(args):
 
     def fmt(s):
         return [*(float(v) for v in r.angles_deg[s]), *([mounts[r.mounts[s]]] if multi else [])]
-    report.table(("q", "definition", "optimal guaranteed error (sigma)", "on the continuum"),
-                 [(q, d, f"{e:g}", "proven" if pr else "on the grid only")
-                  for q, d, e, pr in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, r.errors, r.proven)])
+    from . import certificate, continuum
+    cont = continuum.solve(certificate.stacked_H(mod), len(names), np.eye(len(mod.Q_NAMES))).values
+    report.table(("q", "definition", "optimal error on the grid (sigma)", "continuum optimum (exchange)", "grid is"),
+                 [(q, d, f"{e:g}", f"{c:.6g}", "optimal (proven)" if pr else
+                   "optimal" if abs(c - e) < 1e-6 else "NOT optimal: use intermediate angles")
+                  for q, d, e, c, pr in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, r.errors, cont, r.proven)])
     where = "grid of " + ("detents/quarter turns" if not multi else "quarter turns x mountings")
     print(f"\nminimal number of positions optimal for every q ({where}, {len(r.angles_deg)} positions): "
           f"{r.min_positions}")
@@ -61,7 +64,8 @@ def cmd_plan(args):
         report.write_json(args.json, {
             "model": args.model, "angles": names, "mountings": mounts, "q_names": list(mod.Q_NAMES),
             "definitions": list(mod.Q_DEFINITIONS), "guaranteed_errors": list(r.errors),
-            "proven_on_continuum": list(r.proven), "min_positions": r.min_positions,
+            "proven_on_continuum": list(r.proven), "continuum_errors": [float(c) for c in cont],
+            "min_positions": r.min_positions,
             "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
             "plan": [fmt(s) for s in plan],
             "optimal_plans": [[fmt(s) for s in pl] for pl in r.optimal_plans]})
