@@ -122,13 +122,17 @@ def outputs():
     return out
 
 
-def write(root=ROOT):
-    files = outputs()
+def write_files(files, root="."):
+    """Write {relative path: text} under root; returns the paths written, sorted."""
     for rel, text in files.items():
         path = Path(root) / rel
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text)
     return sorted(files)
+
+
+def write(root=ROOT):
+    return write_files(outputs(), root)
 
 
 def drift(root=ROOT):

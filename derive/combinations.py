@@ -19,9 +19,8 @@ def trig_basis(expr, angles, others=()):
     canonical form of e."""
     cs = {a: (sp.Symbol(f"c_{a}"), sp.Symbol(f"s_{a}")) for a in angles}
     trig = {f(a): v for a, pair in cs.items() for f, v in zip((sp.cos, sp.sin), pair)}
-    absolutes = {}
+    absolutes = {}      # |e| -> a generator of its own, and back
     for k, node in enumerate(sorted(expr.atoms(sp.Abs), key=sp.default_sort_key)):
-        inner = sp.expand(node.args[0].subs(trig))
         absolutes[node] = sp.Symbol(f"abs_{k}")
         absolutes[absolutes[node]] = node
     poly = sp.expand(expr.subs({k: v for k, v in absolutes.items() if isinstance(k, sp.Abs)}).subs(trig))

@@ -42,7 +42,7 @@ class Remount:
 
 def derive_remount(d):
     """(26)-(29) from a derivation of the base model: the layout G, the unseen part D, the stand part."""
-    ident, names = d.ident, list(d.names)
+    ident = d.ident
     q = sp.symbols(f"q1:{ident.R.rows + 1}")
     lead = {name: k for k, name in enumerate(ident.leading)}
     G = sp.Matrix(3, 3, lambda i, j: q[lead[f"Gamma{i + 1}{j + 1}"]])

@@ -6,19 +6,19 @@ import json
 import numpy as np
 import pytest
 
-from verify import certificate, continuum, models
+from verify import certificate, certify, continuum, models
 from verify.checks import certificates
 from verify.cli import main
 
 
 @pytest.fixture(scope="module")
 def two_axis():
-    return certificate.for_model("two-axis")
+    return certify.for_model("two-axis")
 
 
 @pytest.fixture(scope="module")
 def norm():
-    return certificate.for_model("norm")
+    return certify.for_model("norm")
 
 
 def test_two_axis_all_15_certified_exactly(two_axis):
@@ -83,5 +83,5 @@ def test_continuum_solver_matches_the_proven_optima():
     sol = continuum.solve(mod.H, 2, np.eye(15))
     np.testing.assert_allclose(sol.values, 1, atol=1e-7)
     single = models.load("single-axis")
-    sol = continuum.solve(certificate.stacked_H(single), 1, np.eye(15))
+    sol = continuum.solve(certify.stacked_H(single), 1, np.eye(15))
     assert sol.values[14] == pytest.approx(2 + np.sqrt(2), abs=1e-6)   # better than 4 on quarter turns

@@ -1,7 +1,6 @@
 """The model-discrepancy workflow: hidden effects are named, clean data raises no alarm."""
 import json
 
-import numpy as np
 import pytest
 
 import generated.two_axis as mod

@@ -30,7 +30,7 @@ def test_exact_remainder_decomposition():
         p = rng.uniform(-1e-2, 1e-2, 16)
         lam1, lam2, lam3, al, be, ga, e1, e2, e3, d1, d2, d3, dg, u1, u2, u3 = p
         A = np.array([[lam1, 0, 0], [al, lam2, 0], [be, ga, lam3]])
-        e, u, d = np.array([e1, e2, e3]), np.array([u1, u2, u3]), (d1, d2, d3)
+        u, d = np.array([u1, u2, u3]), (d1, d2, d3)
 
         def D(v):
             return np.array([d[l] * v[N.AXES[l] - 1] * v[l] for l in range(3)])

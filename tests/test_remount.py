@@ -6,7 +6,7 @@ from hypothesis import given, settings, strategies as st
 import generated.two_axis_remount as rm
 from conftest import write_csv
 from derive.derivation import derive
-from derive.remount import derive_remount, mountings, substitution_holds
+from derive.remount import mountings, substitution_holds
 from derive.builtin import TWO_AXIS_MODEL
 from verify import mounting
 from verify.data import read_positions

@@ -4,7 +4,6 @@ import json
 import numpy as np
 import pytest
 
-from conftest import write_csv
 from derive import description
 from derive.builtin import MODELS, STANDS_DIR
 from verify import models, plans

@@ -43,7 +43,6 @@ def bench_derive():
 
     t, _ = timed(run)
     from derive.model import residual
-    from derive.builtin import TWO_AXIS_MODEL
     z = residual(TWO_AXIS_MODEL)
     syms = [p.symbol for p in TWO_AXIS_MODEL.parameters]
     zero = {s: 0 for s in syms}
@@ -128,10 +127,10 @@ def bench_continuum(mod):
 
 def bench_certificates():
     """Build and independently check the 15 two-axis certificates vs solving the 15 LPs on a 15 deg grid."""
-    from . import certificate
+    from . import certificate, certify
     from .models import load
     mod = load("two-axis")
-    t, ok = timed(lambda: [all(o for _, o, _ in certificate.check(c)) for c in certificate.for_model("two-axis")])
+    t, ok = timed(lambda: [all(o for _, o, _ in certificate.check(c)) for c in certify.for_model("two-axis")])
     assert all(ok)
     g = np.deg2rad(np.arange(0, 360, 15))
     A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))

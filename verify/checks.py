@@ -189,19 +189,19 @@ def certificates(write_dir=None):
     """Build a certificate for every optimal value and re-check each one independently."""
     from pathlib import Path
 
-    from . import certificate, models
+    from . import certificate, certify, models
     if write_dir:
         Path(write_dir).mkdir(parents=True, exist_ok=True)
-    for name in certificate.MODELS:
+    for name in certify.MODELS:
         mod = models.load(name)
-        certs = certificate.for_model(name)
+        certs = certify.for_model(name)
         done = set()
         for cert in certs:
             steps = certificate.check(cert)
             q = cert["claim"].split(" of ", 1)[1].split(" ", 1)[0]
             done.add(q)
             if write_dir:
-                certificate.write(cert, Path(write_dir) / certificate.file_name(cert))
+                certificate.write(cert, Path(write_dir) / certify.file_name(cert))
             how = "exact" if "exact" in steps[2][2] else steps[2][2].split(": ")[-1]
             yield Check(f"certificate {name} {q}: (a) unbiased (b) primal = dual (c) dual feasible",
                         "000 (9)-(10), Theorems 2-4; 001 section 4", f"value {cert['value']}, all hold",

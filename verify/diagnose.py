@@ -169,14 +169,8 @@ def effect_estimates(study, chosen, A, sigma):
 
 def write_module(study, chosen, directory):
     """The extended model's generated module and report, written to `directory`."""
-    from pathlib import Path
-
     from derive import codegen
-    files = codegen.model_files(study.model(chosen), str(directory), str(directory))
-    for rel, text in files.items():
-        Path(rel).parent.mkdir(parents=True, exist_ok=True)
-        Path(rel).write_text(text)
-    return sorted(files)
+    return codegen.write_files(codegen.model_files(study.model(chosen), str(directory), str(directory)))
 
 
 def plot(res, path, title):
