@@ -17,7 +17,7 @@ SCALE = {"bias_drift": 1 / 5760, "bias_temperature": 1 / 4.0}
 
 
 def run(tmp_path, plan, effects, seed):
-    P, f, t, T, _ = simulate.simulate(base, mod, plan, effects, S, seed)
+    P, f, t, T, _, _ = simulate.simulate(base, mod, plan, effects, S, seed)
     path = tmp_path / "d.csv"
     simulate.write(path, P, f, t, T)
     res = diagnose.diagnose(base, mod, read_positions(str(path)), S, 9.81, prior=2e-4)
@@ -83,7 +83,7 @@ def test_cli_simulate_and_diagnose(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["simulate", "--model", "two-axis", "--plan", "grid:7x45", "--sigma", "1e-5", "-o", "x.csv"], "must divide 360"),
+    (["simulate", "--model", "two-axis", "--plan", "grid:7x45", "--sigma", "1e-5", "-o", "x.csv"], "divide 360"),
     (["simulate", "--model", "two-axis", "--plan", "optimal10", "--effect", "warp=1", "--sigma", "1e-5", "-o", "x.csv"],
      "unknown effect 'warp'"),
     (["simulate", "--model", "two-axis", "--plan", "optimal10", "--effect", "bias_drift=1", "--sigma", "1e-5",
@@ -92,3 +92,18 @@ def test_cli_simulate_and_diagnose(tmp_path, capsys):
 def test_bad_arguments(capsys, argv, message):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("stand, plan, effect, values", [
+    ("single-axis", "grid:30", "scale_quadratic", [0, 1e-4, 0]),
+    ("three-axis", "grid:90x45x90", "bias_drift", [1e-4 / 5000, 0, 0]),
+])
+def test_diagnose_described_stands(tmp_path, capsys, stand, plan, effect, values):
+    # garant simulate and garant diagnose on the example stands of derive/stands/ (issue 7).
+    data, out = tmp_path / "d.csv", tmp_path / "r.json"
+    assert main(["simulate", "--model", stand, "--plan", plan, "--effect", f"{effect}=" + ",".join(map(str, values)),
+                 "--sigma", str(S), "--seed", "1", "-o", str(data)]) == 0
+    assert main(["diagnose", "--model", stand, str(data), "--sigma", str(S), "--prior", "2e-4",
+                 "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    assert not res["consistent_before"] and res["effects"] == [effect] and res["consistent_after"]

@@ -90,7 +90,7 @@ def bench_diagnose(mod):
 
     from . import diagnose, simulate
     from .data import read_positions
-    P, f, t, T, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:30x45", [("scale_quadratic", [1e-4, 0, 0])],
+    P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:30x45", [("scale_quadratic", [1e-4, 0, 0])],
                                       1e-5, 0)
     with tempfile.TemporaryDirectory() as tmp:
         simulate.write(f"{tmp}/d.csv", P, f, t, T)

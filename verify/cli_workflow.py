@@ -76,8 +76,10 @@ def cmd_simulate(args):
     base = _base_model(args.model)
     mod = models.load(args.model)
     effects = [simulate.parse_effect(e, CATALOGUE) for e in args.effect]
-    P, f, t, T, _ = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g, args.size)
-    simulate.write(args.output, P, f, t, T)
+    P, f, t, T, _, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
+                                              args.size)
+    names, mount_names = models.layout(mod)
+    simulate.write(args.output, P, f, t, T, names, mounts, mount_names)
     hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects) or "none"
     print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}")
     return 0
@@ -88,8 +90,6 @@ def cmd_diagnose(args):
     base = _base_model(args.model)
     mod = models.load(args.model)
     names, mounts = models.layout(mod)
-    if len(mounts) > 1 or len(names) != 2:
-        raise DataError("diagnose works on two-angle stands with one mounting for now")
     pos = read_positions(args.data, names, mounts)
     t0 = time.perf_counter()
     res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior)
@@ -100,8 +100,8 @@ def cmd_diagnose(args):
           + ("consistent" if res["consistent_before"] else "INCONSISTENT"))
     if res["disagreements"]:
         worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:8]
-        report.table(("position", "alpha_deg", "beta_deg", "component", "residual/sigma"),
-                     [(d["position"], f"{d['alpha_deg']:g}", f"{d['beta_deg']:g}", d["component"],
+        report.table(("position", *(f"{a}_deg" for a in names), "component", "residual/sigma"),
+                     [(d["position"], *(f"{d[a + '_deg']:g}" for a in names), d["component"],
                        f"{d['residual'] / args.sigma:+.2f}") for d in worst])
         print(f"({len(res['disagreements'])} residual components exceed the limit; largest shown)")
     for h in res["history"]:
@@ -115,9 +115,10 @@ def cmd_diagnose(args):
     for group in res["indistinguishable"]:
         print("indistinguishable on this plan: " + " / ".join(group))
     for s in res["separating_positions"]:
-        print(f"  to separate {' and '.join(s['effects'])}, measure at (alpha, beta) = "
-              + "; ".join(f"({p['alpha_deg']:g}, {p['beta_deg']:g}) [differ by "
-                          f"{p['predicted_difference'] / args.sigma:.1f} sigma]" for p in s["positions"]))
+        print(f"  to separate {' and '.join(s['effects'])}, measure at ({', '.join(names)}) = "
+              + "; ".join("(" + ", ".join(f"{p[a + '_deg']:g}" for a in names)
+                          + (f", {p['mount']}" if "mount" in p else "")
+                          + f") [differ by {p['predicted_difference'] / args.sigma:.1f} sigma]" for p in s["positions"]))
     print(f"after: minimax residual {res['max_residual_after'] / args.sigma:.2f} sigma: "
           + ("consistent" if res["consistent_after"] else "still INCONSISTENT"))
     print("this plan is blind to: " + (", ".join(res["blind_to"]) or "nothing in the catalogue"))

@@ -33,8 +33,10 @@ class Study:
         from derive import effects as cat
         self.cat, self.base_model, self.mod = cat, base_model, mod
         self.angles = positions.radians
+        self.mounts = positions.mounts
         self.extra = positions.extra
-        self.z = mod.residual(*self.angles, positions.f.T, g).T.reshape(-1)
+        kw = {} if self.mounts is None else {"mount": self.mounts}
+        self.z = mod.residual(*self.angles, positions.f.T, g, **kw).T.reshape(-1)
         self.columns = {v: np.asarray(positions.extra[v], float) for v in ("time_s", "temp_c")
                         if v in positions.extra}
         self._cache = {}
@@ -54,17 +56,23 @@ class Study:
     def model(self, names):
         return self.cat.extend(self.base_model, names)
 
-    def H(self, names, angles=None, columns=None):
+    def H(self, names, angles=None, columns=None, mounts=None):
+        """H of the extended model at positions, (3, m, N): rows of each position's mounting."""
         key = tuple(sorted(names, key=list(self.cat.CATALOGUE).index))
         if key not in self._cache:
             self._cache[key] = self.cat.numeric_H(self.model(key))
         ext = self.model(key)
-        angles = self.angles if angles is None else angles
+        if angles is None:
+            angles, mounts = self.angles, self.mounts
         columns = self.columns if columns is None else columns
-        return self._cache[key](*angles, *[columns[str(v)] for v in ext.variables])
+        Hs = self._cache[key](*angles, *[columns[str(v)] for v in ext.variables])     # (3 x mounts, m, N)
+        if mounts is None:
+            return Hs[:3]
+        idx = 3 * np.asarray(mounts)[None, :] + np.arange(3)[:, None]                 # (3, N)
+        return np.take_along_axis(Hs, idx[:, None, :], axis=0)
 
-    def A(self, names, angles=None, columns=None):
-        Hs = self.H(names, angles, columns)
+    def A(self, names, angles=None, columns=None, mounts=None):
+        Hs = self.H(names, angles, columns, mounts)
         return np.transpose(Hs, (1, 2, 0)).reshape(Hs.shape[1], -1)
 
 
@@ -73,37 +81,46 @@ def rank(A):
     return int((s > 1e-9 * s.max()).sum())
 
 
-def remainder_allowance(mod, angles, g, prior, samples=100, seed=0):
+def remainder_allowance(mod, angles, g, prior, mounts=None, samples=100, seed=0):
     """Twice the largest linearisation remainder |z_exact - H^T q| found for errors up to `prior`
     (random samples of the exact model at these positions): added to sigma in the consistency test."""
     rng = np.random.default_rng(seed)
-    Hs = mod.H(*angles)
+    kw = {} if mounts is None else {"mount": mounts}
+    Hs = mod.H(*angles, **kw)
     worst = 0.0
     for _ in range(samples):
         p = rng.uniform(-prior, prior, len(mod.PARAMETER_NAMES))
-        z = mod.residual(*angles, mod.readings(*angles, p, g), g)
+        z = mod.residual(*angles, mod.readings(*angles, p, g, **kw), g, **kw)
         worst = max(worst, float(np.abs(z - np.einsum("pns,n->ps", Hs, mod.PHYSICAL_TO_Q @ p)).max()))
     return 2 * worst
 
 
 def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
-    """Positions where the two alternative extended fits predict most differently."""
+    """Positions (every mounting) where the two alternative extended fits predict most differently."""
+    n = len(study.angles)
     g = np.deg2rad(np.arange(0, 360, step))
-    grid = np.array([(a, b) for a in g for b in g]).T
+    grid = np.array(np.meshgrid(*[g] * n, indexing="ij")).reshape(n, -1)
+    mounts = None
+    if study.mounts is not None:
+        nm = len(study.base_model.mountings)
+        mounts = np.repeat(np.arange(nm), grid.shape[1])
+        grid = np.tile(grid, nm)
     cols = {k: np.full(grid.shape[1], np.mean(v)) for k, v in study.columns.items()}
     preds = []
     for alt in (alt1, alt2):
         q, _, _ = chebyshev_fit(study.A(chosen + [alt]), study.z)
-        preds.append(np.einsum("pns,n->sp", study.H(chosen + [alt], tuple(grid), cols), q))
+        preds.append(np.einsum("pns,n->sp", study.H(chosen + [alt], tuple(grid), cols, mounts), q))
     diff = np.abs(preds[0] - preds[1]).max(axis=1)
     best = np.argsort(diff)[::-1][:top]
-    return [{"alpha_deg": float(np.rad2deg(grid[0, k])), "beta_deg": float(np.rad2deg(grid[1, k])),
+    names = [a.name for a in study.base_model.stand.angles]
+    return [{**{f"{a}_deg": float(np.rad2deg(grid[i, k])) for i, a in enumerate(names)},
+             **({"mount": study.base_model.mountings[mounts[k]]} if mounts is not None else {}),
              "predicted_difference": float(diff[k])} for k in best]
 
 
 def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
     study = Study(base_model, mod, positions, g)
-    allow = remainder_allowance(mod, study.angles, g, prior)
+    allow = remainder_allowance(mod, study.angles, g, prior, study.mounts)
     limit = sigma + allow
     A0 = study.A([])
     if rank(A0) < A0.shape[0]:
@@ -132,8 +149,9 @@ def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
     A1 = study.A(chosen)
     _, t1, r1 = chebyshev_fit(A1, study.z)
     estimates = effect_estimates(study, chosen, A1, sigma) if chosen else {}
+    names = [a.name for a in base_model.stand.angles]
     excess = [{"position": int(k // 3), "component": int(k % 3) + 1,
-               "alpha_deg": float(positions.angles_deg[k // 3, 0]), "beta_deg": float(positions.angles_deg[k // 3, 1]),
+               **{f"{a}_deg": float(positions.angles_deg[k // 3, i]) for i, a in enumerate(names)},
                "residual": float(r0[k]), "excess_over_sigma": float(abs(r0[k]) - limit)}
               for k in np.flatnonzero(np.abs(r0) > limit)]
     return {
