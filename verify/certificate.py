@@ -83,7 +83,7 @@ def feasible(H, lam, dom, syms, max_boxes=1_500_000):
             return True, f"exact: every |H^T lambda| <= {sup} (sum of |coefficients| of canonical monomials)"
         if all(harmonic_bound(p, syms) for p in polys):
             return True, ("exact: each H^T lambda is A cos x + B sin x in one angle x, with A^2 + B^2 <= 1 "
-                          "by the sum of |coefficients|")
+                          "(sum of |coefficients|, or 1 - A^2 - B^2 a sum of even powers)")
         lo = [float(sp.sympify(r[0])) for r in dom["ranges"]]
         hi = [float(sp.sympify(r[1])) for r in dom["ranges"]]
         etas = []
@@ -121,9 +121,21 @@ def harmonic_bound(p, syms):
         if rest != 0 or x in (A.free_symbols | B.free_symbols) or A.has(sp.cos(x), sp.sin(x)) or B.has(sp.cos(x), sp.sin(x)):
             continue
         q = sp.expand(A**2 + B**2)
-        if sum((abs(v) for v in trig_basis(q, syms).values()), sp.Integer(0)) <= 1:
+        if sum((abs(v) for v in trig_basis(q, syms).values()), sp.Integer(0)) <= 1 or nonnegative(1 - q):
             return True
     return False
+
+
+def nonnegative(expr):
+    """Exact: expr simplifies to a sum of terms, each a positive number times even powers."""
+    e = sp.factor(sp.trigsimp(sp.expand(expr)))
+    if e == 0:
+        return True
+    for term in (e.args if e.is_Add else (e,)):
+        coeff, factors = term.as_coeff_mul()
+        if coeff <= 0 or not all(f.is_Pow and f.exp.is_even for f in factors):
+            return False
+    return True
 
 
 def box_bound(expr, syms, lo, hi, eta=ETA, max_boxes=1_500_000, start=8):

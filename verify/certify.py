@@ -112,36 +112,40 @@ def _snapped_primal(d, syms, X, K, phi, nu, step, R):
 
 
 def _dual_candidates(lam, primal, d, syms, R, step):
-    """Exact versions of a float dual: rationalised, with surds of 2 and 3, then by slackness."""
-    yield [sp.Rational(str(round(v, 9))).limit_denominator(1000) if abs(v) > 1e-9 else sp.Integer(0) for v in lam]
+    """Exact versions of a float dual: small rationals, rationals, with surds of 2 and 3, then by
+    complementary slackness (the checker decides which, if any, holds)."""
+    for den in (12, 1000):
+        yield [sp.Rational(str(round(v, 9))).limit_denominator(den) if abs(v) > 1e-6 else sp.Integer(0)
+               for v in lam]
     yield [sp.nsimplify(v, [sp.sqrt(2), sp.sqrt(3)], tolerance=1e-8) if abs(v) > 1e-9 else sp.Integer(0) for v in lam]
     cols, signs = [], []
     for at, row, w in primal:
         sub = {s: sp.sympify(x) for s, x in zip(syms, at)}
         cols.append([sp.nsimplify(d.ident.H[row, c].subs(sub)) for c in range(d.ident.H.cols)])
         signs.append(1 if sp.nsimplify(w) > 0 else -1)
-    exact = exact_dual(lam, cols, signs)
-    if exact is not None:
-        yield exact
+    yield from exact_duals(lam, cols, signs)
 
 
-def exact_dual(lam, cols, signs):
+def exact_duals(lam, cols, signs):
     """lambda made exact by complementary slackness: on its support J, the active constraints
-    h_k . lambda = sign_k of the primal's measurements, solved exactly; None if they do not fix it."""
+    h_k . lambda = sign_k of the primal's measurements, solved exactly; free parameters left by them
+    are set to simple exact numbers near the float dual (looser and looser), one candidate each."""
     J = [i for i, v in enumerate(lam) if abs(v) > 1e-6]
     M = sp.Matrix([[c[i] for i in J] for c in cols])
-    rhs = sp.Matrix([int(s) for s in signs])
     try:
-        x, free = M.gauss_jordan_solve(rhs)
+        x, free = M.gauss_jordan_solve(sp.Matrix([int(s) for s in signs]))
     except ValueError:
-        return None
-    if free:
-        x = x.subs({f: sp.nsimplify(lam[J[k]], [sp.sqrt(2), sp.sqrt(3)], tolerance=1e-9)
-                    for k, f in enumerate(free) if False} or {f: 0 for f in free})
-    out = [sp.Integer(0)] * len(lam)
-    for i, v in zip(J, x):
-        out[i] = sp.nsimplify(sp.simplify(v))
-    return out
+        return
+    taus = list(free)
+    for tol in (1e-9, 1e-6, 1e-3):
+        fix = {}
+        for t in taus:
+            i = next(k for k, v in enumerate(x) if v == t)
+            fix[t] = sp.nsimplify(lam[J[i]], [sp.sqrt(2), sp.sqrt(3)], tolerance=tol)
+        out = [sp.Integer(0)] * len(lam)
+        for i, v in zip(J, x.subs(fix)):
+            out[i] = sp.nsimplify(sp.radsimp(v))
+        yield out
 
 
 def exact_primal(cols, nu, lam):

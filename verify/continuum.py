@@ -51,7 +51,7 @@ def _refine(H, x, lam_col, step, lo, hi):
     return x, best
 
 
-def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=40, top=2):
+def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60, top=12):
     """Exchange method on [0, 2 pi)^n_angles for the targets (columns of `targets`, m x T)."""
     lo, hi = np.zeros(n_angles), np.full(n_angles, 2 * np.pi)
     g = np.deg2rad(np.arange(0, 360, scan_deg))
@@ -66,7 +66,10 @@ def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=40
         viol = _violation(H, scan, lam)                                  # (K, T)
         new = []
         for t in range(lam.shape[1]):
-            for k in np.argsort(viol[:, t])[::-1][:top]:
+            # refine from every scan point that is nearly active (up to `top` of them): a peak
+            # between scan points can exceed 1 even where the scan shows less
+            near = [k for k in np.argsort(viol[:, t])[::-1][:top] if viol[k, t] > 0.9]
+            for k in near:
                 x, v = _refine(H, scan[k], lam[:, t], np.deg2rad(scan_deg) / 2, lo, hi)
                 if v > 1 + tol and not any(np.allclose(x, y, atol=1e-6) for y in [*new, *X]):
                     new.append(x)
