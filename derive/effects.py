@@ -83,7 +83,8 @@ def extend(model, names):
         model = replace(model, preferred=model.preferred + tuple(p.name for p in e.params),
                         source_file=f"{model.source_file} + effect {name}",
                         stand=replace(model.stand, name=f"{model.stand.name}_{name}",
-                                      title=f"{model.stand.title} + {name}"))
+                                      title=f"{model.stand.title} + {name}",
+                                      source=f"extension of {model.stand.source} by {name}"))
     return model
 
 

@@ -31,7 +31,7 @@ def for_stand(key):
     domain = {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names)}
     m = d.ident.H.cols
     out = []
-    if key == "two_axis":
+    if len(getattr(mod, "ESTIMATOR_TERMS", ())):       # derived closed forms with the duals e_nu
         for nu in range(m):
             primal = [([_angle(v) for v in mod.PLAN_DEG[s]], p, Fraction(num, den))
                       for s, p, num, den in mod.ESTIMATOR_TERMS[nu]]
@@ -153,7 +153,9 @@ def exact_primal(cols, nu, lam):
     measurements where the dual touches (any such w is optimal), made exact in rationals."""
     import cvxpy as cp
 
-    from .plans import solve_exact, touching
+    from derive.estimators import solve_exact
+
+    from .plans import touching
     cand, signs = touching(cols, lam)
     V = np.array([cols[s, p] * g for (s, p), g in zip(cand, signs)], float)
     w = cp.Variable(len(cand), nonneg=True)

@@ -18,6 +18,8 @@ from math import comb
 
 import numpy as np
 
+from derive.estimators import solve_exact
+
 from .models import H_at, layout
 
 QUARTER_DEG = tuple((a, b) for a in (0, 90, 180, 270) for b in (0, 90, 180, 270))
@@ -51,27 +53,6 @@ def integer_columns(mod, angles_deg, mounts=None):
     if np.abs(Hs - rounded).max() > 1e-12:
         raise ValueError("H is not integer on these positions; exact plan search needs a grid where it is")
     return rounded.astype(np.int64)
-
-
-def solve_exact(columns, b):
-    """Rational x with columns^T x = b for linearly independent integer columns, else None."""
-    k = len(columns)
-    rows = [[Fraction(int(c[i])) for c in columns] + [Fraction(int(b[i]))] for i in range(len(b))]
-    r = 0
-    for c in range(k):
-        p = next((i for i in range(r, len(rows)) if rows[i][c] != 0), None)
-        if p is None:
-            return None
-        rows[r], rows[p] = rows[p], rows[r]
-        rows[r] = [v / rows[r][c] for v in rows[r]]
-        for i in range(len(rows)):
-            if i != r and rows[i][c] != 0:
-                f = rows[i][c]
-                rows[i] = [a - f * bb for a, bb in zip(rows[i], rows[r])]
-        r += 1
-    if any(rows[i][k] != 0 for i in range(r, len(rows))):
-        return None
-    return [rows[i][k] for i in range(k)]
 
 
 @dataclass(frozen=True)
@@ -172,12 +153,6 @@ def minimal_sets(cols, nu, lam=None):
     return dual_on_grid(cols, nu)[1] if lam is None else _minimal(cols, nu, lam)
 
 
-def exact_lower_bound(H_sup, nu, lam):
-    """a^T lambda / max_p sum |lambda| H_SUP[p]: proven bound of the continuum optimum (weak duality)."""
-    worst = max(sum(abs(l) * Fraction(int(v)) for l, v in zip(lam, row)) for row in np.asarray(H_sup))
-    return lam[nu] / worst
-
-
 def popcount(x):
     return np.array([bin(int(v)).count("1") for v in x]) if len(x) else np.array([], int)
 
@@ -257,10 +232,12 @@ def search(mod, angles_deg=None, mounts=None):
     if any(sets == [] for sets in per_nu):
         bad = ", ".join(f"q{nu + 1}" for nu, sets in enumerate(per_nu) if sets == [])
         raise ValueError(f"the grid has no optimal estimator of {bad} (not identifiable there?)")
+    from .exact import dual_lower_bound                   # exact imports this module
     errors = tuple(float(lam[nu]) for nu, lam in enumerate(lams))
     sup = getattr(mod, "H_SUP", None)
-    proven = tuple(sup is not None and all(isinstance(v, Fraction) for v in lam)
-                   and exact_lower_bound(sup, nu, lam) == lam[nu] for nu, lam in enumerate(lams))
+    proven = tuple(bool(sup is not None and all(isinstance(v, Fraction) for v in lam)
+                        and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
+                   for nu, lam in enumerate(lams))
     S = len(angles_deg)
     if S <= BITMASK_LIMIT and all(sets is not None for sets in per_nu):
         n, plans = _bitmask_plans(S, per_nu)
