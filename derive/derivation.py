@@ -5,6 +5,7 @@ from functools import lru_cache
 import sympy as sp
 
 from . import combinations, estimators, model as model_mod
+from .description import check_observable
 
 
 @dataclass(frozen=True)
@@ -29,7 +30,6 @@ class Derivation:
 def derive(model):
     """Run the whole symbolic pipeline for a model description (cached per model)."""
     J = model_mod.jacobian(model)
-    from .description import check_observable
     check_observable(model, J)
     names = [p.name for p in model.parameters]
     ident = combinations.identify(J, names, model.preferred, model.angle_symbols, model.variables)
@@ -39,3 +39,22 @@ def derive(model):
     return Derivation(model=model, up_nominal=tuple(model_mod.up_nominal(model, Q) for Q in Qs),
                       force_over_g=tuple(model_mod.specific_force_over_g(model, Q) for Q in Qs), J=J,
                       ident=ident, estimators=tuple(est))
+
+
+@lru_cache(maxsize=None)
+def numeric_H(model):
+    """H of a (possibly extended) model as a numpy function of (*angles, *variables): (3, m, ...)."""
+    return _numeric_H(derive(model))
+
+
+def _numeric_H(d):
+    args = [*d.model.angle_symbols, *d.model.variables]
+    rows, cols = d.ident.H.shape
+    f = sp.lambdify(args, list(d.ident.H), "numpy")
+
+    def H(*values):
+        import numpy as np
+        values = np.broadcast_arrays(*[np.asarray(v, float) for v in values])
+        out = [np.broadcast_to(np.asarray(v, float), values[0].shape) for v in f(*values)]
+        return np.array(out).reshape((rows, cols) + values[0].shape)
+    return H

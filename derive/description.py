@@ -9,7 +9,8 @@ import re
 import tomllib
 from pathlib import Path
 
-from .model import Angle, Block, Link, Model, Parameter, Stand
+from .model import Angle, Block, Link, Model, Stand
+from .parameter import Parameter
 
 AXES = {"x": 1, "y": 2, "z": 3}
 KEYS = {

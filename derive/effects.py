@@ -6,11 +6,10 @@ true specific force w (block axes), the time t of the row and its temperature T;
 a once-per-turn error to a read angle of the chain.
 """
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import sympy as sp
 
-from .model import Parameter
+from .parameter import Parameter
 
 TIME, TEMP = sp.Symbol("time_s", real=True), sp.Symbol("temp_c", real=True)
 VARIABLE_DEFAULTS = {"time_s": 0.0, "temp_c": 20.0}     # s; degrees C (the reference 20 C)
@@ -86,23 +85,3 @@ def extend(model, names):
                                       title=f"{model.stand.title} + {name}",
                                       source=f"extension of {model.stand.source} by {name}"))
     return model
-
-
-@lru_cache(maxsize=None)
-def numeric_H(model):
-    """H of a (possibly extended) model as a numpy function of (*angles, *variables): (3, m, ...)."""
-    from .derivation import derive
-    return _numeric_H(derive(model))
-
-
-def _numeric_H(d):
-    args = [*d.model.angle_symbols, *d.model.variables]
-    rows, cols = d.ident.H.shape
-    f = sp.lambdify(args, list(d.ident.H), "numpy")
-
-    def H(*values):
-        import numpy as np
-        values = np.broadcast_arrays(*[np.asarray(v, float) for v in values])
-        out = [np.broadcast_to(np.asarray(v, float), values[0].shape) for v in f(*values)]
-        return np.array(out).reshape((rows, cols) + values[0].shape)
-    return H

@@ -7,21 +7,10 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from .effects import CATALOGUE, TEMP, TIME
+from .parameter import Parameter
+from .remount import mountings
 from .rotations import C, small_turn
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """One physical error parameter: its symbol name, LaTeX, unit and meaning."""
-
-    name: str
-    latex: str
-    unit: str
-    meaning: str
-
-    @property
-    def symbol(self):
-        return sp.Symbol(self.name, real=True)
 
 
 @dataclass(frozen=True)
@@ -105,21 +94,18 @@ class Model:
 
     @property
     def parameters(self):
-        from .effects import CATALOGUE
         return self.stand.parameters + self.block.parameters + tuple(
             p for name in self.effects for p in CATALOGUE[name].params)
 
     @property
     def variables(self):
         """Row variables besides the angles that the model depends on (time, temperature)."""
-        from .effects import TEMP, TIME
         names = set()
         for name in self.effects:
             names |= {TIME, TEMP} & self._effect_term(name).free_symbols
         return tuple(v for v in (TIME, TEMP) if v in names)
 
     def _effect_term(self, name):
-        from .effects import CATALOGUE
         w = sp.Matrix(sp.symbols("w1:4", real=True))
         return CATALOGUE[name].term(w, self.symbols)
 
@@ -134,7 +120,6 @@ class Model:
 
 def mount_matrices(model):
     """Q of each mounting of the model, by name ((25) of 000)."""
-    from .remount import mountings
     table = mountings()
     return [table[name] for name in model.mountings]
 
@@ -212,7 +197,6 @@ def specific_force_over_g(model, Q=None):
 def _effects_over_g(model, Q, nominal=False):
     """Sensor effects over g; with `nominal`, at the nominal specific force (enough at first order,
     since every effect term is an effect parameter times a function of w)."""
-    from .effects import CATALOGUE
     out = sp.zeros(3, 1)
     if model.effects:
         w = up_nominal(model, Q) if nominal else _product(_force_factors(model, Q)[1:])

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-import generated.two_axis as two_axis
+from garant.generated import two_axis as two_axis
 
 
 @pytest.fixture(scope="session")

@@ -5,9 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import generated.norm as N
-from verify import calibrate, recordings
-from verify.cli import main
+from garant.generated import norm as N
+from garant.verify.io import recordings
+from garant.verify.workflows import calibrate_norm
+from garant.verify.cli import main
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 G = 9.81744                      # the value the recordings' authors used (shared/data/real/README.md)
@@ -42,7 +43,7 @@ def test_synthetic_log_recovers_errors_within_bounds(tmp_path):
     stills, _ = recordings.still_intervals(log)
     assert len(stills) == len(dirs) + 1
     box = dict(k_max=2e-3, v_max=2e-3, eps_max=2e-3, delta_max=0.0, df_max=1e-5, dg_max=0.0)   # hard bound of the mean noise
-    res = calibrate.run(N, stills, G, 9, str(path), delta_sigma=N.remainder_bound(**box))
+    res = calibrate_norm.run(N, stills, G, 9, str(path), delta_sigma=N.remainder_bound(**box))
     got = np.array(list(res["parameters"].values()))
     bound = np.array(list(res["guaranteed_error"].values()))
     assert np.all(np.abs(got - truth[:9]) <= bound)
@@ -90,7 +91,7 @@ def test_repeat_sessions_agree_within_bounds():
     for s in (2, 3, 4):
         log = recordings.read_log(str(REAL / f"repeat_session{s}_acc.txt"))
         stills, _ = recordings.still_intervals(log)
-        res[s] = calibrate.run(N, stills, G, 9, log.path)
+        res[s] = calibrate_norm.run(N, stills, G, 9, log.path)
     for a, b in ((2, 3), (2, 4), (3, 4)):
         for k in res[a]["parameters"]:
             diff = abs(res[a]["parameters"][k] - res[b]["parameters"][k])

@@ -6,33 +6,35 @@ import json
 import numpy as np
 import pytest
 
-from verify import certificate, certify, continuum, models
-from verify.checks import certificates
-from verify.cli import main
+from garant.verify import models
+from garant.verify.papers.certificates import certificates
+from garant.verify.proof import build, check
+from garant.verify.solve import continuum
+from garant.verify.cli import main
 
 
 @pytest.fixture(scope="module")
 def two_axis():
-    return certify.for_model("two-axis")
+    return build.for_model("two-axis")
 
 
 @pytest.fixture(scope="module")
 def norm():
-    return certify.for_model("norm")
+    return build.for_model("norm")
 
 
 def test_two_axis_all_15_certified_exactly(two_axis):
     # 000, section 4: the optimal guaranteed error of every q_nu is sigma, on the whole square.
     assert len(two_axis) == 15
     for cert in two_axis:
-        steps = certificate.check(cert)
+        steps = check.check(cert)
         assert cert["value"] == "1" and all(ok for _, ok, _ in steps) and "exact" in steps[2][2]
 
 
 def test_norm_all_12_certified(norm):
     # 001, section 4: 1, 1, 1, 2, 2, 2, 1, 1, 1, 4, 4, 4 (units of delta_sigma_max), on the sphere.
     assert [c["value"] for c in norm] == ["1", "1", "1", "2", "2", "2", "1", "1", "1", "4", "4", "4"]
-    assert all(all(ok for _, ok, _ in certificate.check(c)) for c in norm)
+    assert all(all(ok for _, ok, _ in check.check(c)) for c in norm)
 
 
 @pytest.mark.parametrize("tamper, step, reason", [
@@ -45,23 +47,23 @@ def test_norm_all_12_certified(norm):
 def test_wrong_certificate_is_rejected_with_reason(two_axis, tamper, step, reason):
     cert = copy.deepcopy(two_axis[6])           # q7 = bias1
     tamper(cert)
-    steps = {s: (ok, detail) for s, ok, detail in certificate.check(cert)}
+    steps = {s: (ok, detail) for s, ok, detail in check.check(cert)}
     assert not steps[step][0] and reason in steps[step][1]
 
 
 def test_wrong_sphere_dual_is_rejected(norm):
     cert = copy.deepcopy(norm[9])               # delta1_g: lambda = 4 e10 - e8
     cert["dual"] = ["0" if x == "-1" else x for x in cert["dual"]]
-    steps = {s: ok for s, ok, _ in certificate.check(cert)}
+    steps = {s: ok for s, ok, _ in check.check(cert)}
     assert not steps["(c) dual feasible"]
 
 
 def test_check_certificate_cli(two_axis, tmp_path, capsys):
     good, bad = tmp_path / "good.json", tmp_path / "bad.json"
-    certificate.write(two_axis[0], good)
+    check.write(two_axis[0], good)
     cert = copy.deepcopy(two_axis[0])
     cert["value"] = "2"
-    certificate.write(cert, bad)
+    check.write(cert, bad)
     assert main(["check-certificate", str(good)]) == 0
     assert main(["check-certificate", str(bad)]) == 1
     assert "REJECTED" in capsys.readouterr().out
@@ -83,15 +85,15 @@ def test_continuum_solver_matches_the_proven_optima():
     sol = continuum.solve(mod.H, 2, np.eye(15))
     np.testing.assert_allclose(sol.values, 1, atol=1e-7)
     single = models.load("single-axis")
-    sol = continuum.solve(certify.stacked_H(single), 1, np.eye(15))
+    sol = continuum.solve(build.stacked_H(single), 1, np.eye(15))
     assert sol.values[14] == pytest.approx(2 + np.sqrt(2), abs=1e-6)   # better than 4 on quarter turns
 
 
 def test_example_stands_fully_certified():
     # Every optimal value of the example stands, including single-axis q15 = 2 + sqrt(2) on the continuum.
     for name, m in (("single-axis", 15), ("three-axis", 17)):
-        certs = certify.for_model(name)
+        certs = build.for_model(name)
         assert len(certs) == m
-        assert all(all(ok for _, ok, _ in certificate.check(c)) for c in certs)
-    q15 = certify.for_model("single-axis")[14]
+        assert all(all(ok for _, ok, _ in check.check(c)) for c in certs)
+    q15 = build.for_model("single-axis")[14]
     assert q15["value"] == "sqrt(2) + 2"

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import simulate, write_csv
-from verify.cli import main
+from garant.verify.cli import main
 
 SIGMA = 1e-5
 PLAN10 = [(0, 0), (0, 180), (180, 90), (180, 270), (90, 90), (270, 90), (90, 270), (90, 180), (270, 180), (90, 0)]

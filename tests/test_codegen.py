@@ -3,7 +3,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from derive import codegen
+from garant.derive import codegen
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -34,7 +34,7 @@ def test_check_command_reports_drift(tmp_path, monkeypatch):
 
 def test_generated_imports_without_sympy():
     code = ("import sys; sys.modules['sympy'] = None; sys.modules['jinja2'] = None; "
-            "import generated.two_axis as m; print(m.H(0.0, 0.0).shape)")
+            "from garant.generated import two_axis as m; print(m.H(0.0, 0.0).shape)")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "(3, 15)"

@@ -4,10 +4,10 @@ import pytest
 import sympy as sp
 from hypothesis import given, settings, strategies as st
 
-from derive import published
-from derive.derivation import derive
-from derive.rotations import C, small_turn
-from derive.builtin import TWO_AXIS_MODEL
+from garant.derive import published
+from garant.derive.derivation import derive
+from garant.derive.rotations import C, small_turn
+from garant.derive.builtin import TWO_AXIS_MODEL
 
 a, b = sp.symbols("alpha beta", real=True)
 
@@ -96,7 +96,7 @@ def test_rotations_are_orthonormal(axis, x):
 @settings(max_examples=30, deadline=None)
 @given(st.lists(st.floats(-0.1, 0.1), min_size=3, max_size=3))
 def test_small_turn_is_E_plus_hat_to_first_order(theta):
-    from derive.rotations import hat
+    from garant.derive.rotations import hat
     R = np.array(small_turn([sp.Float(t) for t in theta]), float)
     E_hat = np.eye(3) + np.array(hat(theta), float)
     assert np.abs(R - E_hat).max() <= 2 * max(abs(t) for t in theta) ** 2 + 1e-15

@@ -3,12 +3,12 @@ import json
 
 import pytest
 
-import generated.two_axis as mod
-from derive.builtin import TWO_AXIS_MODEL as base
-from derive.effects import CATALOGUE
-from verify import diagnose, simulate
-from verify.cli import main
-from verify.data import read_positions
+from garant.generated import two_axis as mod
+from garant.derive.builtin import TWO_AXIS_MODEL as base
+from garant.derive.effects import CATALOGUE
+from garant.verify.workflows import diagnose, simulate
+from garant.verify.cli import main
+from garant.verify.io.positions import read_positions
 
 S = 1e-5
 # Parameter scale that makes a value of k mean "k sigma" of effect on z (time up to ~96 min,

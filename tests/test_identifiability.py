@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from derive import identifiability as I
-from verify import redundancy as rd
-from verify import redundancy_checks
-from verify.cli import main
+from garant.derive import identifiability as I
+from garant.verify.papers import redundancy_003
+from garant.verify.workflows import redundancy as rd
+from garant.verify.cli import main
 
 
 def test_example1_dependent_with_printed_relation():
@@ -30,8 +30,8 @@ def test_example2_full_basis_has_common_scale_relation():
 
 
 def test_two_axis_relations_explain_q():
-    from derive.derivation import derive
-    from derive.builtin import TWO_AXIS_MODEL
+    from garant.derive.derivation import derive
+    from garant.derive.builtin import TWO_AXIS_MODEL
     rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
     assert {"Delta_g", "Gamma11", "Gamma22", "Gamma33"} in [set(g) for g in groups]
     assert "phi[Delta_g] + phi[Gamma11] + phi[Gamma22] + phi[Gamma33] = 0" in [r.text() for r in rel]
@@ -57,7 +57,7 @@ def test_trace_identity_exact_random_geometries(r, q, N):
         assert all(v * N >= 1 for v in B.diagonal())        # (7): never below sigma^2/N
 
 
-@pytest.mark.parametrize("group", [g for g, _ in redundancy_checks.all_groups()])
+@pytest.mark.parametrize("group", [g for g, _ in redundancy_003.all_groups()])
 def test_003_checks_pass(group):
     rows = list(group())
     assert rows and all(r.passed for r in rows), [r for r in rows if not r.passed]

@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-import generated.two_axis_remount as rm
-from verify import checks, nearby, section6
+from garant.generated import two_axis_remount as rm
+from garant.verify.papers import section6, stand_000
+from garant.verify.workflows import nearby
 
 
 @pytest.mark.parametrize("miss", [0.01, 0.5, 2.0])
@@ -41,11 +42,11 @@ def test_section6_some_biased_some_not(mod):
         1: ["q4", "q5", "q6", "q7"], 2: ["q8", "q9", "q10", "q11"], 3: ["q12", "q13", "q14", "q15"]}
 
 
-@pytest.mark.parametrize("group", [checks.remount_round_trip, checks.ignoring_the_stand])
+@pytest.mark.parametrize("group", [stand_000.remount_round_trip, stand_000.ignoring_the_stand])
 def test_issue3_checks_pass(mod, group):
     rows = list(group(mod, rm))
     assert rows and all(r.passed for r in rows)
 
 
 def test_realised_plan_checks_pass(mod):
-    assert all(r.passed for r in checks.realised_plan(mod))
+    assert all(r.passed for r in stand_000.realised_plan(mod))

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 import sympy as sp
 
-import generated.norm as N
-from derive import norm
-from verify import norm_checks
+from garant.generated import norm as N
+from garant.derive import norm
+from garant.verify.papers import norm_001
 
 
 @pytest.mark.parametrize("axes", [(2, 3, 1), (3, 1, 2), (2, 1, 1)])
@@ -42,10 +42,10 @@ def test_exact_remainder_decomposition():
         assert N.remainder(m, p) == pytest.approx(rho1 - h**2 * (1.5 + h) / (1 + h) ** 2, abs=1e-15)
 
 
-@pytest.mark.parametrize("label", list(norm_checks.BOXES))
+@pytest.mark.parametrize("label", list(norm_001.BOXES))
 def test_derived_bound_holds_on_samples(label):
-    box = norm_checks.BOXES[label]
-    assert N.remainder_bound(**box) >= norm_checks.worst_remainder(N, box, seed=3)
+    box = norm_001.BOXES[label]
+    assert N.remainder_bound(**box) >= norm_001.worst_remainder(N, box, seed=3)
 
 
 def test_bound_is_second_order_with_first_order_noise():
@@ -54,7 +54,7 @@ def test_bound_is_second_order_with_first_order_noise():
     assert first == {(0, 0, 0, 1, 0): sp.sqrt(3)}          # only sqrt(3) delta_f_max
 
 
-@pytest.mark.parametrize("group", [g for g, _ in norm_checks.all_groups(N)])
+@pytest.mark.parametrize("group", [g for g, _ in norm_001.all_groups(N)])
 def test_norm_checks_pass(group):
     rows = list(group(N))
     assert rows and all(r.passed for r in rows), [r for r in rows if not r.passed]
@@ -62,12 +62,12 @@ def test_norm_checks_pass(group):
 
 def test_sphere_plans():
     # 001: 18 tests for the 9 linear parameters; for all 12 we find 30 (< the source's 42).
-    assert len(norm_checks.minimal_plan(N, range(9))) == 18
-    assert len(norm_checks.minimal_plan(N, range(12))) == 30
+    assert len(norm_001.minimal_plan(N, range(9))) == 18
+    assert len(norm_001.minimal_plan(N, range(12))) == 30
 
 
 def test_wrong_dual_is_rejected():
-    from verify import sphere
+    from garant.verify.solve import sphere
     lam = np.array(N.DUALS[9], float)
     lam[7] = 0.0                                # drop the -n2 term: |4 n1^2 n2| reaches 1.54
     ok, _, _ = sphere.prove_dual(N.H_EXPONENTS, lam)

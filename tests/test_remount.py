@@ -3,14 +3,14 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-import generated.two_axis_remount as rm
+from garant.generated import two_axis_remount as rm
 from conftest import write_csv
-from derive.derivation import derive
-from derive.remount import mountings, substitution_holds
-from derive.builtin import TWO_AXIS_MODEL
-from verify import mounting
-from verify.data import read_positions
-from verify.estimate import estimate
+from garant.derive.derivation import derive
+from garant.derive.remount import mountings, substitution_holds
+from garant.derive.builtin import TWO_AXIS_MODEL
+from garant.verify.io.positions import read_positions
+from garant.verify.workflows import mounting
+from garant.verify.workflows.estimate import estimate
 
 NAMES = sorted(rm.MOUNTS)
 STAND = ("kappa", "epsilon", "Delta_alpha", "Delta_beta", "alpha_star", "Delta_g")
@@ -98,3 +98,15 @@ def test_simulate_estimate_recover_within_bounds(mod, tmp_path, seed):
         for j in range(3):
             err = ph["Gamma"][i][j] - Gamma[i, j] + neg[f"Gamma{i + 1}{j + 1}"]
             assert abs(err) <= bd["Gamma"][i][j] + rem
+
+
+def test_cli_estimate_with_mount_prints_block_errors(mod, tmp_path, capsys):
+    # The --mount path of `garant estimate` end to end: the table of block errors (29) of 000 is printed.
+    from garant.verify.cli import main
+    stand = dict(zip(STAND, [1e-4] * 6))
+    f = mounting.mounted_readings(mod, rm, *np.deg2rad(np.array(mod.PLAN_DEG, float).T), stand,
+                                  np.zeros((3, 3)), np.zeros(3), np.zeros(3), "+y+z+x", 9.81).T
+    path = write_csv(tmp_path / "d.csv", mod.PLAN_DEG, f)
+    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5", "--mount", "+y+z+x"]) == 0
+    out = capsys.readouterr().out
+    assert "block errors in block axes, mounting +y+z+x" in out and "theta_k3" in out

@@ -4,10 +4,11 @@ import json
 import numpy as np
 import pytest
 
-from derive import description
-from derive.builtin import MODELS, STANDS_DIR
-from verify import models, plans
-from verify.cli import main
+from garant.derive import description
+from garant.derive.builtin import MODELS, STANDS_DIR
+from garant.verify import models
+from garant.verify.solve import plans
+from garant.verify.cli import main
 
 SIGMA, G = 1e-5, 9.81
 

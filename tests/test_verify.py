@@ -3,12 +3,13 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from derive import published
-from verify import checks, exact, lp, plans
+from garant.derive import published
+from garant.verify.papers import stand_000
+from garant.verify.solve import exact, lp, plans
 
 
-@pytest.mark.parametrize("group", [checks.closed_forms, checks.continuum_optimum, checks.grid_lp,
-                                   checks.plan_checks, checks.additivity])
+@pytest.mark.parametrize("group", [stand_000.closed_forms, stand_000.continuum_optimum, stand_000.grid_lp,
+                                   stand_000.plan_checks, stand_000.additivity])
 def test_every_check_passes(mod, group):
     rows = list(group(mod))
     assert rows and all(r.passed for r in rows), [r for r in rows if not r.passed]

@@ -16,8 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import checks, lp, plans
 from .models import load
+from .papers import stand_000
+from .solve import lp, plans
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -34,15 +35,15 @@ def timed(fn, repeat=1):
 def bench_derive():
     """Derivation and rendering of the two-axis model (in process, cache cleared) vs a naive Jacobian."""
     import sympy as sp
-    from derive import codegen, derivation
-    from derive.builtin import TWO_AXIS_MODEL
+    from garant.derive import codegen, derivation
+    from garant.derive.builtin import TWO_AXIS_MODEL
 
     def run():
         derivation.derive.cache_clear()
         return codegen.model_files(TWO_AXIS_MODEL)
 
     t, _ = timed(run)
-    from derive.model import residual
+    from garant.derive.model import residual
     z = residual(TWO_AXIS_MODEL)
     syms = [p.symbol for p in TWO_AXIS_MODEL.parameters]
     zero = {s: 0 for s in syms}
@@ -53,7 +54,7 @@ def bench_derive():
 
 def bench_guaranteed_errors(mod):
     """Exact continuum proof of the 15 optimal errors vs a 5-degree grid LP (primal only)."""
-    t, rows = timed(lambda: list(checks.continuum_optimum(mod)), repeat=3)
+    t, rows = timed(lambda: list(stand_000.continuum_optimum(mod)), repeat=3)
     assert all(r.passed for r in rows)
     g = np.deg2rad(np.arange(0, 360, 5))
     A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
@@ -85,11 +86,11 @@ def bench_diagnose(mod):
     extended model's module (what scoring would cost without the derived-H path)."""
     import tempfile
 
-    from derive import codegen, derivation, effects
-    from derive.builtin import TWO_AXIS_MODEL
+    from garant.derive import codegen, derivation, effects
+    from garant.derive.builtin import TWO_AXIS_MODEL
 
-    from . import diagnose, simulate
-    from .data import read_positions
+    from .io.positions import read_positions
+    from .workflows import diagnose, simulate
     P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:30x45", [("scale_quadratic", [1e-4, 0, 0])],
                                       1e-5, 0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -98,7 +99,7 @@ def bench_diagnose(mod):
 
         def run():
             derivation.derive.cache_clear()
-            effects.numeric_H.cache_clear()
+            derivation.numeric_H.cache_clear()
             return diagnose.diagnose(TWO_AXIS_MODEL, mod, pos, 1e-5, 9.81, prior=2e-4)
         t_run, res = timed(run)
     assert res["effects"] == ["scale_quadratic"]
@@ -113,7 +114,7 @@ def bench_diagnose(mod):
 def bench_continuum(mod):
     """Exchange method for the 15 two-axis optima vs a 1-degree grid LP (timed on one target at
     3 degrees, scaled by the number of columns and targets: the LP work grows at least linearly)."""
-    from . import continuum
+    from .solve import continuum
     t, sol = timed(lambda: continuum.solve(mod.H, 2, np.eye(15)), repeat=3)
     assert np.allclose(sol.values, 1, atol=1e-7)
     g = np.deg2rad(np.arange(0, 360, 3))
@@ -127,10 +128,9 @@ def bench_continuum(mod):
 
 def bench_certificates():
     """Build and independently check the 15 two-axis certificates vs solving the 15 LPs on a 15 deg grid."""
-    from . import certificate, certify
-    from .models import load
+    from .proof import build, check
     mod = load("two-axis")
-    t, ok = timed(lambda: [all(o for _, o, _ in certificate.check(c)) for c in certify.for_model("two-axis")])
+    t, ok = timed(lambda: [all(o for _, o, _ in check.check(c)) for c in build.for_model("two-axis")])
     assert all(ok)
     g = np.deg2rad(np.arange(0, 360, 15))
     A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
@@ -139,7 +139,7 @@ def bench_certificates():
 
 
 def codegen_outputs():
-    from derive import codegen
+    from garant.derive import codegen
     return codegen.outputs()
 
 
@@ -148,9 +148,9 @@ def main():
     mod = load("two-axis")
     fresh, _ = timed(lambda: subprocess.run([sys.executable, "-m", "derive", "--check"], cwd=ROOT,
                                             check=True, capture_output=True))
-    from derive import description
-    from derive.builtin import STANDS_DIR
-    from derive.derivation import derive as derive_model
+    from garant.derive import description
+    from garant.derive.builtin import STANDS_DIR
+    from garant.derive.derivation import derive as derive_model
     three, _ = timed(lambda: derive_model(description.load(STANDS_DIR / "three_axis.toml")))
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod), bench_continuum(mod),
             bench_certificates(), bench_diagnose(mod)]

@@ -5,10 +5,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .data import DataError
+from .errors import DataError
 
-MODELS = {"two-axis": "generated.two_axis", "single-axis": "generated.single_axis",
-          "three-axis": "generated.three_axis", "norm": "generated.norm"}
+MODELS = {"two-axis": "garant.generated.two_axis", "single-axis": "garant.generated.single_axis",
+          "three-axis": "garant.generated.three_axis", "norm": "garant.generated.norm"}
 STANDS = ["two-axis", "single-axis", "three-axis"]       # models with stand angles (plan, estimate)
 
 
@@ -23,7 +23,7 @@ def load(name):
 
 def from_description(path):
     """Derive a stand description and execute the rendered module (no file is written)."""
-    from derive import codegen, description
+    from garant.derive import codegen, description
     try:
         model = description.load(path)
         files = codegen.model_files(model)
@@ -34,6 +34,21 @@ def from_description(path):
     mod.__file__ = str(Path(path).resolve())
     exec(compile(files[key], key, "exec"), mod.__dict__)
     return mod
+
+
+def stand_model(name):
+    """The symbolic Model (derive/) of a built-in stand or of a description file."""
+    from garant.derive import description
+    from garant.derive.builtin import MODELS as BUILTIN
+    if str(name).endswith(".toml"):
+        try:
+            return description.load(name)
+        except description.DescriptionError as e:
+            raise DataError(str(e)) from None
+    key = name.replace("-", "_")
+    if key not in BUILTIN:
+        raise DataError(f"unknown stand {name!r}; use {', '.join(STANDS)} or a STAND.toml")
+    return BUILTIN[key]
 
 
 def load_remount(name):

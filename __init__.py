@@ -1,0 +1,29 @@
+"""garant: guaranteed (minimax) calibration of accelerometer blocks on test stands.
+
+    garant.derive     SymPy: stand descriptions -> residual (1), H (3), combinations q (4), remount, norm (2.2)
+    garant.generated  numpy only: the rendered estimator modules
+    garant.verify     numpy, cvxpy: LPs, proofs, workflows on data, the checks against the papers
+
+The names below are the notebook API; each is imported on first use, so `import garant` is light.
+"""
+from importlib import import_module
+
+__version__ = "0.1.0"
+
+_API = {
+    "load_model": ("garant.verify.models", "load"),
+    "stand_model": ("garant.verify.models", "stand_model"),
+    "read_positions": ("garant.verify.io.positions", "read_positions"),
+    "estimate": ("garant.verify.workflows.estimate", "estimate"),
+    "search_plans": ("garant.verify.solve.plans", "search"),
+    "diagnose": ("garant.verify.workflows.diagnose", "diagnose"),
+    "DataError": ("garant.verify.errors", "DataError"),
+}
+__all__ = list(_API)
+
+
+def __getattr__(name):
+    if name not in _API:
+        raise AttributeError(f"module 'garant' has no attribute {name!r}")
+    module, attr = _API[name]
+    return getattr(import_module(module), attr)

@@ -1,0 +1,131 @@
+"""The house: one installed namespace, imports that run one way, no import circles, no giant room.
+
+Read statically (ast), function-level imports included, so a lazy import cannot hide a circle.
+"""
+import ast
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("derive", "generated", "verify")
+# Rank of each room of verify/: a module may import only from a room of lower rank (or its own room).
+RANK = {"errors": 0, "io": 1, "models": 1, "solve": 2, "proof": 3, "workflows": 4, "papers": 5, "cli": 6,
+        "bench": 7, "__main__": 7}
+
+
+def modules():
+    """{dotted name under garant: path} for every module of the three packages."""
+    out = {}
+    for pkg in PACKAGES:
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            parts = list(path.relative_to(ROOT).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out["garant." + ".".join(parts)] = path
+    return out
+
+
+def imports(name, path, known):
+    """Modules of garant that `name` imports anywhere in its text (resolved to known module names)."""
+    is_pkg = path.name == "__init__.py"
+    here = name.split(".") if is_pkg else name.split(".")[:-1]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = here[:len(here) - node.level + 1] if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            targets = [f"{mod}.{a.name}" for a in node.names] + [mod]
+        else:
+            continue
+        for t in targets:
+            while t and t not in known:
+                t = t.rpartition(".")[0]
+            if t and t != name and not name.startswith(t + "."):
+                found.add(t)
+    return found
+
+
+def graph():
+    known = modules()
+    return {n: imports(n, p, known) for n, p in known.items()}
+
+
+def test_no_module_imports_a_module_that_imports_it_back():
+    g = graph()
+
+    def reach(start):
+        seen, todo = set(), list(g[start])
+        while todo:
+            n = todo.pop()
+            if n not in seen:
+                seen.add(n)
+                todo += g[n]
+        return seen
+    circles = sorted(n for n in g if n in reach(n))
+    assert not circles, f"modules on an import circle: {circles}"
+
+
+def test_cycle_detector_sees_a_circle(tmp_path):
+    # The check above can fail: two modules that import each other are found.
+    (tmp_path / "a.py").write_text("from . import b\n")
+    (tmp_path / "b.py").write_text("def f():\n    from .a import x\n")
+    known = {"garant.p.a": tmp_path / "a.py", "garant.p.b": tmp_path / "b.py"}
+    assert imports("garant.p.a", known["garant.p.a"], known) == {"garant.p.b"}
+    assert imports("garant.p.b", known["garant.p.b"], known) == {"garant.p.a"}
+
+
+def test_layers_run_one_way():
+    """derive -> generated <- verify; inside verify, cli -> papers -> workflows -> proof -> solve -> io/models."""
+    bad = []
+    for name, deps in graph().items():
+        layer = name.split(".")[1]
+        for d in deps:
+            other = d.split(".")[1]
+            if layer == "derive" and other != "derive" or layer == "generated" and other != "generated":
+                bad.append((name, d))
+            elif layer == other == "verify":
+                room, to = name.split(".")[2], d.split(".")[2]
+                if room != to and RANK[to] >= RANK[room]:
+                    bad.append((name, d))
+    assert not bad, f"imports against the arrows: {bad}"
+
+
+def test_largest_room_under_a_third_of_the_code():
+    rooms = {}
+    for name, path in modules().items():
+        parts = name.split(".")
+        room = ".".join(parts[1:3]) if parts[1] == "verify" and (ROOT / "/".join(parts[1:3])).is_dir() else parts[1]
+        rooms[room] = rooms.get(room, 0) + len(path.read_text().splitlines())
+    total = sum(rooms.values())
+    room, size = max(rooms.items(), key=lambda kv: kv[1])
+    assert size < total / 3, f"{room} holds {size} of {total} lines"
+
+
+@pytest.mark.skipif(not (ROOT / "pyproject.toml").exists(), reason="needs the source tree")
+def test_wheel_installs_only_the_garant_namespace(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                          "-w", str(tmp_path), str(ROOT)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    (wheel,) = tmp_path.glob("garant-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    tops = {n.split("/")[0] for n in names}
+    assert tops == {"garant", next(t for t in tops if t.endswith(".dist-info"))}, tops
+    for must in ("garant/__init__.py", "garant/derive/codegen.py", "garant/derive/stands/two_axis.toml",
+                 "garant/derive/templates/model/MODEL.py.jinja", "garant/generated/two_axis.py",
+                 "garant/verify/cli/__init__.py", "garant/verify/solve/lp.py"):
+        assert must in names
+    assert not any(n.startswith(("garant/tests", "garant/docs")) for n in names)
+
+
+def test_import_garant_is_light_and_gives_the_api():
+    code = ("import sys, garant; assert 'sympy' not in sys.modules and 'cvxpy' not in sys.modules; "
+            "print(sorted(garant.__all__)); print(garant.load_model('two-axis').Q_NAMES[0])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/")
+    assert out.returncode == 0, out.stderr
+    assert "estimate" in out.stdout and out.stdout.strip().endswith("q1")

@@ -1,0 +1,24 @@
+"""Arguments several commands share, stated once with their units."""
+from ..models import STANDS
+
+G_DEFAULT = 9.81  # m/s^2
+
+
+def model(p, *, positional=False):
+    help_ = f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml"
+    if positional:
+        p.add_argument("model", help=help_)
+    else:
+        p.add_argument("--model", required=True, help=help_)
+
+
+def sigma(p, help_="bound on each residual component, dimensionless (units of g), (5) of 000"):
+    p.add_argument("--sigma", type=float, required=True, help=help_)
+
+
+def g(p, help_="model gravity, m/s^2 (default 9.81)"):
+    p.add_argument("--g", type=float, default=G_DEFAULT, help=help_)
+
+
+def json(p):
+    p.add_argument("--json", metavar="FILE", help="also write the result as JSON")

@@ -1,0 +1,80 @@
+"""garant calibrate-norm: a real static log calibrated through the norm relation (2.2) of 001."""
+import sys
+
+from ..io.recordings import FORMATS, SENSORS
+from . import args as a
+
+
+def add(sub):
+    p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
+    p.add_argument("log", metavar="LOG")
+    p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
+    p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355",
+                   help="accelerometer of an OpenAXES log")
+    a.g(p, "local gravity, m/s^2 (default 9.81)")
+    p.add_argument("--params", type=int, choices=(9, 12), default=9,
+                   help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
+    p.add_argument("--window", type=float, default=1.0, help="moving-variance window, s")
+    p.add_argument("--k", type=float, default=10.0, help="still when the moving variance < k x the initial one")
+    p.add_argument("--min-still", type=float, default=2.0, help="shortest still interval kept, s")
+    p.add_argument("--delta-sigma", type=float, metavar="D",
+                   help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; "
+                   "default: the minimax residual of the fit, the smallest bound the data allow")
+    p.add_argument("--diagnose", action="store_true",
+                   help="test the model against each interval's noise and try the effect catalogue")
+    a.json(p)
+    p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
+    return p
+
+
+def run(args):
+    import numpy as np
+
+    from .. import models
+    from ..io import recordings, report
+    from ..workflows import calibrate_norm
+    mod = models.load("norm")
+    log = recordings.read_log(args.log, args.format, args.sensor)
+    stills, note = recordings.still_intervals(log, window=args.window, k=args.k, min_still=args.min_still)
+    print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})",
+          file=sys.stderr)
+    res = calibrate_norm.run(mod, stills, args.g, args.params, args.log, args.delta_sigma)
+    print(f"calibration a = M (raw - b), {res['intervals']} still intervals, {res['iterations']} iterations "
+          f"({res['start']})")
+    print("M (m/s^2 per raw unit):")
+    for row in res["matrix"]:
+        print("   " + "  ".join(f"{v:+.6e}" for v in row))
+    print("b (raw units): " + "  ".join(f"{v:+.6e}" for v in res["bias"]))
+    dsig = res["delta_sigma_max"]
+    print(f"minimax residual of the fit: {res['delta_sigma_fit']:.3e}; delta_sigma_max = {dsig:.3e} "
+          f"(x g = {dsig * args.g:.3e} m/s^2) from the {res['delta_sigma_source']}")
+    pars = res["parameters"] or {}
+    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan"),
+                 [(k, f"{pars[k]:+.4e}" if k in pars else "-", f"{v:.3e}",
+                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}") for k, v in res["guaranteed_error"].items()])
+    if res["directions_to_add"]:
+        print(f"\nto reach the optimal bounds, add {len(res['directions_to_add'])} orientation(s) "
+              "(unit vectors in sensor axes, -gravity direction):")
+        for d in res["directions_to_add"]:
+            print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+    if args.diagnose:
+        raw = np.array([st.mean for st in stills])
+        fit = calibrate_norm.fit(mod, raw, args.g, args.params)
+        d = calibrate_norm.diagnose_norm(mod, stills, fit, args.g, args.params)
+        res["diagnosis"] = d
+        print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
+        print(f"  {args.params}-parameter model: worst {d['max_residual_before']:.1f} -> "
+              + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
+        for step in d["scores"]:
+            print("  try: " + ", ".join(f"{k} {v:.1f}" for k, v in sorted(step.items(), key=lambda kv: kv[1])))
+        for group in d["indistinguishable"]:
+            print("  indistinguishable with these orientations: " + " / ".join(group))
+        print("  added: " + (", ".join(d["effects"]) or "nothing") + f"; worst now {d['max_residual_after']:.1f} -> "
+              + ("consistent" if d["consistent_after"] else "still INCONSISTENT: an effect outside the catalogue, "
+                 "or a noise bound too tight"))
+    if args.json:
+        report.write_json(args.json, res)
+    if args.plot:
+        calibrate_norm.plot(res, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0

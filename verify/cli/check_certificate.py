@@ -1,0 +1,26 @@
+"""garant check-certificate: re-check an optimality certificate without any solver."""
+from ..errors import DataError
+
+
+def add(sub):
+    p = sub.add_parser("check-certificate", help="re-check an optimality certificate, independently of any solver")
+    p.add_argument("file", metavar="FILE.json")
+    return p
+
+
+def run(args):
+    from ..proof import check
+    try:
+        cert = check.read(args.file)
+    except (OSError, ValueError) as e:
+        raise DataError(f"{args.file}: cannot read a certificate ({e})") from None
+    try:
+        steps = check.check(cert)
+    except (KeyError, TypeError, IndexError, SyntaxError) as e:
+        raise DataError(f"{args.file}: malformed certificate ({type(e).__name__}: {e})") from None
+    print(f"{cert.get('claim', '?')} ({cert.get('model', '?')}), value {cert.get('value', '?')}")
+    for step, ok, detail in steps:
+        print(f"  {'PASS' if ok else 'FAIL'} {step}: {detail}")
+    ok = all(ok for _, ok, _ in steps)
+    print("certificate holds" if ok else "certificate REJECTED")
+    return 0 if ok else 1

@@ -1,0 +1,72 @@
+"""garant diagnose: find where the model and the data disagree, name the missing effect, add it."""
+import sys
+import time
+
+from . import args as a
+
+
+def add(sub):
+    p = sub.add_parser("diagnose", help="find the effect missing from the model, add it, show the gap shrink")
+    p.add_argument("data", metavar="DATA.csv", help="as for estimate; optional columns time_s, temp_c")
+    a.model(p)
+    a.sigma(p, "noise bound, units of g")
+    a.g(p)
+    p.add_argument("--prior", type=float, default=1e-3,
+                   help="size of the stand and block errors, for the linearisation remainder")
+    a.json(p)
+    p.add_argument("--plot", metavar="FILE.png")
+    p.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
+    return p
+
+
+def run(args):
+    from .. import models
+    from ..io import report
+    from ..io.positions import read_positions
+    from ..workflows import diagnose
+    base = models.stand_model(args.model)
+    mod = models.load(args.model)
+    names, mounts = models.layout(mod)
+    pos = read_positions(args.data, names, mounts)
+    t0 = time.perf_counter()
+    res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior)
+    study = res.pop("_study")
+    lim = args.sigma + res["remainder_allowance"]
+    print(f"current model: minimax residual {res['max_residual_before'] / args.sigma:.2f} sigma "
+          f"(limit {lim / args.sigma:.2f} with the linearisation remainder): "
+          + ("consistent" if res["consistent_before"] else "INCONSISTENT"))
+    if res["disagreements"]:
+        worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:8]
+        report.table(("position", *(f"{a}_deg" for a in names), "component", "residual/sigma"),
+                     [(d["position"], *(f"{d[a + '_deg']:g}" for a in names), d["component"],
+                       f"{d['residual'] / args.sigma:+.2f}") for d in worst])
+        print(f"({len(res['disagreements'])} residual components exceed the limit; largest shown)")
+    for h in res["history"]:
+        print(f"step {h['step']}: " + ", ".join(f"{e} {v / args.sigma:.2f}" for e, v in
+                                               sorted(h["scores"].items(), key=lambda kv: kv[1])))
+    if res["effects"]:
+        print("added: " + ", ".join(res["effects"]))
+        report.table(("parameter", "estimate", "guaranteed error", "unit", "combination"),
+                     [(k, f"{v['value']:+.4e}", f"{v['bound']:.3e}", v["unit"], v["q"])
+                      for k, v in res["estimates"].items()])
+    for group in res["indistinguishable"]:
+        print("indistinguishable on this plan: " + " / ".join(group))
+    for s in res["separating_positions"]:
+        print(f"  to separate {' and '.join(s['effects'])}, measure at ({', '.join(names)}) = "
+              + "; ".join("(" + ", ".join(f"{p[a + '_deg']:g}" for a in names)
+                          + (f", {p['mount']}" if "mount" in p else "")
+                          + f") [differ by {p['predicted_difference'] / args.sigma:.1f} sigma]" for p in s["positions"]))
+    print(f"after: minimax residual {res['max_residual_after'] / args.sigma:.2f} sigma: "
+          + ("consistent" if res["consistent_after"] else "still INCONSISTENT"))
+    print("this plan is blind to: " + (", ".join(res["blind_to"]) or "nothing in the catalogue"))
+    for e, why in res["skipped"].items():
+        print(f"not tried: {e} ({why})")
+    print(f"diagnosis took {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    if args.report:
+        for f in diagnose.write_module(study, res["effects"], args.report):
+            print(f"wrote {f}")
+    if args.plot:
+        diagnose.plot(res, args.plot, f"{args.data}: residuals before and after")
+    if args.json:
+        report.write_json(args.json, res)
+    return 0

@@ -1,0 +1,1 @@
+"""Readers and writers: positions CSV, raw accelerometer logs, tables and JSON."""

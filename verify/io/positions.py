@@ -1,0 +1,83 @@
+"""Reading measured positions from CSV, with one clear line for every way a file can be wrong."""
+import csv
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import DataError
+
+
+@dataclass
+class Positions:
+    """Readings at stand positions: angles as read (degrees), mountings, specific force f (m/s^2)."""
+
+    path: str
+    angles_deg: np.ndarray             # (N, n_angles)
+    f: np.ndarray                      # (N, 3), m/s^2
+    mounts: np.ndarray = None          # (N,) mounting index, or None for a single mounting
+    extra: dict = field(default_factory=dict)   # other columns, kept as text
+
+    @property
+    def alpha_deg(self):
+        return self.angles_deg[:, 0]
+
+    @property
+    def beta_deg(self):
+        return self.angles_deg[:, 1]
+
+    @property
+    def radians(self):
+        return tuple(np.deg2rad(self.angles_deg[:, i]) for i in range(self.angles_deg.shape[1]))
+
+
+def _number(text, path, line, col):
+    try:
+        v = float(text)
+    except ValueError:
+        raise DataError(f"{path} line {line}: column {col}: {text.strip()!r} is not a number") from None
+    if not math.isfinite(v):
+        raise DataError(f"{path} line {line}: column {col}: {text.strip()} is not a finite number")
+    return v
+
+
+def read_positions(path, angles=("alpha", "beta"), mountings=None):
+    """Read a CSV with columns <angle>_deg for each angle, f1, f2, f3 (m/s^2), and `mount` (a name
+    such as +y+z+x) when the stand uses several mountings; other columns are kept."""
+    angle_cols = [f"{a}_deg" for a in angles]
+    required = angle_cols + ["f1", "f2", "f3"] + (["mount"] if mountings and len(mountings) > 1 else [])
+    try:
+        with open(path, newline="") as fh:
+            rows = list(csv.reader(fh))
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    except UnicodeDecodeError:
+        raise DataError(f"{path}: not a text CSV file") from None
+    if not rows:
+        raise DataError(f"{path}: empty file; expected a header {','.join(required)}")
+    header = [h.strip() for h in rows[0]]
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise DataError(f"{path}: missing column(s) {', '.join(missing)}; header is {','.join(header)}")
+    numeric = [c for c in required if c != "mount"]
+    data = {c: [] for c in header}
+    for line, row in enumerate(rows[1:], start=2):
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise DataError(f"{path} line {line}: {len(row)} fields, header has {len(header)}")
+        for c, cell in zip(header, row):
+            if c == "mount" and "mount" in required and cell.strip() not in mountings:
+                raise DataError(f"{path} line {line}: mount {cell.strip()!r} is not one of {', '.join(mountings)}")
+            data[c].append(_number(cell, path, line, c) if c in numeric else cell.strip())
+    if not data[required[0]]:
+        raise DataError(f"{path}: no data rows after the header")
+    mounts = (np.array([list(mountings).index(m) for m in data["mount"]]) if "mount" in required else None)
+    pos = Positions(path, np.column_stack([data[c] for c in angle_cols]),
+                    np.array([data["f1"], data["f2"], data["f3"]]).T, mounts,
+                    {c: v for c, v in data.items() if c not in required})
+    for c, v in zip(angle_cols, pos.angles_deg.T):
+        if len(v) > 2 and np.abs(v).max() <= 2 * math.pi + 1e-9 and np.any(np.abs(v) > 1e-9):
+            raise DataError(f"{path}: column {c} lies within +-2pi ({v.min():g} to {v.max():g}): "
+                            "these look like radians; the column is in degrees")
+    return pos

@@ -1,0 +1,77 @@
+"""Section 6 of 000: what ignoring the stand errors does to the block's optimal estimators.
+
+Setting the stand combinations to zero (q1 = q2 = q3 = 0) removes their columns from H; the problem
+then splits into one per accelerometer. Its optimal estimators on the quarter-turn grid are all
+found exactly (the minimal sets of `plans`), and each is applied to the full model: the image on the
+removed columns is the bias the stand errors put into it.
+"""
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+
+from ..solve import exact, plans
+
+
+@dataclass(frozen=True)
+class Reduced:
+    name: str                 # the block parameter q_nu
+    estimators: int           # optimal estimators of the reduced model (minimal sets, quarter grid)
+    biased: int               # how many carry stand errors in the full model
+    example: str              # bias of one biased estimator, in the stand combinations
+    error_reduced: Fraction   # optimal guaranteed error, reduced model (proven, continuum)
+    error_full: Fraction      # the same, full model
+
+
+def analyse(mod, stand_idx):
+    """For every block parameter: its reduced-model optimal estimators, and which are biased."""
+    m = len(mod.Q_NAMES)
+    keep = [k for k in range(m) if k not in stand_idx]
+
+    def H_reduced(alpha, beta):
+        return mod.H(alpha, beta)[:, keep]
+
+    cols = exact.integer_columns(mod, plans.QUARTER_DEG)
+    reduced_cols = cols[:, :, keep]
+    out = []
+    for j, nu in enumerate(keep):
+        sets = plans.minimal_sets(reduced_cols, j)
+        biases = []
+        for ms in sets:
+            image = [Fraction(0)] * m
+            for s, p, w in ms.weights:
+                image = [a + w * int(v) for a, v in zip(image, cols[s, p])]
+            biases.append({k: image[k] for k in stand_idx if image[k] != 0})
+        biased = [b for b in biases if b]
+        example = linear(biased[0], mod) if biased else ""
+        e_full = [int(i == nu) for i in range(m)]
+        e_red = [int(i == j) for i in range(len(keep))]
+        out.append(Reduced(
+            name=mod.Q_NAMES[nu], estimators=len(sets), biased=len(biased), example=example,
+            error_reduced=_closed(exact.dual_lower_bound(mod.H_SUP[:, keep], e_red, e_red),
+                                  min(sum(abs(w) for *_, w in ms.weights) for ms in sets)),
+            error_full=exact.dual_lower_bound(mod.H_SUP, e_full, e_full)))
+    return out
+
+
+def _closed(lower, upper):
+    """The optimum when the proven lower bound meets an exact estimator's error, else None."""
+    return lower if lower == upper else None
+
+
+def linear(coeffs, mod):
+    """'-1/2 kappa + (Delta_alpha + alpha_star)' from {q index: coefficient}."""
+    out = ""
+    for k, c in coeffs.items():
+        name = mod.Q_DEFINITIONS[k]
+        name = f"({name})" if " " in name else name
+        mag = "" if abs(c) == 1 else f"{abs(c)} "
+        out += (("-" if c < 0 else "") if not out else (" - " if c < 0 else " + ")) + mag + name
+    return out
+
+
+def per_accelerometer(mod, stand_idx):
+    """Without the stand columns, each q involves one accelerometer only: {p: [q names]}."""
+    Hs = np.abs(mod.H(np.linspace(0, 6, 7), np.linspace(0, 6, 7)[:, None])).max(axis=(2, 3))   # (3, m)
+    return {p + 1: [mod.Q_NAMES[k] for k in range(Hs.shape[1]) if k not in stand_idx and Hs[p, k] > 0]
+            for p in range(3)}

@@ -1,0 +1,197 @@
+"""Optimality certificates, checkable without trusting any solver.
+
+A certificate claims that the optimal guaranteed error of a^T q over a whole continuum of positions
+(a box of stand angles, or the unit sphere of 001) equals a value v. It carries the measurement
+functions H as exact expressions, a primal estimator (positions, components, weights) and a dual
+vector lambda, all exact (rationals, or algebraic numbers like sqrt(3)/2). The check:
+(a) unbiasedness: sum_k w_k H^(p_k)(x_k) = a, exactly;
+(b) value: sum_k |w_k| = a^T lambda = v, exactly;
+(c) dual feasibility: |H^(p)(x)^T lambda| <= 1 for every x of the continuum and every p: exactly
+    when the trigonometric form gives it (sum of |coefficients| of canonical monomials <= 1), else by
+    rigorous interval branch and bound, which proves it to 1 + ETA.
+By weak duality (a)-(c) prove v/(1 + ETA) <= optimum <= v (= v when (c) closes exactly).
+"""
+import json
+
+import numpy as np
+import sympy as sp
+
+from ..solve.interval import mean_value_enclosure
+
+ETA = 1e-9
+FORMAT = "garant-certificate-1"
+
+
+def _s(x):
+    return sp.sstr(sp.nsimplify(x))
+
+
+def make(model, claim, domain, H_rows, target, value, primal, dual):
+    """A certificate as a JSON-ready dict. H_rows: list of rows (one per component and mounting) of
+    expression strings; primal: (position strings, row index, weight); dual: exact numbers."""
+    return {"format": FORMAT, "model": model, "claim": claim, "domain": domain, "H": H_rows,
+            "target": [_s(a) for a in target], "value": _s(value),
+            "primal": [{"at": list(at), "row": int(row), "weight": _s(w)} for at, row, w in primal],
+            "dual": [_s(l) for l in dual]}
+
+
+def _symbols(domain):
+    names = domain["names"]
+    return [sp.Symbol(n, real=True) for n in names]
+
+
+def _parse(text, syms):
+    return sp.sympify(text, locals={str(s): s for s in syms})
+
+
+def check(cert):
+    """[(step, passed, detail)] for the steps (a), (b), (c); a certificate holds iff all pass."""
+    if cert.get("format") != FORMAT:
+        return [("format", False, f"not a {FORMAT} certificate")]
+    dom = cert["domain"]
+    syms = _symbols(dom)
+    H = [[_parse(e, syms) for e in row] for row in cert["H"]]
+    m = len(H[0])
+    a = [sp.nsimplify(sp.sympify(x)) for x in cert["target"]]
+    lam = [sp.nsimplify(sp.sympify(x)) for x in cert["dual"]]
+    v = sp.nsimplify(sp.sympify(cert["value"]))
+    out = []
+    image = [sp.Integer(0)] * m
+    for term in cert["primal"]:
+        at = {s: sp.sympify(x) for s, x in zip(syms, term["at"])}
+        w = sp.nsimplify(sp.sympify(term["weight"]))
+        row = H[term["row"]]
+        image = [sp.nsimplify(sp.simplify(i + w * h.subs(at))) for i, h in zip(image, row)]
+    bad = [(k, i, t) for k, (i, t) in enumerate(zip(image, a)) if sp.simplify(i - t) != 0]
+    out.append(("(a) unbiased", not bad, "sum w H = a exactly" if not bad else
+                f"component {bad[0][0] + 1} of sum w H is {bad[0][1]}, the target has {bad[0][2]}"))
+    l1 = sum((abs(sp.nsimplify(sp.sympify(t["weight"]))) for t in cert["primal"]), sp.Integer(0))
+    dual_value = sp.nsimplify(sum(x * y for x, y in zip(a, lam)))
+    ok = sp.simplify(l1 - v) == 0 and sp.simplify(dual_value - v) == 0
+    out.append(("(b) primal = dual = value", ok, f"sum|w| = {l1}, a.lambda = {dual_value}, value = {v}"))
+    out.append(("(c) dual feasible",) + feasible(H, lam, dom, syms))
+    return out
+
+
+def feasible(H, lam, dom, syms, max_boxes=1_500_000):
+    """|H^T lambda| <= 1 on the whole domain: (passed, detail)."""
+    polys = [sp.expand(sum((l * h for l, h in zip(lam, row) if l != 0), sp.Integer(0))) for row in H]
+    if dom["kind"] == "angles":
+        from garant.derive.combinations import trig_basis
+        sup = max(sum((abs(c) for c in trig_basis(p, syms).values()), sp.Integer(0)) for p in polys)
+        if sup <= 1:
+            return True, f"exact: every |H^T lambda| <= {sup} (sum of |coefficients| of canonical monomials)"
+        if all(harmonic_bound(p, syms) for p in polys):
+            return True, ("exact: each H^T lambda is A cos x + B sin x in one angle x, with A^2 + B^2 <= 1 "
+                          "(sum of |coefficients|, or 1 - A^2 - B^2 a sum of even powers)")
+        lo = [float(sp.sympify(r[0])) for r in dom["ranges"]]
+        hi = [float(sp.sympify(r[1])) for r in dom["ranges"]]
+        etas = []
+        for k, p in enumerate(polys):
+            for eta in (ETA, 1e-6):
+                ok, detail = box_bound(p, syms, lo, hi, eta=eta, max_boxes=max_boxes)
+                if ok or "not closed" not in detail:
+                    break
+            if not ok:
+                return False, f"row {k}: {detail}"
+            etas.append(eta)
+        return True, f"interval branch and bound over the box: |H^T lambda| <= 1 + {max(etas):g}"
+    if dom["kind"] == "sphere":
+        from ..solve.sphere import prove_terms
+        for k, p in enumerate(polys):
+            terms = [(float(c), m) for m, c in sp.Poly(p, *syms).terms()]
+            ok, boxes, _ = prove_terms(terms, eta=ETA)
+            if not ok:
+                return False, f"row {k}: |H^T lambda| exceeds 1 + {ETA:g} somewhere on the sphere"
+        return True, f"interval branch and bound over the sphere: |H^T lambda| <= 1 + {ETA:g}"
+    return False, f"unknown domain {dom['kind']!r}"
+
+
+def harmonic_bound(p, syms):
+    """Exact proof of |p| <= 1 when p = A cos x + B sin x in some angle x (A, B free of x) and the
+    coefficient bound shows A^2 + B^2 <= 1 (Cauchy-Schwarz: |A cos x + B sin x| <= sqrt(A^2 + B^2))."""
+    from garant.derive.combinations import trig_basis
+    if p == 0:
+        return True
+    for x in syms:
+        expanded = sp.expand(p)
+        A = sp.expand(expanded.coeff(sp.cos(x)))
+        B = sp.expand(expanded.coeff(sp.sin(x)))
+        rest = sp.expand(expanded - A * sp.cos(x) - B * sp.sin(x))
+        if rest != 0 or x in (A.free_symbols | B.free_symbols) or A.has(sp.cos(x), sp.sin(x)) or B.has(sp.cos(x), sp.sin(x)):
+            continue
+        q = sp.expand(A**2 + B**2)
+        if sum((abs(v) for v in trig_basis(q, syms).values()), sp.Integer(0)) <= 1 or nonnegative(1 - q):
+            return True
+    return False
+
+
+def nonnegative(expr):
+    """Exact: expr simplifies to a sum of terms, each a positive number times even powers."""
+    e = sp.factor(sp.trigsimp(sp.expand(expr)))
+    if e == 0:
+        return True
+    for term in (e.args if e.is_Add else (e,)):
+        coeff, factors = term.as_coeff_mul()
+        if coeff <= 0 or not all(f.is_Pow and f.exp.is_even for f in factors):
+            return False
+    return True
+
+
+def box_bound(expr, syms, lo, hi, eta=ETA, max_boxes=1_500_000, start=8):
+    """Prove |expr| <= 1 + eta over the box by branch and bound (mean-value form); or find a point."""
+    f = sp.lambdify(syms, expr, modules=[{"sin": lambda x: x.sin(), "cos": lambda x: x.cos()}])
+    n = len(syms)
+    edges = [np.linspace(l, h, start + 1) for l, h in zip(lo, hi)]
+    grids = np.meshgrid(*[e[:-1] for e in edges], indexing="ij")
+    los = [g.ravel() for g in grids]
+    w = [np.full(los[0].shape, (h - l) / start) for l, h in zip(lo, hi)]
+    evaluated = 0
+    while los[0].size:
+        evaluated += los[0].size
+        if evaluated > max_boxes:
+            return False, f"not closed within {max_boxes} boxes"
+        bounds = [x for i in range(n) for x in (los[i], los[i] + w[i])]
+        enc = mean_value_enclosure(lambda *v: _as_grad(f(*v), v[0]), *bounds)
+        from ..solve.interval import box_variables
+        c = [los[i] + w[i] / 2 for i in range(n)]
+        at_c = _as_grad(f(*box_variables(c, c)), None).v
+        viol = np.minimum(np.abs(at_c.lo), np.abs(at_c.hi)) > 1 + eta
+        if viol.any():
+            k = int(np.flatnonzero(viol)[0])
+            where = ", ".join(f"{s}={c[i][k]:.6g}" for i, s in enumerate(syms))
+            return False, f"|H^T lambda| = {max(abs(at_c.lo[k]), abs(at_c.hi[k])):.6g} > 1 at {where}"
+        bad = enc.mag() > 1 + eta
+        if not bad.any():
+            return True, f"{evaluated} boxes"
+        if np.any(bad & (w[0] < 1e-9)):
+            return False, "boxes too small without closing (a touching point with zero curvature?)"
+        keep = np.flatnonzero(bad)
+        los = [x[keep] for x in los]
+        w = [x[keep] / 2 for x in w]
+        for i in range(n):                              # split every box in 2^n
+            los = [np.concatenate([x, x + (w[i] if j == i else 0)]) for j, x in enumerate(los)]
+            w = [np.concatenate([x, x]) for x in w]
+    return True, f"{evaluated} boxes"
+
+
+def _as_grad(value, like):
+    """lambdify returns a plain number for constant expressions: lift it to an interval Grad."""
+    from ..solve.interval import Grad, Iv
+    if isinstance(value, Grad):
+        return value
+    ref = like.v.lo if like is not None else np.zeros(1)
+    zero = Iv(np.zeros_like(ref))
+    n = len(like.d) if like is not None else 0
+    return Grad(Iv(np.full_like(ref, float(value))), [zero] * n)
+
+
+def write(cert, path):
+    with open(path, "w") as fh:
+        json.dump(cert, fh, indent=1)
+        fh.write("\n")
+
+
+def read(path):
+    with open(path) as fh:
+        return json.load(fh)

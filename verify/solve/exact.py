@@ -1,0 +1,61 @@
+"""Exact (rational) checks of estimators, and continuum bounds that are proofs, not samples.
+
+- unbiasedness (8)/(24) of 000: sum_k Psi_k H_k = a, in Fraction arithmetic, with H at quarter-turn
+  positions taken as the exact integers cos/sin are there;
+- guaranteed error of an estimator: sum_k |Psi_k| (times sigma), exactly;
+- a lower bound of the continuum optimum from a dual vector lambda (weak duality, (9)-(10)):
+  a^T lambda / max_p sup |H^(p)T lambda|, with the sup bounded by the triangle inequality over the
+  proven entry bounds H_SUP. Primal value = this bound closes the optimum on the continuum.
+"""
+from fractions import Fraction
+
+import numpy as np
+
+from ..models import H_at
+
+
+def integer_columns(mod, angles_deg, mounts=None):
+    """H^(p) at grid positions as exact integers, shape (S, 3, m); fails if not integer."""
+    if callable(mod):                                  # an H function of the angles
+        P = np.deg2rad(np.atleast_2d(np.asarray(angles_deg, float)))
+        Hs = mod(*[P[:, i] for i in range(P.shape[1])])
+    else:
+        Hs = H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts)
+    Hs = np.moveaxis(Hs, -1, 0)
+    rounded = np.rint(Hs)
+    if np.abs(Hs - rounded).max() > 1e-12:
+        raise ValueError("H is not integer on these positions; exact plan search needs a grid where it is")
+    return rounded.astype(np.int64)
+
+
+def terms_from_published(terms):
+    """[(weight str, p 1..3, alpha deg, beta deg)] -> [(Fraction, p 0..2, (alpha, beta))]."""
+    return [(Fraction(w), p - 1, (a, b)) for w, p, a, b in terms]
+
+
+def terms_from_generated(mod, nu):
+    return [(Fraction(num, den), p, tuple(int(v) for v in mod.PLAN_DEG[s]))
+            for s, p, num, den in mod.ESTIMATOR_TERMS[nu]]
+
+
+def unbiased_image(H, terms):
+    """sum_k Psi_k H^(p_k)(position_k), exactly: a list of Fractions (the a of the estimator)."""
+    positions = sorted({pos for _, _, pos in terms})
+    cols = integer_columns(H, positions)            # H: a model's H function of the angles
+    out = [Fraction(0)] * cols.shape[2]
+    for w, p, pos in terms:
+        h = cols[positions.index(pos), p]
+        out = [o + w * int(v) for o, v in zip(out, h)]
+    return out
+
+
+def l1(terms):
+    """Guaranteed error of the estimator in units of sigma: sum |Psi|, exactly."""
+    return sum((abs(w) for w, _, _ in terms), Fraction(0))
+
+
+def dual_lower_bound(H_sup, a, lam):
+    """a^T lambda / max_p sum_nu |lambda_nu| H_SUP[p, nu]: a proven lower bound of the optimum."""
+    a, lam = [Fraction(x) for x in a], [Fraction(x) for x in lam]
+    worst = max(sum(abs(l) * Fraction(int(s)) for l, s in zip(lam, row)) for row in np.asarray(H_sup))
+    return sum(x * y for x, y in zip(a, lam)) / worst

@@ -1,0 +1,1 @@
+"""Work on data: estimate, norm calibration, diagnose, simulate, identify, realised plans, remount."""

@@ -1,0 +1,214 @@
+"""`garant diagnose`: find where the model and the data disagree, name the missing effect, add it.
+
+1. Chebyshev (minimax) fit of the current model: with noise bounded by sigma the best fit must come
+   within sigma (plus the linearisation remainder); the positions that do not are reported.
+2. Each catalogue effect is added to the model symbolically (derive/effects.py, cached); an effect
+   that leaves the rank of this plan's measurement matrix unchanged is zero or fully absorbed here
+   (the plan is blind to it). The others are scored by the minimax residual of the extended fit.
+3. Forward selection adds the best effect until the model is consistent; effects that explain the
+   data equally well are reported as indistinguishable, with the positions that would separate them.
+4. The chosen effects are estimated with guaranteed bounds (the LP on these positions), the extended
+   model's module is written, and the residuals before and after are shown against +-sigma.
+"""
+import cvxpy as cp
+import numpy as np
+
+from ..errors import DataError
+from ..solve import lp
+
+TIE = 0.02                    # scores within 2% (of sigma) count as equal
+
+
+def chebyshev_fit(A, z):
+    """min over q of max |z - A^T q| (LP, HiGHS): q, the minimax residual, the residual vector."""
+    q, t = cp.Variable(A.shape[0]), cp.Variable()
+    cp.Problem(cp.Minimize(t), [cp.abs(z - A.T @ q) <= t]).solve(solver=cp.HIGHS)
+    return q.value, float(t.value), z - A.T @ q.value
+
+
+class Study:
+    """The data and the model family: measurement matrices of extended models, cached."""
+
+    def __init__(self, base_model, mod, positions, g):
+        from garant.derive import effects as cat
+        self.cat, self.base_model, self.mod = cat, base_model, mod
+        self.angles = positions.radians
+        self.mounts = positions.mounts
+        self.extra = positions.extra
+        kw = {} if self.mounts is None else {"mount": self.mounts}
+        self.z = mod.residual(*self.angles, positions.f.T, g, **kw).T.reshape(-1)
+        self.columns = {v: np.asarray(positions.extra[v], float) for v in ("time_s", "temp_c")
+                        if v in positions.extra}
+        self._cache = {}
+
+    def available(self):
+        """Applicable effects, and those skipped for a missing column."""
+        ok, skipped = [], {}
+        for name in self.cat.applicable(self.base_model):
+            need = {str(v) for v in self.cat.extend(self.base_model, [name]).variables}
+            missing = need - set(self.columns)
+            if missing:
+                skipped[name] = f"needs column {', '.join(sorted(missing))}"
+            else:
+                ok.append(name)
+        return ok, skipped
+
+    def model(self, names):
+        return self.cat.extend(self.base_model, names)
+
+    def H(self, names, angles=None, columns=None, mounts=None):
+        """H of the extended model at positions, (3, m, N): rows of each position's mounting."""
+        key = tuple(sorted(names, key=list(self.cat.CATALOGUE).index))
+        if key not in self._cache:
+            from garant.derive.derivation import numeric_H
+            self._cache[key] = numeric_H(self.model(key))
+        ext = self.model(key)
+        if angles is None:
+            angles, mounts = self.angles, self.mounts
+        columns = self.columns if columns is None else columns
+        Hs = self._cache[key](*angles, *[columns[str(v)] for v in ext.variables])     # (3 x mounts, m, N)
+        if mounts is None:
+            return Hs[:3]
+        idx = 3 * np.asarray(mounts)[None, :] + np.arange(3)[:, None]                 # (3, N)
+        return np.take_along_axis(Hs, idx[:, None, :], axis=0)
+
+    def A(self, names, angles=None, columns=None, mounts=None):
+        Hs = self.H(names, angles, columns, mounts)
+        return np.transpose(Hs, (1, 2, 0)).reshape(Hs.shape[1], -1)
+
+
+def rank(A):
+    s = np.linalg.svd(A, compute_uv=False)
+    return int((s > 1e-9 * s.max()).sum())
+
+
+def remainder_allowance(mod, angles, g, prior, mounts=None, samples=100, seed=0):
+    """Twice the largest linearisation remainder |z_exact - H^T q| found for errors up to `prior`
+    (random samples of the exact model at these positions): added to sigma in the consistency test."""
+    rng = np.random.default_rng(seed)
+    kw = {} if mounts is None else {"mount": mounts}
+    Hs = mod.H(*angles, **kw)
+    worst = 0.0
+    for _ in range(samples):
+        p = rng.uniform(-prior, prior, len(mod.PARAMETER_NAMES))
+        z = mod.residual(*angles, mod.readings(*angles, p, g, **kw), g, **kw)
+        worst = max(worst, float(np.abs(z - np.einsum("pns,n->ps", Hs, mod.PHYSICAL_TO_Q @ p)).max()))
+    return 2 * worst
+
+
+def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
+    """Positions (every mounting) where the two alternative extended fits predict most differently."""
+    n = len(study.angles)
+    g = np.deg2rad(np.arange(0, 360, step))
+    grid = np.array(np.meshgrid(*[g] * n, indexing="ij")).reshape(n, -1)
+    mounts = None
+    if study.mounts is not None:
+        nm = len(study.base_model.mountings)
+        mounts = np.repeat(np.arange(nm), grid.shape[1])
+        grid = np.tile(grid, nm)
+    cols = {k: np.full(grid.shape[1], np.mean(v)) for k, v in study.columns.items()}
+    preds = []
+    for alt in (alt1, alt2):
+        q, _, _ = chebyshev_fit(study.A(chosen + [alt]), study.z)
+        preds.append(np.einsum("pns,n->sp", study.H(chosen + [alt], tuple(grid), cols, mounts), q))
+    diff = np.abs(preds[0] - preds[1]).max(axis=1)
+    best = np.argsort(diff)[::-1][:top]
+    names = [a.name for a in study.base_model.stand.angles]
+    return [{**{f"{a}_deg": float(np.rad2deg(grid[i, k])) for i, a in enumerate(names)},
+             **({"mount": study.base_model.mountings[mounts[k]]} if mounts is not None else {}),
+             "predicted_difference": float(diff[k])} for k in best]
+
+
+def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
+    study = Study(base_model, mod, positions, g)
+    allow = remainder_allowance(mod, study.angles, g, prior, study.mounts)
+    limit = sigma + allow
+    A0 = study.A([])
+    if rank(A0) < A0.shape[0]:
+        raise DataError(f"{positions.path}: these positions cannot identify the current model; "
+                        "see `garant identify --plan`")
+    _, t0, r0 = chebyshev_fit(A0, study.z)
+    candidates, skipped = study.available()
+    base_rank = rank(A0)
+    blind = [e for e in candidates if rank(study.A([e])) == base_rank]
+    usable = [e for e in candidates if e not in blind]
+    chosen, score, history, indistinguishable, separate = [], t0, [], [], []
+    while score > limit and len(chosen) < len(usable):
+        scores = {e: chebyshev_fit(study.A(chosen + [e]), study.z)[1] for e in usable if e not in chosen}
+        best = min(scores, key=scores.get)
+        if scores[best] >= score * (1 - 1e-6):
+            break
+        ties = [e for e, s in scores.items() if s <= scores[best] + TIE * sigma and e != best]
+        history.append({"step": len(chosen) + 1, "scores": scores})
+        if ties and scores[best] <= limit:
+            group = [best] + ties
+            indistinguishable.append(group)
+            separate += [{"effects": [best, t], "positions": separating_positions(study, chosen, best, t)}
+                         for t in ties]
+        chosen.append(best)
+        score = scores[best]
+    A1 = study.A(chosen)
+    _, t1, r1 = chebyshev_fit(A1, study.z)
+    estimates = effect_estimates(study, chosen, A1, sigma) if chosen else {}
+    names = [a.name for a in base_model.stand.angles]
+    excess = [{"position": int(k // 3), "component": int(k % 3) + 1,
+               **{f"{a}_deg": float(positions.angles_deg[k // 3, i]) for i, a in enumerate(names)},
+               "residual": float(r0[k]), "excess_over_sigma": float(abs(r0[k]) - limit)}
+              for k in np.flatnonzero(np.abs(r0) > limit)]
+    return {
+        "sigma": sigma, "remainder_allowance": allow, "consistent_before": bool(t0 <= limit),
+        "max_residual_before": t0, "disagreements": excess, "effects": chosen,
+        "indistinguishable": indistinguishable, "separating_positions": separate,
+        "consistent_after": bool(t1 <= limit), "max_residual_after": t1, "estimates": estimates,
+        "blind_to": blind, "skipped": skipped, "history": history,
+        "residual_before": r0.reshape(-1, 3).tolist(), "residual_after": r1.reshape(-1, 3).tolist(),
+        "_study": study,
+    }
+
+
+def effect_estimates(study, chosen, A, sigma):
+    """Each effect parameter: the q it leads in the extended model, its value and guaranteed bound."""
+    from garant.derive.derivation import derive
+    d = derive(study.model(chosen))
+    Phi, err = lp.primal(A)
+    q = Phi.T @ study.z
+    names = [p.name for p in d.model.parameters]
+    out = {}
+    for e in chosen:
+        for p in study.cat.CATALOGUE[e].params:
+            if p.name in d.ident.leading:
+                k = d.ident.leading.index(p.name)
+                row = d.ident.R.row(k)
+                definition = " ".join(f"{'+' if c > 0 else '-'}{'' if abs(c) == 1 else abs(c)}{n}"
+                                      for c, n in zip(row, names) if c != 0).lstrip("+")
+                out[p.name] = {"value": float(q[k]), "bound": float(sigma * err[k]), "unit": p.unit,
+                               "q": definition}
+    return out
+
+
+def write_module(study, chosen, directory):
+    """The extended model's generated module and report, written to `directory`."""
+    from garant.derive import codegen
+    return codegen.write_files(codegen.model_files(study.model(chosen), str(directory), str(directory)))
+
+
+def plot(res, path, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    before, after = np.array(res["residual_before"]), np.array(res["residual_after"])
+    s = res["sigma"]
+    fig, ax = plt.subplots(figsize=(8, 4))
+    k = np.arange(before.size) / 3
+    ax.plot(k, before.reshape(-1) / s, "o", ms=3, color="C3", label="current model")
+    ax.plot(k, after.reshape(-1) / s, "s", ms=3, color="C0",
+            label="with " + (", ".join(res["effects"]) if res["effects"] else "no effect added"))
+    lim = 1 + res["remainder_allowance"] / s
+    ax.axhspan(-lim, lim, color="C0", alpha=0.12, label="+- sigma (+ linearisation remainder)")
+    ax.set_xlabel("position (three components each)")
+    ax.set_ylabel("minimax-fit residual (units of sigma)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,107 @@
+"""`garant identify`: what a model can estimate, what it confounds, and what a plan cannot separate."""
+import csv
+
+import numpy as np
+
+from ..errors import DataError
+from ..solve import lp
+
+MODELS = ("two-axis", "003-example1", "003-example2")
+
+
+def read_plan(path):
+    """Positions (degrees) from a CSV with columns alpha_deg, beta_deg (other columns ignored)."""
+    try:
+        with open(path, newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    if not rows or not {"alpha_deg", "beta_deg"} <= set(rows[0]):
+        raise DataError(f"{path}: a plan needs columns alpha_deg, beta_deg")
+    try:
+        return np.array([[float(r["alpha_deg"]), float(r["beta_deg"])] for r in rows])
+    except (TypeError, ValueError):
+        raise DataError(f"{path}: alpha_deg and beta_deg must be numbers") from None
+
+
+def plan_blind_spots(mod, positions_deg):
+    """q combinations the plan cannot see: the null space of the plan's measurement matrix in q."""
+    A = lp.measurement_matrix(mod.H, np.deg2rad(positions_deg))
+    _, s, Vt = np.linalg.svd(A.T)
+    rank = int((s > 1e-9 * s.max()).sum()) if s.size else 0
+    out = []
+    for v in rref(Vt[rank:]):
+        out.append(" ".join(f"{c:+.3g}*{n}" for c, n in zip(v, mod.Q_NAMES) if c))
+    return lp.unidentifiable(A), out
+
+
+def rref(B, tol=1e-9):
+    """Reduced row-echelon form of the rows of B (a canonical basis of their span)."""
+    B = np.array(B, float)
+    r = 0
+    for c in range(B.shape[1] if B.size else 0):
+        if r == len(B):
+            break
+        p = r + int(np.argmax(np.abs(B[r:, c])))
+        if abs(B[p, c]) < tol:
+            continue
+        B[[r, p]] = B[[p, r]]
+        B[r] /= B[r, c]
+        for i in range(len(B)):
+            if i != r:
+                B[i] -= B[i, c] * B[r]
+        r += 1
+    B[np.abs(B) < tol] = 0
+    return B[:r]
+
+
+def report(model, plan_path=None):
+    """Lines of text and a JSON-able dict for a model (and a plan)."""
+    from garant.derive import identifiability as I
+    if model == "two-axis":
+        from garant.derive.derivation import derive
+        from garant.derive.builtin import TWO_AXIS_MODEL
+        from garant.generated import two_axis as mod
+        rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
+        res = {"model": model, "estimable": [f"{q} = {d}" for q, d in zip(mod.Q_NAMES, mod.Q_DEFINITIONS)],
+               "relations": [r.text() for r in rel], "confounded_groups": groups}
+        if plan_path:
+            missing, blind = plan_blind_spots(mod, read_plan(plan_path))
+            res["plan"] = {"path": plan_path,
+                           "not_identifiable": [f"{mod.Q_NAMES[k]} = {mod.Q_DEFINITIONS[k]}" for k in missing],
+                           "invisible_combinations": blind}
+        return res
+    if model in ("003-example1", "003-example2"):
+        if plan_path:
+            raise DataError(f"--plan applies to stand models, not to {model}")
+        out = I.analyse_example(model)
+        return {"model": model, "title": out["title"], "V": str(out["V"]),
+                "basis_functions": [f"{n} = {f}" for n, f in out["functions"]],
+                "relations": [r.text() for r in out["relations"]], "confounded_groups": out["groups"],
+                "degenerate_trajectories": [{"trajectory": t, "relations": [r.text() for r in rel]}
+                                            for t, rel in out["degenerate"]]}
+    raise DataError(f"unknown model {model!r}; use one of {', '.join(MODELS)}")
+
+
+def print_report(res):
+    print(f"model: {res['model']}" + (f" ({res['title']})" if "title" in res else ""))
+    if "V" in res:
+        print(f"constraint residual V = {res['V']}")
+        print("basis functions (003, (9)): " + "; ".join(res["basis_functions"]))
+    if "estimable" in res:
+        print("estimable combinations (4):")
+        for e in res["estimable"]:
+            print(f"  {e}")
+    print("identical relations among the basis functions (directions no data can see):")
+    for r in res["relations"] or ["none: every parameter is estimable for generic data"]:
+        print(f"  {r}")
+    print("confounded groups: " + ("; ".join("{" + ", ".join(g) + "}" for g in res["confounded_groups"])
+                                   or "none"))
+    for d in res.get("degenerate_trajectories", []):
+        print(f"degenerate on trajectories with {d['trajectory']}: " + "; ".join(d["relations"]))
+    if "plan" in res:
+        p = res["plan"]
+        print(f"plan {p['path']}: " + ("identifies every q" if not p["not_identifiable"] else
+                                      "cannot identify " + "; ".join(p["not_identifiable"])))
+        for b in p["invisible_combinations"]:
+            print(f"  invisible: {b}")
