@@ -5,9 +5,14 @@ coordinate axis of the frame it carries (x, y, z, or -x, -y, -z): either a read 
 encoder offset (and optional once-per-turn harmonic), or a fixed small error. Errors raise
 DescriptionError with the file and the place in it.
 """
+import builtins
+import keyword
+import math
 import re
 import tomllib
 from pathlib import Path
+
+from .effects import CATALOGUE, VARIABLE_DEFAULTS
 
 from .model import Angle, Block, Link, Model, Stand
 from .parameter import Parameter
@@ -21,7 +26,15 @@ KEYS = {
     "block": {"misalignment", "gravity_error", "mountings"},
     "estimation": {"preferred", "plan_deg", "remount"},
 }
-NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+#: Limits that keep a derivation to seconds: a larger stand is refused, not left to hang.
+LIMITS = {"angles": 4, "links": 12, "parameters": 40, "detents": 72, "plan positions": 200,
+          "mountings": 24, "text": 300, "bytes": 1_000_000}
+#: Names the generated module uses itself (template locals, numpy, the block and the catalogue).
+RESERVED = (set(keyword.kwlist) | set(keyword.softkwlist) | set(dir(builtins))
+            | {"np", "zero", "one", "physical", "g", "f", "mount", "H", "up_nominal", "readings", "residual"}
+            | {f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)} | {f"bias{i}" for i in (1, 2, 3)}
+            | {p.name for e in CATALOGUE.values() for p in e.params} | set(VARIABLE_DEFAULTS))
 
 
 class DescriptionError(ValueError):
@@ -42,7 +55,50 @@ def _keys(path, where, table, allowed):
 
 def _name(path, where, value):
     if not isinstance(value, str) or not NAME.match(value):
-        _fail(path, where, f"{value!r} is not a valid name (letters, digits, _; starts with a letter)")
+        _fail(path, where, f"{_short(value)} is not a valid name (letters, digits, _; starts with a letter; "
+              "at most 32)")
+    return value
+
+
+def _new_name(path, where, value):
+    """A name the description introduces: valid, and not one the generated code or the block uses."""
+    _name(path, where, value)
+    if value in RESERVED or value.isupper() or re.fullmatch(r"t\d+", value):
+        _fail(path, where, f"{value!r} is reserved (a Python word, a name the generated module uses, or "
+              "a block or effect parameter); choose another")
+    return value
+
+
+def _short(value):
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _text(path, where, value, default):
+    """A free-text field (title, source, unit, meaning, latex): one printable line, never code."""
+    if value is None:
+        return default
+    if not isinstance(value, str) or len(value) > LIMITS["text"] or not value.isprintable():
+        _fail(path, where, f"expected one printable line of text of at most {LIMITS['text']} characters")
+    return value
+
+
+def _numbers(path, where, value, length=None, most=None):
+    if not isinstance(value, list) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                              and math.isfinite(v) for v in value):
+        _fail(path, where, f"{_short(value)} is not a list of numbers")
+    if length is not None and len(value) != length:
+        _fail(path, where, f"expected {length} numbers, found {len(value)}")
+    if most is not None and len(value) > most:
+        _fail(path, where, f"at most {most} values")
+    return value
+
+
+def _table_list(path, where, value, most):
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        _fail(path, where, f"expected [[{where}]] tables")
+    if len(value) > most:
+        _fail(path, where, f"at most {most} [[{where}]] tables (a larger stand is beyond garant's limits)")
     return value
 
 
@@ -63,15 +119,16 @@ def _axis(path, where, value):
 
 def _angle(path, where, a):
     _keys(path, where, a, KEYS["angle"])
-    name = _name(path, f"{where}.name", a.get("name"))
-    lo, hi = a.get("range_deg", [0, 360])
-    if not (isinstance(lo, (int, float)) and isinstance(hi, (int, float)) and lo < hi and hi - lo <= 360):
+    name = _new_name(path, f"{where}.name", a.get("name"))
+    lo, hi = _numbers(path, f"{where}.range_deg", a.get("range_deg", [0, 360]), length=2)
+    if not (lo < hi and hi - lo <= 360):
         _fail(path, f"{where}.range_deg", f"[{lo}, {hi}] is not a range of at most one turn")
-    detents = a.get("detents_deg", [])
+    detents = _numbers(path, f"{where}.detents_deg", a.get("detents_deg", []), most=LIMITS["detents"])
     for d in detents:
-        if not isinstance(d, (int, float)) or not lo <= d <= hi:
+        if not lo <= d <= hi:
             _fail(path, f"{where}.detents_deg", f"{d} is outside the range [{lo}, {hi}]")
-    return Angle(name, a.get("latex", name), a.get("meaning", f"{name}, as read"), (lo, hi), tuple(detents))
+    return Angle(name, _text(path, f"{where}.latex", a.get("latex"), name),
+                 _text(path, f"{where}.meaning", a.get("meaning"), f"{name}, as read"), (lo, hi), tuple(detents))
 
 
 def load(path, source_file=None):
@@ -79,11 +136,19 @@ def load(path, source_file=None):
     path = Path(path)
     shown = source_file or str(path)
     try:
-        data = tomllib.loads(path.read_text())
+        with open(path, "rb") as fh:
+            raw = fh.read(LIMITS["bytes"] + 1)
+        if len(raw) > LIMITS["bytes"]:
+            raise DescriptionError(f"{path}: larger than {LIMITS['bytes']} bytes; a description is a short file")
+        data = tomllib.loads(raw.decode("utf-8-sig"))
     except OSError as e:
         raise DescriptionError(f"{path}: cannot read ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise DescriptionError(f"{path}: not UTF-8 text (byte {e.start})") from None
     except tomllib.TOMLDecodeError as e:
         raise DescriptionError(f"{path}: not valid TOML ({e})") from None
+    except RecursionError:
+        raise DescriptionError(f"{path}: nested too deep for a stand description") from None
     return from_data(data, shown)
 
 
@@ -94,16 +159,23 @@ def from_data(data, path="<description>"):
     stand = data.get("stand", {})
     _keys(path, "stand", stand, KEYS["stand"])
     name = _name(path, "stand.name", stand.get("name"))
-    angles = [_angle(path, f"angle[{i}]", a) for i, a in enumerate(data.get("angle", []), 1)]
+    angles = []
+    for i, a in enumerate(_table_list(path, "angle", data.get("angle", []), LIMITS["angles"]), 1):
+        angles.append(_angle(path, f"angle[{i}]", a))
+        if angles[-1].name in {b.name for b in angles[:-1]}:
+            _fail(path, f"angle[{i}].name", f"{angles[-1].name!r} is declared twice")
     if not angles:
         _fail(path, "angle", "a stand needs at least one [[angle]]")
     params = []
-    for i, p in enumerate(data.get("parameter", []), 1):
-        _keys(path, f"parameter[{i}]", p, KEYS["parameter"])
-        pname = _name(path, f"parameter[{i}].name", p.get("name"))
+    for i, p in enumerate(_table_list(path, "parameter", data.get("parameter", []), LIMITS["parameters"]), 1):
+        where = f"parameter[{i}]"
+        _keys(path, where, p, KEYS["parameter"])
+        pname = _new_name(path, f"{where}.name", p.get("name"))
         if pname in {q.name for q in params} or pname in {a.name for a in angles}:
-            _fail(path, f"parameter[{i}].name", f"{pname!r} is declared twice")
-        params.append(Parameter(pname, p.get("latex", pname), p.get("unit", "rad"), p.get("meaning", pname)))
+            _fail(path, f"{where}.name", f"{pname!r} is declared twice")
+        params.append(Parameter(pname, _text(path, f"{where}.latex", p.get("latex"), pname),
+                                _text(path, f"{where}.unit", p.get("unit"), "rad"),
+                                _text(path, f"{where}.meaning", p.get("meaning"), pname)))
     declared = {p.name for p in params}
     used = set()
 
@@ -115,13 +187,13 @@ def from_data(data, path="<description>"):
         return value
 
     links = []
-    for i, l in enumerate(data.get("link", []), 1):
+    for i, l in enumerate(_table_list(path, "link", data.get("link", []), LIMITS["links"]), 1):
         where = f"link[{i}]"
         _keys(path, where, l, KEYS["link"])
         axis, sign = _axis(path, f"{where}.axis", l.get("axis"))
         if "angle" in l:
-            if l["angle"] not in {a.name for a in angles}:
-                _fail(path, f"{where}.angle", f"{l['angle']!r} is not an [[angle]]")
+            if not isinstance(l["angle"], str) or l["angle"] not in {a.name for a in angles}:
+                _fail(path, f"{where}.angle", f"{_short(l['angle'])} is not an [[angle]]")
             if "error" in l:
                 _fail(path, where, "a link with an angle takes 'offset', not 'error'")
             harmonic = l.get("harmonic")
@@ -145,9 +217,12 @@ def from_data(data, path="<description>"):
     theta = tuple(ref(f"block.misalignment[{i}]", t) for i, t in enumerate(theta, 1))
     dg = ref("block.gravity_error", block.get("gravity_error"))
     from .remount import mountings
-    mounts = tuple(block.get("mountings", ["+x+y+z"]))
+    mounts = block.get("mountings", ["+x+y+z"])
+    if not isinstance(mounts, list) or not mounts or len(mounts) > LIMITS["mountings"]:
+        _fail(path, "block.mountings", f"give a list of 1 to {LIMITS['mountings']} mountings like \"+y+z+x\"")
+    mounts = tuple(mounts)
     for i, m in enumerate(mounts, 1):
-        if m not in mountings():
+        if not isinstance(m, str) or m not in mountings():
             _fail(path, f"block.mountings[{i}]", f"{m!r} is not a proper mounting like +x+y+z or +y+z+x")
     unused = declared - used
     if unused:
@@ -158,19 +233,26 @@ def from_data(data, path="<description>"):
     default = ([l.error for l in links if l.error and l.error not in theta and l.error != dg]
                + [h for l in links if l.harmonic for h in l.harmonic] + block_params + [*theta, dg])
     preferred = est.get("preferred", default)
-    if sorted(preferred) != sorted(declared | set(block_params)):
+    if not isinstance(preferred, list) or not all(isinstance(n, str) for n in preferred):
+        _fail(path, "estimation.preferred", "give a list of parameter names")
+    if sorted(preferred) != sorted(declared | set(block_params)) or len(set(preferred)) != len(preferred):
         missing = (declared | set(block_params)) - set(preferred)
         extra = set(preferred) - (declared | set(block_params))
         _fail(path, "estimation.preferred", f"must list every parameter once (missing: {sorted(missing)}, "
               f"unknown: {sorted(extra)})")
-    plan = tuple(tuple(p) for p in est.get("plan_deg", []))
-    for i, p in enumerate(plan, 1):
-        if len(p) != len(angles):
-            _fail(path, f"estimation.plan_deg[{i}]", f"needs {len(angles)} angles")
-    st = Stand(name=name, title=stand.get("title", name), angles=tuple(angles), chain=tuple(links[::-1]),
-               parameters=tuple(params), theta=theta, gravity_error=dg, source=stand.get("source", path))
+    plan = est.get("plan_deg", [])
+    if not isinstance(plan, list) or len(plan) > LIMITS["plan positions"]:
+        _fail(path, "estimation.plan_deg", f"give a list of at most {LIMITS['plan positions']} positions")
+    plan = tuple(tuple(_numbers(path, f"estimation.plan_deg[{i}]", p, length=len(angles)))
+                 for i, p in enumerate(plan, 1))
+    remount = est.get("remount", False)
+    if not isinstance(remount, bool):
+        _fail(path, "estimation.remount", "true or false")
+    st = Stand(name=name, title=_text(path, "stand.title", stand.get("title"), name), angles=tuple(angles),
+               chain=tuple(links[::-1]), parameters=tuple(params), theta=theta, gravity_error=dg,
+               source=_text(path, "stand.source", stand.get("source"), str(path)))
     return Model(stand=st, block=Block(), preferred=tuple(preferred), plan_deg=plan,
-                 remount=bool(est.get("remount", False)), mountings=mounts, source_file=path)
+                 remount=remount, mountings=mounts, source_file=path)
 
 
 def check_observable(model, J):

@@ -28,7 +28,7 @@ def test_two_axis_all_15_certified_exactly(two_axis):
     assert len(two_axis) == 15
     for cert in two_axis:
         steps = check.check(cert)
-        assert cert["value"] == "1" and all(ok for _, ok, _ in steps) and "exact" in steps[2][2]
+        assert cert["value"] == "1" and all(ok for _, ok, _ in steps) and "exact" in steps[-1][2]
 
 
 def test_norm_all_12_certified(norm):
@@ -69,6 +69,53 @@ def test_check_certificate_cli(two_axis, tmp_path, capsys):
     assert "REJECTED" in capsys.readouterr().out
     (tmp_path / "junk.json").write_text("{")
     assert main(["check-certificate", str(tmp_path / "junk.json")]) == 2
+
+
+def test_forged_certificate_with_scaled_H_is_rejected(two_axis):
+    # Issue 14: doubling H and halving the weights kept (a) and made (b) read 1/2 for q7 (true optimum 1).
+    cert = copy.deepcopy(two_axis[6])
+    cert["H"] = [[f"2*({e})" for e in row] for row in cert["H"]]
+    for t in cert["primal"]:
+        t["weight"] = f"({t['weight']})/2"
+    cert["dual"] = [f"({x})/2" for x in cert["dual"]]
+    cert["value"] = "1/2"
+    steps = check.check(cert)
+    assert steps[0][0] == "(0) model" and not steps[0][1] and "differs from the model" in steps[0][2]
+
+
+@pytest.mark.parametrize("tamper, reason", [
+    (lambda c: c.update(model="five-axis"), "unknown model"),
+    (lambda c: c["domain"].update(ranges=[["0", "pi/8"], ["0", "pi/8"]]), "whole box"),
+    (lambda c: c.update(target=["1"] + ["0"] * 14), "target is not e_nu"),
+    (lambda c: c["domain"].update(names=["beta", "alpha"]), "domain"),
+])
+def test_certificate_not_of_its_model_is_rejected(two_axis, tamper, reason):
+    cert = copy.deepcopy(two_axis[6])
+    tamper(cert)
+    steps = check.check(cert)
+    assert not steps[0][1] and reason in steps[0][2]
+
+
+@pytest.mark.parametrize("text", ["10**10**10", "__import__('os').system('touch pwned')", "(" * 60 + "1" + ")" * 60,
+                                  "((10**16)**16)**16", "1e5", "alpha.__class__", "9" * 50, "lambda: 1"])
+def test_hostile_certificate_strings_are_refused_not_run(two_axis, tmp_path, capsys, text):
+    cert = copy.deepcopy(two_axis[6])
+    cert["value"] = text
+    path = tmp_path / "c.json"
+    check.write(cert, path)
+    assert main(["check-certificate", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "value" in err[0] and not (tmp_path / "pwned").exists()
+
+
+@pytest.mark.parametrize("content", ["[]", "null", '"str"', "[" * 100000 + "]" * 100000, "{}",
+                                     '{"format": "garant-certificate-1", "domain": {"kind": "angles", '
+                                     '"names": ["a","b","c","d","e","f","g","h","i","j","k","l"]}}'])
+def test_malformed_certificate_files_give_one_line(tmp_path, capsys, content):
+    path = tmp_path / "c.json"
+    path.write_text(content)
+    assert main(["check-certificate", str(path)]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
 def test_every_certificate_in_verify_holds(tmp_path):

@@ -4,6 +4,7 @@ A command module imports what its work needs inside `run`, so `garant --help` an
 not pay for SymPy, cvxpy or matplotlib.
 """
 import argparse
+import os
 import sys
 import warnings
 
@@ -12,10 +13,21 @@ from . import (calibrate_norm, check_certificate, derive, diagnose, estimate, id
                verify)
 
 COMMANDS = (verify, plan, estimate, calibrate_norm, identify, derive, simulate, diagnose, check_certificate)
+#: Output options of the commands: (attribute, what it is, a file or a folder).
+OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("output", "the data file", "file"),
+           ("report", "the report folder", "folder"), ("certificates", "the certificate folder", "folder"),
+           ("out", "the output folder", "folder"))
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: `garant: error: ...` and exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def parser():
-    ap = argparse.ArgumentParser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
+    ap = _Parser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
         command.add(sub).set_defaults(run=command.run)
@@ -24,8 +36,9 @@ def parser():
 
 def main(argv=None):
     args = parser().parse_args(argv)
-    warnings.filterwarnings("ignore", category=RuntimeWarning, module="cvxpy")
+    warnings.simplefilter("ignore", RuntimeWarning)     # inputs are checked; a failure is one line
     try:
+        _check_outputs(args)
         return args.run(args)
     except (DataError, LPFailed, ValueError) as e:
         print(f"garant: error: {e}", file=sys.stderr)
@@ -33,6 +46,19 @@ def main(argv=None):
     except OSError as e:
         print(f"garant: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
         return 2
+
+
+def _check_outputs(args):
+    """Every output path is checked before any work, so a command that fails writes nothing."""
+    from ..io.report import check_writable
+    for attr, what, kind in OUTPUTS:
+        path = getattr(args, attr, None)
+        if path is None:
+            continue
+        if kind == "file":
+            check_writable(path, what)
+        elif os.path.exists(path) and not os.path.isdir(path):
+            raise DataError(f"{path}: {what} exists and is not a folder")
 
 
 if __name__ == "__main__":

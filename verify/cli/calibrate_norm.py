@@ -14,10 +14,10 @@ def add(sub):
     a.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
-    p.add_argument("--window", type=float, default=1.0, help="moving-variance window, s")
-    p.add_argument("--k", type=float, default=10.0, help="still when the moving variance < k x the initial one")
-    p.add_argument("--min-still", type=float, default=2.0, help="shortest still interval kept, s")
-    p.add_argument("--delta-sigma", type=float, metavar="D",
+    p.add_argument("--window", type=a.positive, default=1.0, help="moving-variance window, s")
+    p.add_argument("--k", type=a.positive, default=10.0, help="still when the moving variance < k x the initial one")
+    p.add_argument("--min-still", type=a.positive, default=2.0, help="shortest still interval kept, s")
+    p.add_argument("--delta-sigma", type=a.positive, metavar="D",
                    help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; "
                    "default: the minimax residual of the fit, the smallest bound the data allow")
     p.add_argument("--diagnose", action="store_true",
@@ -36,8 +36,7 @@ def run(args):
     mod = models.load("norm")
     log = recordings.read_log(args.log, args.format, args.sensor)
     stills, note = recordings.still_intervals(log, window=args.window, k=args.k, min_still=args.min_still)
-    print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})",
-          file=sys.stderr)
+    print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})")
     res = calibrate_norm.run(mod, stills, args.g, args.params, args.log, args.delta_sigma)
     print(f"calibration a = M (raw - b), {res['intervals']} still intervals, {res['iterations']} iterations "
           f"({res['start']})")

@@ -12,12 +12,9 @@ def run(args):
     from ..proof import check
     try:
         cert = check.read(args.file)
-    except (OSError, ValueError) as e:
-        raise DataError(f"{args.file}: cannot read a certificate ({e})") from None
-    try:
         steps = check.check(cert)
-    except (KeyError, TypeError, IndexError, SyntaxError) as e:
-        raise DataError(f"{args.file}: malformed certificate ({type(e).__name__}: {e})") from None
+    except check.MalformedCertificate as e:
+        raise DataError(f"{args.file}: not a valid certificate: {e}") from None
     print(f"{cert.get('claim', '?')} ({cert.get('model', '?')}), value {cert.get('value', '?')}")
     for step, ok, detail in steps:
         print(f"  {'PASS' if ok else 'FAIL'} {step}: {detail}")

@@ -11,7 +11,7 @@ def add(sub):
     a.model(p)
     a.sigma(p, "noise bound, units of g")
     a.g(p)
-    p.add_argument("--prior", type=float, default=1e-3,
+    p.add_argument("--prior", type=a.positive, default=1e-3,
                    help="size of the stand and block errors, for the linearisation remainder")
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png")

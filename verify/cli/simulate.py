@@ -11,7 +11,7 @@ def add(sub):
     a.sigma(p, "noise bound, units of g")
     p.add_argument("--seed", type=int, default=0)
     a.g(p)
-    p.add_argument("--size", type=float, default=1e-4, help="bound of the random stand and block errors")
+    p.add_argument("--size", type=a.positive, default=1e-4, help="bound of the random stand and block errors")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
 

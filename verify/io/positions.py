@@ -35,7 +35,8 @@ def _number(text, path, line, col):
     try:
         v = float(text)
     except ValueError:
-        raise DataError(f"{path} line {line}: column {col}: {text.strip()!r} is not a number") from None
+        shown = text.strip() if len(text.strip()) <= 40 else text.strip()[:40] + "..."
+        raise DataError(f"{path} line {line}: column {col}: {shown!r} is not a number") from None
     if not math.isfinite(v):
         raise DataError(f"{path} line {line}: column {col}: {text.strip()} is not a finite number")
     return v
@@ -47,15 +48,20 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
     angle_cols = [f"{a}_deg" for a in angles]
     required = angle_cols + ["f1", "f2", "f3"] + (["mount"] if mountings and len(mountings) > 1 else [])
     try:
-        with open(path, newline="") as fh:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = list(csv.reader(fh))
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     except UnicodeDecodeError:
-        raise DataError(f"{path}: not a text CSV file") from None
+        raise DataError(f"{path}: not a UTF-8 text CSV file") from None
+    except csv.Error as e:
+        raise DataError(f"{path}: not a CSV file of positions ({e})") from None
     if not rows:
         raise DataError(f"{path}: empty file; expected a header {','.join(required)}")
     header = [h.strip() for h in rows[0]]
+    if len(set(header)) != len(header):
+        dup = sorted({h for h in header if header.count(h) > 1})
+        raise DataError(f"{path}: duplicate column(s) {', '.join(dup)} in the header")
     missing = [c for c in required if c not in header]
     if missing:
         raise DataError(f"{path}: missing column(s) {', '.join(missing)}; header is {','.join(header)}")

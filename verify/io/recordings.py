@@ -1,5 +1,5 @@
 """Raw accelerometer logs: reading the supported formats and finding the still intervals."""
-import csv
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,66 +17,130 @@ class Log:
     raw: np.ndarray        # (N, 3), the sensor's own units (counts or m/s^2)
 
 
+#: Time column names of a `csv` log, and the unit each one states (factor to seconds).
+TIME_COLUMNS = {"time_s": 1.0, "t_s": 1.0, "time": 1.0, "t": 1.0, "timestamp": 1.0, "time_ms": 1e-3, "t_ms": 1e-3,
+                "time_us": 1e-6, "t_us": 1e-6}
+#: Accelerometer column names of a `csv` log, in the order x, y, z (any one set).
+ACCEL_COLUMNS = (("x", "y", "z"), ("ax", "ay", "az"), ("acc_x", "acc_y", "acc_z"), ("accel_x", "accel_y", "accel_z"),
+                 ("f1", "f2", "f3"))
+MIN_SAMPLES = 100
+
+
 def guess_format(path):
-    with open(path, errors="replace") as fh:
-        head = fh.readline()
+    with open(path, "rb") as fh:
+        head = fh.readline(4096).decode("utf-8", errors="replace")
     if ";" in head and "TIME" in head:
         return "openaxes"
     return "csv" if "," in head else "imu_tk"
 
 
-def _floats(rows, path, first_line):
+def _header(path, delimiter):
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        line = fh.readline(1_000_000)
+    if not line.strip():
+        raise DataError(f"{path}: empty file; expected a header line")
+    return [h.strip() for h in line.rstrip("\r\n").split(delimiter)]
+
+
+def _load(path, delimiter, usecols, skip):
+    """The numeric columns `usecols` of a delimited text file, read in C; one line naming the first bad
+    cell when a cell is not a finite number."""
     try:
-        return np.array(rows, dtype=float)
-    except ValueError:
-        for k, r in enumerate(rows):
-            for cell in r:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)             # "input contained no data": said below
+            data = np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
+                              encoding="utf-8-sig", comments=None)
+    except (ValueError, UnicodeDecodeError) as e:
+        raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}") from None
+    if data.shape[0] == 0:
+        raise DataError(f"{path}: no data rows")
+    bad = ~np.isfinite(data)
+    if bad.any():
+        row = int(np.flatnonzero(bad.any(axis=1))[0])
+        raise DataError(f"{path} line {row + skip + 1}: NaN or infinite value")
+    return data
+
+
+def _first_bad_cell(path, delimiter, usecols, skip):
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        for k, line in enumerate(fh, 1):
+            if k <= skip:
+                continue
+            cells = line.split(delimiter)
+            if len(cells) <= max(usecols):
+                return f"line {k}: {len(cells)} columns, expected at least {max(usecols) + 1}"
+            for c in usecols:
                 try:
-                    float(cell)
+                    float(cells[c])
                 except ValueError:
-                    raise DataError(f"{path} line {first_line + k}: {cell!r} is not a number") from None
-        raise
+                    text = cells[c].strip()
+                    return f"line {k}: {text[:40]!r}{'...' if len(text) > 40 else ''} is not a number"
+    return None
+
+
+def _csv_columns(path, header):
+    """(time column, its factor to s, three accelerometer columns) of a `csv` log header."""
+    low = [h.lower() for h in header]
+    if len(set(low)) != len(low):
+        raise DataError(f"{path}: duplicate column names in the header {','.join(header)}")
+    times = [h for h in low if h in TIME_COLUMNS]
+    if len(times) != 1:
+        raise DataError(f"{path}: expected one time column named {', '.join(TIME_COLUMNS)} "
+                        f"(the suffix states the unit); header is {','.join(header)}")
+    t = low.index(times[0])
+    for names in ACCEL_COLUMNS:
+        if all(n in low for n in names):
+            return t, TIME_COLUMNS[times[0]], [low.index(n) for n in names]
+    rest = [k for k in range(len(low)) if k != t]
+    if len(rest) < 3:
+        raise DataError(f"{path}: a csv log needs a time column and three accelerometer columns; header is "
+                        f"{','.join(header)}")
+    return t, TIME_COLUMNS[times[0]], rest[:3]
+
+
+def _check_time(path, t, named_unit):
+    """Time must increase and be in seconds: a reset or a unit that is not seconds is refused."""
+    dt = np.diff(t)
+    if np.all(dt == 0):
+        raise DataError(f"{path}: the time column is constant")
+    back = np.flatnonzero(dt < 0)
+    if back.size:
+        raise DataError(f"{path}: time goes back at data row {int(back[0]) + 2} (a reset or a merged log); "
+                        "split the log or fix the time column")
+    step = float(np.median(dt))
+    if named_unit and not 1e-5 <= step <= 0.5:
+        raise DataError(f"{path}: the time column has a median step of {step:g}, not a sample interval in "
+                        "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds")
 
 
 def read_log(path, fmt=None, sensor="adxl355"):
     """Time (s) and three accelerometer columns of a log; one clear line on any problem."""
     try:
         fmt = fmt or guess_format(path)
-        with open(path, newline="", errors="replace") as fh:
-            if fmt == "imu_tk":
-                rows = [line.split() for line in fh if line.strip()]
-                first = 1
-            else:
-                rows = list(csv.reader(fh, delimiter=";" if fmt == "openaxes" else ","))
-                first = 2
+        if fmt == "openaxes":
+            header = _header(path, ";")
+            cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
+            missing = [c for c in cols if c not in header]
+            if missing:
+                raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an OpenAXES log")
+            data = _load(path, ";", [header.index(c) for c in cols], 1)
+            t, raw, unit = data[:, 0] * 1e-6, data[:, 1:4], False            # TIME in microseconds
+        elif fmt == "csv":
+            header = _header(path, ",")
+            ti, factor, acc = _csv_columns(path, header)
+            data = _load(path, ",", [ti] + acc, 1)
+            t, raw, unit = data[:, 0] * factor, data[:, 1:4], factor == 1.0
+        elif fmt == "imu_tk":
+            data = _load(path, None, [0, 1, 2, 3], 0)
+            t, raw, unit = data[:, 0], data[:, 1:4], True
+        else:
+            raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
-    if fmt == "openaxes":
-        header, rows = rows[0], rows[1:]
-        cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
-        missing = [c for c in cols if c not in header]
-        if missing:
-            raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an OpenAXES log")
-        idx = [header.index(c) for c in cols]
-        data = _floats([[r[i] for i in idx] for r in rows if r], path, first)
-        data[:, 0] *= 1e-6                                        # microseconds -> s
-    elif fmt == "csv":
-        header, rows = rows[0], rows[1:]
-        if len(header) < 4:
-            raise DataError(f"{path}: a csv log needs a header and columns time_s, x, y, z")
-        data = _floats([r[:4] for r in rows if r], path, first)
-    elif fmt == "imu_tk":
-        bad = next((k for k, r in enumerate(rows) if len(r) < 4), None)
-        if bad is not None:
-            raise DataError(f"{path} line {bad + 1}: expected columns t x y z, got {len(rows[bad])}")
-        data = _floats([r[:4] for r in rows], path, first)
-    else:
-        raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
-    if len(data) < 100:
-        raise DataError(f"{path}: only {len(data)} samples; a static calibration needs a long recording")
-    if not np.all(np.isfinite(data)):
-        raise DataError(f"{path}: the log contains NaN or infinite values")
-    return Log(path, data[:, 0] - data[0, 0], data[:, 1:4])
+    if len(t) < MIN_SAMPLES:
+        raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording")
+    _check_time(path, t, unit)
+    return Log(path, t - t[0], raw)
 
 
 @dataclass
@@ -110,19 +174,13 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     if base > 20 * floor:
         base, note = floor, (f"the first {init:g} s are not still; threshold {k:g} x the 5th "
                              "percentile of the moving variance")
-    still = var < k * base
-    out, i = [], 0
-    while i < len(still):
-        if not still[i]:
-            i += 1
-            continue
-        j = i
-        while j < len(still) and still[j]:
-            j += 1
-        a, b = i + n // 2, j + n // 2            # window centre indices
-        if log.t[min(b, len(log.t) - 1)] - log.t[a] >= min_still:
+    still = np.concatenate([[False], var < k * base, [False]])
+    edges = np.flatnonzero(np.diff(still.astype(np.int8)))
+    out, last = [], len(log.t) - 1
+    for i, j in zip(edges[::2], edges[1::2]):                  # runs [i, j) of still windows
+        a, b = i + n // 2, j + n // 2                            # window centre indices
+        if log.t[min(b, last)] - log.t[a] >= min_still:
             seg = log.raw[a:b]
-            out.append(Still(float(log.t[a]), float(log.t[min(b, len(log.t) - 1)]), seg.mean(axis=0),
+            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), seg.mean(axis=0),
                              seg.std(axis=0, ddof=1) / np.sqrt(len(seg)), len(seg)))
-        i = j
     return out, note

@@ -1,6 +1,11 @@
-"""Plain-text tables and JSON files for the command line."""
+"""Plain-text tables and JSON files for the command line; every file is written whole or not at all."""
 import json
+import os
 import sys
+import tempfile
+from pathlib import Path
+
+from ..errors import DataError
 
 
 def table(headers, rows, out=None):
@@ -16,6 +21,43 @@ def table(headers, rows, out=None):
 
 
 def write_json(path, obj):
-    with open(path, "w") as fh:
-        json.dump(obj, fh, indent=2)
-        fh.write("\n")
+    """Strict JSON (no NaN or Infinity), written atomically."""
+    try:
+        text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
+    except ValueError:
+        raise DataError(f"{path}: a result is not finite (NaN or infinity); nothing written") from None
+    write_text(path, text)
+
+
+def write_text(path, text, mode="w"):
+    """Write a file atomically: a temporary file beside it, renamed over it when complete."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".part")
+    try:
+        with os.fdopen(fd, mode) as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def save_figure(fig, path):
+    """A matplotlib figure as PNG, written atomically."""
+    import io
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=110, format="png")
+    write_text(path, buf.getvalue(), "wb")
+
+
+def check_writable(path, what):
+    """Refuse an output path before any work: its folder must exist and be writable, and it must not
+    be a folder itself."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise DataError(f"{path}: {what} is a folder, not a file")
+    if not parent.is_dir():
+        raise DataError(f"{path}: the folder {parent} for {what} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise DataError(f"{path}: the folder {parent} for {what} is not writable")

@@ -11,6 +11,7 @@ import numpy as np
 import sympy as sp
 
 from .check import feasible, make
+from .reference import MODELS, reference
 
 
 def _angle(deg):
@@ -19,16 +20,15 @@ def _angle(deg):
 
 def for_stand(key):
     """Certificates of every optimal value of a built-in stand (derive/stands/KEY.toml)."""
-    from garant.derive.builtin import MODELS
+    from garant.derive.builtin import MODELS as BUILTIN
     from garant.derive.derivation import derive
 
     from .. import models
-    model = MODELS[key]
-    d = derive(model)
+    d = derive(BUILTIN[key])
     mod = models.load(key.replace("_", "-"))
-    names = [a.name for a in model.stand.angles]
-    rows = [[sp.sstr(e) for e in d.ident.H.row(r)] for r in range(d.ident.H.rows)]
-    domain = {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names)}
+    H, domain, _ = reference(key)
+    names = domain["names"]
+    rows = [[sp.sstr(e) for e in row] for row in H]
     m = d.ident.H.cols
     out = []
     if len(getattr(mod, "ESTIMATOR_TERMS", ())):       # derived closed forms with the duals e_nu
@@ -179,10 +179,8 @@ def exact_primal(cols, nu, lam):
 def for_norm():
     """Certificates of the twelve optimal values of 001 on the unit sphere."""
     from garant.generated import norm as mod
-    from garant.derive import norm
-    model = norm.NormModel(mod.AXES)
-    rows = [[sp.sstr(e) for e in norm.H(model)]]
-    domain = {"kind": "sphere", "names": ["n1", "n2", "n3"]}
+    H, domain, _ = reference("norm")
+    rows = [[sp.sstr(e) for e in row] for row in H]
     out = []
     for nu, q in enumerate(mod.Q_NAMES):
         primal = [([x.strip() for x in mod.PLAN_EXACT[k].split(",")], 0, Fraction(num, den))
@@ -192,9 +190,6 @@ def for_norm():
         out.append(make("norm", f"optimal guaranteed error of {q} on the unit sphere (units of "
                         "delta_sigma_max)", domain, rows, a, sum(abs(w) for _, _, w in primal), primal, lam))
     return out
-
-
-MODELS = {"two-axis": "two_axis", "single-axis": "single_axis", "three-axis": "three_axis", "norm": None}
 
 
 def for_model(name):

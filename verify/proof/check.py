@@ -10,16 +10,30 @@ vector lambda, all exact (rationals, or algebraic numbers like sqrt(3)/2). The c
     when the trigonometric form gives it (sum of |coefficients| of canonical monomials <= 1), else by
     rigorous interval branch and bound, which proves it to 1 + ETA.
 By weak duality (a)-(c) prove v/(1 + ETA) <= optimum <= v (= v when (c) closes exactly).
+Before (a), step (0) ties the certificate to its model: its H and domain must be those re-derived
+from the model it names (reference.py), and its target the e_nu of the q its claim names. Every
+string is read by the whitelist grammar of parse.py and every list is size-capped: a hostile file
+is refused with one line, never evaluated.
 """
+import re
 import json
 
 import numpy as np
 import sympy as sp
 
 from ..solve.interval import mean_value_enclosure
+from .parse import exact
+from .reference import reference
 
 ETA = 1e-9
 FORMAT = "garant-certificate-1"
+MAX_ITEMS = 10_000           # rows, entries, primal terms, dual entries
+MAX_BOX_ANGLES = 4           # interval branch and bound starts from 8^n boxes
+MAX_BYTES = 50_000_000
+
+
+class MalformedCertificate(ValueError):
+    """A certificate file that is not of the garant-certificate-1 form."""
 
 
 def _s(x):
@@ -35,45 +49,115 @@ def make(model, claim, domain, H_rows, target, value, primal, dual):
             "dual": [_s(l) for l in dual]}
 
 
-def _symbols(domain):
-    names = domain["names"]
-    return [sp.Symbol(n, real=True) for n in names]
+def _list(value, where, length=None):
+    if not isinstance(value, list) or not value or len(value) > MAX_ITEMS:
+        raise MalformedCertificate(f"{where}: expected a list of 1 to {MAX_ITEMS} items")
+    if length is not None and len(value) != length:
+        raise MalformedCertificate(f"{where}: expected {length} items, found {len(value)}")
+    return value
 
 
-def _parse(text, syms):
-    return sp.sympify(text, locals={str(s): s for s in syms})
+def _field(cert, key, kind):
+    if not isinstance(cert.get(key), kind):
+        raise MalformedCertificate(f"{key!r}: missing or not a {kind.__name__}")
+    return cert[key]
+
+
+def _exact(text, syms, where):
+    try:
+        return exact(text, syms)
+    except ValueError as e:
+        raise MalformedCertificate(f"{where}: {e}") from None
+
+
+def parsed(cert):
+    """The certificate's content as exact SymPy objects, after checking its form and sizes."""
+    if not isinstance(cert, dict):
+        raise MalformedCertificate(f"expected a JSON object, found {type(cert).__name__}")
+    dom = _field(cert, "domain", dict)
+    if dom.get("kind") not in ("angles", "sphere"):
+        raise MalformedCertificate(f"domain.kind: {dom.get('kind')!r} is neither 'angles' nor 'sphere'")
+    names = _list(dom.get("names"), "domain.names")
+    if not all(isinstance(n, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,40}", n) for n in names) \
+            or len(set(names)) != len(names) or len(names) > 12:
+        raise MalformedCertificate("domain.names: at most 12 distinct plain names")
+    syms = [sp.Symbol(n, real=True) for n in names]
+    H = [[_exact(e, syms, f"H[{i}][{j}]") for j, e in enumerate(_list(row, f"H[{i}]"))]
+         for i, row in enumerate(_list(cert.get("H"), "H"))]
+    m = len(H[0])
+    if any(len(row) != m for row in H):
+        raise MalformedCertificate("H: rows of different lengths")
+    a = [_exact(x, (), f"target[{k}]") for k, x in enumerate(_list(cert.get("target"), "target", m))]
+    lam = [_exact(x, (), f"dual[{k}]") for k, x in enumerate(_list(cert.get("dual"), "dual", m))]
+    v = _exact(cert.get("value"), (), "value")
+    primal = []
+    for k, term in enumerate(_list(cert.get("primal"), "primal")):
+        if not isinstance(term, dict) or not isinstance(term.get("row"), int) or not 0 <= term["row"] < len(H):
+            raise MalformedCertificate(f"primal[{k}]: needs 'at', 'weight' and a 'row' below {len(H)}")
+        at = {s: _exact(x, (), f"primal[{k}].at") for s, x in zip(syms, _list(term.get("at"), f"primal[{k}].at",
+                                                                              len(syms)))}
+        primal.append((at, term["row"], _exact(term.get("weight"), (), f"primal[{k}].weight")))
+    ranges = None
+    if dom["kind"] == "angles":
+        ranges = [[_exact(x, (), "domain.ranges") for x in _list(r, "domain.ranges[]", 2)]
+                  for r in _list(dom.get("ranges"), "domain.ranges", len(syms))]
+    return dict(syms=syms, H=H, a=a, lam=lam, v=v, primal=primal, ranges=ranges)
+
+
+def tied_to_model(cert, c):
+    """(passed, detail): H and domain are those of the model the certificate names, and the target is
+    the e_nu of the q its claim names."""
+    if not isinstance(cert.get("model"), str):
+        return False, "names no model"
+    try:
+        H_ref, dom_ref, q_names = reference(cert["model"])
+    except ValueError as e:
+        return False, str(e)
+    if [str(s) for s in c["syms"]] != dom_ref["names"] or cert["domain"]["kind"] != dom_ref["kind"]:
+        return False, f"domain {cert['domain'].get('names')} is not that of {cert['model']} ({dom_ref['names']})"
+    if dom_ref["kind"] == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
+        return False, "the domain is not the whole box of angles of the model"
+    syms = {s.name: s for s in c["syms"]}
+    ref = [[e.subs({x: syms[x.name] for x in e.free_symbols}) for e in row] for row in H_ref]
+    if len(ref) != len(c["H"]) or len(ref[0]) != len(c["H"][0]):
+        return False, f"H is {len(c['H'])} x {len(c['H'][0])}; {cert['model']} has {len(ref)} x {len(ref[0])}"
+    for i, (row, row_ref) in enumerate(zip(c["H"], ref)):
+        for j, (h, r) in enumerate(zip(row, row_ref)):
+            if sp.expand(h - r) != 0:
+                return False, f"H[{i}][{j}] = {h} differs from the model's {r}"
+    q = re.search(r"\bof (\S+) ", str(cert.get("claim", "")))
+    nu = q_names.index(q.group(1)) if q and q.group(1) in q_names else -1
+    if nu < 0 or c["a"] != [int(k == nu) for k in range(len(c["a"]))]:
+        return False, "the target is not e_nu of the q the claim names"
+    return True, f"H and domain re-derived from {cert['model']}; target e_{nu + 1} ({q_names[nu]})"
 
 
 def check(cert):
-    """[(step, passed, detail)] for the steps (a), (b), (c); a certificate holds iff all pass."""
-    if cert.get("format") != FORMAT:
-        return [("format", False, f"not a {FORMAT} certificate")]
-    dom = cert["domain"]
-    syms = _symbols(dom)
-    H = [[_parse(e, syms) for e in row] for row in cert["H"]]
+    """[(step, passed, detail)] for the steps (0), (a), (b), (c); a certificate holds iff all pass.
+    MalformedCertificate when the file is not of the certificate form."""
+    if not isinstance(cert, dict) or cert.get("format") != FORMAT:
+        raise MalformedCertificate(f"not a {FORMAT} certificate (no \"format\": \"{FORMAT}\")")
+    c = parsed(cert)
+    syms, H, a, lam, v = c["syms"], c["H"], c["a"], c["lam"], c["v"]
     m = len(H[0])
-    a = [sp.nsimplify(sp.sympify(x)) for x in cert["target"]]
-    lam = [sp.nsimplify(sp.sympify(x)) for x in cert["dual"]]
-    v = sp.nsimplify(sp.sympify(cert["value"]))
-    out = []
+    out = [("(0) model", *tied_to_model(cert, c))]
+    if not out[0][1]:
+        return out
     image = [sp.Integer(0)] * m
-    for term in cert["primal"]:
-        at = {s: sp.sympify(x) for s, x in zip(syms, term["at"])}
-        w = sp.nsimplify(sp.sympify(term["weight"]))
-        row = H[term["row"]]
-        image = [sp.nsimplify(sp.simplify(i + w * h.subs(at))) for i, h in zip(image, row)]
+    for at, row, w in c["primal"]:
+        image = [sp.nsimplify(sp.simplify(i + w * h.subs(at))) for i, h in zip(image, H[row])]
     bad = [(k, i, t) for k, (i, t) in enumerate(zip(image, a)) if sp.simplify(i - t) != 0]
     out.append(("(a) unbiased", not bad, "sum w H = a exactly" if not bad else
                 f"component {bad[0][0] + 1} of sum w H is {bad[0][1]}, the target has {bad[0][2]}"))
-    l1 = sum((abs(sp.nsimplify(sp.sympify(t["weight"]))) for t in cert["primal"]), sp.Integer(0))
+    l1 = sum((abs(w) for _, _, w in c["primal"]), sp.Integer(0))
     dual_value = sp.nsimplify(sum(x * y for x, y in zip(a, lam)))
     ok = sp.simplify(l1 - v) == 0 and sp.simplify(dual_value - v) == 0
     out.append(("(b) primal = dual = value", ok, f"sum|w| = {l1}, a.lambda = {dual_value}, value = {v}"))
-    out.append(("(c) dual feasible",) + feasible(H, lam, dom, syms))
+    out.append(("(c) dual feasible",) + feasible(H, lam, cert["domain"], syms, c["ranges"]))
     return out
 
 
-def feasible(H, lam, dom, syms, max_boxes=1_500_000):
+def feasible(H, lam, dom, syms, ranges=None, max_boxes=1_500_000):
     """|H^T lambda| <= 1 on the whole domain: (passed, detail)."""
     polys = [sp.expand(sum((l * h for l, h in zip(lam, row) if l != 0), sp.Integer(0))) for row in H]
     if dom["kind"] == "angles":
@@ -84,8 +168,10 @@ def feasible(H, lam, dom, syms, max_boxes=1_500_000):
         if all(harmonic_bound(p, syms) for p in polys):
             return True, ("exact: each H^T lambda is A cos x + B sin x in one angle x, with A^2 + B^2 <= 1 "
                           "(sum of |coefficients|, or 1 - A^2 - B^2 a sum of even powers)")
-        lo = [float(sp.sympify(r[0])) for r in dom["ranges"]]
-        hi = [float(sp.sympify(r[1])) for r in dom["ranges"]]
+        if len(syms) > MAX_BOX_ANGLES:
+            return False, f"interval branch and bound covers at most {MAX_BOX_ANGLES} angles, not {len(syms)}"
+        ranges = ranges or [[exact(x) for x in r] for r in dom["ranges"]]
+        lo, hi = [float(r[0]) for r in ranges], [float(r[1]) for r in ranges]
         etas = []
         for k, p in enumerate(polys):
             for eta in (ETA, 1e-6):
@@ -187,11 +273,19 @@ def _as_grad(value, like):
 
 
 def write(cert, path):
-    with open(path, "w") as fh:
-        json.dump(cert, fh, indent=1)
-        fh.write("\n")
+    from ..io.report import write_text
+    write_text(path, json.dumps(cert, indent=1) + "\n")
 
 
 def read(path):
-    with open(path) as fh:
-        return json.load(fh)
+    """The JSON of a certificate file; MalformedCertificate if it is not JSON or is too large or deep."""
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_BYTES + 1)
+    if len(data) > MAX_BYTES:
+        raise MalformedCertificate(f"larger than {MAX_BYTES} bytes")
+    try:
+        return json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise MalformedCertificate(f"not JSON ({e})") from None
+    except RecursionError:
+        raise MalformedCertificate("JSON nested too deep") from None

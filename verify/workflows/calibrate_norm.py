@@ -12,6 +12,7 @@ import cvxpy as cp
 import numpy as np
 
 from ..errors import DataError
+from ..io.report import save_figure
 from ..solve import lp
 
 MAX_ITER = 60
@@ -162,7 +163,7 @@ def plot(result, path):
         ax.set_yscale("symlog", linthresh=band)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
 
 

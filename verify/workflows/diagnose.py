@@ -13,8 +13,10 @@
 import cvxpy as cp
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, LPFailed
+from ..io.report import save_figure
 from ..solve import lp
+from .estimate import check_residual_size
 
 TIE = 0.02                    # scores within 2% (of sigma) count as equal
 
@@ -22,7 +24,10 @@ TIE = 0.02                    # scores within 2% (of sigma) count as equal
 def chebyshev_fit(A, z):
     """min over q of max |z - A^T q| (LP, HiGHS): q, the minimax residual, the residual vector."""
     q, t = cp.Variable(A.shape[0]), cp.Variable()
-    cp.Problem(cp.Minimize(t), [cp.abs(z - A.T @ q) <= t]).solve(solver=cp.HIGHS)
+    problem = cp.Problem(cp.Minimize(t), [cp.abs(z - A.T @ q) <= t])
+    problem.solve(solver=cp.HIGHS)
+    if problem.status != cp.OPTIMAL:
+        raise LPFailed(f"minimax fit: the solver ended with status {problem.status}")
     return q.value, float(t.value), z - A.T @ q.value
 
 
@@ -121,6 +126,7 @@ def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
 
 def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
     study = Study(base_model, mod, positions, g)
+    check_residual_size(study.z.reshape(-1, 3), positions.path)
     allow = remainder_allowance(mod, study.angles, g, prior, study.mounts)
     limit = sigma + allow
     A0 = study.A([])
@@ -210,5 +216,5 @@ def plot(res, path, title):
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)

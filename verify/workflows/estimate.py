@@ -22,6 +22,16 @@ def residuals_table_axes(mod, positions, g, Q):
     return (Q.T @ z_block).T
 
 
+def check_residual_size(z, path, limit=0.5):
+    """Readings must be near the model: a residual beyond half of g is a unit or column mistake, not
+    a small error the linear model (2) can describe."""
+    worst = np.abs(z).max(axis=1)
+    if worst.max() > limit:
+        k = int(np.argmax(worst))
+        raise DataError(f"{path}: position {k + 1} differs from the model by {worst[k]:.3g} g; readings must be "
+                        "specific force in m/s^2 (check --g, the units and the column order)")
+
+
 def choose_estimator(mod, positions, A):
     """Weights (m x 3N) and the method: (23) of 000 near the optimal plan, else the LP (7)-(8)."""
     plan = getattr(mod, "PLAN_DEG", np.zeros((0, 2)))
@@ -61,6 +71,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower"):
     if missing:
         raise DataError(f"{positions.path}: the {distinct} distinct positions cannot identify "
                         f"{describe(mod, missing)}; add positions (see `garant plan`)")
+    check_residual_size(z, positions.path)
     W, method = choose_estimator(mod, positions, A)
     q = W @ z.reshape(-1)
     resid = z - (A.T @ q).reshape(-1, 3)

@@ -7,6 +7,7 @@ Reusing D itself carries the bias (D A^T - E) q: its guaranteed error is infinit
 """
 import numpy as np
 
+from ..io.report import save_figure
 from ..solve import lp
 def plan_estimators(mod):
     """D: the generated optimal estimators on PLAN_DEG as an m x 3S matrix, columns ordered (s, p)."""
@@ -86,7 +87,7 @@ def plot(mod, path, misses_deg=np.linspace(0, 5, 11)):
                  "(reusing the exact-plan estimators: biased, guaranteed error infinite)", fontsize=9)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
     return s
 

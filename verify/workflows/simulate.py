@@ -5,6 +5,7 @@ import types
 import numpy as np
 
 from ..errors import DataError
+from ..io.report import write_text
 from ..solve.plans import QUARTER_DEG
 
 ROW_SECONDS = 60.0        # one position a minute
@@ -98,10 +99,10 @@ def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4):
 
 def write(path, P, f, t, T, names=("alpha", "beta"), mounts=None, mount_names=None):
     """CSV with a column <angle>_deg per angle, f1..f3 (m/s^2), mount (if any), time_s, temp_c."""
-    with open(path, "w") as fh:
-        fh.write(",".join([f"{a}_deg" for a in names] + ["f1", "f2", "f3"] + (["mount"] if mounts is not None else [])
-                          + ["time_s", "temp_c"]) + "\n")
-        for k, (pos, row, ti, Ti) in enumerate(zip(P, f, t, T)):
-            cells = [f"{a:g}" for a in pos] + [repr(float(v)) for v in row]
-            cells += [mount_names[mounts[k]]] if mounts is not None else []
-            fh.write(",".join(cells + [f"{ti:g}", f"{Ti:.4f}"]) + "\n")
+    lines = [",".join([f"{a}_deg" for a in names] + ["f1", "f2", "f3"] + (["mount"] if mounts is not None else [])
+                      + ["time_s", "temp_c"])]
+    for k, (pos, row, ti, Ti) in enumerate(zip(P, f, t, T)):
+        cells = [f"{a:g}" for a in pos] + [repr(float(v)) for v in row]
+        cells += [mount_names[mounts[k]]] if mounts is not None else []
+        lines.append(",".join(cells + [f"{ti:g}", f"{Ti:.4f}"]))
+    write_text(path, "\n".join(lines) + "\n")

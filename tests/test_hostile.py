@@ -1,0 +1,215 @@
+"""Hostile and malformed inputs (issue 14): no code runs from a user's file, and every bad file ends
+with exit status 2, exactly one line on stderr naming the file or option and the problem, no output
+file, and in bounded time."""
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from garant.derive.builtin import STANDS_DIR
+from garant.generated import two_axis
+from garant.verify.cli import main
+
+BASE = (STANDS_DIR / "single_axis.toml").read_text()
+G = 9.81
+
+
+def run(argv, capsys, limit_s=30):
+    t0 = time.perf_counter()
+    code = main([str(a) for a in argv])
+    elapsed = time.perf_counter() - t0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert elapsed < limit_s, f"took {elapsed:.1f} s"
+    return code, err
+
+
+def refused(argv, capsys, *words, outputs=()):
+    code, err = run(argv, capsys)
+    assert code == 2, err
+    assert len(err) == 1, err
+    assert err[0].startswith("garant"), err
+    for w in words:
+        assert w in err[0], err[0]
+    for out in outputs:
+        assert not Path(out).exists() or (Path(out).is_dir() and not any(Path(out).iterdir())), out
+    return err[0]
+
+
+# ---------------------------------------------------------------- stand descriptions (TOML)
+
+HOSTILE_UNIT = "rad\", __import__('os').system('touch pwned'), \""
+
+
+def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    old_unit = 'unit = "rad"\nmeaning = "encoder offset (read - true)"'
+    old_title = 'title = "Single-axis indexing table, block in three mountings"'
+    assert old_unit in BASE and old_title in BASE
+    meaning, title = 'a """ b \\ end\\', 'Tri"""ple \\ quoted """'
+    text = BASE.replace(old_unit, f"unit = {json.dumps(HOSTILE_UNIT)}\nmeaning = {json.dumps(meaning)}", 1)
+    text = text.replace(old_title, f"title = {json.dumps(title)}", 1)
+    (tmp_path / "s.toml").write_text(text)
+    code, err = run(["derive", "s.toml", "--out", "out"], capsys, limit_s=60)
+    assert code == 0, err
+    assert not (tmp_path / "pwned").exists()
+    from garant.verify import models
+    mod = models.load(str(tmp_path / "s.toml"))
+    assert not (tmp_path / "pwned").exists()
+    units = dict((n, u) for n, u, _ in mod.PARAMETERS)
+    assert units["Delta_phi"] == HOSTILE_UNIT                       # a string, round-tripped
+    assert 'Tri"""ple \\ quoted' in mod.__doc__
+
+
+@pytest.mark.parametrize("old, new, where", [
+    ('detents_deg = [0, 90, 180, 270]', 'range_deg = 5', "angle[1].range_deg"),
+    ('detents_deg = [0, 90, 180, 270]', 'detents_deg = 90', "angle[1].detents_deg"),
+    ('mountings = ["+x+y+z", "+y+z+x", "+z+x+y"]', 'mountings = 3', "block.mountings"),
+    ('preferred = ["kappa"', 'preferred = [1, "kappa"', "estimation.preferred"),
+    ('[estimation]\n', '[estimation]\nplan_deg = [["a"]]\n', "estimation.plan_deg"),
+    ('source = "garant example stand (docs/new_stand.md)"', "source = 5", "stand.source"),
+    ('angle = "phi"', 'angle = [1]', "link[2].angle"),
+    ('title = "Single-axis indexing table, block in three mountings"', 'title = "two\\nlines"', "stand.title"),
+    ('name = "phi"', 'name = "lambda"', "reserved"),
+    ('name = "phi"', 'name = "None"', "reserved"),
+    ('name = "phi"', 'name = "np"', "reserved"),
+    ('name = "kappa"', 'name = "Gamma11"', "reserved"),
+    ('[[parameter]]\nname = "kappa"', '[[angle]]\nname = "phi"\n\n[[parameter]]\nname = "kappa"', "declared twice"),
+    ('remount', 'remount', ""),
+])
+def test_bad_description_is_one_line_and_writes_nothing(tmp_path, capsys, old, new, where):
+    if old == "remount":
+        text = BASE + "remount = 3\n"
+        where = "estimation.remount"
+    else:
+        assert old in BASE
+        text = BASE.replace(old, new, 1)
+    (tmp_path / "s.toml").write_text(text)
+    refused(["derive", tmp_path / "s.toml", "--out", tmp_path / "out"], capsys, "s.toml", where,
+            outputs=[tmp_path / "out"])
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: BASE + "\n" + "\n".join('[[link]]\naxis = "y"\nerror = "kappa"\n' for _ in range(50)), ("at most",)),
+    (lambda: BASE + "\n" + "\n".join(f'[[angle]]\nname = "a{k}"\n' for k in range(1000)), ("at most",)),
+    (lambda: "x = " + "[" * 100_000 + "]" * 100_000 + "\n", ("s.toml",)),
+    (lambda: b"\xff\xfe[stand]\n", ("UTF-8",)),
+    (lambda: "x" * 2_000_000, ("bytes",)),
+])
+def test_oversized_or_undecodable_description_refused_fast(tmp_path, capsys, make, words):
+    data = make()
+    path = tmp_path / "s.toml"
+    path.write_bytes(data if isinstance(data, bytes) else data.encode())
+    refused(["plan", path], capsys, *words)
+
+
+def test_description_with_bom_is_read(tmp_path, capsys):
+    (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbf" + BASE.encode())
+    code, err = run(["derive", tmp_path / "s.toml", "--out", tmp_path / "out"], capsys, limit_s=60)
+    assert code == 0, err
+
+
+# ---------------------------------------------------------------- positions CSV (estimate)
+
+GOOD_ROW = "0,0,0,0,9.81"
+PLAN10 = two_axis.PLAN_DEG.tolist()
+
+
+@pytest.mark.parametrize("content, words", [
+    (b"", ("empty",)),
+    (b"alpha_deg,beta_deg,f1,f2,f3\n", ("no data rows",)),
+    (b"\xff\xfe\x00a", ("UTF-8",)),
+    (b"alpha_deg,beta_deg,f1,f2,f3,f1\n0,0,0,0,9.81,1\n", ("duplicate",)),
+    (("alpha_deg,beta_deg,f1,f2,f3\n0,0,0,0," + "9" * 200_000 + "\n").encode(), ("d.csv",)),
+    (b"alpha_deg,beta_deg,f1,f2,f3\n0,0,0,0,nan\n", ("not a finite number",)),
+    (("alpha_deg,beta_deg,f1,f2,f3\n" + "".join(f"{a:g},{b:g},0,0,1e308\n" for a, b in PLAN10)).encode(),
+     ("differs from the model",)),
+    (b"alpha_deg,beta_deg,f1,f2\n0,0,0,0\n", ("missing column",)),
+    (b"alpha_deg,beta_deg,f1,f2,f3\n0,0,0,0\n", ("fields",)),
+])
+def test_bad_positions_file(tmp_path, capsys, content, words):
+    path = tmp_path / "d.csv"
+    path.write_bytes(content)
+    out = tmp_path / "r.json"
+    refused(["estimate", "--model", "two-axis", path, "--sigma", "1e-5", "--json", out], capsys, "d.csv", *words,
+            outputs=[out])
+
+
+@pytest.mark.parametrize("option, value", [("--sigma", "nan"), ("--sigma", "inf"), ("--sigma", "0"),
+                                           ("--sigma", "-1e-5"), ("--g", "inf"), ("--g", "nan")])
+def test_non_finite_numbers_refused(tmp_path, capsys, option, value):
+    path = tmp_path / "d.csv"
+    path.write_text("alpha_deg,beta_deg,f1,f2,f3\n" + GOOD_ROW + "\n")
+    argv = ["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5", "--g", "9.81"]
+    argv[argv.index(option) + 1] = value
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert e.value.code == 2 and len(err) == 1 and option in err[0]
+
+
+def test_output_paths_checked_before_any_work(tmp_path, capsys):
+    sim = tmp_path / "d.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "optimal10", "--sigma", "1e-5", "-o", str(sim)]) == 0
+    capsys.readouterr()
+    refused(["estimate", "--model", "two-axis", sim, "--sigma", "1e-5", "--json", "/nonexistent/r.json"],
+            capsys, "/nonexistent")
+    json_out = tmp_path / "r.json"
+    refused(["diagnose", "--model", "two-axis", sim, "--sigma", "1e-5", "--json", json_out,
+             "--plot", "/nonexistent/p.png"], capsys, "/nonexistent", outputs=[json_out])
+    refused(["estimate", "--model", "two-axis", sim, "--sigma", "1e-5", "--json", tmp_path], capsys, "folder")
+
+
+# ---------------------------------------------------------------- raw logs (calibrate-norm)
+
+def _log(n=2000, dt=0.01, t0=0.0):
+    t = t0 + dt * np.arange(n)
+    return t, np.tile([0.0, 0.0, 9.81], (n, 1))
+
+
+def _csv(path, header, cols):
+    lines = [header] + [",".join(repr(float(v)) for v in row) for row in np.column_stack(cols)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("fmt, make, words", [
+    ("csv", lambda p: p.write_text(""), ("empty",)),
+    ("openaxes", lambda p: p.write_text(""), ("empty",)),
+    ("csv", lambda p: p.write_text("time_s,x,y,z\n"), ("no data rows",)),
+    ("openaxes", lambda p: p.write_text("TIME;ACCEL_ADXL355_0;ACCEL_ADXL355_1;ACCEL_ADXL355_2\n"), ("no data rows",)),
+    ("csv", lambda p: _csv(p, "time_s,x,y,z", [np.zeros(2000), *_log()[1].T]), ("constant",)),
+    ("csv", lambda p: _csv(p, "time_s,x,y,z", [_log(dt=10.0)[0], *_log()[1].T]), ("time_ms",)),
+    ("csv", lambda p: _csv(p, "time_s,x,y,z", [np.r_[_log(1000)[0], _log(1000)[0]], *_log()[1].T]), ("goes back",)),
+    ("csv", lambda p: _csv(p, "x,y,z", [*_log()[1].T]), ("time column",)),
+    ("csv", lambda p: _csv(p, "time_s,x,x,z", [_log()[0], *_log()[1].T]), ("duplicate",)),
+    ("imu_tk", lambda p: p.write_bytes(b"0 1 2 \xff\n" * 200), ("not a number",)),
+    ("imu_tk", lambda p: p.write_text("0 1 2 3\n" * 50), ("only 50 samples",)),
+])
+def test_bad_log(tmp_path, capsys, fmt, make, words):
+    path = tmp_path / "log.txt"
+    make(path)
+    out = tmp_path / "c.json"
+    refused(["calibrate-norm", path, "--format", fmt, "--json", out], capsys, "log.txt", *words, outputs=[out])
+
+
+def test_time_column_anywhere_and_in_milliseconds(tmp_path):
+    from garant.verify.io import recordings
+    t, f = _log()
+    log = recordings.read_log(_csv(tmp_path / "a.csv", "x,y,z,time_ms", [*f.T, 1000 * t]), "csv")
+    np.testing.assert_allclose(log.t, t - t[0], atol=1e-12)
+    np.testing.assert_allclose(log.raw, f)
+
+
+@pytest.mark.parametrize("option", ["--delta-sigma", "--window", "--g"])
+def test_non_finite_log_options_refused(option, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["calibrate-norm", "x.txt", option, "nan"])
+    assert e.value.code == 2 and len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_no_stray_files(tmp_path):
+    # Nothing above wrote beside the test's own folders (atomic writes leave no .part files).
+    assert not [p for p in Path(os.getcwd()).glob(".*.part")]

@@ -1,0 +1,160 @@
+"""Exact numbers and expressions from a certificate's text, by a whitelist grammar: nothing is evaluated.
+
+    expr   := term (("+" | "-") term)*
+    term   := unary (("*" | "/") unary)*
+    unary  := ("+" | "-") unary | power
+    power  := atom ("**" exponent)?
+    exponent := integer | "(" ["-"] integer "/" integer ")" | "-" integer    (|value| <= MAX_EXPONENT)
+    atom   := integer | name | ("sqrt" | "sin" | "cos") "(" expr ")" | "(" expr ")"
+
+Integers have at most MAX_DIGITS digits, names are the certificate's own symbols (and pi), text is at
+most MAX_CHARS long and nested at most MAX_DEPTH deep: a hostile string is refused, never run.
+"""
+import re
+
+import sympy as sp
+
+MAX_CHARS = 20_000
+MAX_DIGITS = 40
+MAX_DEPTH = 40
+MAX_EXPONENT = 16
+MAX_BITS = 4096
+FUNCTIONS = {"sqrt": sp.sqrt, "sin": sp.sin, "cos": sp.cos}
+TOKEN = re.compile(r"\s*(?:(\d+)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
+
+
+class ParseError(ValueError):
+    """Text that is not an exact expression of the grammar above."""
+
+
+def _tokens(text):
+    if not isinstance(text, str):
+        raise ParseError(f"expected a string, got {type(text).__name__}")
+    if len(text) > MAX_CHARS:
+        raise ParseError(f"an expression of {len(text)} characters (at most {MAX_CHARS})")
+    out, pos = [], 0
+    text = text.rstrip()
+    while pos < len(text):
+        m = TOKEN.match(text, pos)
+        if not m:
+            raise ParseError(f"unexpected {text[pos:pos + 10]!r} in {text[:60]!r}")
+        number, name, op = m.groups()
+        if number is not None and len(number) > MAX_DIGITS:
+            raise ParseError(f"an integer of {len(number)} digits (at most {MAX_DIGITS})")
+        out.append(("int", int(number)) if number is not None else ("name", name) if name else ("op", op))
+        pos = m.end()
+    return out
+
+
+class _Parser:
+    def __init__(self, text, symbols):
+        self.toks, self.k, self.depth, self.text = _tokens(text), 0, 0, text
+        self.names = {**{str(s): s for s in symbols}, "pi": sp.pi}
+
+    def peek(self):
+        return self.toks[self.k] if self.k < len(self.toks) else (None, None)
+
+    def take(self, op=None):
+        tok = self.peek()
+        if tok[0] is None or (op is not None and tok != ("op", op)):
+            raise ParseError(f"expected {op or 'more'} in {self.text[:60]!r}")
+        self.k += 1
+        return tok
+
+    def nested(self, fn):
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise ParseError(f"nested more than {MAX_DEPTH} deep")
+        out = fn()
+        self.depth -= 1
+        return out
+
+    def expr(self):
+        value = self.term()
+        while self.peek() in (("op", "+"), ("op", "-")):
+            sign = self.take()[1]
+            value = value + self.term() if sign == "+" else value - self.term()
+        return value
+
+    def term(self):
+        value = self.unary()
+        while self.peek() in (("op", "*"), ("op", "/")):
+            op = self.take()[1]
+            rhs = self.unary()
+            if op == "/" and rhs == 0:
+                raise ParseError(f"division by zero in {self.text[:60]!r}")
+            value = value * rhs if op == "*" else value / rhs
+        return value
+
+    def unary(self):
+        if self.peek() in (("op", "+"), ("op", "-")):
+            sign = self.take()[1]
+            inner = self.nested(self.unary)
+            return inner if sign == "+" else -inner
+        return self.power()
+
+    def power(self):
+        base = self.atom()
+        if self.peek() == ("op", "**"):
+            self.take()
+            e = self.exponent()
+            if base.is_Rational and max(abs(base.p), base.q).bit_length() * abs(e) > MAX_BITS:
+                raise ParseError(f"a number of more than {MAX_BITS} bits in {self.text[:60]!r}")
+            value = base ** e
+            if value.is_Pow and value.exp.is_number and abs(value.exp) > MAX_EXPONENT:
+                raise ParseError(f"a power beyond {MAX_EXPONENT} in {self.text[:60]!r}")
+            return value
+        return base
+
+    def exponent(self):
+        kind, value = self.peek()
+        if (kind, value) == ("op", "("):
+            self.take()
+            neg = self.peek() == ("op", "-") and self.take()
+            p = self.take()
+            self.take("/")
+            q = self.take()
+            self.take(")")
+            if p[0] != "int" or q[0] != "int" or q[1] == 0:
+                raise ParseError(f"an exponent must be an integer or a fraction of integers in {self.text[:60]!r}")
+            e = sp.Rational(-p[1] if neg else p[1], q[1])
+        else:
+            neg = self.peek() == ("op", "-") and self.take()
+            tok = self.take()
+            if tok[0] != "int":
+                raise ParseError(f"an exponent must be an integer in {self.text[:60]!r}")
+            e = sp.Integer(-tok[1] if neg else tok[1])
+        if abs(e) > MAX_EXPONENT:
+            raise ParseError(f"exponent {e} is beyond {MAX_EXPONENT}")
+        return e
+
+    def atom(self):
+        kind, value = self.take()
+        if kind == "int":
+            return sp.Integer(value)
+        if kind == "name" and value in FUNCTIONS:
+            self.take("(")
+            arg = self.nested(self.expr)
+            self.take(")")
+            return FUNCTIONS[value](arg)
+        if kind == "name":
+            if value not in self.names:
+                raise ParseError(f"unknown name {value!r} (allowed: {', '.join(sorted(self.names))}, "
+                                 f"{', '.join(FUNCTIONS)})")
+            return self.names[value]
+        if value == "(":
+            inner = self.nested(self.expr)
+            self.take(")")
+            return inner
+        raise ParseError(f"unexpected {value!r} in {self.text[:60]!r}")
+
+
+def exact(text, symbols=()):
+    """The SymPy expression the text denotes, from the grammar above; ParseError otherwise."""
+    p = _Parser(text, symbols)
+    if not p.toks:
+        raise ParseError("an empty expression")
+    value = p.expr()
+    if p.k != len(p.toks):
+        raise ParseError(f"unexpected {p.toks[p.k][1]!r} in {text[:60]!r}")
+    return value
