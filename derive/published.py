@@ -4,7 +4,7 @@ Expressions are strings in alpha, beta; estimator terms are (weight, component p
 alpha in degrees, beta in degrees), as the paper writes z^(p)(alpha, beta).
 """
 
-#: (3) of 000 as printed. The printed H^(3) has 14 entries: one zero of positions 4..11 is lost.
+#: (3) of 000 as printed. The printed H^(3) has 14 entries: one zero of positions 3..11 is lost.
 H_000 = (
     ("-cos(beta)", "-cos(alpha)*sin(beta)", "-cos(alpha)*cos(beta)", "cos(alpha)",
      "sin(alpha)*sin(beta)", "sin(alpha)*cos(beta)", "1", "0", "0", "0", "0", "0", "0", "0", "0"),

@@ -43,9 +43,28 @@ def test_exact_remainder_decomposition():
 
 
 @pytest.mark.parametrize("label", list(norm_001.BOXES))
-def test_derived_bound_holds_on_samples(label):
+def test_derived_bound_holds_at_the_worst_vertices(label):
     box = norm_001.BOXES[label]
-    assert N.remainder_bound(**box) >= norm_001.worst_remainder(N, box, seed=3)
+    assert N.remainder_bound(**box) >= norm_001.worst_remainder(N, box, seed=3).value
+
+
+def test_vertex_search_refutes_the_printed_bound_in_the_mems_box():
+    # Audit of issue 13: |delta_sigma| = 1.0944e-3 against the printed (2.4) 1.0600e-3, at a vertex of
+    # the MEMS box; random sampling inside the box missed it. The search must find it by itself.
+    box = norm_001.BOXES["MEMS"]
+    found = norm_001.worst_remainder(N, box, seed=5)
+    assert found.value == pytest.approx(1.0944e-3, rel=1e-3)
+    assert found.value > N.published_bound(**box)
+    assert set(np.abs(found.p) / norm_001.box_vector(box)) == {1.0}         # a vertex
+
+
+def test_search_is_needed_random_interior_samples_miss_it():
+    # The same budget of random points inside the box stays below the printed bound.
+    rng = np.random.default_rng(0)
+    mx = norm_001.box_vector(norm_001.BOXES["MEMS"])
+    m = rng.normal(size=(3, 20000))
+    p = rng.uniform(-1, 1, (16, 20000)) * mx[:, None]
+    assert np.abs(N.remainder(m / np.linalg.norm(m, axis=0), p)).max() < N.published_bound(**norm_001.BOXES["MEMS"])
 
 
 def test_bound_is_second_order_with_first_order_noise():
@@ -72,3 +91,10 @@ def test_wrong_dual_is_rejected():
     lam[7] = 0.0                                # drop the -n2 term: |4 n1^2 n2| reaches 1.54
     ok, _, _ = sphere.prove_dual(N.H_EXPONENTS, lam)
     assert not ok
+
+
+@pytest.mark.parametrize("scale, ratio", [(0.1, 1.0028), (0.01, 1.00026)])
+def test_printed_bound_fails_in_smaller_boxes_too(scale, ratio):
+    # (2.4) of 001 is exact at second order: the third-order excess shrinks with the box but stays > 0.
+    box = {k: v * scale for k, v in norm_001.BOXES["MEMS"].items()}
+    assert norm_001.worst_remainder(N, box).value / N.published_bound(**box) > ratio

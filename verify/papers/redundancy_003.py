@@ -1,6 +1,10 @@
 """Checks of 003 for `garant verify`: the trace identity, the limits (6)-(7), Monte Carlo."""
+import re
+
 import numpy as np
 import sympy as sp
+
+from garant.derive import published
 
 from ..workflows import redundancy as rd
 from .row import Check
@@ -66,30 +70,60 @@ def monte_carlo(runs=20000, N=40, sigma=0.01):
 
 
 def examples():
-    """Identical linear dependence (003, (9)-(16)) found by the service, and the two-axis stand."""
+    """Identical linear dependence (003, (9)-(16)): each relation the service finds is backed by an
+    exact identity derived here, and compared with the paper's (or the paper's (4) of 000)."""
     from garant.derive import identifiability as I
-    from garant.derive.derivation import derive
     from garant.derive.builtin import TWO_AXIS_MODEL
-    ex1 = I.analyse_example("003-example1")
-    got = [r.text() for r in ex1["relations"]]
+    from garant.derive.derivation import derive
+    x, y, d, a, R, al = sp.symbols("x y d a R alpha", real=True)
+    V1 = d**2 - (x - a)**2 - y**2
+    printed = -a * sp.diff(V1, x) + x * sp.diff(V1, x) + y * sp.diff(V1, y) + d * sp.diff(V1, d)   # = 2 V
+    identity = sp.expand(printed.subs(d**2, (x - a)**2 + y**2))
+    got = [r.text() for r in I.analyse_example("003-example1")["relations"]]
     want = "-a*phi[c_x] + phi[theta_d] + phi[theta_x] + phi[theta_y] = 0"
-    yield Check("003 Example 1: basis dependent, with the printed relation", "003, Example 1",
-                "phi2 + phi4 - a phi3 + phi6 = 0", "; ".join(got), got == [want])
+    yield Check("003 Example 1: the printed relation is an identity on the constraint, and the only one found",
+                "003, Example 1: phi2 + phi4 - a phi3 + phi6 = 0",
+                "identity 0; service: that relation alone", f"identity {identity}; service: {'; '.join(got)}",
+                identity == 0 and got == [want])
     ex2 = I.analyse_example("003-example2", multiplicative=False)
     degenerate = [t for t, _ in ex2["degenerate"]]
     yield Check("003 Example 2, additive errors: independent, degenerate when alpha = const",
                 "003, Example 2", "no relation; alpha = const degenerate",
                 f"{len(ex2['relations'])} relations; degenerate on {', '.join(degenerate)}",
                 not ex2["relations"] and "alpha = const" in degenerate)
+    V2 = x - R * sp.cos(al)
+    euler = sp.simplify((x * sp.diff(V2, x) + R * sp.diff(V2, R)).subs(x, R * sp.cos(al)))
     full = [r.text() for r in I.analyse_example("003-example2")["relations"]]
-    yield Check("003 Example 2, additive and multiplicative: the printed claim 'independent'",
-                "003, Example 2 (claim corrected: V is homogeneous in x, R)",
-                "phi[theta_R] + phi[theta_x] = 0", "; ".join(full),
-                full == ["phi[theta_R] + phi[theta_x] = 0"])
-    rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
-    yield Check("two-axis stand: relations among the 21 basis functions = 21 - 15", "000, (4)",
-                "6 relations, 5 confounded groups", f"{len(rel)} relations, {len(groups)} groups",
-                len(rel) == 6 and len(groups) == 5)
+    yield Check("003 Example 2, additive and multiplicative: theta_x + theta_R = 0 (Euler: V homogeneous "
+                "in x, R), so not 'independent' as printed", "003, Example 2 (claim corrected)",
+                "x V_x + R V_R = V = 0 on the constraint; service: that relation alone",
+                f"x V_x + R V_R = {euler}; service: {'; '.join(full)}",
+                euler == 0 and full == ["phi[theta_R] + phi[theta_x] = 0"])
+    d = derive(TWO_AXIS_MODEL)
+    rel, groups = I.explain_stand(d)
+    names = list(d.names)
+    null = all(sp.simplify(d.J * sp.Matrix([r.coefficients[r.names.index(f"phi[{n}]")] for n in names]))
+               == sp.zeros(d.J.rows, 1) for r in rel)
+    want_rel = len(names) - len(published.Q_000)
+    want_groups = _groups_of(published.Q_000, names)
+    got_groups = sorted(sorted(g) for g in groups)
+    yield Check("two-axis stand: relations among the basis functions, each J r = 0 exactly",
+                "000, (4): 21 parameters, 15 combinations, their shared parameters",
+                f"{want_rel} relations, groups {want_groups}",
+                f"{len(rel)} relations ({'all J r = 0' if null else 'NOT in the null space'}), groups {got_groups}",
+                null and len(rel) == want_rel and got_groups == want_groups)
+
+
+def _groups_of(combinations, names):
+    """Parameters linked by the printed combinations (4) (connected components), with more than one member."""
+    groups = []
+    for text in combinations:
+        members = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text)) & set(names)
+        for g in [g for g in groups if g & members]:
+            members |= g
+            groups.remove(g)
+        groups.append(members)
+    return sorted(sorted(g) for g in groups if len(g) > 1)
 
 
 def all_groups():

@@ -7,6 +7,7 @@ removed columns is the bias the stand errors put into it.
 """
 from dataclasses import dataclass
 from fractions import Fraction
+from itertools import combinations
 
 import numpy as np
 
@@ -75,3 +76,53 @@ def per_accelerometer(mod, stand_idx):
     Hs = np.abs(mod.H(np.linspace(0, 6, 7), np.linspace(0, 6, 7)[:, None])).max(axis=(2, 3))   # (3, m)
     return {p + 1: [mod.Q_NAMES[k] for k in range(Hs.shape[1]) if k not in stand_idx and Hs[p, k] > 0]
             for p in range(3)}
+
+
+def brute_force(mod, stand_idx):
+    """{q name: (optimal estimators, biased ones)} of the reduced model, counted a second way: every
+    subset of the signed touching measurements of the q's own accelerometer on the quarter grid, in
+    exact Fractions, kept when it represents e_nu with positive weights and no smaller subset does."""
+    P = np.deg2rad(np.array(plans.QUARTER_DEG, float))
+    Hq = mod.H(P[:, 0], P[:, 1])                                   # (3, m, 16)
+    H = np.rint(Hq).astype(int)
+    assert np.abs(Hq - H).max() < 1e-12
+    out = {}
+    for p, names in per_accelerometer(mod, stand_idx).items():
+        own = [mod.Q_NAMES.index(n) for n in names]
+        for nu in own:
+            touch = [(s, int(np.sign(H[p - 1, nu, s]))) for s in range(H.shape[2]) if abs(H[p - 1, nu, s]) == 1]
+            vecs = [[Fraction(sign * H[p - 1, k, s]) for k in own] for s, sign in touch]
+            target = [Fraction(int(k == nu)) for k in own]
+            found = []
+            for size in range(1, len(own) + 1):
+                for sub in combinations(range(len(touch)), size):
+                    if any(set(f) <= set(sub) for f, _ in found):
+                        continue
+                    w = _solve([vecs[i] for i in sub], target)
+                    if w is not None and min(w) > 0:
+                        found.append((sub, w))
+            biased = sum(any(sum(wi * touch[i][1] * H[p - 1, k, touch[i][0]] for wi, i in zip(w, sub)) != 0
+                             for k in stand_idx) for sub, w in found)
+            out[mod.Q_NAMES[nu]] = (len(found), biased)
+    return out
+
+
+def _solve(vectors, target):
+    """Weights w with sum w_i v_i = target when the v_i are independent and it has a solution, else None."""
+    n, k = len(target), len(vectors)
+    rows = [[vectors[j][i] for j in range(k)] + [target[i]] for i in range(n)]
+    pivots, r = [], 0
+    for c in range(k):
+        piv = next((i for i in range(r, n) if rows[i][c] != 0), None)
+        if piv is None:
+            return None                                            # dependent vectors
+        rows[r], rows[piv] = rows[piv], rows[r]
+        rows[r] = [x / rows[r][c] for x in rows[r]]
+        for i in range(n):
+            if i != r and rows[i][c] != 0:
+                rows[i] = [a - rows[i][c] * b for a, b in zip(rows[i], rows[r])]
+        pivots.append(c)
+        r += 1
+    if any(rows[i][k] != 0 for i in range(r, n)):
+        return None                                                # target outside the span
+    return [rows[i][k] for i in range(k)]

@@ -9,7 +9,7 @@ from garant.derive import published
 
 from ..solve import exact, lp, plans
 from ..workflows import nearby
-from . import section6
+from . import physics_000, section6
 from .row import Check
 GRID_STEP_DEG = 15
 
@@ -69,9 +69,11 @@ def plan_checks(mod, search=None):
                 "000, section 4.3: fewer than 10 cannot be optimal", str(published.MIN_POSITIONS_000),
                 str(r.min_positions), r.min_positions == published.MIN_POSITIONS_000)
     n = len(r.optimal_plans)
-    yield Check("number of optimal 10-position plans (quarter-turn grid, exact)",
-                "000, section 4.3: 'at least 64'", f">= {published.AT_LEAST_PLANS_000}", str(n),
-                n >= published.AT_LEAST_PLANS_000)
+    table2 = int(np.prod([len(alts) for _, alts in published.TABLE2_000]))
+    yield Check("number of optimal 10-position plans on the quarter-turn grid (16 positions, exact count)",
+                "000, section 4.3 ('at least 64') and Table 2 (one set of each row)",
+                f"{table2} (product of the alternatives of Table 2; the paper: >= {published.AT_LEAST_PLANS_000})",
+                str(n), n == table2 and n >= published.AT_LEAST_PLANS_000)
     for name, listed in published.TABLE1_000.items():
         nu = mod.Q_NAMES.index(name)
         found = [r.plan_deg(ms.positions) for ms in r.minimal[nu]]
@@ -112,60 +114,68 @@ def additivity(mod):
                     f"LP = exact = dual bound = {err}", f"{val[0]:.9f}, {err}, {lower}", ok)
 
 
-def remount_round_trip(mod, remount):
-    """(28)-(29) recover block errors exactly, for all 24 mountings and both conventions for Gamma."""
+def remount_round_trip(mod, remount, size=1e-6):
+    """(28)-(29) recover the block errors of every mounting, both Gamma conventions, from readings
+    simulated by the paper's own chain in numpy (physics_000.py), estimated with the generated H on
+    the quarter-turn grid: exact up to the second-order remainder (errors of size 1e-6)."""
     rng = np.random.default_rng(0)
+    P = np.deg2rad(np.array(plans.QUARTER_DEG, float))
+    A = lp.measurement_matrix(mod.H, P)
     worst = 0.0
     for name, Q in remount.MOUNTS.items():
         for gamma in ("lower", "symmetric"):
-            stand = dict(zip(STAND_NAMES, rng.integers(-9, 10, 6).astype(float)))
-            G = rng.integers(-9, 10, (3, 3)).astype(float)
-            G = np.tril(G) if gamma == "lower" else G + G.T
-            b, th = rng.integers(-9, 10, 3).astype(float), rng.integers(-9, 10, 3).astype(float)
-            v = dict(stand)
-            v.update({f"Gamma{i + 1}{j + 1}": (Q.T @ G @ Q)[i, j] for i in range(3) for j in range(3)})
-            v.update({f"bias{i + 1}": (Q.T @ b)[i] for i in range(3)})
-            v.update(dict(zip(("theta1", "theta2", "theta3"), Q.T @ th)))
-            q = mod.PHYSICAL_TO_Q @ np.array([v[n] for n in mod.PARAMETER_NAMES])
+            stand = dict(zip(physics_000.STAND, rng.uniform(-size, size, 6)))
+            G = rng.uniform(-size, size, (3, 3))
+            G = np.tril(G) if gamma == "lower" else (G + G.T) / 2
+            b, th = rng.uniform(-size, size, 3), rng.uniform(-size, size, 3)
+            z = np.concatenate([physics_000.residual_table_axes(a, be, physics_000.readings_over_g(
+                a, be, stand, Q, G, b, th), Q) for a, be in P])
+            q = np.linalg.lstsq(A.T, z, rcond=None)[0]
             got = remount.recovery_matrix(name, gamma) @ q + remount.neglected(
                 name, stand["Delta_g"], stand["Delta_beta"], gamma)
-            want = np.concatenate([[stand["kappa"], stand["Delta_alpha"] + stand["alpha_star"],
-                                    stand["epsilon"]], b, G.ravel(), th])
-            worst = max(worst, float(np.abs(got - want).max()))
+            want = np.concatenate([[stand["kappa"], stand["Delta_alpha"] + stand["alpha_star"], stand["epsilon"]],
+                                   b, G.ravel(), th])
+            worst = max(worst, float(np.abs(got - want).max()) / size)
     yield Check("remount (28)-(29): 24 mountings x 2 Gamma conventions recover the block errors",
-                "000, (25)-(29)", "0 (integer errors, exact)", f"{worst:g}", worst == 0)
+                "000, (25)-(29); readings from the paper's chain (verify/papers/physics_000.py)",
+                "< 1e-4 of the error size (second order)", f"{worst:.1e}", worst < 1e-4)
 
 
-STAND_NAMES = ("kappa", "epsilon", "Delta_alpha", "Delta_beta", "alpha_star", "Delta_g")
+#: docs/mountings_and_realised_plans.md: at a 1-degree miss the worst guaranteed error over 20 random
+#: realisations is about 1.05 sigma for (23) and 1.03 sigma for the LP optimum on the same positions.
+DOCS_REALISED_1DEG = (1.05, 1.03)
 
 
-def realised_plan(mod, misses_deg=(0.1, 1.0, 3.0)):
-    """(23)-(24) of 000 on the optimal plan set with errors: unbiased, near sigma, reuse is biased."""
-    rng = np.random.default_rng(1)
-    for miss in misses_deg:
-        P = np.asarray(mod.PLAN_DEG, float) + rng.choice((-miss, miss), size=(len(mod.PLAN_DEG), 2))
-        r = nearby.compare(mod, P)
-        e23, elp, bias = r["error_23"].max(), r["error_lp"].max(), np.abs(r["bias_of_exact"]).max()
-        ok = r["unbiased_23"] < 1e-12 and elp <= e23 + 1e-9 and bias > 0
-        yield Check(f"(23) on the optimal plan missed by {miss:g} deg", "000, (20)-(24)",
-                    "(24) holds; max sum|Psi~| of (23) >= LP; reused exact estimators biased",
-                    f"{r['unbiased_23']:.0e}; {e23:.4f} >= {elp:.4f}; {bias:.2e} q", bool(ok))
+def realised_plan(mod):
+    """(23)-(24) of 000 on the optimal plan missed by 1 degree: the figures the docs quote."""
+    _, _, worst23, _, worst_lp = nearby.sweep(mod, [1.0])[0]
+    got = (round(float(worst23), 2), round(float(worst_lp), 2))
+    yield Check("(23) and the LP optimum on the optimal plan missed by 1 deg (worst of 20 realisations)",
+                "000, (20)-(24); docs/mountings_and_realised_plans.md",
+                f"{DOCS_REALISED_1DEG[0]} and {DOCS_REALISED_1DEG[1]} sigma",
+                f"{worst23:.4f} and {worst_lp:.4f} sigma", got == DOCS_REALISED_1DEG)
 
 
 def ignoring_the_stand(mod, remount):
-    """Section 6 of 000: reduced-model optimal estimators, their stand bias, and equal optimal errors."""
+    """Section 6 of 000: reduced-model optimal estimators, their stand bias, and equal optimal errors,
+    each compared with an independent value: counts by brute force over the quarter grid
+    (section6.brute_force), the full-model optimum closed by the exact estimator of the module."""
     stand_idx = [k for _, k, _ in remount.STAND]
     rows = section6.analyse(mod, stand_idx)
+    brute = section6.brute_force(mod, stand_idx)
     for r in rows:
-        same = r.error_reduced is not None and r.error_reduced == r.error_full == 1
+        nu = mod.Q_NAMES.index(r.name)
+        full_upper = exact.l1(exact.terms_from_generated(mod, nu))
+        n, nb = brute[r.name]
+        ok = (r.estimators, r.biased) == (n, nb) and r.error_reduced == 1 and r.error_full == full_upper == 1
         yield Check(f"ignoring the stand: optimal estimators of {r.name} biased by stand errors",
-                    "000, section 6", "errors 1 = 1 with and without the stand",
-                    f"{r.error_full} = {r.error_reduced}; {r.biased}/{r.estimators} biased"
-                    + (f", e.g. {r.example}" if r.example else ""), same)
-    some = any(r.biased for r in rows) and any(r.biased < r.estimators for r in rows)
+                    "000, section 6", f"{nb}/{n} biased (brute force); errors 1 = 1 (exact estimators)",
+                    f"{r.biased}/{r.estimators} biased; reduced {r.error_reduced}, full {r.error_full} <= "
+                    f"{full_upper}" + (f"; e.g. {r.example}" if r.example else ""), ok)
+    total = sum(r.estimators for r in rows), sum(r.biased for r in rows)
     yield Check("ignoring the stand: some optimal estimators are biased, others are not",
-                "000, section 6", "both kinds", f"{sum(r.biased for r in rows)} biased of "
-                f"{sum(r.estimators for r in rows)}", some)
+                "000, section 6 ('some of their optimal estimators are then biased')", "0 < biased < all",
+                f"{total[1]} biased of {total[0]}", 0 < total[1] < total[0])
 
 
 def all_groups(mod, remount):
