@@ -5,7 +5,6 @@ import dataclasses
 import types
 
 import numpy as np
-import pytest
 
 from garant.verify import models
 from garant.verify.papers import certificates, norm_001, redundancy_003, stand_000
