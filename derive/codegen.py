@@ -71,6 +71,7 @@ def model_context(d):
         angles=[a.name for a in m.stand.angles], parameters=m.parameters,
         signature=[a.name for a in m.stand.angles] + [f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
         variable_sig=[f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
+        variables=[str(v) for v in m.variables],
         row_args=[a.name for a in m.stand.angles] + [str(v) for v in m.variables],
         ranges=[[_num(v) for v in a.range_deg] for a in m.stand.angles],
         detents=[[_num(v) for v in a.detents_deg] for a in m.stand.angles],

@@ -1,5 +1,6 @@
 """garant calibrate-norm: synthetic logs with known errors, and the real recordings of shared/data/real."""
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,8 @@ from garant.verify.cli import main
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 G = 9.81744                      # the value the recordings' authors used (shared/data/real/README.md)
-needs_real = pytest.mark.skipif(not REAL.is_dir(), reason="../shared/data/real is not present")
+# Skipped on a machine without shared/, never in CI (CI=true): there the data must be present.
+needs_real = pytest.mark.skipif(not REAL.is_dir() and not os.environ.get("CI"), reason="../shared/data/real is not present")
 
 
 def synthetic_log(path, params, directions, noise, seed=0, still_s=3.0, move_s=2.0, rate=100):
@@ -64,17 +66,22 @@ def test_bad_log_one_line(tmp_path, capsys):
 
 
 @needs_real
-@pytest.mark.parametrize("name, args", [
-    ("imu_tk_xsens_acc.txt", []), ("repeat_session2_acc.txt", []), ("repeat_session3_acc.txt", []),
-    ("repeat_session4_acc.txt", ["--params", "12"]), ("openaxes_imu9.csv", ["--sensor", "adxl355"]),
-    ("openaxes_imu9.csv", ["--sensor", "bmi160"])])
-def test_real_recordings_calibrate(tmp_path, name, args):
+@pytest.mark.parametrize("name, args, consistent", [
+    ("imu_tk_xsens_acc.txt", [], True), ("repeat_session2_acc.txt", [], True), ("repeat_session3_acc.txt", [], True),
+    ("repeat_session4_acc.txt", ["--params", "12"], True), ("openaxes_imu9.csv", ["--sensor", "adxl355"], False),
+    ("openaxes_imu9.csv", ["--sensor", "bmi160"], False)])
+def test_real_recordings_calibrate(tmp_path, name, args, consistent):
+    # The verdict against the noise rule (3 standard errors of each interval's mean, half a count):
+    # the OpenAXES accelerometers drift beyond their own noise (see test_real_diagnosis_is_reported).
     out = tmp_path / "r.json"
     assert main(["calibrate-norm", str(REAL / name), "--g", str(G), "--json", str(out),
-                 "--plot", str(tmp_path / "r.png"), *args]) == 0
+                 "--plot", str(tmp_path / "r.png"), *args]) == (0 if consistent else 3)
     res = json.loads(out.read_text())
+    assert res["consistent"] is consistent and res["delta_sigma_source"].startswith("noise rule")
     assert res["intervals"] >= 20 and (tmp_path / "r.png").stat().st_size > 10000
-    assert all(abs(r["residual_after_ms2"]) <= G * res["delta_sigma_fit"] * (1 + 1e-6) for r in res["per_interval"])
+    assert all(abs(r["residual_after_ms2"]) <= G * res["minimax_residual"] * (1 + 1e-6) for r in res["per_interval"])
+    inside = [abs(r["residual_after_ms2"]) <= G * (r["noise_rule"] + res["remainder_bound"]) for r in res["per_interval"]]
+    assert all(inside) is consistent and ("guaranteed_error" in res) is consistent
     if name.startswith("imu_tk"):                 # raw counts: about 415 counts per m/s^2 (datasheet)
         assert 1 / res["matrix"][0][0] == pytest.approx(415, rel=0.02)
 
@@ -104,7 +111,7 @@ def test_real_diagnosis_is_reported(tmp_path):
     # sessions are consistent with the 9-parameter model (docs/norm_001.md).
     out = tmp_path / "d.json"
     assert main(["calibrate-norm", str(REAL / "openaxes_imu9.csv"), "--sensor", "bmi160", "--g", str(G),
-                 "--diagnose", "--json", str(out)]) == 0
+                 "--diagnose", "--json", str(out)]) == 3
     d = json.loads(out.read_text())["diagnosis"]
     assert not d["consistent_before"] and d["effects"][0] == "bias_drift" and d["consistent_after"]
     assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--diagnose",

@@ -45,11 +45,13 @@ def test_estimate_recovers_q_within_bound(tmp_path, capsys, mod, positions, seed
     q_true = mod.PHYSICAL_TO_Q @ p
     q_hat = np.array([d["q"][n] for n in mod.Q_NAMES])
     bound = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
-    # Guaranteed bound plus the second-order linearisation remainder (|p| <= 1e-4: < 1e-7).
-    assert np.all(np.abs(q_hat - q_true) <= bound + 1e-7)
+    linear = np.array([d["guaranteed_error_linear"][n] for n in mod.Q_NAMES])
+    # The guaranteed bound includes the proven linearisation remainder: no allowance added here.
+    assert d["consistent"] and np.all(np.abs(q_hat - q_true) <= bound)
+    assert np.all(bound >= linear) and d["remainder_bound"] > 0
     if positions == PLAN10:
-        np.testing.assert_allclose(bound, SIGMA, rtol=1e-6)
-    assert d["residual_max"] >= 0
+        np.testing.assert_allclose(linear, SIGMA, rtol=1e-6)      # 000, section 4: sigma for every q
+    assert 0 <= d["minimax_residual"] <= SIGMA
 
 
 def write(tmp_path, text):

@@ -107,3 +107,22 @@ def test_diagnose_described_stands(tmp_path, capsys, stand, plan, effect, values
                  "--json", str(out)]) == 0
     res = json.loads(out.read_text())
     assert not res["consistent_before"] and res["effects"] == [effect] and res["consistent_after"]
+
+
+@pytest.mark.parametrize("pair, seed", [(("scale_quadratic", "bias_drift"), 0), (("cross_coupling", "bias_temperature"), 1),
+                                        (("beta_encoder_harmonic", "scale_asymmetry"), 2)])
+def test_two_effects_at_two_sigma_both_named(tmp_path, pair, seed):
+    # Issue 12: two effects at once, each with a signature of 2 sigma (the largest change of a reading
+    # it makes), default prior 1e-3: both are named.
+    import numpy as np
+    scaled = []
+    for name in pair:
+        unit = [1.0] + [0.0] * (len(CATALOGUE[name].params) - 1)
+        _, f1, *_ = simulate.simulate(base, mod, "grid:30x45", [(name, unit)], S, seed)
+        _, f0, *_ = simulate.simulate(base, mod, "grid:30x45", [(name, [0.0] * len(unit))], S, seed)
+        scaled.append((name, [2.0 / (np.abs(f1 - f0).max() / 9.81 / S) * v for v in unit]))
+    P, f, t, T, _, _ = simulate.simulate(base, mod, "grid:30x45", scaled, S, seed)
+    simulate.write(tmp_path / "d.csv", P, f, t, T)
+    res = diagnose.diagnose(base, mod, read_positions(str(tmp_path / "d.csv")), S, 9.81)
+    named = set(res["effects"]) | {e for g in res["indistinguishable"] for e in g}
+    assert set(pair) <= named and res["consistent_after"]

@@ -100,7 +100,7 @@ def bench_diagnose(mod):
         def run():
             derivation.derive.cache_clear()
             derivation.numeric_H.cache_clear()
-            return diagnose.diagnose(TWO_AXIS_MODEL, mod, pos, 1e-5, 9.81, prior=2e-4)
+            return diagnose.diagnose(TWO_AXIS_MODEL, mod, pos, 1e-5, 9.81)
         t_run, res = timed(run)
     assert res["effects"] == ["scale_quadratic"]
     def render_all():
@@ -109,6 +109,39 @@ def bench_diagnose(mod):
     base, _ = timed(render_all)
     return ("diagnosis, whole catalogue, 96 positions (target < 10 s)", t_run,
             "derive and render every extended module", base)
+
+
+def bench_guarantee(mod):
+    """The verdict on 100 two-axis positions: exact-model minimax fit, proven a posteriori remainder
+    (interval Taylor) and the guaranteed errors, vs sampling the exact model's remainder at 100 random
+    parameter vectors (what the allowance was before: no proof). Target < 2 s."""
+    import tempfile
+
+    from .io.positions import read_positions
+    from .workflows import estimate, guarantee, simulate
+    from garant.derive.builtin import TWO_AXIS_MODEL
+    P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:36x36", [], 1e-5, 0)
+    with tempfile.TemporaryDirectory() as tmp:
+        simulate.write(f"{tmp}/d.csv", P, f, t, T)
+        pos = read_positions(f"{tmp}/d.csv")
+    z = estimate.residuals_table_axes(mod, pos, 9.81, np.eye(3)).reshape(-1)
+    A = lp.measurement_matrix(mod.H, np.column_stack(pos.radians))
+    W = lp.primal(A)[0].T
+    t_run, v = timed(lambda: guarantee.verdict(mod, pos, z, A, 1e-5, 9.81, W=W), repeat=3)
+    assert v.consistent and len(P) == 100
+    rng = np.random.default_rng(0)
+    Hs = mod.H(*pos.radians)
+
+    def sampled():
+        worst = 0.0
+        for _ in range(100):
+            p = rng.uniform(-1e-3, 1e-3, len(mod.PARAMETER_NAMES))
+            zz = mod.residual(*pos.radians, mod.readings(*pos.radians, p, 9.81), 9.81)
+            worst = max(worst, float(np.abs(zz - np.einsum("pns,n->ps", Hs, mod.PHYSICAL_TO_Q @ p)).max()))
+        return worst
+    base, _ = timed(sampled, repeat=3)
+    return ("verdict, 100 positions: exact fit + proven remainder (target < 2 s)", t_run,
+            "sampled remainder, 100 draws (no proof)", base)
 
 
 def bench_continuum(mod):
@@ -138,6 +171,34 @@ def bench_certificates():
     return "15 two-axis certificates: build + exact check (target < 5 s)", t, "primal LP on a 15 deg grid", base
 
 
+def bench_scale(rows=(1_000, 10_000, 100_000, 1_000_000), distinct=96):
+    """Peak memory and time of `garant estimate` and `garant identify --plan` on files of N rows (the
+    96 positions of a 30 x 45 degree grid, each read many times, as a static log gives), each command
+    in a fresh process. Target: linear in N; 1e6 rows under 2 GB and 60 s."""
+    import tempfile
+    mod = load("two-axis")
+    rng = np.random.default_rng(0)
+    p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    grid = np.array([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], float)[:distinct]
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in rows:
+            P = grid[rng.integers(0, len(grid), n)]
+            f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (n, 3))
+            path = f"{tmp}/d{n}.csv"
+            np.savetxt(path, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3",
+                       comments="", fmt="%.10g")
+            for argv in (["estimate", "--model", "two-axis", path, "--sigma", "1e-5"],
+                         ["identify", "two-axis", "--plan", path]):
+                code = ("import resource, sys, time; from garant.verify.cli import main; t = time.perf_counter(); "
+                        f"main({argv!r}); print(time.perf_counter() - t, "
+                        "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)")
+                r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+                t, kb = r.stderr.strip().splitlines()[-1].split()
+                out.append((argv[0], n, float(t), int(kb) / 1024))
+    return out
+
+
 def codegen_outputs():
     from garant.derive import codegen
     return codegen.outputs()
@@ -153,7 +214,7 @@ def main():
     from garant.derive.derivation import derive as derive_model
     three, _ = timed(lambda: derive_model(description.load(STANDS_DIR / "three_axis.toml")))
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod), bench_continuum(mod),
-            bench_certificates(), bench_diagnose(mod)]
+            bench_certificates(), bench_guarantee(mod), bench_diagnose(mod)]
     width = max(len(r[0]) for r in rows)
     print(f"{'figure'.ljust(width)}  {'time, s':>9}  {'baseline, s':>11}  {'speed-up':>9}  baseline")
     for name, t, bname, base in rows:
@@ -161,6 +222,10 @@ def main():
     print(f"\n`python -m derive --check` (all {len(codegen_outputs())} files) in a fresh process, "
           f"interpreter start included: {fresh:.2f} s")
     print(f"derivation of the three-axis stand with its errors: {three:.2f} s")
+    print("\nscale (96 distinct positions, repeated rows; fresh process each):")
+    print(f"{'command':10s} {'rows':>9s} {'time, s':>8s} {'peak MiB':>9s}")
+    for cmd, n, t, mib in bench_scale():
+        print(f"{cmd:10s} {n:9d} {t:8.2f} {mib:9.0f}")
 
 
 if __name__ == "__main__":

@@ -43,6 +43,9 @@ def main(argv=None):
     except (DataError, LPFailed, ValueError) as e:
         print(f"garant: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:                            # output piped into a reader that stopped (head)
+        sys.stderr.close()
+        return 0
     except OSError as e:
         print(f"garant: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
         return 2

@@ -36,3 +36,9 @@ def g(p, help_="model gravity, m/s^2 (default 9.81)"):
 
 def json(p):
     p.add_argument("--json", metavar="FILE", help="also write the result as JSON")
+
+
+def prior(p, default=1e-3):
+    p.add_argument("--prior", type=positive, default=default,
+                   help=f"size of every stand and block error (rad, or dimensionless for Gamma and Delta_g), "
+                        f"for the proven linearisation remainder (default {default:g})")

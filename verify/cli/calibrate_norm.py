@@ -3,6 +3,7 @@ import sys
 
 from ..io.recordings import FORMATS, SENSORS
 from . import args as a
+from .estimate import EXIT_INCONSISTENT
 
 
 def add(sub):
@@ -18,8 +19,8 @@ def add(sub):
     p.add_argument("--k", type=a.positive, default=10.0, help="still when the moving variance < k x the initial one")
     p.add_argument("--min-still", type=a.positive, default=2.0, help="shortest still interval kept, s")
     p.add_argument("--delta-sigma", type=a.positive, metavar="D",
-                   help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; "
-                   "default: the minimax residual of the fit, the smallest bound the data allow")
+                   help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; default: the "
+                   "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
                    help="test the model against each interval's noise and try the effect catalogue")
     a.json(p)
@@ -37,7 +38,7 @@ def run(args):
     log = recordings.read_log(args.log, args.format, args.sensor)
     stills, note = recordings.still_intervals(log, window=args.window, k=args.k, min_still=args.min_still)
     print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})")
-    res = calibrate_norm.run(mod, stills, args.g, args.params, args.log, args.delta_sigma)
+    res = calibrate_norm.run(mod, stills, args.g, args.params, args.log, args.delta_sigma, recordings.quantum(log))
     print(f"calibration a = M (raw - b), {res['intervals']} still intervals, {res['iterations']} iterations "
           f"({res['start']})")
     print("M (m/s^2 per raw unit):")
@@ -45,21 +46,19 @@ def run(args):
         print("   " + "  ".join(f"{v:+.6e}" for v in row))
     print("b (raw units): " + "  ".join(f"{v:+.6e}" for v in res["bias"]))
     dsig = res["delta_sigma_max"]
-    print(f"minimax residual of the fit: {res['delta_sigma_fit']:.3e}; delta_sigma_max = {dsig:.3e} "
-          f"(x g = {dsig * args.g:.3e} m/s^2) from the {res['delta_sigma_source']}")
-    pars = res["parameters"] or {}
-    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan"),
-                 [(k, f"{pars[k]:+.4e}" if k in pars else "-", f"{v:.3e}",
-                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}") for k, v in res["guaranteed_error"].items()])
-    if res["directions_to_add"]:
-        print(f"\nto reach the optimal bounds, add {len(res['directions_to_add'])} orientation(s) "
-              "(unit vectors in sensor axes, -gravity direction):")
-        for d in res["directions_to_add"]:
-            print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+    print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * args.g:.3e} m/s^2), from the "
+          f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
+    print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
+          + ("consistent" if res["consistent"] else
+             f"INCONSISTENT: the data refute this noise bound (they support delta_sigma >= "
+             f"{res['sigma_min_supported']:.3e}); no bound is given. Intervals that disagree: "
+             + ", ".join(map(str, res["disagreements"][:12])) + ". Try --diagnose, or give --delta-sigma."))
+    if res["consistent"]:
+        _print_bounds(res)
     if args.diagnose:
         raw = np.array([st.mean for st in stills])
         fit = calibrate_norm.fit(mod, raw, args.g, args.params)
-        d = calibrate_norm.diagnose_norm(mod, stills, fit, args.g, args.params)
+        d = calibrate_norm.diagnose_norm(mod, stills, fit, args.g, args.params, recordings.quantum(log))
         res["diagnosis"] = d
         print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
         print(f"  {args.params}-parameter model: worst {d['max_residual_before']:.1f} -> "
@@ -76,4 +75,23 @@ def run(args):
     if args.plot:
         calibrate_norm.plot(res, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
-    return 0
+    return 0 if res["consistent"] else EXIT_INCONSISTENT
+
+
+def _print_bounds(res):
+    from ..io import report
+    pars = res["parameters"]
+    if pars is None:
+        print("parameters of (1.3): the log is in raw units, so only M and b above are estimated; the "
+              "guaranteed errors below are those of (1.3)'s parameters of the calibrated block")
+    units = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
+    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan", "unit"),
+                 [(k, f"{pars[k]:+.4e}" if pars else "(raw units)", f"{v:.3e}",
+                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
+                   next(u for p, u in units.items() if k.startswith(p)))
+                  for k, v in res["guaranteed_error"].items()])
+    if res["directions_to_add"]:
+        print(f"\nto reach the optimal bounds, add {len(res['directions_to_add'])} orientation(s) "
+              "(unit vectors in sensor axes, -gravity direction):")
+        for d in res["directions_to_add"]:
+            print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")

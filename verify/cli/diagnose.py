@@ -11,8 +11,7 @@ def add(sub):
     a.model(p)
     a.sigma(p, "noise bound, units of g")
     a.g(p)
-    p.add_argument("--prior", type=a.positive, default=1e-3,
-                   help="size of the stand and block errors, for the linearisation remainder")
+    a.prior(p)
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png")
     p.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
@@ -31,9 +30,8 @@ def run(args):
     t0 = time.perf_counter()
     res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior)
     study = res.pop("_study")
-    lim = args.sigma + res["remainder_allowance"]
-    print(f"current model: minimax residual {res['max_residual_before'] / args.sigma:.2f} sigma "
-          f"(limit {lim / args.sigma:.2f} with the linearisation remainder): "
+    print(f"current model: minimax residual less the proven linearisation remainder (<= "
+          f"{res['remainder_bound'] / args.sigma:.2f} sigma) is {res['max_residual_before'] / args.sigma:.2f} sigma: "
           + ("consistent" if res["consistent_before"] else "INCONSISTENT"))
     if res["disagreements"]:
         worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:8]

@@ -2,6 +2,9 @@
 from ..errors import DataError
 from . import args as a
 
+#: Exit status when the data refute sigma (docs: README, "Exit status").
+EXIT_INCONSISTENT = 3
+
 
 def add(sub):
     p = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
@@ -14,6 +17,7 @@ def add(sub):
                    "table +y, ...): also report the block's physical errors, (28)-(29) of 000")
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
+    a.prior(p)
     a.json(p)
     return p
 
@@ -30,18 +34,40 @@ def run(args):
                         f"+y+z+x; got {args.mount!r}")
     names, mounts = models.layout(mod)
     res = estimate(mod, read_positions(args.data, names, mounts), args.sigma, args.g,
-                   remount=remount, mount=args.mount, gamma=args.gamma)
+                   remount=remount, mount=args.mount, gamma=args.gamma, prior=args.prior)
+    if args.json:
+        report.write_json(args.json, res)
+    return print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
+
+
+def print_verdict(res, mod, path):
+    """The data refute sigma: one clear line, the smallest sigma they support, where they disagree."""
+    s = res["sigma"]
+    print(f"INCONSISTENT: the data refute sigma = {s:g}: no q fits every reading within sigma plus the proven "
+          f"remainder ({res['remainder_bound']:.2e}); the data support sigma >= {res['sigma_min_supported']:.3g}. "
+          "No bound is given. Look for the missing effect with `garant diagnose`.")
+    d = res["disagreements"]
+    names = list(mod.ANGLES)
+    print(f"{len(d)} residual components disagree, e.g. " + "; ".join(
+        f"position {x['position']} (" + ", ".join(f"{x[a + '_deg']:g}" for a in names) + f") f{x['component']}"
+        for x in d[:5]))
+    return EXIT_INCONSISTENT
+
+
+def print_estimate(res, mod, args):
+    from ..io import report
+    print(f"consistent: the minimax residual of the exact model is {res['minimax_residual']:.3e} "
+          f"({res['minimax_residual'] / args.sigma:.2f} sigma); proven linearisation remainder <= "
+          f"{res['remainder_bound']:.2e} (prior {res['prior']:g})")
     print(f"method: {res['method']}")
-    report.table(("q", "definition", "estimate", "guaranteed error", "unit"),
+    report.table(("q", "definition", "estimate", "guaranteed error", "= linear", "+ remainder", "unit"),
                  [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
+                   f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
                    res["units"][q]) for q in mod.Q_NAMES])
     print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {args.g} m/s^2, "
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
-    print(f"max |residual| after the fit: {res['residual_max']:.3e} ({res['residual_max'] / args.sigma:.2f} sigma)")
     if args.mount:
         print_physical(res)
-    if args.json:
-        report.write_json(args.json, res)
     return 0
 
 

@@ -143,6 +143,11 @@ def read_log(path, fmt=None, sensor="adxl355"):
     return Log(path, t - t[0], raw)
 
 
+def quantum(log):
+    """The quantisation step of the raw readings: 1 count for an integer log, else 0 (already scaled)."""
+    return 1.0 if np.all(log.raw == np.round(log.raw)) else 0.0
+
+
 @dataclass
 class Still:
     start: float           # s

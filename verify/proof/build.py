@@ -155,13 +155,16 @@ def exact_primal(cols, nu, lam):
 
     from garant.derive.estimators import solve_exact
 
+    from ..errors import LPFailed
+    from ..solve import lp
     from ..solve.plans import touching
     cand, signs = touching(cols, lam)
     V = np.array([cols[s, p] * g for (s, p), g in zip(cand, signs)], float)
     w = cp.Variable(len(cand), nonneg=True)
     prob = cp.Problem(cp.Minimize(0), [V.T @ w == np.eye(V.shape[1])[nu]])
-    prob.solve(solver=cp.HIGHS)
-    if prob.status != cp.OPTIMAL:
+    try:
+        lp.solve(prob, "exact primal support")
+    except LPFailed:
         return None
     support = [k for k in np.argsort(-w.value) if w.value[k] > 1e-9]
     chosen = []

@@ -9,8 +9,15 @@ import numpy as np
 INF = np.inf
 
 
+REL = 2.0 ** -51     # at least one ulp of any normal double, as a fraction of its magnitude
+TINY = 1e-300        # covers results at or below the normal range
+
+
 def _out(lo, hi):
-    return np.nextafter(lo, -INF), np.nextafter(hi, INF)
+    """Widen by at least one ulp: a correctly rounded result is within half an ulp of the exact value,
+    and |x| 2^-51 is one ulp or more, so [lo - d, hi + d] holds it (the scaling by a power of 2 is
+    exact; the subtraction's own rounding is half an ulp, inside the margin)."""
+    return lo - (np.abs(lo) * REL + TINY), hi + (np.abs(hi) * REL + TINY)
 
 
 class Iv:
@@ -39,8 +46,8 @@ class Iv:
 
     def __mul__(self, o):
         o = _iv(o)
-        p = np.stack([self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi])
-        return Iv(*_out(p.min(axis=0), p.max(axis=0)))
+        a, b, c, d = self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi
+        return Iv(*_out(np.minimum(np.minimum(a, b), np.minimum(c, d)), np.maximum(np.maximum(a, b), np.maximum(c, d))))
 
     __rmul__ = __mul__
 

@@ -11,22 +11,24 @@ import cvxpy as cp
 import numpy as np
 
 from ..errors import LPFailed
+from . import highs
 
 
-def _solve(problem, what):
+def solve(problem, what):
+    """Solve a cvxpy problem with HiGHS; LPFailed unless optimal."""
+    highs.new()                                   # the first HiGHS of the process prints a banner: not here
     problem.solve(solver=cp.HIGHS)
     if problem.status != cp.OPTIMAL:
         raise LPFailed(f"{what}: solver status {problem.status}")
 
 
 def primal(A, targets=None):
-    """Optimal estimators Phi (K x n) and their guaranteed errors sum |Phi| (n), for a = targets."""
-    m, K = A.shape
-    T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
-    pos, neg = cp.Variable((K, T.shape[1]), nonneg=True), cp.Variable((K, T.shape[1]), nonneg=True)
-    _solve(cp.Problem(cp.Minimize(cp.sum(pos + neg)), [A @ (pos - neg) == T]), "primal (7)-(8)")
-    Phi = pos.value - neg.value
-    return Phi, np.abs(Phi).sum(axis=0)
+    """Optimal estimators Phi (K x n) and their guaranteed errors sum |Phi| (n), for a = targets.
+
+    Passed to HiGHS directly (solve/highs.py): the hot path of `estimate`, where cvxpy's
+    canonicalisation cost more time and memory than the solve (python -m verify.bench). The dual and
+    the Chebyshev polynomial below stay in cvxpy, as the papers state them: an independent route."""
+    return highs.l1_estimators(A, targets)
 
 
 def dual(A, targets=None):
@@ -34,7 +36,7 @@ def dual(A, targets=None):
     m, K = A.shape
     T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
     Lam = cp.Variable((m, T.shape[1]))
-    _solve(cp.Problem(cp.Maximize(cp.sum(cp.multiply(T, Lam))), [cp.abs(A.T @ Lam) <= 1]),
+    solve(cp.Problem(cp.Maximize(cp.sum(cp.multiply(T, Lam))), [cp.abs(A.T @ Lam) <= 1]),
            "dual (9)-(10)")
     return Lam.value, (T * Lam.value).sum(axis=0)
 
@@ -48,7 +50,7 @@ def sparse_dual(A, targets=None, slack=1e-9):
     _, value = dual(A, T)
     Lam = cp.Variable((m, T.shape[1]))
     cons = [cp.abs(A.T @ Lam) <= 1, cp.sum(cp.multiply(T, Lam), axis=0) >= value - slack * np.maximum(1, value)]
-    _solve(cp.Problem(cp.Minimize(cp.sum(cp.abs(Lam))), cons), "sparse dual")
+    solve(cp.Problem(cp.Minimize(cp.sum(cp.abs(Lam))), cons), "sparse dual")
     return Lam.value, value
 
 
@@ -57,7 +59,7 @@ def chebyshev(A):
     m, K = A.shape
     Y, t = cp.Variable((m, m)), cp.Variable(m)
     cons = [cp.diag(Y) == 1, cp.abs(A.T @ Y) <= cp.reshape(t, (1, m), order="C")]
-    _solve(cp.Problem(cp.Minimize(cp.sum(t)), cons), "Chebyshev polynomial (12)")
+    solve(cp.Problem(cp.Minimize(cp.sum(t)), cons), "Chebyshev polynomial (12)")
     return t.value, Y.value
 
 
@@ -75,9 +77,29 @@ def measurement_matrix(H, positions, mounts=None):
     return np.transpose(Hs, (1, 2, 0)).reshape(Hs.shape[1], -1)
 
 
-def unidentifiable(A, tol=1e-9):
-    """Indices nu for which no unbiased estimator exists: e_nu is not in the range of A."""
-    if A.size == 0:
-        return list(range(A.shape[0]))
-    x, *_ = np.linalg.lstsq(A, np.eye(A.shape[0]), rcond=None)
-    return [nu for nu in range(A.shape[0]) if np.abs(A @ x[:, nu] - np.eye(A.shape[0])[nu]).max() > tol]
+def gram_spectrum(A, chunk=100_000):
+    """Eigen-decomposition of the m x m Gram matrix A A^T (A: m x K), summed in chunks of columns:
+    memory independent of K. range(A) = range(A A^T), and the eigenvectors of its (numerically) zero
+    eigenvalues span the combinations no column of A can see."""
+    m, K = A.shape
+    G = np.zeros((m, m))
+    for k in range(0, K, chunk):
+        B = A[:, k:k + chunk]
+        G += B @ B.T
+    return np.linalg.eigh(G)
+
+
+def blind_directions(A, tol=1e-12):
+    """Orthonormal rows spanning {x : A^T x = 0}: eigenvalues of A A^T below tol x the largest (singular
+    values below 1e-6 of the largest)."""
+    if A.shape[1] == 0:
+        return np.eye(A.shape[0])
+    w, V = gram_spectrum(A)
+    return V[:, w <= tol * max(w.max(), 1e-300)].T
+
+
+def unidentifiable(A, tol=1e-12):
+    """Indices nu for which no unbiased estimator exists: e_nu is not in the range of A (m x K), i.e. it
+    has a component along a blind direction."""
+    N = blind_directions(A, tol)
+    return [nu for nu in range(A.shape[0]) if np.linalg.norm(N[:, nu]) > 1e-6]

@@ -190,6 +190,8 @@ def _milp_plan(cols, lams):
     For each q_nu, weights w >= 0 on the measurements where its dual certificate touches, with
     sum_k w_k sign_k H_k = e_nu (then sum w = lambda_nu, the optimum), and w_k <= lambda_nu x_s."""
     import cvxpy as cp
+
+    from . import lp
     S, _, m = cols.shape
     x = cp.Variable(S, boolean=True)
     cons = []
@@ -201,9 +203,7 @@ def _milp_plan(cols, lams):
         sel[range(len(cand)), [s for s, _ in cand]] = 1
         cons += [V @ w == np.eye(m)[nu], w <= float(lam[nu]) * (sel @ x)]
     prob = cp.Problem(cp.Minimize(cp.sum(x)), cons)
-    prob.solve(solver=cp.HIGHS)
-    if prob.status != cp.OPTIMAL:
-        raise ValueError(f"the plan search (mixed-integer program) ended with status {prob.status}")
+    lp.solve(prob, "the plan search (mixed-integer program)")
     plan = tuple(int(s) for s in np.flatnonzero(np.round(x.value) > 0.5))
     return len(plan), (plan,)
 

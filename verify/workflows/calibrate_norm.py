@@ -8,21 +8,19 @@ of each parameter on the directions actually present is the LP (3.1)-(3.2) on th
 units of delta_sigma_max, here set to the minimax residual of the fit (the smallest noise bound the
 data allow).
 """
-import cvxpy as cp
 import numpy as np
 
 from ..errors import DataError
 from ..io.report import save_figure
-from ..solve import lp
+from ..solve import highs, lp
 
 MAX_ITER = 60
 
 
 def chebyshev_fit(Hk, s):
-    """min over q of max_k |s_k - Hk[:, k] . q| (LP): q and the minimax residual."""
-    q, t = cp.Variable(Hk.shape[0]), cp.Variable()
-    cp.Problem(cp.Minimize(t), [cp.abs(s - Hk.T @ q) <= t]).solve(solver=cp.HIGHS)
-    return q.value, float(t.value)
+    """min over q of max_k |s_k - Hk[:, k] . q| (HiGHS): q and the minimax residual."""
+    q, t, _ = highs.chebyshev_fit(Hk, s)
+    return q, t
 
 
 def initial_map(raw, g):
@@ -76,14 +74,16 @@ def fit(mod, raw, g, params=9):
     return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note)
 
 
-def guaranteed(mod, n, params, dsig):
-    """Guaranteed error of each parameter on the present directions (LP), and the unidentifiable ones."""
+def guaranteed(mod, n, params, noise):
+    """Guaranteed error of each parameter on the present directions, and the unidentifiable ones:
+    the LP min sum_k noise_k |Phi_k| subject to A Phi = e_nu (noise: each direction's bound, units of g),
+    solved as the plain LP (7)-(8) on the columns a_k / noise_k."""
     A = mod.H(n)[:params]
     missing = lp.unidentifiable(A)
     if missing:
         return None, missing
-    _, err = lp.primal(A)
-    return err * dsig, []
+    _, err = lp.primal(A / np.broadcast_to(noise, A.shape[1]))
+    return err, []
 
 
 def directions_to_add(mod, n, params, within_deg=10.0):
@@ -99,12 +99,30 @@ def parameters(M_total, b, g):
     return np.array([P[0, 0] - 1, P[1, 1] - 1, P[2, 2] - 1, P[1, 0], P[2, 0], P[2, 1], *(b / g)])
 
 
+K_SE = 3.0     # the noise rule: 3 standard errors of each interval's mean, plus half a count
+
+
+def noise_rule(stills, M, n, g, quantum=0.0, k_se=K_SE):
+    """The bound of |delta_sigma| from the data themselves, per still interval (units of g):
+    k_se standard errors of its mean plus half the quantisation step (raw units), carried through the
+    calibration to the sensed direction n: |n^T M (k_se se + quantum/2)| / g, component-wise bounded.
+    A stated rule, not the fit's own residual."""
+    rows = np.abs(n.T @ M)                                    # (K, 3)
+    per = np.array([k_se * st.std_error + quantum / 2 for st in stills])
+    return (rows * per).sum(axis=1) / g
+
+
 PARAM_LABELS = ("lambda1", "lambda2", "lambda3", "alpha", "beta", "gamma", "eps1/g", "eps2/g", "eps3/g",
                 "delta1*g", "delta2*g", "delta3*g")
 
 
-def run(mod, stills, g, params, path, delta_sigma=None):
-    """The whole calibration of a log's still intervals: the dictionary the CLI prints and writes."""
+def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
+    """The whole calibration of a log's still intervals: the dictionary the CLI prints and writes.
+
+    The noise bound delta_sigma_max is --delta-sigma when given, else the noise rule from the data
+    (never the fit's own residual). The verdict first: the data are consistent when the minimax
+    residual of the exact norm relation is within delta_sigma_max plus the proven remainder (2.3)
+    of the linearisation around the fit; if not, no bound is given."""
     need = params + 3
     if len(stills) < need:
         raise DataError(f"{path}: found only {len(stills)} still interval(s); a {params}-parameter "
@@ -114,75 +132,101 @@ def run(mod, stills, g, params, path, delta_sigma=None):
     before, _ = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
     res = fit(mod, raw, g, params)
     fit_residual = float(np.abs(res["sigma"]).max())
-    dsig = fit_residual if delta_sigma is None else max(delta_sigma, fit_residual)
-    err, missing = guaranteed(mod, res["n"], params, dsig)
+    rule = noise_rule(stills, res["M"], res["n"], g, quantum)
+    dsig = float(rule.max()) if delta_sigma is None else delta_sigma
+    source = ("--delta-sigma" if delta_sigma is not None else
+              f"noise rule: {K_SE:g} standard errors of each interval's mean"
+              + (f" plus half a count ({quantum:g} raw units)" if quantum else ""))
+    noise = np.minimum(rule, dsig) if delta_sigma is None else np.full(len(stills), dsig)
+    err, missing = guaranteed(mod, res["n"], params, noise)
     if missing:
         raise DataError(f"{path}: the {len(stills)} orientations cannot identify "
                         f"{', '.join(mod.Q_NAMES[k] for k in missing)}; add orientations")
+    rb = linearisation_remainder(mod, err, params)
+    rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb)[0], params)
+    consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
+    out = {
+        "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
+        "start": res["note"], "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
+        "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
+        "consistent": bool(consistent), "minimax_residual": fit_residual, "delta_sigma_max": dsig,
+        "delta_sigma_source": source, "remainder_bound": rb,
+        "sigma_min_supported": max(fit_residual - rb, 0.0),
+        "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
+                          "noise_rule": float(nr), "residual_before_ms2": float(g * sb),
+                          "residual_after_ms2": float(g * sa)}
+                         for s, nr, sb, sa in zip(stills, rule, before, res["sigma"])],
+    }
+    if not consistent:
+        out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > noise + rb)]
+        return out
     plan = mod.PLAN[:18] if params == 9 else mod.PLAN
     _, best = lp.primal(mod.H(plan.T)[:params])
     si = res["note"].startswith("log in m/s^2")
     q = parameters(res["M"], res["b"], g).tolist() + res["delta"].tolist()[: params - 9] if si else None
-    return {
-        "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
-        "start": res["note"], "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
-        "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
-        "delta_sigma_fit": fit_residual, "delta_sigma_max": dsig,
-        "delta_sigma_source": ("minimax residual of the fit" if delta_sigma is None else
-                               "--delta-sigma" if delta_sigma >= fit_residual else
-                               "minimax residual of the fit (larger than --delta-sigma: the data contradict it)"),
+    out.update({
         "parameters": None if q is None else dict(zip(PARAM_LABELS, q)),
-        "guaranteed_error": dict(zip(PARAM_LABELS, err.tolist())),
+        "guaranteed_error": dict(zip(PARAM_LABELS, guaranteed(mod, res["n"], params, noise + rb)[0].tolist())),
+        "guaranteed_error_linear": dict(zip(PARAM_LABELS, err.tolist())),
         "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (best * dsig).tolist())),
-        "directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in directions_to_add(mod, res["n"], params)],
-        "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
-                          "residual_before_ms2": float(g * sb), "residual_after_ms2": float(g * sa)}
-                         for s, sb, sa in zip(stills, before, res["sigma"])],
-    }
+        "directions_to_add": [{"n": d, "nearest_present_deg": a}
+                              for d, a in directions_to_add(mod, res["n"], params)],
+    })
+    return out
+
+
+def linearisation_remainder(mod, e, params):
+    """The proven bound (2.3) of 001 for errors within e around the fit (units as PARAM_LABELS):
+    second order; the noise itself is delta_sigma_max, not counted twice (df = 0); g is taken as exact."""
+    return float(mod.remainder_bound(k_max=e[:3].max(), v_max=e[3:6].max(), eps_max=e[6:9].max(),
+                                     delta_max=e[9:12].max() if params == 12 else 0.0, df_max=0.0, dg_max=0.0))
 
 
 def plot(result, path):
-    """PNG of the norm residual per still interval, before and after calibration."""
+    """PNG of the norm residual per still interval: before (the starting map) and after the
+    calibration, each at its own scale, with the noise bound band after."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     rows = result["per_interval"]
     k = np.arange(1, len(rows) + 1)
-    before = [r["residual_before_ms2"] for r in rows]
-    after = [r["residual_after_ms2"] for r in rows]
-    band = result["g"] * result["delta_sigma_fit"]
-    fig, ax = plt.subplots(figsize=(7, 4))
-    ax.plot(k, before, "o", color="C3", label="before (starting map)")
-    ax.plot(k, after, "s", color="C0", label=f"after ({result['params']}-parameter calibration)")
-    ax.axhspan(-band, band, color="C0", alpha=0.15, label=f"+- delta_sigma_fit g = {band:.2e} m/s^2")
-    ax.axhline(0, color="k", lw=0.6)
-    ax.set_xlabel("still interval")
-    ax.set_ylabel("(|a|^2 - g^2) / (2 |a|^2) x g   (m/s^2)")
-    ax.set_title(f"{result['log'].rsplit('/', 1)[-1]}: norm residual per still interval", fontsize=9)
-    if max(map(abs, before)) > 50 * band:
-        ax.set_yscale("symlog", linthresh=band)
-    ax.legend(fontsize=8)
+    g = result["g"]
+    fig, (a0, a1) = plt.subplots(1, 2, figsize=(10, 4))
+    a0.plot(k, [r["residual_before_ms2"] for r in rows], "o", color="C3")
+    a0.set_title("before (starting map)", fontsize=9)
+    a1.plot(k, [r["residual_after_ms2"] for r in rows], "s", color="C0")
+    a1.plot(k, [g * r["noise_rule"] for r in rows], "_", color="C2", label="noise rule of each interval")
+    a1.plot(k, [-g * r["noise_rule"] for r in rows], "_", color="C2")
+    band = g * (result["delta_sigma_max"] + result["remainder_bound"])
+    a1.axhspan(-band, band, color="C0", alpha=0.12,
+               label=f"+- (delta_sigma_max + remainder) g = {band:.2e} m/s^2")
+    a1.set_title(f"after ({result['params']}-parameter calibration): "
+                 + ("consistent" if result["consistent"] else "INCONSISTENT"), fontsize=9)
+    for ax in (a0, a1):
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xlabel("still interval")
+    a0.set_ylabel("(|a|^2 - g^2) / (2 |a|^2) x g   (m/s^2)")
+    a1.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0, -0.15), ncol=2)
+    fig.suptitle(f"{result['log'].rsplit('/', 1)[-1]}: norm residual per still interval", fontsize=10)
     fig.tight_layout()
     save_figure(fig, path)
     plt.close(fig)
 
 
 def weighted_fit(Hk, s, bounds):
-    """min over q of max_k |s_k - Hk[:, k] . q| / bounds_k (LP): the fit in units of each noise bound."""
-    q, t = cp.Variable(Hk.shape[0]), cp.Variable()
-    cp.Problem(cp.Minimize(t), [cp.abs(s - Hk.T @ q) <= t * bounds]).solve(solver=cp.HIGHS)
-    return q.value, float(t.value)
+    """min over q of max_k |s_k - Hk[:, k] . q| / bounds_k (HiGHS): the fit in units of each noise bound."""
+    q, t, _ = highs.chebyshev_fit(Hk, s, weights=bounds)
+    return q, t
 
 
-def diagnose_norm(mod, stills, res, g, params, k_se=3.0):
+def diagnose_norm(mod, stills, res, g, params, quantum=0.0):
     """The model-discrepancy test on a real log: is the calibrated norm model consistent with each
-    interval's own noise (k_se standard errors of its mean), and which catalogue effect helps?"""
+    interval's own noise (the noise rule), and which catalogue effect helps?"""
     import sympy as sp
     from garant.derive.effects import CATALOGUE
     from garant.derive.norm import NormModel, effect_columns, n_sym
     s, n = res["sigma"], res["n"]
-    se = np.array([np.linalg.norm(res["M"] @ st.std_error) for st in stills]) / g   # units of g
-    bounds = k_se * se
+    bounds = noise_rule(stills, res["M"], n, g, quantum)
     t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
     base = mod.H(n)[:params]
     _, t0 = weighted_fit(base, s, bounds)
@@ -211,7 +255,8 @@ def diagnose_norm(mod, stills, res, g, params, k_se=3.0):
             tied.append([best] + ties)
         chosen.append(best)
         score = scores[best]
-    return {"noise_bound": f"{k_se:g} standard errors of each interval's mean",
+    return {"noise_bound": f"the noise rule: {K_SE:g} standard errors of each interval's mean"
+                           + (" plus half a count" if quantum else ""),
             "indistinguishable": tied,
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0, "effects": chosen,
             "consistent_after": bool(score <= 1), "max_residual_after": score,

@@ -10,25 +10,21 @@
 4. The chosen effects are estimated with guaranteed bounds (the LP on these positions), the extended
    model's module is written, and the residuals before and after are shown against +-sigma.
 """
-import cvxpy as cp
 import numpy as np
 
-from ..errors import DataError, LPFailed
+from ..errors import DataError
 from ..io.report import save_figure
-from ..solve import lp
+from ..solve import highs, lp
+from . import guarantee
 from .estimate import check_residual_size
 
 TIE = 0.02                    # scores within 2% (of sigma) count as equal
 
 
-def chebyshev_fit(A, z):
-    """min over q of max |z - A^T q| (LP, HiGHS): q, the minimax residual, the residual vector."""
-    q, t = cp.Variable(A.shape[0]), cp.Variable()
-    problem = cp.Problem(cp.Minimize(t), [cp.abs(z - A.T @ q) <= t])
-    problem.solve(solver=cp.HIGHS)
-    if problem.status != cp.OPTIMAL:
-        raise LPFailed(f"minimax fit: the solver ended with status {problem.status}")
-    return q.value, float(t.value), z - A.T @ q.value
+def chebyshev_fit(A, z, rb=None):
+    """min over q of max_k (|z_k - a_k^T q| - rb_k) (HiGHS; rb the proven remainder, 0 when not given):
+    q, that minimax, the residual vector. With noise bounded by sigma it is <= sigma for the true model."""
+    return highs.chebyshev_fit(A, z, slack=rb)
 
 
 class Study:
@@ -87,20 +83,6 @@ def rank(A):
     return int((s > 1e-9 * s.max()).sum())
 
 
-def remainder_allowance(mod, angles, g, prior, mounts=None, samples=100, seed=0):
-    """Twice the largest linearisation remainder |z_exact - H^T q| found for errors up to `prior`
-    (random samples of the exact model at these positions): added to sigma in the consistency test."""
-    rng = np.random.default_rng(seed)
-    kw = {} if mounts is None else {"mount": mounts}
-    Hs = mod.H(*angles, **kw)
-    worst = 0.0
-    for _ in range(samples):
-        p = rng.uniform(-prior, prior, len(mod.PARAMETER_NAMES))
-        z = mod.residual(*angles, mod.readings(*angles, p, g, **kw), g, **kw)
-        worst = max(worst, float(np.abs(z - np.einsum("pns,n->ps", Hs, mod.PHYSICAL_TO_Q @ p)).max()))
-    return 2 * worst
-
-
 def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
     """Positions (every mounting) where the two alternative extended fits predict most differently."""
     n = len(study.angles)
@@ -124,23 +106,25 @@ def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
              "predicted_difference": float(diff[k])} for k in best]
 
 
-def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
+def diagnose(base_model, mod, positions, sigma, g, prior=guarantee.PRIOR_DEFAULT):
+    """The discrepancy workflow: a fit is consistent when its minimax residual less the proven
+    linearisation remainder (a posteriori, workflows/guarantee.py) is at most sigma."""
     study = Study(base_model, mod, positions, g)
     check_residual_size(study.z.reshape(-1, 3), positions.path)
-    allow = remainder_allowance(mod, study.angles, g, prior, study.mounts)
-    limit = sigma + allow
     A0 = study.A([])
     if rank(A0) < A0.shape[0]:
         raise DataError(f"{positions.path}: these positions cannot identify the current model; "
                         "see `garant identify --plan`")
-    _, t0, r0 = chebyshev_fit(A0, study.z)
+    rb = guarantee.verdict(mod, positions, study.z, A0, sigma, g, prior, lp.primal(A0)[0].T).remainder
+    limit = sigma
+    _, t0, r0 = chebyshev_fit(A0, study.z, rb)
     candidates, skipped = study.available()
     base_rank = rank(A0)
     blind = [e for e in candidates if rank(study.A([e])) == base_rank]
     usable = [e for e in candidates if e not in blind]
     chosen, score, history, indistinguishable, separate = [], t0, [], [], []
     while score > limit and len(chosen) < len(usable):
-        scores = {e: chebyshev_fit(study.A(chosen + [e]), study.z)[1] for e in usable if e not in chosen}
+        scores = {e: chebyshev_fit(study.A(chosen + [e]), study.z, rb)[1] for e in usable if e not in chosen}
         best = min(scores, key=scores.get)
         if scores[best] >= score * (1 - 1e-6):
             break
@@ -154,15 +138,16 @@ def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
         chosen.append(best)
         score = scores[best]
     A1 = study.A(chosen)
-    _, t1, r1 = chebyshev_fit(A1, study.z)
-    estimates = effect_estimates(study, chosen, A1, sigma) if chosen else {}
+    _, t1, r1 = chebyshev_fit(A1, study.z, rb)
+    estimates = effect_estimates(study, chosen, A1, sigma + rb) if chosen else {}
     names = [a.name for a in base_model.stand.angles]
     excess = [{"position": int(k // 3), "component": int(k % 3) + 1,
                **{f"{a}_deg": float(positions.angles_deg[k // 3, i]) for i, a in enumerate(names)},
-               "residual": float(r0[k]), "excess_over_sigma": float(abs(r0[k]) - limit)}
-              for k in np.flatnonzero(np.abs(r0) > limit)]
+               "residual": float(r0[k]), "remainder": float(rb[k]),
+               "excess_over_sigma": float(abs(r0[k]) - rb[k] - sigma)}
+              for k in np.flatnonzero(np.abs(r0) - rb > sigma)]
     return {
-        "sigma": sigma, "remainder_allowance": allow, "consistent_before": bool(t0 <= limit),
+        "sigma": sigma, "prior": prior, "remainder_bound": float(rb.max()), "consistent_before": bool(t0 <= limit),
         "max_residual_before": t0, "disagreements": excess, "effects": chosen,
         "indistinguishable": indistinguishable, "separating_positions": separate,
         "consistent_after": bool(t1 <= limit), "max_residual_after": t1, "estimates": estimates,
@@ -172,22 +157,27 @@ def diagnose(base_model, mod, positions, sigma, g, prior=1e-3):
     }
 
 
-def effect_estimates(study, chosen, A, sigma):
-    """Each effect parameter: the q it leads in the extended model, its value and guaranteed bound."""
+def effect_estimates(study, chosen, A, noise):
+    """Each effect parameter: the q it leads in the extended model, its value and guaranteed bound
+    (noise: the bound of each residual component, sigma plus the proven remainder of the base model)."""
     from garant.derive.derivation import derive
     d = derive(study.model(chosen))
-    Phi, err = lp.primal(A)
+    blind = set(lp.unidentifiable(A))                   # combinations this plan cannot estimate
+    seen = [k for k in range(A.shape[0]) if k not in blind]
+    Phi = np.zeros((A.shape[1], A.shape[0]))
+    Phi[:, seen] = lp.primal(A, np.eye(A.shape[0])[:, seen])[0]
+    err = np.abs(Phi.T) @ noise
     q = Phi.T @ study.z
     names = [p.name for p in d.model.parameters]
     out = {}
     for e in chosen:
         for p in study.cat.CATALOGUE[e].params:
-            if p.name in d.ident.leading:
+            if p.name in d.ident.leading and d.ident.leading.index(p.name) in seen:
                 k = d.ident.leading.index(p.name)
                 row = d.ident.R.row(k)
                 definition = " ".join(f"{'+' if c > 0 else '-'}{'' if abs(c) == 1 else abs(c)}{n}"
                                       for c, n in zip(row, names) if c != 0).lstrip("+")
-                out[p.name] = {"value": float(q[k]), "bound": float(sigma * err[k]), "unit": p.unit,
+                out[p.name] = {"value": float(q[k]), "bound": float(err[k]), "unit": p.unit,
                                "q": definition}
     return out
 
@@ -209,8 +199,9 @@ def plot(res, path, title):
     ax.plot(k, before.reshape(-1) / s, "o", ms=3, color="C3", label="current model")
     ax.plot(k, after.reshape(-1) / s, "s", ms=3, color="C0",
             label="with " + (", ".join(res["effects"]) if res["effects"] else "no effect added"))
-    lim = 1 + res["remainder_allowance"] / s
-    ax.axhspan(-lim, lim, color="C0", alpha=0.12, label="+- sigma (+ linearisation remainder)")
+    ax.axhspan(-1, 1, color="C0", alpha=0.12, label="+- sigma")
+    ax.axhline(1 + res["remainder_bound"] / s, color="C0", lw=0.8, ls=":", label="+ the largest proven remainder")
+    ax.axhline(-1 - res["remainder_bound"] / s, color="C0", lw=0.8, ls=":")
     ax.set_xlabel("position (three components each)")
     ax.set_ylabel("minimax-fit residual (units of sigma)")
     ax.set_title(title, fontsize=9)

@@ -2,8 +2,9 @@
 import numpy as np
 
 from ..errors import DataError
+from ..io.positions import Positions
 from ..solve import lp
-from . import mounting, nearby
+from . import guarantee, mounting, nearby
 
 EXACT_DEG = 1e-6   # positions closer than this to the plan count as on it
 
@@ -20,6 +21,27 @@ def residuals_table_axes(mod, positions, g, Q):
         return mod.residual(*positions.radians, positions.f.T, g, mount=positions.mounts).T
     z_block = positions.f.T / g - Q @ mod.up_nominal(*positions.radians)
     return (Q.T @ z_block).T
+
+
+def distinct_positions(positions, decimals=6):
+    """Rows at the same position (angles equal to 1e-6 degree, same mounting) averaged into one.
+
+    The average of readings whose noise is within +-sigma is within +-sigma too: the bound (5) holds
+    for each averaged residual (worst case; no independence of the noise is assumed), and the LP and
+    the remainder are then solved once per distinct position. Other columns are dropped."""
+    key = np.round(positions.angles_deg, decimals)
+    if positions.mounts is not None:
+        key = np.column_stack([key, positions.mounts])
+    uniq, inverse = np.unique(key, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if len(uniq) == len(key):
+        return positions
+    counts = np.bincount(inverse)
+    f = np.column_stack([np.bincount(inverse, weights=positions.f[:, i]) for i in range(3)]) / counts[:, None]
+    angles = np.column_stack([np.bincount(inverse, weights=positions.angles_deg[:, i])
+                              for i in range(positions.angles_deg.shape[1])]) / counts[:, None]
+    mounts = None if positions.mounts is None else uniq[:, -1].astype(int)
+    return Positions(positions.path, angles, f, mounts)
 
 
 def check_residual_size(z, path, limit=0.5):
@@ -49,44 +71,55 @@ def choose_estimator(mod, positions, A):
     return Phi.T, "optimal guaranteed estimator on these positions (LP (7)-(8) of 000)"
 
 
-def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower"):
-    """q, guaranteed errors sigma * sum |weights|, residuals, and the block's physical errors.
+def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", prior=guarantee.PRIOR_DEFAULT):
+    """The verdict (are the data consistent with sigma?), then q with guaranteed errors that include
+    the proven linearisation remainder (workflows/guarantee.py), and the block's physical errors.
 
-    The bounds hold for |rho| <= sigma in (5); the second-order remainder of the linearisation
-    (1) -> (2) is not included.
+    When the data refute sigma, `consistent` is False and no bound is given: its premise is false.
     """
     if sigma <= 0:
         raise DataError(f"--sigma must be positive (got {sigma:g})")
     if g <= 0:
         raise DataError(f"--g must be positive (got {g:g} m/s^2)")
     Q = remount.MOUNTS[mount] if mount else np.eye(3)
-    angles = positions.radians
+    rows, all_rows = len(positions.f), positions
+    positions = distinct_positions(positions)
+    distinct = len(positions.f)
     z = residuals_table_axes(mod, positions, g, Q)
-    A = lp.measurement_matrix(mod, np.column_stack(angles), positions.mounts)
-    keys = [tuple(r) for r in np.round(positions.angles_deg, 6)]
-    if positions.mounts is not None:
-        keys = [k + (m,) for k, m in zip(keys, positions.mounts)]
-    distinct = len(set(keys))
+    A = lp.measurement_matrix(mod, np.column_stack(positions.radians), positions.mounts)
     missing = lp.unidentifiable(A)
     if missing:
         raise DataError(f"{positions.path}: the {distinct} distinct positions cannot identify "
                         f"{describe(mod, missing)}; add positions (see `garant plan`)")
-    check_residual_size(z, positions.path)
+    check_residual_size(residuals_table_axes(mod, all_rows, g, Q), positions.path)
     W, method = choose_estimator(mod, positions, A)
-    q = W @ z.reshape(-1)
-    resid = z - (A.T @ q).reshape(-1, 3)
+    v = guarantee.verdict(mod, positions, z.reshape(-1), A, sigma, g, prior, W)
     out = {
-        "model": mod.__name__.rsplit(".", 1)[-1], "method": method,
-        "g": g, "sigma": sigma, "positions": len(z), "distinct_positions": distinct,
-        "q": dict(zip(mod.Q_NAMES, q.tolist())),
-        "guaranteed_error": dict(zip(mod.Q_NAMES, (sigma * np.abs(W).sum(axis=1)).tolist())),
-        "definitions": dict(zip(mod.Q_NAMES, mod.Q_DEFINITIONS)),
-        "units": dict(zip(mod.Q_NAMES, mod.Q_UNITS)),
-        "residual": resid.tolist(),
-        "residual_max": float(np.abs(resid).max()),
+        "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma, "prior": prior,
+        "positions": rows, "distinct_positions": distinct, "consistent": v.consistent,
+        "sigma_min_supported": v.sigma_min_supported, "remainder_bound": float(v.remainder.max()),
+        "minimax_residual": v.minimax_exact, "minimax_residual_linear": v.minimax_linear,
+        "definitions": dict(zip(mod.Q_NAMES, mod.Q_DEFINITIONS)), "units": dict(zip(mod.Q_NAMES, mod.Q_UNITS)),
     }
+    if not v.consistent:
+        names = list(mod.ANGLES)
+        out["disagreements"] = [
+            {"position": int(k // 3) + 1, **{f"{a}_deg": float(positions.angles_deg[k // 3, i])
+                                             for i, a in enumerate(names)}, "component": int(k % 3) + 1}
+            for k in v.disagree]
+        return out
+    q = W @ z.reshape(-1)
+    out.update({
+        "method": method,
+        "q": dict(zip(mod.Q_NAMES, q.tolist())),
+        "guaranteed_error": dict(zip(mod.Q_NAMES, v.guaranteed_error.tolist())),
+        "guaranteed_error_linear": dict(zip(mod.Q_NAMES, v.error_linear.tolist())),
+        "guaranteed_error_remainder": dict(zip(mod.Q_NAMES, v.error_remainder.tolist())),
+        "residual": (z - (A.T @ q).reshape(-1, 3)).tolist(),
+    })
     if remount is not None:
-        phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, q, W, sigma, g)
+        phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, q, W, sigma + v.remainder, g,
+                                             v.q_shift)
         out.update(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound,
                    physical_note=note)
     return out

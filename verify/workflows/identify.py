@@ -26,11 +26,10 @@ def read_plan(path):
 
 def plan_blind_spots(mod, positions_deg):
     """q combinations the plan cannot see: the null space of the plan's measurement matrix in q."""
-    A = lp.measurement_matrix(mod.H, np.deg2rad(positions_deg))
-    _, s, Vt = np.linalg.svd(A.T)
-    rank = int((s > 1e-9 * s.max()).sum()) if s.size else 0
+    distinct = np.unique(np.round(np.asarray(positions_deg, float), 6), axis=0)   # repeats add nothing
+    A = lp.measurement_matrix(mod.H, np.deg2rad(distinct))
     out = []
-    for v in rref(Vt[rank:]):
+    for v in rref(lp.blind_directions(A)):
         out.append(" ".join(f"{c:+.3g}*{n}" for c, n in zip(v, mod.Q_NAMES) if c))
     return lp.unidentifiable(A), out
 

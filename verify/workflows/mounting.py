@@ -24,13 +24,16 @@ def mounted_readings(mod, remount, alpha, beta, stand, Gamma, bias, theta_k, mou
     return np.einsum("ij,j...->i...", Q, mod.readings(alpha, beta, physical, g))
 
 
-def recover(remount, mount, gamma, q, weights, sigma, g):
-    """Physical errors in block axes from q, with guaranteed bounds sigma * sum |K Phi|.
+def recover(remount, mount, gamma, q, weights, noise, g, q_shift=0.0):
+    """Physical errors in block axes from q, with guaranteed bounds sum_k |K Phi|_k noise_k.
 
-    weights: m x K estimator matrix (q = weights @ z); biases are returned in m/s^2.
+    weights: m x K estimator matrix (q = weights @ z); noise: the bound of each residual component
+    (sigma, plus the remainder when it is known), a number or (K,); q_shift bounds a shift of q the
+    estimate carries (the absorbed curvature, workflows/guarantee.py); biases are returned in m/s^2.
     """
     K = remount.recovery_matrix(mount, gamma)
-    value, bound = K @ q, sigma * np.abs(K @ weights).sum(axis=1)
+    value = K @ q
+    bound = np.abs(K @ weights) @ np.broadcast_to(noise, weights.shape[1]) + np.abs(K) @ np.broadcast_to(q_shift, len(q))
     out, err = {}, {}
     names = list(remount.OUTPUTS)
     for key in PHYSICAL_KEYS:

@@ -1,0 +1,111 @@
+"""Linear programs passed to HiGHS directly (highspy): the hot paths, where cvxpy's modelling layer
+costs more than the solve (python -m verify.bench measures both).
+
+    minimise c^T x  subject to  row_lo <= M x <= row_hi,  col_lo <= x <= col_hi,
+
+with M dense (rows x cols), handed over column-wise. One quiet solver per call; the banner HiGHS
+prints on its first construction is kept off standard output.
+"""
+import os
+
+import highspy
+import numpy as np
+
+from ..errors import LPFailed
+
+INF = highspy.kHighsInf
+_quiet = False
+
+
+def new():
+    """A HiGHS instance that prints nothing."""
+    global _quiet
+    if not _quiet:
+        fd = os.dup(1)
+        try:
+            with open(os.devnull, "w") as null:
+                os.dup2(null.fileno(), 1)
+                h = highspy.Highs()
+        finally:
+            os.dup2(fd, 1)
+            os.close(fd)
+        _quiet = True
+    else:
+        h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    return h
+
+
+def solve(c, M, row_lo, row_hi, col_lo, col_hi, what):
+    """(x, row duals, objective) of the LP above; LPFailed unless optimal."""
+    M = np.asarray(M, float)
+    rows, cols = M.shape
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = cols, rows
+    lp.col_cost_ = np.asarray(c, float)
+    lp.col_lower_, lp.col_upper_ = np.broadcast_to(col_lo, cols).astype(float), np.broadcast_to(col_hi, cols).astype(float)
+    lp.row_lower_, lp.row_upper_ = np.asarray(row_lo, float), np.asarray(row_hi, float)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    lp.a_matrix_.start_ = np.arange(0, rows * cols + 1, rows, dtype=np.int32)
+    lp.a_matrix_.index_ = np.tile(np.arange(rows, dtype=np.int32), cols)
+    lp.a_matrix_.value_ = np.ascontiguousarray(M.T).ravel()
+    h = new()
+    h.passModel(lp)
+    h.run()
+    status = h.getModelStatus()
+    if status != highspy.HighsModelStatus.kOptimal:
+        raise LPFailed(f"{what}: {h.modelStatusToString(status)}")
+    sol = h.getSolution()
+    return np.array(sol.col_value), np.array(sol.row_dual), h.getInfo().objective_function_value
+
+
+def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
+    """min t over q with |z_k - a_k^T q| <= t w_k + s_k for every k (A: m x K; w = 1, s = 0 unless
+    given): (q, t, the residual vector z - A^T q). Plain, it is the minimax (Chebyshev) fit."""
+    m, K = A.shape
+    w = np.ones(K) if weights is None else np.asarray(weights, float)
+    s = np.zeros(K) if slack is None else np.asarray(slack, float)
+    M = np.block([[A.T, w[:, None]], [A.T, -w[:, None]]])
+    c = np.zeros(m + 1)
+    c[-1] = 1.0
+    x, _, t = solve(c, M, np.r_[z - s, np.full(K, -INF)], np.r_[np.full(K, INF), z + s],
+                    np.r_[np.full(m, -INF), -INF if slack is not None else 0.0], INF, what)
+    q = x[:m]
+    return q, float(t), z - A.T @ q
+
+
+def l1_estimators(A, targets=None):
+    """The primal (7)-(8) of 000 for each target a (columns of `targets`, default every e_nu):
+    min sum |Phi| subject to A Phi = a, as u - v with u, v >= 0. One model, the targets solved in turn
+    with the previous basis (only the right-hand side changes): (Phi (K x n), sum |Phi| (n,))."""
+    A = np.asarray(A, float)
+    m, K = A.shape
+    T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = 2 * K, m
+    lp.col_cost_ = np.ones(2 * K)
+    lp.col_lower_, lp.col_upper_ = np.zeros(2 * K), np.full(2 * K, INF)
+    lp.row_lower_, lp.row_upper_ = T[:, 0].copy(), T[:, 0].copy()
+    nz = A != 0
+    counts = nz.sum(axis=0)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    lp.a_matrix_.start_ = np.r_[0, np.cumsum(np.r_[counts, counts])].astype(np.int32)
+    rows = np.nonzero(nz.T)[1].astype(np.int32)                 # row indices, column by column
+    vals = A.T[nz.T]
+    lp.a_matrix_.index_ = np.r_[rows, rows]
+    lp.a_matrix_.value_ = np.r_[vals, -vals]
+    h = new()
+    h.passModel(lp)
+    idx = np.arange(m, dtype=np.int32)
+    Phi, err = np.zeros((K, T.shape[1])), np.zeros(T.shape[1])
+    for k in range(T.shape[1]):
+        if k:
+            h.changeRowsBounds(m, idx, T[:, k], T[:, k])
+        h.run()
+        status = h.getModelStatus()
+        if status != highspy.HighsModelStatus.kOptimal:
+            raise LPFailed(f"primal (7)-(8), target {k + 1}: {h.modelStatusToString(status)}")
+        x = np.array(h.getSolution().col_value)
+        Phi[:, k] = x[:K] - x[K:]
+        err[k] = np.abs(Phi[:, k]).sum()
+    return Phi, err

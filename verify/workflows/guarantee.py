@@ -1,0 +1,189 @@
+"""What makes a bound guaranteed: the data consistent with sigma, and the linearisation remainder in it.
+
+The linear model (2) of 000 is z = H^T q + rho + R(p), with |rho| <= sigma (5) and R the remainder
+of (1) -> (2). garant bounds R by a proof (solve/taylor.py: interval Taylor arithmetic on the exact
+readings of the generated module) over the parameters the premises allow:
+
+1. a priori: every stand and block error within --prior (biases enter linearly and need no bound);
+2. a posteriori: the identifiable combinations within their guaranteed bounds around the estimate,
+   the unseparable directions (UNSEPARABLE) within what the prior allows, intersected with 1.
+   Each step only shrinks the bound, and each is valid whenever the premises hold.
+
+The part of the curvature that a column of H carries is absorbed by a shift C(p) of q (Remainder):
+R = H^T C(p) + R', with both |C(p)| and |R'| proven. The verdict: if the premises hold, q + C(p)
+satisfies |z_k - a_k^T (q + C)| <= sigma + R'_k for every k, so min over q' of
+max_k (|z_k - a_k^T q'| - R'_k) <= sigma. When that minimax exceeds sigma, the data refute sigma (or
+the prior, or the model): a proof. Otherwise each q is bounded by sum_k |W_k| (sigma + R'_k) + |C(p)|:
+a linear part sigma sum |W| and a remainder part. The exact-model minimax fit (unseparable
+directions at 0, the stated representative) is reported as the fit quality.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..solve import highs, taylor
+
+PRIOR_DEFAULT = 1e-3       # rad and dimensionless: the size of every stand and block error
+
+
+@dataclass
+class Verdict:
+    consistent: bool
+    sigma: float
+    sigma_min_supported: float       # smallest sigma the data support (sigma itself when consistent)
+    minimax_less_remainder: float    # min_q max_k |z_k - a_k^T q| - R_k
+    minimax_linear: float            # min_q max_k |z_k - a_k^T q|
+    exact_fit: np.ndarray            # q of the exact-model minimax fit
+    minimax_exact: float             # its residual: the fit quality
+    remainder: np.ndarray            # R_k, proven, per residual component (N*3,)
+    remainder_prior: np.ndarray      # the same over the prior box alone
+    disagree: np.ndarray             # indices k where |z_k - a_k^T q*| - R_k > sigma
+    error_linear: np.ndarray = None  # sigma sum |W| per q
+    error_remainder: np.ndarray = None   # sum |W_k| R'_k + |C(p)| per q
+    q_shift: np.ndarray = None           # the bound of |C(p)|: curvature absorbed by q
+
+    @property
+    def guaranteed_error(self):
+        return self.error_linear + self.error_remainder
+
+
+def linear_parameters(mod):
+    """Parameters that enter the readings affinely with a constant coefficient: the biases."""
+    return np.array([n.startswith("bias") for n in mod.PARAMETER_NAMES])
+
+
+def coordinates(mod):
+    """p = L v with v = (q, t): q the identifiable combinations (p = R+ q), t the coordinates along
+    orthonormal unseparable directions N. Combinations that are biases (entering linearly) are left
+    out: they do not enter the remainder. Returns (L, index of each q in v or -1, N)."""
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    lin = linear_parameters(mod)
+    Rp = np.linalg.pinv(R)
+    keep = [nu for nu in range(R.shape[0]) if np.abs(R[nu, ~lin]).max() > 0]
+    U = np.asarray(mod.UNSEPARABLE, float)
+    N = np.linalg.qr(U.T)[0].T if U.size else np.zeros((0, R.shape[1]))
+    L = np.hstack([Rp[:, keep], N.T])
+    L[lin] = 0.0
+    return L, keep, N
+
+
+def box(mod, prior, q=None, e=None):
+    """Bounds of v = (q, t): q within [q - e, q + e] (or what the prior allows when no estimate is
+    given), t within what |p_k| <= prior allows; every bound also within what the prior allows."""
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    lin = linear_parameters(mod)
+    L, keep, N = coordinates(mod)
+    q_prior = np.abs(R[keep][:, ~lin]).sum(axis=1) * prior
+    t_prior = np.abs(N[:, ~lin]).sum(axis=1) * prior
+    lo, hi = -q_prior, q_prior
+    if q is not None:
+        lo, hi = np.maximum(lo, q[keep] - e[keep]), np.minimum(hi, q[keep] + e[keep])
+        lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
+    return L, np.r_[lo, -t_prior], np.r_[hi, t_prior]
+
+
+class Remainder:
+    """The proven remainder at a set of positions, with the curvature the combinations absorb.
+
+    Part of the second-order term is a function of the parameters times a column of H (e.g. along the
+    unseparable direction Gamma_ii = Delta_g the readings move by Gamma_ii Delta_g u_i, which is q's own
+    column): a q shifted by C(p) = 1/2 v^T C v absorbs it exactly. C is fitted once, by least squares
+    over the positions, to the Hessian at 0; then for every v in a box
+        z_exact = H^T (q + C(p)) + R',  |R'_k| <= 1/2 sum |v_k| |v_j| sup |Hess_kj - (H^T C)_kj|,
+    |C(p)_nu| <= 1/2 sum |C_nu,kj| |v_k| |v_j|: both proven (the Hessian enclosed by interval Taylor
+    arithmetic, the fit's float rounding covered by a margin)."""
+
+    def __init__(self, mod, positions, A):
+        self.mod, self.positions = mod, positions
+        self.kw = {"mounts": positions.mounts} if positions.mounts is not None else {}
+        self.extra = [positions.extra[str(v)] for v in getattr(mod, "VARIABLES", ())]
+        self.L = coordinates(mod)[0]
+        nv = self.L.shape[1]
+        H0, _ = taylor.hessian(mod, positions.radians, self.L, np.zeros(nv), np.zeros(nv), variables=self.extra,
+                               **self.kw)
+        Y = H0.reshape(-1, nv * nv)                                          # (N*3, nv*nv)
+        self.C = np.linalg.lstsq(A.T, Y, rcond=None)[0]                      # (m, nv*nv)
+        self.fit = (A.T @ self.C).reshape(H0.shape)
+
+    def __call__(self, lo, hi):
+        """(bound of |R'| per residual component (N*3,), bound of |C(p)| per q (m,)) over the box."""
+        H_lo, H_hi = taylor.hessian(self.mod, self.positions.radians, self.L, lo, hi, variables=self.extra,
+                                    **self.kw)
+        margin = 1e-12 * (1 + np.abs(self.fit))
+        mag = np.maximum(np.abs(H_lo - self.fit), np.abs(H_hi - self.fit)) + margin
+        P = np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0))
+        PP = np.outer(P, P)
+        rb = 0.5 * np.einsum("kj,sikj->si", PP, mag).reshape(-1)
+        cb = 0.5 * np.abs(self.C) @ PP.reshape(-1)
+        return np.nextafter(rb, np.inf), np.nextafter(cb, np.inf)
+
+
+def _weighted_minimax(A, z, rb):
+    """min over q of max_k (|z_k - a_k^T q| - rb_k): (value, q, residual)."""
+    q, t, r = highs.chebyshev_fit(A, z, slack=rb, what="minimax fit with remainder")
+    return t, q, r
+
+
+def exact_fit(mod, positions, z, A, g, iterations=6):
+    """Minimax fit of the exact model, unseparable directions at 0 (p = R+ q): successive Chebyshev fits
+    of the exact residual with the linear H, a contraction when the remainder is small."""
+    Rp = np.linalg.pinv(np.asarray(mod.PHYSICAL_TO_Q, float))
+    kw = {"mount": positions.mounts} if positions.mounts is not None else {}
+    extra = [positions.extra[str(v)] for v in getattr(mod, "VARIABLES", ())]
+
+    def model(q):
+        f = mod.readings(*positions.radians, Rp @ q, g, *extra, **kw)
+        return mod.residual(*positions.radians, f, g, **kw).T.reshape(-1)
+    q, best, _ = highs.chebyshev_fit(A, z)
+    for _ in range(iterations):
+        dq, t, _ = highs.chebyshev_fit(A, z - model(q))
+        if t >= best * (1 - 1e-9):
+            break
+        q, best = q + dq, t
+    return q, float(np.abs(z - model(q)).max())
+
+
+def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2):
+    """The consistency verdict and, with an estimator W (m x K), the guaranteed errors with remainder."""
+    rem = Remainder(mod, positions, A)
+    rb_prior, cb_prior = rem(*box(mod, prior)[1:])
+
+    def proven(s):
+        """(R', C) bounds when the noise bound is s: a priori, then a posteriori (each step valid if the
+        premises hold)."""
+        rb, cb = rb_prior, cb_prior
+        if W is not None:
+            q = W @ z
+            for _ in range(steps):
+                e = np.abs(W) @ (s + rb) + cb
+                rb2, cb2 = rem(*box(mod, prior, q, e)[1:])
+                rb, cb = np.minimum(rb, rb2), np.minimum(cb, cb2)
+        return rb, cb
+    rb, cb = proven(sigma)
+    t, _, r = _weighted_minimax(A, z, rb)
+    t_lin = highs.chebyshev_fit(A, z)[1]
+    q_exact, t_exact = exact_fit(mod, positions, z, A, g)
+    consistent = bool(t <= sigma)
+    supported = sigma if consistent else _smallest_sigma(A, z, sigma, t_lin, lambda s: proven(s)[0])
+    v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
+                minimax_less_remainder=float(t), minimax_linear=t_lin, exact_fit=q_exact,
+                minimax_exact=t_exact, remainder=rb, remainder_prior=rb_prior,
+                disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)))
+    if W is not None:
+        v.error_linear = sigma * np.abs(W).sum(axis=1)
+        v.error_remainder = np.abs(W) @ rb + cb
+        v.q_shift = cb
+    return v
+
+
+def _smallest_sigma(A, z, refuted, supported, proven, steps=4):
+    """Bisection (in log) between a refuted sigma and one the data support (the linear minimax
+    residual always is): the smallest supported sigma found, to within the last bracket."""
+    lo, hi = refuted, supported
+    for _ in range(steps):
+        mid = np.sqrt(lo * hi)
+        if _weighted_minimax(A, z, proven(mid))[0] <= mid:
+            hi = mid
+        else:
+            lo = mid
+    return float(hi)
