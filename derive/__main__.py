@@ -11,14 +11,15 @@ def main(argv=None):
                     help="render in memory and exit 1 with a unified diff if any committed file differs")
     args = ap.parse_args(argv)
     if args.check:
-        diffs = codegen.drift()
+        files = codegen.outputs()
+        diffs = codegen.drift(files=files)
         for d in diffs:
             sys.stdout.write(d)
         if diffs:
             print(f"{len(diffs)} generated file(s) differ: run `python -m derive` and commit.",
                   file=sys.stderr)
             return 1
-        print(f"{len(codegen.outputs())} generated files up to date.")
+        print(f"{len(files)} generated files up to date.")
         return 0
     for rel in codegen.write():
         print(f"wrote {rel}")

@@ -155,10 +155,10 @@ def write(root=ROOT):
     return write_files(outputs(), root)
 
 
-def drift(root=ROOT):
-    """Unified diffs between the committed files and a fresh rendering; empty if none."""
+def drift(root=ROOT, files=None):
+    """Unified diffs between the committed files and a fresh rendering (or `files`); empty if none."""
     diffs = []
-    for rel, text in outputs().items():
+    for rel, text in (files or outputs()).items():
         path = Path(root) / rel
         old = path.read_text() if path.exists() else ""
         if old != text:

@@ -23,13 +23,27 @@ from .solve import lp, plans
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def timed(fn, repeat=1):
-    best = float("inf")
+REPEAT = 3
+
+
+class Timing(float):
+    """Median wall-clock seconds of REPEAT runs, with the median CPU seconds beside it."""
+
+    def __new__(cls, wall, cpu):
+        t = super().__new__(cls, wall)
+        t.cpu = cpu
+        return t
+
+
+def timed(fn, repeat=REPEAT):
+    """The same statistic on both sides of every ratio: the median of `repeat` runs (wall and CPU)."""
+    walls, cpus = [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        w0, c0 = time.perf_counter(), time.process_time()
         out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
+        walls.append(time.perf_counter() - w0)
+        cpus.append(time.process_time() - c0)
+    return Timing(float(np.median(walls)), float(np.median(cpus))), out
 
 
 def bench_derive():
@@ -54,7 +68,7 @@ def bench_derive():
 
 def bench_guaranteed_errors(mod):
     """Exact continuum proof of the 15 optimal errors vs a 5-degree grid LP (primal only)."""
-    t, rows = timed(lambda: list(stand_000.continuum_optimum(mod)), repeat=3)
+    t, rows = timed(lambda: list(stand_000.continuum_optimum(mod)))
     assert all(r.passed for r in rows)
     g = np.deg2rad(np.arange(0, 360, 5))
     A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
@@ -64,7 +78,7 @@ def bench_guaranteed_errors(mod):
 
 def bench_plan_search(mod, sample=40):
     """Exact minimal-plan proof and count vs LP-per-subset enumeration (sampled, extrapolated)."""
-    t, r = timed(lambda: plans.search(mod, np.array(plans.QUARTER_DEG, float)), repeat=3)
+    t, r = timed(lambda: plans.search(mod, np.array(plans.QUARTER_DEG, float)))
     assert r.min_positions == 10 and len(r.optimal_plans) == 64
     grid = np.deg2rad(np.asarray(plans.QUARTER_DEG, float))
     subsets = list(combinations(range(16), 10))
@@ -76,7 +90,8 @@ def bench_plan_search(mod, sample=40):
             lp.primal(A)
 
     per, _ = timed(lambda: [one(s) for s in subsets[:sample]])
-    base = per / sample * (comb(16, 10) + comb(16, 9))
+    scale = (comb(16, 10) + comb(16, 9)) / sample
+    base = Timing(per * scale, per.cpu * scale)
     return "minimal plan (10) and count of optimal plans (64)", t, \
         "LP per subset of 9 and 10 positions (extrapolated)", base
 
@@ -127,7 +142,7 @@ def bench_guarantee(mod):
     z = estimate.residuals_table_axes(mod, pos, 9.81, np.eye(3)).reshape(-1)
     A = lp.measurement_matrix(mod.H, np.column_stack(pos.radians))
     W = lp.primal(A)[0].T
-    t_run, v = timed(lambda: guarantee.verdict(mod, pos, z, A, 1e-5, 9.81, W=W), repeat=3)
+    t_run, v = timed(lambda: guarantee.verdict(mod, pos, z, A, 1e-5, 9.81, W=W))
     assert v.consistent and len(P) == 100
     rng = np.random.default_rng(0)
     Hs = mod.H(*pos.radians)
@@ -139,7 +154,7 @@ def bench_guarantee(mod):
             zz = mod.residual(*pos.radians, mod.readings(*pos.radians, p, 9.81), 9.81)
             worst = max(worst, float(np.abs(zz - np.einsum("pns,n->ps", Hs, mod.PHYSICAL_TO_Q @ p)).max()))
         return worst
-    base, _ = timed(sampled, repeat=3)
+    base, _ = timed(sampled)
     return ("verdict, 100 positions: exact fit + proven remainder (target < 2 s)", t_run,
             "sampled remainder, 100 draws (no proof)", base)
 
@@ -148,13 +163,14 @@ def bench_continuum(mod):
     """Exchange method for the 15 two-axis optima vs a 1-degree grid LP (timed on one target at
     3 degrees, scaled by the number of columns and targets: the LP work grows at least linearly)."""
     from .solve import continuum
-    t, sol = timed(lambda: continuum.solve(mod.H, 2, np.eye(15)), repeat=3)
+    t, sol = timed(lambda: continuum.solve(mod.H, 2, np.eye(15)))
     assert np.allclose(sol.values, 1, atol=1e-7)
     g = np.deg2rad(np.arange(0, 360, 3))
     A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
     one, (_, v) = timed(lambda: lp.primal(A, np.eye(15)[:, [0]]))
     assert abs(v[0] - 1) < 1e-7
-    base = one * (360 * 360) / (120 * 120) * 15
+    scale = (360 * 360) / (120 * 120) * 15
+    base = Timing(one * scale, one.cpu * scale)
     return ("15 two-axis optima, exchange method on the continuum", t,
             "LP on a 1 deg grid (extrapolated from 3 deg, one target)", base)
 
@@ -216,9 +232,11 @@ def main():
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(mod), bench_continuum(mod),
             bench_certificates(), bench_guarantee(mod), bench_diagnose(mod)]
     width = max(len(r[0]) for r in rows)
-    print(f"{'figure'.ljust(width)}  {'time, s':>9}  {'baseline, s':>11}  {'speed-up':>9}  baseline")
+    print(f"medians of {REPEAT} runs on both sides; wall (CPU) seconds")
+    print(f"{'figure'.ljust(width)}  {'time, s':>15}  {'baseline, s':>15}  {'speed-up':>9}  baseline")
     for name, t, bname, base in rows:
-        print(f"{name.ljust(width)}  {t:9.3f}  {base:11.3f}  {base / t:8.1f}x  {bname}")
+        print(f"{name.ljust(width)}  {t:7.3f} ({t.cpu:5.2f})  {base:7.3f} ({base.cpu:5.2f})"
+              f"  {base / t:8.1f}x  {bname}")
     print(f"\n`python -m derive --check` (all {len(codegen_outputs())} files) in a fresh process, "
           f"interpreter start included: {fresh:.2f} s")
     print(f"derivation of the three-axis stand with its errors: {three:.2f} s")

@@ -10,12 +10,12 @@ from fractions import Fraction
 import numpy as np
 import sympy as sp
 
-from .check import feasible, make
+from .check import as_exact, feasible, make
 from .reference import MODELS, reference
 
 
 def _angle(deg):
-    return sp.sstr(sp.nsimplify(sp.pi * sp.Rational(str(deg)) / 180))
+    return sp.sstr(sp.pi * sp.Rational(str(deg)) / 180)
 
 
 def for_stand(key):
@@ -80,7 +80,7 @@ def _continuum_certificates(mod, d, rows, names, m, step=sp.pi / 24):
             primal = _snapped_primal(d, syms, X, K, Phi[:, nu], nu, step, R)
             if primal is None:
                 continue
-        value = sum((abs(sp.nsimplify(w)) for _, _, w in primal), sp.Integer(0))
+        value = sum((abs(as_exact(w)) for _, _, w in primal), sp.Integer(0))
         Hs = [list(d.ident.H.row(i)) for i in range(R)]
         dom = {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names)}
         for lam in _dual_candidates(sol.lam[:, nu], primal, d, syms, R, step):
@@ -98,7 +98,7 @@ def _snapped_primal(d, syms, X, K, phi, nu, step, R):
     chosen, cols = [], []
     for j in support:
         at = {s: ki * step for s, ki in zip(syms, K[j // R])}
-        col = sp.Matrix([sp.nsimplify(d.ident.H[j % R, c].subs(at)) for c in range(m)])
+        col = sp.Matrix([as_exact(d.ident.H[j % R, c].subs(at)) for c in range(m)])
         if sp.Matrix.hstack(*(cols + [col])).rank() == len(cols) + 1:
             chosen, cols = chosen + [j], cols + [col]
     try:
@@ -121,8 +121,8 @@ def _dual_candidates(lam, primal, d, syms, R, step):
     cols, signs = [], []
     for at, row, w in primal:
         sub = {s: sp.sympify(x) for s, x in zip(syms, at)}
-        cols.append([sp.nsimplify(d.ident.H[row, c].subs(sub)) for c in range(d.ident.H.cols)])
-        signs.append(1 if sp.nsimplify(w) > 0 else -1)
+        cols.append([as_exact(d.ident.H[row, c].subs(sub)) for c in range(d.ident.H.cols)])
+        signs.append(1 if as_exact(w) > 0 else -1)
     yield from exact_duals(lam, cols, signs)
 
 

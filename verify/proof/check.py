@@ -17,6 +17,7 @@ is refused with one line, never evaluated.
 """
 import re
 import json
+from fractions import Fraction
 
 import numpy as np
 import sympy as sp
@@ -36,8 +37,20 @@ class MalformedCertificate(ValueError):
     """A certificate file that is not of the garant-certificate-1 form."""
 
 
+def as_exact(x):
+    """x as an exact SymPy number: exact input is kept as it is (no search), a Fraction becomes a
+    Rational, and only a float is identified (nsimplify)."""
+    if isinstance(x, Fraction):
+        return sp.Rational(x.numerator, x.denominator)
+    if isinstance(x, (int, np.integer)):
+        return sp.Integer(int(x))
+    if isinstance(x, sp.Basic) and not x.atoms(sp.Float):
+        return x
+    return sp.nsimplify(x)
+
+
 def _s(x):
-    return sp.sstr(sp.nsimplify(x))
+    return sp.sstr(as_exact(x))
 
 
 def make(model, claim, domain, H_rows, target, value, primal, dual):
@@ -145,12 +158,12 @@ def check(cert):
         return out
     image = [sp.Integer(0)] * m
     for at, row, w in c["primal"]:
-        image = [sp.nsimplify(sp.simplify(i + w * h.subs(at))) for i, h in zip(image, H[row])]
+        image = [sp.simplify(i + w * h.subs(at)) for i, h in zip(image, H[row])]
     bad = [(k, i, t) for k, (i, t) in enumerate(zip(image, a)) if sp.simplify(i - t) != 0]
     out.append(("(a) unbiased", not bad, "sum w H = a exactly" if not bad else
                 f"component {bad[0][0] + 1} of sum w H is {bad[0][1]}, the target has {bad[0][2]}"))
     l1 = sum((abs(w) for _, _, w in c["primal"]), sp.Integer(0))
-    dual_value = sp.nsimplify(sum(x * y for x, y in zip(a, lam)))
+    dual_value = sp.simplify(sum((x * y for x, y in zip(a, lam)), sp.Integer(0)))
     ok = sp.simplify(l1 - v) == 0 and sp.simplify(dual_value - v) == 0
     out.append(("(b) primal = dual = value", ok, f"sum|w| = {l1}, a.lambda = {dual_value}, value = {v}"))
     out.append(("(c) dual feasible",) + feasible(H, lam, cert["domain"], syms, c["ranges"]))

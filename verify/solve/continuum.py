@@ -31,22 +31,29 @@ def _violation(H, X, lam):
     return np.abs(np.einsum("kpm,mt->kpt", _H_rows(H, X), lam)).max(axis=1)
 
 
-def _refine(H, x, lam_col, step, lo, hi):
-    """Local pattern search for a larger |H^T lambda| from x."""
-    best = _violation(H, x[None], lam_col[:, None])[0, 0]
-    n = len(x)
-    for _ in range(400):
-        if step < 1e-9:
+def _refine(H, X, Lam, step, lo, hi, iterations=400):
+    """Local pattern search for a larger |H^T lambda|, from every start at once: X (P, n) starts,
+    Lam (m, P) the dual vector of each; each move tries +-step along every angle, and a start whose
+    moves all fail halves its step. Returns the final points (P, n) and values (P,)."""
+    P, n = X.shape
+    moves = np.concatenate([np.eye(n), -np.eye(n)])                      # (2n, n)
+    best = np.abs(np.einsum("kpm,mk->kp", _H_rows(H, X), Lam)).max(axis=1)
+    steps = np.full(P, float(step))
+    for _ in range(iterations):
+        live = steps >= 1e-9
+        if not live.any():
             break
-        moves = np.concatenate([np.eye(n), -np.eye(n)]) * step
-        cand = np.clip(x + moves, lo, hi)
-        vals = _violation(H, cand, lam_col[:, None])[:, 0]
-        k = int(np.argmax(vals))
-        if vals[k] > best + 1e-12:
-            x, best = cand[k], vals[k]
-        else:
-            step /= 2
-    return x, best
+        idx = np.flatnonzero(live)
+        cand = np.clip(X[idx, None, :] + moves[None] * steps[idx, None, None], lo, hi)   # (L, 2n, n)
+        rows = _H_rows(H, cand.reshape(-1, n)).reshape(len(idx), 2 * n, -1, Lam.shape[0])
+        vals = np.abs(np.einsum("lcpm,ml->lcp", rows, Lam[:, idx])).max(axis=2)          # (L, 2n)
+        k = vals.argmax(axis=1)
+        top = vals[np.arange(len(idx)), k]
+        up = top > best[idx] + 1e-12
+        X[idx[up]] = cand[np.flatnonzero(up), k[up]]
+        best[idx[up]] = top[up]
+        steps[idx[~up]] /= 2
+    return X, best
 
 
 def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60, top=12):
@@ -62,13 +69,14 @@ def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60
         A = lp.measurement_matrix(H, X)
         lam, _ = lp.sparse_dual(A, targets)
         viol = _violation(H, scan, lam)                                  # (K, T)
+        # refine from every scan point that is nearly active (up to `top` of them per target): a peak
+        # between scan points can exceed 1 even where the scan shows less
+        pairs = [(k, t) for t in range(lam.shape[1]) for k in np.argsort(viol[:, t])[::-1][:top] if viol[k, t] > 0.9]
         new = []
-        for t in range(lam.shape[1]):
-            # refine from every scan point that is nearly active (up to `top` of them): a peak
-            # between scan points can exceed 1 even where the scan shows less
-            near = [k for k in np.argsort(viol[:, t])[::-1][:top] if viol[k, t] > 0.9]
-            for k in near:
-                x, v = _refine(H, scan[k], lam[:, t], np.deg2rad(scan_deg) / 2, lo, hi)
+        if pairs:
+            ks, ts = np.array(pairs).T
+            xs, vs = _refine(H, scan[ks].copy(), lam[:, ts], np.deg2rad(scan_deg) / 2, lo, hi)
+            for x, v in zip(xs, vs):
                 if v > 1 + tol and not any(np.allclose(x, y, atol=1e-6) for y in [*new, *X]):
                     new.append(x)
         if not new:

@@ -109,3 +109,24 @@ def l1_estimators(A, targets=None):
         Phi[:, k] = x[:K] - x[K:]
         err[k] = np.abs(Phi[:, k]).sum()
     return Phi, err
+
+
+def sparse_dual(A, targets=None, slack=1e-9):
+    """Per target a: the optimum of the dual (9)-(10), max a^T lambda with |A^T lambda| <= 1, and among
+    its optimal lambdas the one of least sum |lambda| (variables lambda, s with -s <= lambda <= s).
+    Returns (Lambda (m x n), values (n,))."""
+    A = np.asarray(A, float)
+    m, K = A.shape
+    T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
+    Lam, values = np.zeros((m, T.shape[1])), np.zeros(T.shape[1])
+    I = np.eye(m)
+    for k, a in enumerate(T.T):
+        lam, _, neg = solve(-a, A.T, -np.ones(K), np.ones(K), -INF, INF, "dual (9)-(10)")
+        values[k] = -neg
+        floor = values[k] - slack * max(1.0, values[k])
+        M = np.block([[A.T, np.zeros((K, m))], [a[None], np.zeros((1, m))], [I, -I], [-I, -I]])
+        x, _, _ = solve(np.r_[np.zeros(m), np.ones(m)], M,
+                        np.r_[-np.ones(K), floor, np.full(2 * m, -INF)], np.r_[np.ones(K), INF, np.zeros(2 * m)],
+                        np.r_[np.full(m, -INF), np.zeros(m)], INF, "sparse dual")
+        Lam[:, k] = x[:m]
+    return Lam, values
