@@ -4,19 +4,20 @@
     garant.generated  numpy only: the rendered estimator modules
     garant.verify     numpy, cvxpy: LPs, proofs, workflows on data, the checks against the papers
 
-The names below are the notebook API; each is imported on first use, so `import garant` is light.
+The names below are the notebook API (docs/api.md); each is imported on first use, so
+`import garant` is light.
 """
 from importlib import import_module
 
 __version__ = "0.1.0"
 
 _API = {
+    "plan": ("garant.verify.api", "plan"),
+    "estimate": ("garant.verify.api", "estimate"),
+    "calibrate_norm": ("garant.verify.api", "calibrate_norm"),
+    "diagnose": ("garant.verify.api", "diagnose"),
+    "apply": ("garant.verify.api", "apply"),
     "load_model": ("garant.verify.models", "load"),
-    "stand_model": ("garant.verify.models", "stand_model"),
-    "read_positions": ("garant.verify.io.positions", "read_positions"),
-    "estimate": ("garant.verify.workflows.estimate", "estimate"),
-    "search_plans": ("garant.verify.solve.plans", "search"),
-    "diagnose": ("garant.verify.workflows.diagnose", "diagnose"),
     "DataError": ("garant.verify.errors", "DataError"),
 }
 __all__ = list(_API)

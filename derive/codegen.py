@@ -113,6 +113,7 @@ def model_files(model, module_dir="generated", docs_dir="docs"):
     """The generated module and derivation report of one stand model (and its remount files)."""
     d = derive(model)
     key = model.stand.name
+    module_dir, docs_dir = str(module_dir).rstrip("/") or ".", str(docs_dir).rstrip("/") or "."
     out = {f"{module_dir}/{key}.py": render("model/MODEL.py.jinja", model_context(d), model.source_file, ".py")}
     if model.stand.source.startswith("000"):       # the stand of 000 itself: compare with its published results
         out[f"{docs_dir}/derivation_{key}.md"] = render("report/REPORT.md.jinja", report_context(d),

@@ -100,3 +100,18 @@ def test_builtin_files_are_the_registered_models():
     assert set(MODELS) == {p.stem for p in STANDS_DIR.glob("*.toml")} == {"two_axis", "single_axis", "three_axis"}
     for key, m in MODELS.items():
         assert description.load(STANDS_DIR / f"{key}.toml").stand == m.stand
+
+
+@pytest.mark.parametrize("name", ["single-axis", "two-axis"])
+def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, capsys):
+    # Issue 16: `plan --csv` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
+    # the data; `estimate` on the data then bounds every q of the saved truth.
+    plan, data, est = tmp_path / "p.csv", tmp_path / "d.csv", tmp_path / "e.json"
+    assert main(["plan", name, "--csv", str(plan)]) == 0
+    assert main(["simulate", "--model", name, "--plan", str(plan), "--sigma", str(SIGMA), "-o", str(data)]) == 0
+    truth = json.loads((tmp_path / "d.truth.json").read_text())
+    assert main(["estimate", "--model", name, str(data), "--sigma", str(SIGMA), "--json", str(est)]) == 0
+    res = json.loads(est.read_text())
+    assert res["positions"] == len(plan.read_text().splitlines()) - 1
+    for q, v in truth["q"].items():
+        assert abs(res["q"][q] - v) <= res["guaranteed_error"][q]

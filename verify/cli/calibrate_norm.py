@@ -10,8 +10,7 @@ def add(sub):
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
     p.add_argument("log", metavar="LOG")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
-    p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355",
-                   help="accelerometer of an OpenAXES log")
+    p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
     a.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
@@ -25,6 +24,9 @@ def add(sub):
                    help="test the model against each interval's noise and try the effect catalogue")
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
+    p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
+                   "for `garant apply`")
+    p.add_argument("--export-imu-tk", metavar="FILE", help="write the calibration in imu_tk's form (T, K, B)")
     return p
 
 
@@ -35,7 +37,12 @@ def run(args):
     from ..io import recordings, report
     from ..workflows import calibrate_norm
     mod = models.load("norm")
+    explicit, args.sensor = args.sensor is not None, args.sensor or "adxl355"
     log = recordings.read_log(args.log, args.format, args.sensor)
+    if (args.format or recordings.guess_format(args.log)) == "openaxes":
+        other = ", ".join(s for s in sorted(recordings.SENSORS) if s != args.sensor)
+        print(f"OpenAXES log: accelerometer {args.sensor}"
+              + ("" if explicit else f" (the default; --sensor {other} for the other)"))
     stills, note = recordings.still_intervals(log, window=args.window, k=args.k, min_still=args.min_still)
     print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})")
     res = calibrate_norm.run(mod, stills, args.g, args.params, args.log, args.delta_sigma, recordings.quantum(log))
@@ -45,6 +52,9 @@ def run(args):
     for row in res["matrix"]:
         print("   " + "  ".join(f"{v:+.6e}" for v in row))
     print("b (raw units): " + "  ".join(f"{v:+.6e}" for v in res["bias"]))
+    M = np.array(res["matrix"])
+    print("the same in imu_tk's form X' = T K (X - B): T = M diag(M)^-1 (unit diagonal), K = diag(M) = "
+          + "  ".join(f"{v:.6e}" for v in np.diag(M)) + ", B = b")
     dsig = res["delta_sigma_max"]
     print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * args.g:.3e} m/s^2), from the "
           f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
@@ -75,7 +85,21 @@ def run(args):
     if args.plot:
         calibrate_norm.plot(res, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
+    if args.save or args.export_imu_tk:
+        _save(res, mod, args)
     return 0 if res["consistent"] else EXIT_INCONSISTENT
+
+
+def _save(res, mod, args):
+    from ..io import calibration
+    if not res["consistent"]:
+        print("no calibration file written: the data refute the noise bound, so it has no guaranteed bounds")
+        return
+    cal = calibration.from_norm(res, mod.AXES)
+    for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):
+        if path:
+            write(path, cal)
+            print(f"wrote {path}")
 
 
 def _print_bounds(res):

@@ -19,6 +19,8 @@ def add(sub):
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
     a.prior(p)
     a.json(p)
+    p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
+                   "`garant apply`: needs the remount formulas (two-axis)")
     return p
 
 
@@ -68,6 +70,12 @@ def print_estimate(res, mod, args):
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
     if args.mount:
         print_physical(res)
+    if args.save:
+        from ..io import calibration
+        if "physical" not in res:
+            raise DataError("--save needs the block's physical errors: a model with the remount formulas (two-axis)")
+        calibration.write(args.save, calibration.from_stand(res))
+        print(f"wrote {args.save}")
     return 0
 
 

@@ -8,6 +8,8 @@ def add(sub):
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
     a.model(p, positional=True)
     a.json(p)
+    p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
+                   "`garant simulate --plan PLAN.csv` and for the stand operator")
     return p
 
 
@@ -48,6 +50,11 @@ def run(args):
             "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
             "plan": [fmt(s) for s in plan],
             "optimal_plans": [[fmt(s) for s in pl] for pl in r.optimal_plans]})
+    if args.csv:
+        header = [f"{a}_deg" for a in names] + (["mount"] if multi else [])
+        report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
+            f"{v:g}" if not isinstance(v, str) else v for v in fmt(s)) for s in plan]) + "\n")
+        print(f"wrote {args.csv}")
     return 0
 
 

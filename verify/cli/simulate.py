@@ -5,7 +5,8 @@ from . import args as a
 def add(sub):
     p = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
     a.model(p)
-    p.add_argument("--plan", required=True, help="optimal10, quarter16 or grid:AxB (alpha, beta steps in degrees)")
+    p.add_argument("--plan", required=True, help="optimal10, quarter16, grid:AxB (steps per angle in degrees), or a "
+                   "plan file PLAN.csv (`garant plan --csv`)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
                    help="a catalogue effect and its parameter values (repeatable)")
     a.sigma(p, "noise bound, units of g")
@@ -20,14 +21,29 @@ def run(args):
     from garant.derive.effects import CATALOGUE
 
     from .. import models
+    from ..io import report
     from ..workflows import simulate
     base = models.stand_model(args.model)
     mod = models.load(args.model)
     effects = [simulate.parse_effect(e, CATALOGUE) for e in args.effect]
-    P, f, t, T, _, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
-                                              args.size)
+    P, f, t, T, values, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
+                                                   args.size)
     names, mount_names = models.layout(mod)
     simulate.write(args.output, P, f, t, T, names, mounts, mount_names)
     hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects) or "none"
     print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}")
+    truth = truth_path(args.output)
+    units = {p.name: p.unit for p in base.parameters}
+    report.write_json(truth, {"model": args.model, "plan": args.plan, "sigma": args.sigma, "g": args.g,
+                              "seed": args.seed, "effects": {n: list(v) for n, v in effects},
+                              "parameters": {n: float(v) for n, v in values.items()},
+                              "units": {n: units.get(n, "see the effect catalogue") for n in values},
+                              "q": dict(zip(mod.Q_NAMES, (mod.PHYSICAL_TO_Q @ [values.get(n, 0.0) for n in
+                                                                                 mod.PARAMETER_NAMES]).tolist()))})
+    print(f"wrote {truth}: the hidden truth (parameters, q, effects)")
     return 0
+
+
+def truth_path(output):
+    """DATA.csv -> DATA.truth.json, beside the data."""
+    return str(output)[:-4] + ".truth.json" if str(output).endswith(".csv") else str(output) + ".truth.json"

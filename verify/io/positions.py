@@ -87,3 +87,37 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
             raise DataError(f"{path}: column {c} lies within +-2pi ({v.min():g} to {v.max():g}): "
                             "these look like radians; the column is in degrees")
     return pos
+
+
+def read_plan(path, angles, mountings=None):
+    """A plan file: columns <angle>_deg for each angle (degrees), and `mount` when the stand uses several
+    mountings (the file `garant plan --csv` writes). Returns (angles_deg (N, n), mounts (N,) or None)."""
+    multi = mountings is not None and len(mountings) > 1
+    cols = [f"{a}_deg" for a in angles] + (["mount"] if multi else [])
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            rows = list(csv.reader(fh))
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    except (UnicodeDecodeError, csv.Error):
+        raise DataError(f"{path}: not a CSV plan file") from None
+    if not rows or any(c not in [h.strip() for h in rows[0]] for c in cols):
+        raise DataError(f"{path}: a plan needs the columns {','.join(cols)}")
+    header = [h.strip() for h in rows[0]]
+    idx = [header.index(c) for c in cols]
+    body = [r for r in rows[1:] if any(x.strip() for x in r)]
+    if not body:
+        raise DataError(f"{path}: no positions in the plan")
+    try:
+        P = np.array([[_number(r[i], path, k, c) for i, c in zip(idx, cols) if c != "mount"]
+                      for k, r in enumerate(body, 2)])
+    except IndexError:
+        raise DataError(f"{path}: a row has fewer fields than the header") from None
+    mounts = None
+    if multi:
+        names = [r[idx[-1]].strip() for r in body]
+        bad = next((n for n in names if n not in mountings), None)
+        if bad is not None:
+            raise DataError(f"{path}: mount {bad!r} is not one of {', '.join(mountings)}")
+        mounts = np.array([list(mountings).index(n) for n in names])
+    return P, mounts

@@ -5,9 +5,9 @@ a = e_nu (all nu at once, the problems are separable):
 - primal (7)-(8) of 000: min sum |Phi| subject to A Phi = a (Phi: one estimator per column of a);
 - dual (9)-(10): max a^T lambda subject to |A^T lambda| <= 1;
 - generalised Chebyshev polynomial (11)-(12): L_nu = min over y, y_nu = 1, of max |A^T y|.
-Theorem 3: primal = dual = 1 / L_nu. Values are in units of sigma.
+Theorem 3: primal = dual = 1 / L_nu. Values are in units of sigma. cvxpy is imported only by the
+functions that state an LP through it.
 """
-import cvxpy as cp
 import numpy as np
 
 from ..errors import LPFailed
@@ -16,6 +16,7 @@ from . import highs
 
 def solve(problem, what):
     """Solve a cvxpy problem with HiGHS; LPFailed unless optimal."""
+    import cvxpy as cp
     highs.new()                                   # the first HiGHS of the process prints a banner: not here
     problem.solve(solver=cp.HIGHS)
     if problem.status != cp.OPTIMAL:
@@ -33,6 +34,7 @@ def primal(A, targets=None):
 
 def dual(A, targets=None):
     """Optimal dual vectors lambda (m x n) of (9)-(10) and their values a^T lambda (n)."""
+    import cvxpy as cp
     m, K = A.shape
     T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
     Lam = cp.Variable((m, T.shape[1]))
@@ -51,6 +53,7 @@ def sparse_dual(A, targets=None, slack=1e-9):
 
 def chebyshev(A):
     """L_nu and the minimising y (column nu, y_nu = 1) of the Chebyshev polynomial (12)."""
+    import cvxpy as cp
     m, K = A.shape
     Y, t = cp.Variable((m, m)), cp.Variable(m)
     cons = [cp.diag(Y) == 1, cp.abs(A.T @ Y) <= cp.reshape(t, (1, m), order="C")]

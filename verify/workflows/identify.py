@@ -1,27 +1,11 @@
 """`garant identify`: what a model can estimate, what it confounds, and what a plan cannot separate."""
-import csv
-
 import numpy as np
 
 from ..errors import DataError
+from ..io.positions import read_plan
 from ..solve import lp
 
 MODELS = ("two-axis", "003-example1", "003-example2")
-
-
-def read_plan(path):
-    """Positions (degrees) from a CSV with columns alpha_deg, beta_deg (other columns ignored)."""
-    try:
-        with open(path, newline="") as fh:
-            rows = list(csv.DictReader(fh))
-    except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})") from None
-    if not rows or not {"alpha_deg", "beta_deg"} <= set(rows[0]):
-        raise DataError(f"{path}: a plan needs columns alpha_deg, beta_deg")
-    try:
-        return np.array([[float(r["alpha_deg"]), float(r["beta_deg"])] for r in rows])
-    except (TypeError, ValueError):
-        raise DataError(f"{path}: alpha_deg and beta_deg must be numbers") from None
 
 
 def plan_blind_spots(mod, positions_deg):
@@ -65,7 +49,7 @@ def report(model, plan_path=None):
         res = {"model": model, "estimable": [f"{q} = {d}" for q, d in zip(mod.Q_NAMES, mod.Q_DEFINITIONS)],
                "relations": [r.text() for r in rel], "confounded_groups": groups}
         if plan_path:
-            missing, blind = plan_blind_spots(mod, read_plan(plan_path))
+            missing, blind = plan_blind_spots(mod, read_plan(plan_path, mod.ANGLES)[0])
             res["plan"] = {"path": plan_path,
                            "not_identifiable": [f"{mod.Q_NAMES[k]} = {mod.Q_DEFINITIONS[k]}" for k in missing],
                            "invisible_combinations": blind}
@@ -88,7 +72,7 @@ def print_report(res):
         print(f"constraint residual V = {res['V']}")
         print("basis functions (003, (9)): " + "; ".join(res["basis_functions"]))
     if "estimable" in res:
-        print("estimable combinations (4):")
+        print("estimable combinations, (4) of 000:")
         for e in res["estimable"]:
             print(f"  {e}")
     print("identical relations among the basis functions (directions no data can see):")

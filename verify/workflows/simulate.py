@@ -5,6 +5,8 @@ import types
 import numpy as np
 
 from ..errors import DataError
+from ..io.positions import read_plan
+from ..models import layout
 from ..io.report import write_text
 from ..solve.plans import QUARTER_DEG
 
@@ -16,6 +18,9 @@ def plan_positions(mod, plan):
     model's own plan), quarter16 / quarter (every quarter turn), grid:AxB (a step per angle) or grid:A
     (one step for every angle); with several mountings, every position in each of them."""
     n = len(mod.ANGLES)
+    if str(plan).endswith(".csv"):                          # a plan file, as `garant plan --csv` writes it
+        names, mount_names = layout(mod)
+        return read_plan(plan, names, mount_names if len(mount_names) > 1 else None)
     if plan == "optimal10":
         if not len(getattr(mod, "PLAN_DEG", ())):
             raise DataError("this model has no optimal plan of its own; use quarter or grid:STEP")

@@ -1,0 +1,54 @@
+"""The examples of docs/formats.md and docs/api.md are read and run, so the docs stay true."""
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from garant.verify.io import calibration, recordings
+from garant.verify.io.positions import read_positions
+
+DOCS = Path(__file__).resolve().parent.parent / "docs"
+ROOT = DOCS.parent
+
+
+def block(doc, tag):
+    m = re.search(rf"```{tag}\n(.*?)```", (DOCS / doc).read_text(), re.S)
+    assert m, f"no ```{tag} block in docs/{doc}"
+    return m.group(1)
+
+
+def test_positions_example(tmp_path):
+    (tmp_path / "p.csv").write_text(block("formats.md", "csv positions"))
+    pos = read_positions(str(tmp_path / "p.csv"))
+    assert pos.angles_deg.tolist() == [[0, 0], [0, 180]] and pos.extra["time_s"] == ["0", "60"]
+
+
+def test_log_example(tmp_path):
+    path = tmp_path / "l.csv"
+    head, *rows = block("formats.md", "csv log").strip().splitlines()
+    t = np.arange(200) * 10.0                                         # the example's rows, repeated
+    path.write_text(head + "\n" + "\n".join(f"{ti:g},{rows[k % 2].split(',', 1)[1]}" for k, ti in enumerate(t)) + "\n")
+    log = recordings.read_log(str(path), "csv")
+    assert log.t[1] == pytest.approx(0.01) and log.raw[0].tolist() == [0.01, -0.02, 9.81]
+
+
+def test_calibration_and_imu_tk_examples_agree(tmp_path):
+    (tmp_path / "c.json").write_text(block("formats.md", "json calibration"))
+    (tmp_path / "c.calib").write_text(block("formats.md", "text imu_tk"))
+    cal = calibration.read(tmp_path / "c.json")
+    M, b = calibration.read_imu_tk(tmp_path / "c.calib")
+    np.testing.assert_allclose(M, cal["M"], rtol=1e-15, atol=1e-18)
+    np.testing.assert_allclose(b, cal["b"])
+    a, bound = calibration.apply(cal, np.array([[0.0, 0.0, 9.8]]))
+    assert np.all(bound > cal["bound_bias"])
+
+
+def test_api_example_runs(monkeypatch, capsys):
+    if not (ROOT.parent / "shared" / "data" / "real").is_dir():
+        pytest.skip("../shared/data/real is not present")
+    monkeypatch.chdir(ROOT)
+    exec(compile(block("api.md", "python"), "docs/api.md", "exec"), {})
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("10 [1.0, 1.0, 1.0]") and out[1].startswith("True noise rule")

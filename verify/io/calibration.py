@@ -1,0 +1,137 @@
+"""Calibration files: garant's own JSON (versioned, read back by `garant apply`) and imu_tk's text form.
+
+garant-calibration-1 (every number in SI units unless the field says otherwise):
+
+    format        "garant-calibration-1"
+    kind          "norm" (a static log through (2.2) of 001)
+    model         "a = M (raw - b)": corrected specific force a in m/s^2 from the raw reading
+    raw_unit      what `raw` is measured in ("m/s^2", or "count" for a raw-count log)
+    M             3 x 3, m/s^2 per raw unit, lower-triangular (garant's convention)
+    b             3, raw units
+    bound_matrix  3 x 3 B >= 0, dimensionless, lower-triangular: the worst-case residual scale and
+                  misalignment errors [[lambda1, 0, 0], [alpha, lambda2, 0], [beta, gamma, lambda3]]
+    bound_bias    3, m/s^2: the worst-case residual biases (eps_i)
+    bound_delta   3, dimensionless (x g): the worst-case nonlinearity of the 12-parameter model, or zeros
+    pendulosity_axes  the axes (i, j, k) of the nonlinearity terms delta_l n_axis(l) n_l
+    g             m/s^2, the gravity the calibration used
+    source        the log it was made from; note: how the bound of a sample follows (below)
+
+A corrected sample a is within (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|) of the
+true specific force, component-wise (n = a / |a|): with the residual errors A (|A| <= B) the truth is
+(E + A)^-1 (a - eps), and |(E + A)^-1 v| <= (I - B)^-1 |v| for the lower-triangular B of norm < 1.
+
+imu_tk (CalibratedTriad::save/load): 9 numbers of T (row-major), 9 of K, 3 of B, for
+X' = T K (X - B). garant writes T = M diag(M)^-1 (unit diagonal, the general form of imu_tk's T),
+K = diag(M), B = b, so X' = M (X - b) exactly.
+"""
+import json
+import math
+
+import numpy as np
+
+from ..errors import DataError
+from .report import write_json, write_text
+
+FORMAT = "garant-calibration-1"
+FIELDS = {"format": str, "kind": str, "M": list, "b": list, "bound_matrix": list, "bound_bias": list,
+          "bound_delta": list, "pendulosity_axes": list, "g": float, "raw_unit": str}
+
+
+def from_norm(res, axes):
+    """The calibration dictionary of a consistent `calibrate-norm` result."""
+    e = res["guaranteed_error"]
+    B = [[e["lambda1"], 0.0, 0.0], [e["alpha"], e["lambda2"], 0.0], [e["beta"], e["gamma"], e["lambda3"]]]
+    delta = [e.get(f"delta{i}*g", 0.0) for i in (1, 2, 3)]
+    raw_unit = "m/s^2" if res["start"].startswith("log in m/s^2") else "count"
+    return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": raw_unit,
+            "M": res["matrix"], "b": res["bias"], "bound_matrix": B,
+            "bound_bias": [res["g"] * e[f"eps{i}/g"] for i in (1, 2, 3)], "bound_delta": delta,
+            "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|"}
+
+
+def from_stand(res):
+    """The calibration dictionary of a consistent stand estimate with the block's physical errors
+    ((28)-(29) of 000): a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2. Delta_g, which the stand
+    cannot separate from the scale factors, is bounded by the prior on the diagonal of the bound."""
+    G, eG = np.array(res["physical"]["Gamma"]), np.array(res["physical_bound"]["Gamma"])
+    B = np.abs(eG) + res["prior"] * np.eye(3)
+    return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
+            "M": np.linalg.inv(np.eye(3) + G).tolist(), "b": list(res["physical"]["bias"]), "bound_matrix": B.tolist(),
+            "bound_bias": list(res["physical_bound"]["bias"]), "bound_delta": [0.0, 0.0, 0.0],
+            "pendulosity_axes": [2, 3, 1], "g": res["g"], "source": f"{res['model']} estimate, mounting {res['mount']}",
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B holds the bounds of Gamma and, on its "
+                    "diagonal, the prior on Delta_g"}
+
+
+def write(path, cal):
+    write_json(path, cal)
+
+
+def read(path):
+    """A garant calibration file, checked field by field; DataError with the field on any problem."""
+    try:
+        with open(path, "rb") as fh:
+            data = json.loads(fh.read(1_000_000).decode("utf-8"))
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as e:
+        raise DataError(f"{path}: not a JSON calibration file ({type(e).__name__})") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise DataError(f"{path}: not a {FORMAT} file")
+    for key, kind in FIELDS.items():
+        if not isinstance(data.get(key), (int, float) if kind is float else kind):
+            raise DataError(f"{path}: field {key!r} is missing or not a {kind.__name__}")
+    out = dict(data)
+    for key, shape in (("M", (3, 3)), ("b", (3,)), ("bound_matrix", (3, 3)), ("bound_bias", (3,)),
+                       ("bound_delta", (3,)), ("pendulosity_axes", (3,))):
+        try:
+            arr = np.array(data[key], dtype=float)
+        except (TypeError, ValueError):
+            raise DataError(f"{path}: field {key!r} must hold numbers") from None
+        if arr.shape != shape or not np.all(np.isfinite(arr)):
+            raise DataError(f"{path}: field {key!r} must be {' x '.join(map(str, shape))} finite numbers")
+        out[key] = arr
+    if np.any(out["bound_matrix"] < 0) or np.abs(out["bound_matrix"]).sum(axis=1).max() >= 1:
+        raise DataError(f"{path}: bound_matrix must be nonnegative with row sums below 1")
+    if not math.isfinite(data["g"]) or data["g"] <= 0:
+        raise DataError(f"{path}: g must be a positive number (m/s^2)")
+    return out
+
+
+def apply(cal, raw):
+    """Corrected specific force (N, 3) in m/s^2 and its worst-case error per sample (N, 3)."""
+    a = (np.asarray(raw, float) - cal["b"]) @ cal["M"].T
+    n = a / np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-300)
+    axes = cal["pendulosity_axes"].astype(int) - 1
+    nonlinear = cal["g"] * cal["bound_delta"] * np.abs(n[:, axes] * n)
+    v = np.abs(a) @ cal["bound_matrix"].T + cal["bound_bias"] + nonlinear
+    bound = v @ np.linalg.inv(np.eye(3) - cal["bound_matrix"]).T
+    return a, bound * (1 + 1e-12)
+
+
+def imu_tk_text(cal):
+    """The calibration in imu_tk's CalibratedTriad file form (T, K, B)."""
+    M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
+    K = np.diag(np.diag(M))
+    T = M @ np.linalg.inv(K)
+
+    def block(X):
+        return "\n".join(" ".join(f"{v:.17g}" for v in row) for row in X)
+    return f"{block(T)}\n\n{block(K)}\n\n" + "\n".join(f"{v:.17g}" for v in b) + "\n"
+
+
+def write_imu_tk(path, cal):
+    write_text(path, imu_tk_text(cal))
+
+
+def read_imu_tk(path):
+    """(M, b) from an imu_tk calibration file: M = T K."""
+    try:
+        vals = np.array(open(path).read().split(), dtype=float)
+    except (OSError, ValueError) as e:
+        raise DataError(f"{path}: not an imu_tk calibration file ({e})") from None
+    if vals.size != 21:
+        raise DataError(f"{path}: an imu_tk calibration file has 21 numbers (T, K, B), found {vals.size}")
+    T, K, B = vals[:9].reshape(3, 3), vals[9:18].reshape(3, 3), vals[18:]
+    return T @ K, B
