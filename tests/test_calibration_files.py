@@ -2,7 +2,6 @@
 and applied to the raw log with a worst-case error per sample that the corrected still intervals
 respect (|a| = g within the stated bound)."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -1,5 +1,4 @@
 """The examples of docs/formats.md and docs/api.md are read and run, so the docs stay true."""
-import json
 import re
 from pathlib import Path
 
