@@ -90,3 +90,30 @@ def test_stand_estimate_applied_at_new_positions(tmp_path, capsys):
     a, bound = calibration.apply(calibration.read(cal), mod.readings(alpha, beta, p, 9.81).T)
     w = mod.readings(alpha, beta, clean, 9.81).T
     assert np.all(np.abs(a - w) <= bound) and bound.max() < 0.05
+
+
+def test_reports_for_estimate_and_calibrate_norm(tmp_path, capsys):
+    # --report DIR: one Markdown page with the verdict, the tables, the plots and the command.
+    data = tmp_path / "d.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "grid:30x45", "--sigma", "1e-5", "-o", str(data)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--report", str(tmp_path / "e")]) == 0
+    page = (tmp_path / "e" / "report.md").read_text()
+    assert "**consistent**" in page and "| q1 | kappa |" in page and "garant estimate" in page
+    assert (tmp_path / "e" / "residuals.png").stat().st_size > 10000
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-7", "--report", str(tmp_path / "r")]) == 3
+    assert "**INCONSISTENT**" in (tmp_path / "r" / "report.md").read_text()
+    if REAL.is_dir():
+        assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--report",
+                     str(tmp_path / "c")]) == 0
+        page = (tmp_path / "c" / "report.md").read_text()
+        assert "**consistent**" in page and "lambda1" in page and (tmp_path / "c" / "directions.png").exists()
+
+
+@needs_real
+def test_kalibr_export(tmp_path, capsys):
+    out = tmp_path / "imu.yaml"
+    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--export-kalibr", str(out)]) == 0
+    fields = dict(line.split("#")[0].strip().split(": ") for line in out.read_text().splitlines()
+                  if ": " in line.split("#")[0])
+    assert 1e-4 < float(fields["accelerometer_noise_density"]) < 1e-1
+    assert float(fields["update_rate"]) == pytest.approx(100, rel=0.01)           # the log is about 100 Hz

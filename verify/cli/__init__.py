@@ -18,7 +18,7 @@ OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("
            ("report", "the report folder", "folder"), ("certificates", "the certificate folder", "folder"),
            ("out", "the output folder", "folder"), ("save", "the calibration file", "file"),
            ("export_imu_tk", "the imu_tk calibration file", "file"),
-           ("csv", "the plan file", "file"))
+           ("csv", "the plan file", "file"), ("export_kalibr", "the Kalibr YAML", "file"))
 
 
 class _Parser(argparse.ArgumentParser):

@@ -24,9 +24,11 @@ def add(sub):
                    help="test the model against each interval's noise and try the effect catalogue")
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
+    p.add_argument("--report", metavar="DIR", help="DIR/report.md: verdict, tables, plots, the command")
     p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
                    "for `garant apply`")
     p.add_argument("--export-imu-tk", metavar="FILE", help="write the calibration in imu_tk's form (T, K, B)")
+    p.add_argument("--export-kalibr", metavar="FILE.yaml", help="write a Kalibr-style imu.yaml (noise density, rate)")
     return p
 
 
@@ -87,6 +89,15 @@ def run(args):
         print(f"wrote {args.plot}", file=sys.stderr)
     if args.save or args.export_imu_tk:
         _save(res, mod, args)
+    if args.export_kalibr:
+        from ..io import calibration
+        dt = float(np.median(np.diff(log.t)))
+        per_sample = np.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)   # raw units
+        density = float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample) / np.sqrt(3) * np.sqrt(dt))
+        report.write_text(args.export_kalibr, calibration.kalibr_text(density, 1 / dt))
+        print(f"wrote {args.export_kalibr}")
+    if args.report:
+        _report(res, args)
     return 0 if res["consistent"] else EXIT_INCONSISTENT
 
 
@@ -119,3 +130,38 @@ def _print_bounds(res):
               "(unit vectors in sensor axes, -gravity direction):")
         for d in res["directions_to_add"]:
             print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+
+
+def _report(res, args):
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..io import report
+    from ..workflows import calibrate_norm, plots
+    folder = Path(args.report)
+    folder.mkdir(parents=True, exist_ok=True)
+    calibrate_norm.plot(res, folder / "residuals.png")
+    rows = res["per_interval"]
+    M, b = np.array(res["matrix"]), np.array(res["bias"])
+    n = np.array([r["raw_mean"] for r in rows]) - b
+    n = (n @ M.T).T / np.linalg.norm(n @ M.T, axis=1)
+    plots.residuals_by_direction(n, [r["residual_after_ms2"] for r in rows], [res["g"] * r["noise_rule"] for r in rows],
+                                 folder / "directions.png", f"{args.log}: residual against the direction of gravity")
+    verdict = ("**consistent**" if res["consistent"] else "**INCONSISTENT**: the data refute the noise bound; no bound is given") \
+        + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} ({res['delta_sigma_source']}), " \
+        + f"proven remainder {res['remainder_bound']:.1e} (units of g)"
+    sections = [("Verdict", verdict),
+                ("Calibration a = M (raw - b)", report.markdown_table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
+                 [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
+    if res["consistent"]:
+        pars = res.get("parameters") or {}
+        sections.append(("Parameters of (1.3) and their guaranteed errors", report.markdown_table(
+            ("parameter", "estimate", "guaranteed error", "on the optimal plan"),
+            [(k, f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
+             for k, v in res["guaranteed_error"].items()])))
+    sections += [("Residual per still interval", "![residuals](residuals.png)"),
+                 ("Residual against the direction of gravity", "![directions](directions.png)")]
+    command = f"garant calibrate-norm {args.log} --g {args.g:g} --params {args.params}" + (
+        f" --format {args.format}" if args.format else "") + (f" --delta-sigma {args.delta_sigma:g}" if args.delta_sigma else "")
+    print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections)}")

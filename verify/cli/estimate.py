@@ -19,6 +19,8 @@ def add(sub):
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
     a.prior(p)
     a.json(p)
+    p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
+    p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
     p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
                    "`garant apply`: needs the remount formulas (two-axis)")
     return p
@@ -39,7 +41,44 @@ def run(args):
                    remount=remount, mount=args.mount, gamma=args.gamma, prior=args.prior)
     if args.json:
         report.write_json(args.json, res)
+    if args.plot or args.report:
+        _plots(res, mod, args)
     return print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
+
+
+def _plots(res, mod, args):
+    import sys
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..io import report
+    from ..workflows import plots
+    title = f"{args.data}: residuals of the minimax fit, " + ("consistent" if res["consistent"] else "INCONSISTENT")
+    targets = [p for p in (args.plot, args.report and str(Path(args.report) / "residuals.png")) if p]
+    if args.report:
+        Path(args.report).mkdir(parents=True, exist_ok=True)
+    for path in targets:
+        plots.residuals_by_angle(np.array(res["positions_deg"]), list(mod.ANGLES), res["residual_minimax"],
+                                 args.sigma, path, title)
+    if args.report:
+        verdict = (f"**consistent** with sigma = {args.sigma:g}: minimax residual of the exact model "
+                   f"{res['minimax_residual']:.3e}, proven remainder <= {res['remainder_bound']:.2e}"
+                   if res["consistent"] else
+                   f"**INCONSISTENT**: the data refute sigma = {args.sigma:g}; they support sigma >= "
+                   f"{res['sigma_min_supported']:.3g}. No bound is given.")
+        sections = [("Verdict", verdict)]
+        if res["consistent"]:
+            sections.append(("Estimates (guaranteed error = linear + remainder)", report.markdown_table(
+                ("q", "definition", "estimate", "guaranteed error", "linear", "remainder", "unit"),
+                [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
+                  f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
+                  res["units"][q]) for q in mod.Q_NAMES])))
+        sections.append(("Residuals against each stand angle", "![residuals](residuals.png)"))
+        command = "garant " + " ".join(a for a in sys.argv[1:]) if sys.argv[1:2] == ["estimate"] else \
+            f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} --g {args.g:g} --prior {args.prior:g}"
+        page = report.write_page(args.report, f"Estimate: {args.data}", command, sections)
+        print(f"wrote {page}")
 
 
 def print_verdict(res, mod, path):

@@ -135,3 +135,16 @@ def read_imu_tk(path):
         raise DataError(f"{path}: an imu_tk calibration file has 21 numbers (T, K, B), found {vals.size}")
     T, K, B = vals[:9].reshape(3, 3), vals[9:18].reshape(3, 3), vals[18:]
     return T @ K, B
+
+
+def kalibr_text(noise_density, rate_hz):
+    """A Kalibr-style IMU YAML (imu.yaml) with the fields Kalibr has for these quantities: the
+    accelerometer noise density (m/s^2/sqrt(Hz)) and the update rate (Hz). Kalibr's imu.yaml has no
+    fields for scale, misalignment or bias: those stay in the garant JSON and the imu_tk file."""
+    return ("# Written by garant calibrate-norm --export-kalibr: the fields Kalibr's imu.yaml has for what a static\n"
+            "# calibration measures. Scale, misalignment and bias are not imu.yaml fields: see the garant JSON\n"
+            "# (--save) or the imu_tk file (--export-imu-tk). The random walks are not measured by a static log.\n"
+            "imu0:\n"
+            "  T_i_b:\n" + "".join(f"    - [{', '.join('1.0' if i == j else '0.0' for j in range(4))}]\n" for i in range(4))
+            + f"  accelerometer_noise_density: {noise_density:.6g}   # [ m / s^2 / sqrt(Hz) ]\n"
+            + f"  update_rate: {rate_hz:.6g}   # [ Hz ]\n")

@@ -61,3 +61,21 @@ def check_writable(path, what):
         raise DataError(f"{path}: the folder {parent} for {what} does not exist")
     if not os.access(parent, os.W_OK):
         raise DataError(f"{path}: the folder {parent} for {what} is not writable")
+
+
+def markdown_table(headers, rows):
+    """A Markdown table of rows under headers."""
+    out = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    out += ["| " + " | ".join(str(c).replace("|", "\\|") for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def write_page(folder, title, command, sections):
+    """DIR/report.md: the title, the command that reproduces it, then (heading, Markdown) sections."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    text = [f"# {title}", "", "Reproduce with:", "", "```sh", command, "```", ""]
+    for heading, body in sections:
+        text += [f"## {heading}", "", body, ""]
+    write_text(folder / "report.md", "\n".join(text))
+    return folder / "report.md"

@@ -206,9 +206,9 @@ def plot(result, path):
         ax.axhline(0, color="k", lw=0.6)
         ax.set_xlabel("still interval")
     a0.set_ylabel("(|a|^2 - g^2) / (2 |a|^2) x g   (m/s^2)")
-    a1.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0, -0.15), ncol=2)
+    fig.legend(*a1.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
     fig.suptitle(f"{result['log'].rsplit('/', 1)[-1]}: norm residual per still interval", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     save_figure(fig, path)
     plt.close(fig)
 

@@ -100,6 +100,8 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         "sigma_min_supported": v.sigma_min_supported, "remainder_bound": float(v.remainder.max()),
         "minimax_residual": v.minimax_exact, "minimax_residual_linear": v.minimax_linear,
         "definitions": dict(zip(mod.Q_NAMES, mod.Q_DEFINITIONS)), "units": dict(zip(mod.Q_NAMES, mod.Q_UNITS)),
+        "positions_deg": positions.angles_deg.tolist(),
+        "residual_minimax": v.residual.reshape(-1, 3).tolist(),
     }
     if not v.consistent:
         names = list(mod.ANGLES)

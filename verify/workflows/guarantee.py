@@ -38,6 +38,7 @@ class Verdict:
     remainder: np.ndarray            # R_k, proven, per residual component (N*3,)
     remainder_prior: np.ndarray      # the same over the prior box alone
     disagree: np.ndarray             # indices k where |z_k - a_k^T q*| - R_k > sigma
+    residual: np.ndarray             # z - A^T q* at that minimax fit (N*3,)
     error_linear: np.ndarray = None  # sigma sum |W| per q
     error_remainder: np.ndarray = None   # sum |W_k| R'_k + |C(p)| per q
     q_shift: np.ndarray = None           # the bound of |C(p)|: curvature absorbed by q
@@ -168,7 +169,7 @@ def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2
     v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
                 minimax_less_remainder=float(t), minimax_linear=t_lin, exact_fit=q_exact,
                 minimax_exact=t_exact, remainder=rb, remainder_prior=rb_prior,
-                disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)))
+                disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
     if W is not None:
         v.error_linear = sigma * np.abs(W).sum(axis=1)
         v.error_remainder = np.abs(W) @ rb + cb
