@@ -75,7 +75,7 @@ def plot(mod, path, misses_deg=np.linspace(0, 5, 11)):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     s = sweep(mod, misses_deg)
-    fig, ax = plt.subplots(figsize=(6.4, 4))
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
     ax.plot(s[:, 0], s[:, 2], "o-", color="C1", label="estimator (23), worst of 20 plans")
     ax.plot(s[:, 0], s[:, 1], "o--", color="C1", alpha=0.6, label="estimator (23), mean")
     ax.plot(s[:, 0], s[:, 4], "s-", color="C0", label="LP optimum on the realised plan, worst")
@@ -85,8 +85,8 @@ def plot(mod, path, misses_deg=np.linspace(0, 5, 11)):
     ax.set_ylabel("max over q of the guaranteed error (units of sigma)")
     ax.set_title("Two-axis stand, optimal 10-position plan set with errors\n"
                  "(reusing the exact-plan estimators: biased, guaranteed error infinite)", fontsize=9)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
+    fig.tight_layout(rect=(0, 0.14, 1, 1))
     save_figure(fig, path)
     plt.close(fig)
     return s
