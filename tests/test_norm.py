@@ -98,3 +98,14 @@ def test_printed_bound_fails_in_smaller_boxes_too(scale, ratio):
     # (2.4) of 001 is exact at second order: the third-order excess shrinks with the box but stays > 0.
     box = {k: v * scale for k, v in norm_001.BOXES["MEMS"].items()}
     assert norm_001.worst_remainder(N, box).value / N.published_bound(**box) > ratio
+
+
+def test_plan_norm_command(tmp_path, capsys):
+    # Issue 15: `garant plan norm` was a traceback; now it gives the orientations to hold the IMU in.
+    from garant.verify.cli import main
+    out = tmp_path / "p.json"
+    assert main(["plan", "norm", "--json", str(out)]) == 0
+    import json
+    d = json.loads(out.read_text())
+    assert d["guaranteed_errors"] == pytest.approx([1, 1, 1, 2, 2, 2, 1, 1, 1, 4, 4, 4])   # 001, section 4
+    assert d["min_positions"] == {"9": 18, "12": 30}                 # 18 as in 001; 30 (issues 4 and 13)

@@ -115,3 +115,13 @@ def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, ca
     assert res["positions"] == len(plan.read_text().splitlines()) - 1
     for q, v in truth["q"].items():
         assert abs(res["q"][q] - v) <= res["guaranteed_error"][q]
+
+
+def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
+    # Issue 15: identify works for every stand; an encoder effect on an angle the stand lacks is named as such.
+    assert main(["identify", "single-axis"]) == 0
+    assert "Delta_g + phi[Gamma11]" in capsys.readouterr().out.replace("phi[Delta_g] + phi[Gamma11]", "Delta_g + phi[Gamma11]")
+    assert main(["simulate", "--model", "single-axis", "--plan", "quarter", "--effect", "beta_encoder_harmonic=1e-5,0",
+                 "--sigma", "1e-5", "-o", str(tmp_path / "x.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "encoder of angle 'beta'" in err and "b_s" not in err

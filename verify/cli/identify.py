@@ -4,8 +4,10 @@ from . import args as a
 
 def add(sub):
     p = sub.add_parser("identify", help="estimable combinations, confounded parameters, a plan's blind spots")
-    p.add_argument("model", choices=("two-axis", "003-example1", "003-example2"))
-    p.add_argument("--plan", metavar="FILE", help="CSV with alpha_deg, beta_deg: what this plan cannot separate")
+    p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or "
+                   "003-example1 / 003-example2")
+    p.add_argument("--plan", metavar="FILE", help="CSV with <angle>_deg columns (and mount): what this plan "
+                   "cannot separate")
     a.json(p)
     return p
 

@@ -6,7 +6,8 @@ from . import args as a
 
 def add(sub):
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
-    a.model(p, positional=True)
+    p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or norm "
+                   "(the coarse stand of 001: which orientations to hold the IMU in)")
     a.json(p)
     p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
@@ -14,6 +15,8 @@ def add(sub):
 
 
 def run(args):
+    if args.model == "norm":
+        return run_norm(args)
     from .. import models
     from ..io import report
     from ..proof import build
@@ -66,3 +69,31 @@ def _preferred_plan(mod, r):
         if idx in r.optimal_plans:
             return [int(np.flatnonzero(np.all(r.angles_deg == p, axis=1))[0]) for p in own]
     return list(r.optimal_plans[0])
+
+
+def run_norm(args):
+    """The coarse stand of 001: optimal errors on the sphere (units of delta_sigma_max) and the fewest
+    orientations optimal for the 9 linear parameters and for all 12 (unit vectors, -gravity in sensor axes)."""
+    from .. import models
+    from ..io import report
+    from ..papers import norm_001
+    from ..solve import lp
+    mod = models.load("norm")
+    _, errors = lp.primal(mod.H(mod.PLAN.T))
+    plans = {k: norm_001.minimal_plan(mod, range(k)) for k in (9, 12)}
+    report.table(("q", "optimal guaranteed error (delta_sigma_max)"), [(q, f"{e:.6g}") for q, e in zip(mod.Q_NAMES, errors)])
+    for k, idx in plans.items():
+        print(f"\nfewest orientations optimal for {'the 9 linear parameters' if k == 9 else 'all 12 parameters'}: "
+              f"{len(idx)} (unit vectors n, the direction of -gravity in sensor axes; exact forms in generated/norm.py)")
+        for i in idx:
+            print("   (" + ", ".join(f"{v:+.4f}" for v in mod.PLAN[i]) + ")")
+    if args.json:
+        report.write_json(args.json, {"model": "norm", "q_names": list(mod.Q_NAMES),
+                                      "guaranteed_errors": [float(e) for e in errors],
+                                      "min_positions": {"9": len(plans[9]), "12": len(plans[12])},
+                                      "directions": {str(k): [mod.PLAN[i].tolist() for i in idx] for k, idx in plans.items()},
+                                      "directions_exact": {str(k): [mod.PLAN_EXACT[i] for i in idx] for k, idx in plans.items()}})
+    if args.csv:
+        report.write_text(args.csv, "n1,n2,n3\n" + "\n".join(",".join(f"{v:.17g}" for v in mod.PLAN[i]) for i in plans[12]) + "\n")
+        print(f"wrote {args.csv}")
+    return 0

@@ -25,7 +25,7 @@ def run(args):
     from ..workflows import simulate
     base = models.stand_model(args.model)
     mod = models.load(args.model)
-    effects = [simulate.parse_effect(e, CATALOGUE) for e in args.effect]
+    effects = [simulate.parse_effect(e, CATALOGUE, [a.name for a in base.stand.angles]) for e in args.effect]
     P, f, t, T, values, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
                                                    args.size)
     names, mount_names = models.layout(mod)

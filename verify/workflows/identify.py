@@ -5,13 +5,16 @@ from ..errors import DataError
 from ..io.positions import read_plan
 from ..solve import lp
 
-MODELS = ("two-axis", "003-example1", "003-example2")
 
 
-def plan_blind_spots(mod, positions_deg):
+def plan_blind_spots(mod, positions_deg, mounts=None):
     """q combinations the plan cannot see: the null space of the plan's measurement matrix in q."""
-    distinct = np.unique(np.round(np.asarray(positions_deg, float), 6), axis=0)   # repeats add nothing
-    A = lp.measurement_matrix(mod.H, np.deg2rad(distinct))
+    key = np.round(np.asarray(positions_deg, float), 6)
+    if mounts is not None:
+        key = np.column_stack([key, mounts])
+    distinct = np.unique(key, axis=0)                                      # repeats add nothing
+    P, m = (distinct[:, :-1], distinct[:, -1].astype(int)) if mounts is not None else (distinct, None)
+    A = lp.measurement_matrix(mod if m is not None else mod.H, np.deg2rad(P), m)
     out = []
     for v in rref(lp.blind_directions(A)):
         out.append(" ".join(f"{c:+.3g}*{n}" for c, n in zip(v, mod.Q_NAMES) if c))
@@ -41,15 +44,18 @@ def rref(B, tol=1e-9):
 def report(model, plan_path=None):
     """Lines of text and a JSON-able dict for a model (and a plan)."""
     from garant.derive import identifiability as I
-    if model == "two-axis":
+    if model not in ("003-example1", "003-example2"):            # a stand: built-in or a STAND.toml
         from garant.derive.derivation import derive
-        from garant.derive.builtin import TWO_AXIS_MODEL
-        from garant.generated import two_axis as mod
-        rel, groups = I.explain_stand(derive(TWO_AXIS_MODEL))
+
+        from .. import models
+        mod = models.load(model)
+        rel, groups = I.explain_stand(derive(models.stand_model(model)))
         res = {"model": model, "estimable": [f"{q} = {d}" for q, d in zip(mod.Q_NAMES, mod.Q_DEFINITIONS)],
                "relations": [r.text() for r in rel], "confounded_groups": groups}
         if plan_path:
-            missing, blind = plan_blind_spots(mod, read_plan(plan_path, mod.ANGLES)[0])
+            names, mounts = models.layout(mod)
+            P, m = read_plan(plan_path, names, mounts if len(mounts) > 1 else None)
+            missing, blind = plan_blind_spots(mod, P, m)
             res["plan"] = {"path": plan_path,
                            "not_identifiable": [f"{mod.Q_NAMES[k]} = {mod.Q_DEFINITIONS[k]}" for k in missing],
                            "invisible_combinations": blind}
@@ -63,7 +69,6 @@ def report(model, plan_path=None):
                 "relations": [r.text() for r in out["relations"]], "confounded_groups": out["groups"],
                 "degenerate_trajectories": [{"trajectory": t, "relations": [r.text() for r in rel]}
                                             for t, rel in out["degenerate"]]}
-    raise DataError(f"unknown model {model!r}; use one of {', '.join(MODELS)}")
 
 
 def print_report(res):

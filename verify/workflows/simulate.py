@@ -47,7 +47,7 @@ def _grid(steps):
     return np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(steps), -1).T
 
 
-def parse_effect(text, catalogue):
+def parse_effect(text, catalogue, base_angles=None):
     """'NAME=v1,v2,...' -> (name, values); one value per parameter of the effect, in its units."""
     name, _, vals = text.partition("=")
     if name not in catalogue:
@@ -57,6 +57,9 @@ def parse_effect(text, catalogue):
     except ValueError:
         raise DataError(f"--effect {text}: values must be numbers") from None
     n = len(catalogue[name].params)
+    if catalogue[name].angle is not None and base_angles is not None and catalogue[name].angle not in base_angles:
+        raise DataError(f"--effect {name} is an error of the encoder of angle {catalogue[name].angle!r}; this stand's "
+                        f"angles are {', '.join(base_angles)}")
     if len(values) != n:
         names = ", ".join(p.name for p in catalogue[name].params)
         raise DataError(f"--effect {name} takes {n} values ({names}), got {len(values)}")
