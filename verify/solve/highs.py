@@ -111,6 +111,19 @@ def l1_estimators(A, targets=None):
     return Phi, err
 
 
+def dual(A, targets=None):
+    """The dual (9)-(10) of 000 per target a: max a^T lambda subject to |A^T lambda| <= 1 (one ranged
+    row per measurement). Returns (Lambda (m x n), values (n,))."""
+    A = np.asarray(A, float)
+    m, K = A.shape
+    T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
+    Lam, values = np.zeros((m, T.shape[1])), np.zeros(T.shape[1])
+    for k, a in enumerate(T.T):
+        Lam[:, k], _, neg = solve(-a, A.T, -np.ones(K), np.ones(K), -INF, INF, "dual (9)-(10)")
+        values[k] = -neg
+    return Lam, values
+
+
 def sparse_dual(A, targets=None, slack=1e-9):
     """Per target a: the optimum of the dual (9)-(10), max a^T lambda with |A^T lambda| <= 1, and among
     its optimal lambdas the one of least sum |lambda| (variables lambda, s with -s <= lambda <= s).
@@ -118,11 +131,9 @@ def sparse_dual(A, targets=None, slack=1e-9):
     A = np.asarray(A, float)
     m, K = A.shape
     T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
-    Lam, values = np.zeros((m, T.shape[1])), np.zeros(T.shape[1])
+    Lam, values = dual(A, T)
     I = np.eye(m)
     for k, a in enumerate(T.T):
-        lam, _, neg = solve(-a, A.T, -np.ones(K), np.ones(K), -INF, INF, "dual (9)-(10)")
-        values[k] = -neg
         floor = values[k] - slack * max(1.0, values[k])
         M = np.block([[A.T, np.zeros((K, m))], [a[None], np.zeros((1, m))], [I, -I], [-I, -I]])
         x, _, _ = solve(np.r_[np.zeros(m), np.ones(m)], M,
