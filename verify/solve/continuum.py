@@ -5,7 +5,7 @@ position of the whole box of angles where |H^(p)(x)^T lambda| is largest (a scan
 local pattern search from the best points); add every position where it exceeds 1; repeat until no
 constraint is violated. The primal on the final positions then gives the optimal estimators, and the
 value equals the dual value (the optimum on the continuum, up to the search's tolerance; the
-certificates of `certificate.py` prove it).
+certificates of `proof/check.py` prove it).
 """
 from dataclasses import dataclass
 

@@ -4,9 +4,9 @@ The still intervals give mean raw vectors r_k. The calibration a = M (r - b) (M 
 m/s^2 per raw unit) is found by iterating on the exact |f|: calibrate with the current M, b, form
 sigma_k and n_k, fit the small corrections q by the Chebyshev (minimax) fit of (2.2) in the
 guaranteed sense, fold them into M, b, and repeat until the corrections vanish. The guaranteed error
-of each parameter on the directions actually present is the LP (3.1)-(3.2) on those directions, in
-units of delta_sigma_max, here set to the minimax residual of the fit (the smallest noise bound the
-data allow).
+of each parameter on the directions actually present is the LP (3.1)-(3.2) on those directions with
+each interval's own noise bound: --delta-sigma, or the noise rule from the data (never the fit's own
+residual, which would make the bounds circular), plus the proven remainder (2.3) around the fit.
 """
 import numpy as np
 
