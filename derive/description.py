@@ -22,7 +22,7 @@ KEYS = {
     "stand": {"name", "title", "source"},
     "angle": {"name", "latex", "meaning", "range_deg", "detents_deg"},
     "parameter": {"name", "latex", "unit", "meaning"},
-    "link": {"axis", "angle", "offset", "harmonic", "error"},
+    "link": {"axis", "angle", "offset", "harmonic", "error", "angle_deg"},
     "block": {"misalignment", "gravity_error", "mountings"},
     "estimation": {"preferred", "plan_deg", "remount"},
 }
@@ -102,16 +102,27 @@ def _table_list(path, where, value, most):
     return value
 
 
+def _exact(value):
+    """An exact number from a TOML number: integers as they are, decimals as the decimal written."""
+    import sympy as sp
+    return sp.Integer(value) if isinstance(value, int) else sp.Rational(repr(value))
+
+
 def _axis(path, where, value):
+    """(axis, sign): a coordinate axis (1, 2, 3) and its sign, or an exact unit vector (a tilted axis,
+    the vector written normalised exactly) and +1."""
     if isinstance(value, list):
-        if len(value) != 3 or not all(isinstance(v, (int, float)) for v in value):
-            _fail(path, where, "an axis vector needs three numbers")
+        if len(value) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                      and math.isfinite(v) and abs(v) < 1e6 for v in value):
+            _fail(path, where, "an axis vector needs three finite numbers")
         if not any(value):
             _fail(path, where, "an axis of zero length")
         nz = [i for i, v in enumerate(value) if v]
-        if len(nz) != 1:
-            _fail(path, where, f"{value} is not a coordinate axis; only x, y, z (and their negatives) are supported")
-        return nz[0] + 1, 1 if value[nz[0]] > 0 else -1
+        if len(nz) == 1:
+            return nz[0] + 1, 1 if value[nz[0]] > 0 else -1
+        import sympy as sp
+        v = sp.Matrix([_exact(x) for x in value])
+        return tuple(sp.nsimplify(x / sp.sqrt(v.dot(v))) for x in v), 1
     if not isinstance(value, str) or value.lstrip("+-") not in AXES or len(value) > 2:
         _fail(path, where, f"{value!r} is not an axis (x, y, z, -x, -y, -z)")
     return AXES[value.lstrip("+-")], -1 if value.startswith("-") else 1
@@ -201,12 +212,20 @@ def from_data(data, path="<description>"):
                 _fail(path, f"{where}.harmonic", "give two parameters [a_sin, a_cos]")
             links.append(Link(axis, l["angle"], ref(f"{where}.offset", l["offset"]) if "offset" in l else None,
                               sign, tuple(ref(f"{where}.harmonic", h) for h in harmonic) if harmonic else None))
-        elif "error" in l:
+        elif "error" in l or "angle_deg" in l:
             if "offset" in l or "harmonic" in l:
-                _fail(path, where, "a fixed link takes 'error' only")
-            links.append(Link(axis, None, ref(f"{where}.error", l["error"]), sign))
+                _fail(path, where, "a fixed link takes 'angle_deg' and 'error' only")
+            fixed = l.get("angle_deg")
+            if fixed is not None:
+                if not isinstance(fixed, (int, float)) or isinstance(fixed, bool) or not math.isfinite(fixed) \
+                        or not -360 <= fixed <= 360:
+                    _fail(path, f"{where}.angle_deg", f"{_short(fixed)} is not an angle in degrees within one turn")
+                fixed = _exact(fixed)
+            links.append(Link(axis, None, ref(f"{where}.error", l["error"]) if "error" in l else None, sign,
+                              fixed_deg=fixed))
         else:
-            _fail(path, where, "a link needs an 'angle' (turning) or an 'error' (fixed small turn)")
+            _fail(path, where, "a link needs an 'angle' (turning), an 'angle_deg' (a fixed turn such as a wedge) "
+                  "or an 'error' (fixed small turn)")
     if not links:
         _fail(path, "link", "a stand needs at least one [[link]]")
     block = data.get("block", {})

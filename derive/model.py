@@ -37,11 +37,12 @@ class Link:
     (true = read - offset); without it, the link is a fixed small error `sign * error`.
     """
 
-    axis: int
+    axis: int | tuple                   # 1, 2, 3, or an exact unit vector (a tilted axis)
     angle: str | None = None
     error: str | None = None
     sign: int = 1
     harmonic: tuple[str, str] | None = None   # encoder error a_s sin(read) + a_c cos(read)
+    fixed_deg: object = None            # a fixed turn by this exact angle in degrees (a wedge), plus `error`
 
 
 @dataclass(frozen=True)
@@ -128,7 +129,8 @@ def link_angle(link, symbols, angles):
     """The true turn of a link: sign * (read - offset - harmonic error), or sign * fixed error."""
     error = symbols[link.error] if link.error else 0
     if link.angle is None:
-        return link.sign * error
+        fixed = sp.pi * link.fixed_deg / 180 if link.fixed_deg is not None else 0
+        return link.sign * (fixed + error)
     read = angles[link.angle]
     wobble = 0
     if link.harmonic:

@@ -13,6 +13,11 @@ class GarantPrinter(NumPyPrinter):
     def _print_Rational(self, expr):
         return f"{expr.p}/{expr.q}"
 
+    def _print_Integer(self, expr):
+        """Beyond 2^53 (an exactly normalised tilted axis) as a float literal: numpy functions take no
+        Python integers of that size, and the generated module computes in floats anyway."""
+        return repr(float(expr.p)) if abs(expr.p) > 2**53 else str(expr.p)
+
     def _print_Half(self, expr):
         return self._print_Rational(expr)
 

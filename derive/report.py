@@ -31,14 +31,20 @@ def _link_latex(link: Link, model):
     s = {p.name: p.latex for p in model.parameters}
     a = {x.name: x.latex for x in model.stand.angles}
     if link.angle is None:
-        arg = ("-" if link.sign < 0 else "") + s[link.error]
+        parts = ([sp.latex(link.fixed_deg) + r"^\circ"] if link.fixed_deg is not None else []) + (
+            [s[link.error]] if link.error else [])
+        arg = " + ".join(parts)
+        arg = f"-({arg})" if link.sign < 0 and len(parts) > 1 else ("-" + arg if link.sign < 0 else arg)
     else:
         arg = a[link.angle] + (f" - {s[link.error]}" if link.error else "")
         if link.harmonic:
             hs, hc = (s[n] for n in link.harmonic)
             arg += rf" - {hs}\sin {a[link.angle]} - {hc}\cos {a[link.angle]}"
         arg = f"-({arg})" if link.sign < 0 else arg
-    return rf"C_{link.axis}({arg})"
+    if isinstance(link.axis, int):
+        return rf"C_{link.axis}({arg})"
+    axis = r",\ ".join(f"{float(sp.N(v, 12)):.6g}" for v in link.axis)       # the unit vector, rounded for reading
+    return rf"C_{{({axis})}}({arg})"
 
 
 def _aligned_published_H(printed, derived, parse):

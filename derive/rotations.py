@@ -3,8 +3,13 @@ import sympy as sp
 
 
 def C(axis, x):
-    """Passive rotation by angle x about coordinate axis 1, 2 or 3 (C1, C2, C3 of SPEC.md)."""
+    """Passive rotation by angle x about coordinate axis 1, 2 or 3 (C1, C2, C3 of SPEC.md), or about an
+    exact unit vector n: cos x E + (1 - cos x) n n^T - sin x [n x] (C1 when n = e1)."""
     c, s = sp.cos(x), sp.sin(x)
+    if isinstance(axis, tuple):
+        n = sp.Matrix(axis)
+        cross = sp.Matrix([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
+        return c * sp.eye(3) + (1 - c) * n * n.T - s * cross
     if axis == 1:
         return sp.Matrix([[1, 0, 0], [0, c, s], [0, -s, c]])
     if axis == 2:

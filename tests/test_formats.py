@@ -51,3 +51,12 @@ def test_api_example_runs(monkeypatch, capsys):
     exec(compile(block("api.md", "python"), "docs/api.md", "exec"), {})
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("10 [1.0, 1.0, 1.0]") and out[1].startswith("True noise rule")
+
+
+def test_means_example(tmp_path):
+    from garant.verify.io import means
+    (tmp_path / "m.csv").write_text(block("formats.md", "csv means"))
+    runs = means.read(str(tmp_path / "m.csv"), imu=1)
+    assert len(runs) == 1 and runs[0].stills[0].mean.tolist() == [-0.203, -9.391, 2.858]
+    assert runs[0].stills[0].std_error[0] == pytest.approx(0.036 / 1380 ** 0.5)
+    assert runs[0].nominal.tolist() == [[0, -0.934172, 0.356822]]

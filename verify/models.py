@@ -60,6 +60,33 @@ def load_remount(name):
         return None
 
 
+def reachable_grid(ranges, detents, step):
+    """Positions (degrees, (S, n)) a stand can take on a grid: each angle at its detents when it has
+    them, else at the multiples of `step` (one per angle, or one for all) inside its range."""
+    steps = list(step) if np.ndim(step) else [step] * len(ranges)
+    values = []
+    for (lo, hi), det, st in zip(ranges, detents, steps):
+        values.append(np.asarray(det, float) if len(det) else
+                      np.arange(np.ceil(lo / st) * st, min(hi, lo + 360 - 1e-9) + 1e-9, st))
+    return np.array(np.meshgrid(*values, indexing="ij")).reshape(len(values), -1).T
+
+
+def unreachable(ranges, detents, P):
+    """The first (position index, angle index, value) a stand cannot take, or None."""
+    P = np.atleast_2d(np.asarray(P, float))
+    for i, ((lo, hi), det) in enumerate(zip(ranges, detents)):
+        v = P[:, i]
+        if len(det):
+            bad = ~np.isclose(((v[:, None] - np.asarray(det, float)[None]) + 180) % 360 - 180, 0, atol=1e-6).any(axis=1)
+        else:
+            w = lo + (v - lo) % 360
+            bad = (w > hi + 1e-9) & ~np.isclose(v, hi)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            return k, i, float(v[k])
+    return None
+
+
 def layout(mod):
     """Angle names and mounting names of a stand module (one mounting: ('+x+y+z',))."""
     return list(mod.ANGLES), list(getattr(mod, "MOUNTINGS", ("+x+y+z",)))

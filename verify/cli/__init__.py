@@ -9,16 +9,18 @@ import sys
 import warnings
 
 from ..errors import DataError, LPFailed
-from . import (apply, calibrate_norm, check_certificate, derive, diagnose, estimate, identify, plan, simulate,
-               verify)
+from . import (apply, calibrate_norm, check_certificate, derive, diagnose, estimate, identify, plan, repeatability,
+               simulate, verify)
 
-COMMANDS = (verify, plan, estimate, calibrate_norm, apply, identify, derive, simulate, diagnose, check_certificate)
+COMMANDS = (verify, plan, estimate, calibrate_norm, repeatability, apply, identify, derive, simulate, diagnose,
+            check_certificate)
 #: Output options of the commands: (attribute, what it is, a file or a folder).
 OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("output", "the data file", "file"),
            ("report", "the report folder", "folder"), ("certificates", "the certificate folder", "folder"),
            ("out", "the output folder", "folder"), ("save", "the calibration file", "file"),
            ("export_imu_tk", "the imu_tk calibration file", "file"),
-           ("csv", "the plan file", "file"), ("export_kalibr", "the Kalibr YAML", "file"))
+           ("csv", "the plan file", "file"), ("export_kalibr", "the Kalibr YAML", "file"),
+           ("markdown", "the Markdown file", "file"))
 
 
 class _Parser(argparse.ArgumentParser):

@@ -11,6 +11,7 @@ def add(sub):
     p.add_argument("log", metavar="LOG")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
+    p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
     a.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
@@ -40,7 +41,9 @@ def run(args):
     from ..workflows import calibrate_norm
     mod = models.load("norm")
     explicit, args.sensor = args.sensor is not None, args.sensor or "adxl355"
-    log = recordings.read_log(args.log, args.format, args.sensor)
+    log = recordings.read_log(args.log, args.format, args.sensor, args.imu)
+    if log.note:
+        print(log.note)
     if (args.format or recordings.guess_format(args.log)) == "openaxes":
         other = ", ".join(s for s in sorted(recordings.SENSORS) if s != args.sensor)
         print(f"OpenAXES log: accelerometer {args.sensor}"

@@ -13,6 +13,8 @@ def add(sub):
     a.model(p)
     a.sigma(p)
     a.g(p)
+    p.add_argument("--imu", type=int, metavar="K", help="IMU K of a means file with an imu column")
+    p.add_argument("--run", dest="which_run", metavar="R", help="run R of a means file with a run column (exp or run)")
     p.add_argument("--mount", metavar="Q", help="mounting of the block, e.g. +y+z+x (block axis 1 along "
                    "table +y, ...): also report the block's physical errors, (28)-(29) of 000")
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
@@ -29,7 +31,6 @@ def add(sub):
 def run(args):
     from .. import models
     from ..io import report
-    from ..io.positions import read_positions
     from ..workflows.estimate import estimate
     mod = models.load(args.model)
     remount = None if args.model.endswith(".toml") else models.load_remount(args.model)
@@ -37,13 +38,39 @@ def run(args):
         raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {args.mount!r}")
     names, mounts = models.layout(mod)
-    res = estimate(mod, read_positions(args.data, names, mounts), args.sigma, args.g,
+    res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, args.g,
                    remount=remount, mount=args.mount, gamma=args.gamma, prior=args.prior)
     if args.json:
         report.write_json(args.json, res)
     if args.plot or args.report:
         _plots(res, mod, args)
     return print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
+
+
+def _positions(args, mod, names, mounts):
+    """The positions file, or a means file with known nominal directions (docs/formats.md): its run
+    (--run) of one IMU (--imu), the directions turned into the stand's angles."""
+    import numpy as np
+
+    from ..io import means
+    from ..io.positions import Positions, read_positions
+    from ..workflows.directions import angles_for
+    if not means.looks_like(args.data):
+        if args.imu is not None or args.which_run is not None:
+            raise DataError(f"--imu and --run apply to a means file; {args.data} is a positions file")
+        return read_positions(args.data, names, mounts)
+    runs = means.read(args.data, args.imu)
+    keys = [r.name.rsplit("=", 1)[-1] for r in runs]
+    if len(runs) > 1 and args.which_run is None:
+        raise DataError(f"{args.data}: holds runs {', '.join(keys)}; choose one with --run R")
+    run = runs[keys.index(args.which_run)] if args.which_run is not None and args.which_run in keys else runs[0]
+    if args.which_run is not None and args.which_run not in keys:
+        raise DataError(f"--run {args.which_run}: {args.data} holds runs {', '.join(keys)}")
+    if run.nominal is None:
+        raise DataError(f"{args.data}: no nominal directions (nom_x, nom_y, nom_z); estimate needs known positions "
+                        "(garant calibrate-norm and repeatability need none)")
+    deg = angles_for(mod, run.nominal, args.data)
+    return Positions(args.data, deg, np.array([st.mean for st in run.stills]))
 
 
 def _plots(res, mod, args):

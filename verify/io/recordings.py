@@ -5,8 +5,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError
+from . import mimu
 
-FORMATS = ("imu_tk", "csv", "openaxes")
+FORMATS = ("imu_tk", "csv", "openaxes", "mimu")
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 
@@ -15,6 +16,8 @@ class Log:
     path: str
     t: np.ndarray          # s
     raw: np.ndarray        # (N, 3), the sensor's own units (counts or m/s^2)
+    step: float = None     # quantisation step in raw units when the format states it
+    note: str = ""         # what the reader did (skipped bytes, the IMU read)
 
 
 #: Time column names of a `csv` log, and the unit each one states (factor to seconds).
@@ -28,7 +31,10 @@ MIN_SAMPLES = 100
 
 def guess_format(path):
     with open(path, "rb") as fh:
-        head = fh.readline(4096).decode("utf-8", errors="replace")
+        start = fh.read(4096)
+    if mimu.looks_like(start[: 4 * mimu.PACKET]):
+        return "mimu"
+    head = start.split(b"\n", 1)[0].decode("utf-8", errors="replace")
     if ";" in head and "TIME" in head:
         return "openaxes"
     return "csv" if "," in head else "imu_tk"
@@ -113,11 +119,23 @@ def _check_time(path, t, named_unit):
                         "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds")
 
 
-def read_log(path, fmt=None, sensor="adxl355"):
-    """Time (s) and three accelerometer columns of a log; one clear line on any problem."""
+def read_log(path, fmt=None, sensor="adxl355", imu=None):
+    """Time (s) and three accelerometer columns of a log; one clear line on any problem. `imu` picks
+    one IMU of a multi-IMU stream (mimu: 1-8)."""
+    step, note = None, ""
     try:
         fmt = fmt or guess_format(path)
-        if fmt == "openaxes":
+        if imu is not None and fmt != "mimu":
+            raise DataError(f"--imu applies to a multi-IMU stream (--format mimu), not to a {fmt} log")
+        if fmt == "mimu":
+            if imu is None:
+                raise DataError(f"{path}: a MIMU4444BT stream holds {mimu.IMUS} IMUs; choose one with --imu K")
+            t, raw, step, skipped = mimu.read(path, imu)
+            unit = True
+            note = (f"MIMU4444BT IMU {imu}, array frame, {mimu.COUNTS_PER_G} counts per g = "
+                    f"{mimu.G_DATASHEET} m/s^2; {len(t)} packets" + (f", {skipped} bytes outside valid packets "
+                                                                     "skipped" if skipped else ""))
+        elif fmt == "openaxes":
             header = _header(path, ";")
             cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
             missing = [c for c in cols if c not in header]
@@ -140,11 +158,14 @@ def read_log(path, fmt=None, sensor="adxl355"):
     if len(t) < MIN_SAMPLES:
         raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording")
     _check_time(path, t, unit)
-    return Log(path, t - t[0], raw)
+    return Log(path, t - t[0], raw, step, note)
 
 
 def quantum(log):
-    """The quantisation step of the raw readings: 1 count for an integer log, else 0 (already scaled)."""
+    """The quantisation step of the raw readings: the format's own when it states one, 1 count for an
+    integer log, else 0 (already scaled)."""
+    if log.step is not None:
+        return log.step
     return 1.0 if np.all(log.raw == np.round(log.raw)) else 0.0
 
 

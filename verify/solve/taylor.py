@@ -88,11 +88,18 @@ class _Vector(list):
     __mul__ = __rmul__
 
 
+def _constant_sqrt(x):
+    if isinstance(x, Jet2):
+        raise TypeError("sqrt of a jet: the generated readings take square roots of constants only")
+    return np.sqrt(x)
+
+
 def _namespace():
     ns = types.SimpleNamespace(**{k: getattr(np, k) for k in ("broadcast_arrays", "zeros_like", "ones_like", "pi")})
     ns.asarray = lambda x, dtype=None: x if isinstance(x, list) else np.asarray(x, dtype)
     ns.sin = lambda x: x.sin() if isinstance(x, Jet2) else np.sin(x)
     ns.cos = lambda x: x.cos() if isinstance(x, Jet2) else np.cos(x)
+    ns.sqrt = _constant_sqrt                  # constants of a tilted axis or a wedge, never of a jet
     ns.array = lambda rows: _Vector(rows) if any(isinstance(r, Jet2) for r in rows) else np.array(rows)
     return ns
 

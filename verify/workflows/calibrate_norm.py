@@ -56,6 +56,14 @@ def sigma_and_n(f):
     return (r2 - 1) / (2 * r2), (f / np.sqrt(r2)[:, None]).T
 
 
+def fold(M, b, delta, q, g):
+    """The calibration corrected by q of (2.2) (lower-triangular scale and misalignment, bias over g,
+    and nonlinearity when q has 12 entries)."""
+    A = np.array([[q[0], 0, 0], [q[3], q[1], 0], [q[4], q[5], q[2]]])
+    return (np.linalg.solve(np.eye(3) + A, M), b + np.linalg.solve(M, g * q[6:9]),
+            delta + q[9:12] if len(q) == 12 else delta)
+
+
 def fit(mod, raw, g, params=9):
     """Iterate the norm relation to convergence: M, b, delta (12 params), residuals, iterations."""
     M, b, note = initial_map(raw, g)
@@ -63,11 +71,7 @@ def fit(mod, raw, g, params=9):
     for it in range(1, MAX_ITER + 1):
         s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
         q, _ = chebyshev_fit(mod.H(n)[:params], s)
-        A = np.array([[q[0], 0, 0], [q[3], q[1], 0], [q[4], q[5], q[2]]])
-        b = b + np.linalg.solve(M, g * q[6:9])
-        M = np.linalg.solve(np.eye(3) + A, M)
-        if params == 12:
-            delta = delta + q[9:12]
+        M, b, delta = fold(M, b, delta, q, g)
         if np.abs(q).max() < 1e-12:
             break
     s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
@@ -78,12 +82,19 @@ def guaranteed(mod, n, params, noise):
     """Guaranteed error of each parameter on the present directions, and the unidentifiable ones:
     the LP min sum_k noise_k |Phi_k| subject to A Phi = e_nu (noise: each direction's bound, units of g),
     solved as the plain LP (7)-(8) on the columns a_k / noise_k."""
+    return estimator(mod, n, params, noise)[1:]
+
+
+def estimator(mod, n, params, noise):
+    """The optimal guaranteed estimator on the present directions: weights Phi (K x params) on the norm
+    residuals, the guaranteed errors, and the unidentifiable parameters (then Phi and errors are None)."""
     A = mod.H(n)[:params]
     missing = lp.unidentifiable(A)
     if missing:
-        return None, missing
-    _, err = lp.primal(A / np.broadcast_to(noise, A.shape[1]))
-    return err, []
+        return None, None, missing
+    w = np.broadcast_to(noise, A.shape[1])
+    Phi, err = lp.primal(A / w)
+    return Phi / w[:, None], err, []
 
 
 def directions_to_add(mod, n, params, within_deg=10.0):
@@ -162,11 +173,17 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         return out
     plan = mod.PLAN[:18] if params == 9 else mod.PLAN
     _, best = lp.primal(mod.H(plan.T)[:params])
+    # The estimate the bound is for: the LP estimator's correction Phi^T sigma folded into the fit (the
+    # minimax fit itself is only within twice the bound).
+    Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
+    M, b, delta = fold(res["M"], res["b"], res["delta"], Phi.T @ res["sigma"], g)
+    out.update({"matrix": M.tolist(), "bias": b.tolist(),
+                "nonlinearity_delta_g": delta.tolist() if params == 12 else None})
     si = res["note"].startswith("log in m/s^2")
-    q = parameters(res["M"], res["b"], g).tolist() + res["delta"].tolist()[: params - 9] if si else None
+    q = parameters(M, b, g).tolist() + delta.tolist()[: params - 9] if si else None
     out.update({
         "parameters": None if q is None else dict(zip(PARAM_LABELS, q)),
-        "guaranteed_error": dict(zip(PARAM_LABELS, guaranteed(mod, res["n"], params, noise + rb)[0].tolist())),
+        "guaranteed_error": dict(zip(PARAM_LABELS, bound.tolist())),
         "guaranteed_error_linear": dict(zip(PARAM_LABELS, err.tolist())),
         "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (best * dsig).tolist())),
         "directions_to_add": [{"n": d, "nearest_present_deg": a}

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..io.report import save_figure
+from ..models import reachable_grid
 from ..solve import highs, lp
 from . import guarantee
 from .estimate import check_residual_size
@@ -85,9 +86,8 @@ def rank(A):
 
 def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
     """Positions (every mounting) where the two alternative extended fits predict most differently."""
-    n = len(study.angles)
-    g = np.deg2rad(np.arange(0, 360, step))
-    grid = np.array(np.meshgrid(*[g] * n, indexing="ij")).reshape(n, -1)
+    stand = study.base_model.stand.angles          # only positions the stand can take (detents, ranges)
+    grid = np.deg2rad(reachable_grid([a.range_deg for a in stand], [a.detents_deg for a in stand], step)).T
     mounts = None
     if study.mounts is not None:
         nm = len(study.base_model.mountings)

@@ -6,9 +6,8 @@ import numpy as np
 
 from ..errors import DataError
 from ..io.positions import read_plan
-from ..models import layout
+from ..models import layout, reachable_grid, unreachable
 from ..io.report import write_text
-from ..solve.plans import QUARTER_DEG
 
 ROW_SECONDS = 60.0        # one position a minute
 
@@ -18,15 +17,21 @@ def plan_positions(mod, plan):
     model's own plan), quarter16 / quarter (every quarter turn), grid:AxB (a step per angle) or grid:A
     (one step for every angle); with several mountings, every position in each of them."""
     n = len(mod.ANGLES)
+    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
+    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
     if str(plan).endswith(".csv"):                          # a plan file, as `garant plan --csv` writes it
         names, mount_names = layout(mod)
-        return read_plan(plan, names, mount_names if len(mount_names) > 1 else None)
+        P, mounts = read_plan(plan, names, mount_names if len(mount_names) > 1 else None)
+        _check_reachable(mod, ranges, detents, P, plan)
+        return P, mounts
     if plan == "optimal10":
         if not len(getattr(mod, "PLAN_DEG", ())):
-            raise DataError("this model has no optimal plan of its own; use quarter or grid:STEP")
+            raise DataError("this model has no optimal plan of its own; write one with `garant plan STAND --csv "
+                            "PLAN.csv` and pass --plan PLAN.csv, or use quarter or grid:STEP")
         P = np.asarray(mod.PLAN_DEG, float)
+        _check_reachable(mod, ranges, detents, P, "the model's plan")
     elif plan in ("quarter16", "quarter"):
-        P = np.asarray(QUARTER_DEG, float) if n == 2 else _grid([90.0] * n)
+        P = reachable_grid(ranges, detents, 90.0)
     else:
         m = re.fullmatch(r"grid:(\d+(?:\.\d+)?(?:x\d+(?:\.\d+)?)*)", plan)
         if not m:
@@ -35,16 +40,20 @@ def plan_positions(mod, plan):
         steps = steps * n if len(steps) == 1 else steps
         if len(steps) != n or any(s <= 0 or 360 % s for s in steps):
             raise DataError(f"{plan}: give {n} step(s) that divide 360 degrees")
-        P = _grid(steps)
+        P = reachable_grid(ranges, detents, steps)
     mounts = getattr(mod, "MOUNTINGS", None)
     if mounts is None:
         return P, None
     return np.tile(P, (len(mounts), 1)), np.repeat(np.arange(len(mounts)), len(P))
 
 
-def _grid(steps):
-    axes = [np.arange(0, 360, s) for s in steps]
-    return np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(steps), -1).T
+def _check_reachable(mod, ranges, detents, P, where):
+    bad = unreachable(ranges, detents, P)
+    if bad:
+        k, i, v = bad
+        can = (f"its detents are {', '.join(f'{d:g}' for d in detents[i])}" if len(detents[i])
+               else f"its range is [{ranges[i][0]:g}, {ranges[i][1]:g}]")
+        raise DataError(f"{where}: position {k + 1}: {mod.ANGLES[i]} = {v:g} deg is not reachable ({can})")
 
 
 def parse_effect(text, catalogue, base_angles=None):

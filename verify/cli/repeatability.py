@@ -1,0 +1,204 @@
+"""garant repeatability: several runs of one sensor, compared against their own guaranteed bounds; the
+effect named when they disagree, and the between-run envelope to expect of the next run."""
+import sys
+
+from ..io.recordings import FORMATS, SENSORS
+from . import args as a
+
+
+def add(sub):
+    p = sub.add_parser("repeatability", help="compare runs of one sensor against their guaranteed bounds; "
+                       "name the effect when they disagree; the between-run envelope")
+    p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "
+                   "(exp or run) holding every run")
+    p.add_argument("--format", choices=FORMATS + ("means",), help="log format (guessed when omitted); means: a "
+                   "positions file of per-position means (docs/formats.md)")
+    p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
+    p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
+    a.g(p, "local gravity, m/s^2 (default 9.81)")
+    p.add_argument("--params", type=int, choices=(9, 12), default=9, help="9 or 12 parameters (as calibrate-norm)")
+    p.add_argument("--count", type=a.positive, metavar="STEP",
+                   help="quantisation step of the readings a means file averaged, m/s^2 (the noise rule adds half of "
+                   "it; a raw log states its own)")
+    p.add_argument("--rate", type=a.positive, metavar="HZ", help="sample rate of a means file's start_sample and "
+                   "stop_sample columns (gives the runs a time, for the bias_drift effect)")
+    a.json(p)
+    p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
+    p.add_argument("--markdown", metavar="FILE.md", help="the tables and coverage figures as Markdown")
+    return p
+
+
+def _imus(args, fmt):
+    from ..errors import DataError
+    from ..io import means, mimu
+    if args.imu is None:
+        return [None]
+    if args.imu == "all":
+        if fmt == "mimu":
+            return list(range(1, mimu.IMUS + 1))
+        if fmt == "means":
+            return means.imus(args.logs[0])
+        raise DataError(f"--imu all applies to a multi-IMU stream or a means file, not to a {fmt} log")
+    try:
+        return [int(args.imu)]
+    except ValueError:
+        raise DataError(f"--imu {args.imu!r}: give an IMU number or all") from None
+
+
+def _runs(args, fmt, imu):
+    from ..errors import DataError
+    from ..io import means, recordings
+    if fmt == "means":
+        return [r for path in args.logs for r in means.read(path, imu, args.rate, args.count or 0.0)]
+    if args.count or args.rate:
+        raise DataError("--count and --rate apply to a means file; a raw log states its own")
+    out = []
+    for path in args.logs:
+        log = recordings.read_log(path, fmt, args.sensor or "adxl355", imu)
+        stills, _ = recordings.still_intervals(log)
+        out.append(means.Run(path, stills, None, recordings.quantum(log)))
+    return out
+
+
+def run(args):
+    from .. import models
+    from ..io import means, recordings, report
+    from ..workflows import repeatability
+    fmt = args.format or ("means" if means.looks_like(args.logs[0]) else recordings.guess_format(args.logs[0]))
+    mod = models.load("norm")
+    results = {}
+    imus = _imus(args, fmt)
+    for k, imu in enumerate(imus, 1):
+        label = f"IMU {imu}" if imu is not None else "sensor"
+        if len(imus) > 1:
+            print(f"[{k}/{len(imus)}] {label}", file=sys.stderr)
+        runs = _runs(args, fmt, imu)
+        results[label] = res = repeatability.run(mod, runs, args.g, args.params)
+        _print(label, res)
+    if len(results) > 1:
+        _summary(results)
+    if args.json:
+        report.write_json(args.json, results if len(results) > 1 else next(iter(results.values())))
+    if args.plot:
+        repeatability.plot(results, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    if args.markdown:
+        report.write_text(args.markdown, markdown(results, args))
+        print(f"wrote {args.markdown}", file=sys.stderr)
+    return 0 if all("envelope" in r for r in results.values()) else 3
+
+
+def _fmt(v, e=None):
+    return f"{v:+.3e}" + (f" ± {e:.1e}" if e is not None else "")
+
+
+def _rows(res):
+    rows = []
+    for name in res["parameters"]:
+        env = res["envelope"][name]
+        rows.append([name] + [_fmt(r["parameters"][name], r["guaranteed_error"][name]) for r in res["runs"]]
+                    + [f"[{env['lo']:+.3e}, {env['hi']:+.3e}]"])
+    return ["parameter"] + [f"run {r['run']}" for r in res["runs"]] + ["envelope"], rows
+
+
+def _print(label, res):
+    from ..io import report
+    print(f"\n{label}: {len(res['runs'])} runs, each calibrated by the norm relation with the noise rule")
+    if "inconsistent_runs" in res:
+        print("  INCONSISTENT run(s), no comparison: " + ", ".join(res["inconsistent_runs"])
+              + " (garant calibrate-norm --diagnose on each says why)")
+        return
+    report.table(*_rows(res))
+    print("  (estimate ± guaranteed error per run; units: lambda 1, alpha/beta/gamma rad, eps over g)")
+    print(f"  run pairs x parameters inside their per-run bounds: {res['coverage_per_run_bounds']:.1%}")
+    print(f"  with the envelope, judged on runs left out of it: run pairs {_pct(res['coverage_with_envelope_pairs'])},"
+          f" each run against the envelope of the others {_pct(res['coverage_with_envelope_leave_one_out'])}")
+    print("  effects, all runs fitted at once (worst exact residual in noise units; <= 1 is consistent): "
+          + ", ".join(f"{x['effect']} {x['worst_in_noise_units']:.2f}" if "skipped" not in x
+                      else f"{x['effect']} (skipped: {x['skipped']})" for x in res["effects"]))
+    named = next((x for x in res["effects"] if x["effect"] == res["named_effect"]), None)
+    if named is None:
+        print("  no candidate makes the runs consistent: an effect outside the list, or noise bounds too tight")
+    else:
+        print(f"  named: {named['effect']}: {named['physics']}")
+        for pair, ch in named["changes"].items():
+            print(f"    {pair}: " + ", ".join(f"{k} {v:+.2e}" for k, v in ch.items()))
+    out = [c for c in res["comparisons"] if not c["inside"]]
+    if out:
+        print(f"  outside the per-run bounds ({len(out)}): " + "; ".join(
+            f"runs {c['runs'][0]}-{c['runs'][1]} {c['parameter']} {c['gap'] / c['bound']:.1f}x"
+            + ("" if c.get("explained_by") else " UNEXPLAINED") for c in out))
+
+
+def _pct(x):
+    return "n/a (needs 3 or 4 runs)" if x is None else f"{x:.1%}"
+
+
+def _coverage(results):
+    import numpy as np
+    ok = [r for r in results.values() if "envelope" in r]
+    comps = [c for r in ok for c in r["comparisons"]]
+    loo = [x for r in ok for x in r["envelope_judged"]["leave_one_out"]]
+    pairs = [x for r in ok for x in r["envelope_judged"]["pairs"]]
+    mean = lambda xs: float(np.mean([x["inside"] for x in xs])) if xs else None    # noqa: E731
+    return comps, mean(comps), mean(pairs), mean(loo)
+
+
+def _summary(results):
+    from ..io import report
+    print("\nsummary")
+    rows = [[label, r.get("coverage_per_run_bounds", "inconsistent"), r.get("coverage_with_envelope_pairs"),
+             r.get("coverage_with_envelope_leave_one_out"), r.get("named_effect"),
+             len(r.get("unexplained", []))] for label, r in results.items()]
+    report.table(["sensor", "pairs in per-run bounds", "pairs with envelope", "runs in envelope of others",
+                  "named effect", "unexplained"],
+                 [[_p(x) if x is None or isinstance(x, float) else x for x in row] for row in rows])
+    comps, per_run, pairs, loo = _coverage(results)
+    print(f"all: {per_run:.1%} of {len(comps)} run-pair x parameter comparisons inside the per-run bounds; with the "
+          f"envelope {_pct(pairs)} (pairs), {_pct(loo)} (runs against the envelope of the others)")
+
+
+def markdown(results, args):
+    from ..io import report
+    comps, per_run, pairs, loo = _coverage(results)
+    first = next(iter(results.values()))
+    lines = [f"Written by `garant repeatability {' '.join(args.logs)}"
+             + (f" --format {args.format}" if args.format else "") + (f" --imu {args.imu}" if args.imu else "")
+             + (f" --g {args.g:g}") + (f" --count {args.count:g}" if args.count else "")
+             + (f" --rate {args.rate:g}" if args.rate else "") + f" --markdown {args.markdown}`.", "",
+             f"Comparison: {first['comparison_rule']}. Envelope: {first['envelope_rule']}. Judged on runs left "
+             "out of it: each run pair (i, j) against e_i + e_j + D with D from the other runs, and each run "
+             "against the envelope of the others.", "",
+             report.markdown_table(["sensor", "pairs inside per-run bounds", "pairs inside with the envelope",
+                                    "runs inside the envelope of the others", "named effect", "unexplained"],
+                                   [[k, _p(r.get("coverage_per_run_bounds")), _p(r.get("coverage_with_envelope_pairs")),
+                                     _p(r.get("coverage_with_envelope_leave_one_out")), r.get("named_effect") or "none",
+                                     len(r.get("unexplained", []))] for k, r in results.items()]),
+             "", f"All sensors: {_p(per_run)} of {len(comps)} run-pair x parameter comparisons inside the per-run "
+             f"bounds; with the envelope {_p(pairs)} (pairs) and {_p(loo)} (runs against the envelope of the "
+             "others).", ""]
+    for label, res in results.items():
+        lines += [f"### {label}", ""]
+        if "envelope" not in res:
+            lines += ["Inconsistent run(s): " + ", ".join(res["inconsistent_runs"]), ""]
+            continue
+        lines += [report.markdown_table(*_rows(res)), ""]
+        named = next((x for x in res["effects"] if x["effect"] == res["named_effect"]), None)
+        lines += ["Effects, all runs fitted at once (worst exact residual in noise units): "
+                  + ", ".join(f"{x['effect']} {x['worst_in_noise_units']:.2f}" for x in res["effects"]
+                              if "skipped" not in x) + ".", ""]
+        if named and named["changes"]:
+            lines += [f"Named: **{named['effect']}** ({named['physics']}); changes from run 1: "
+                      + "; ".join(f"{pair}: " + ", ".join(f"{k} {v:+.1e}" for k, v in ch.items())
+                                  for pair, ch in named["changes"].items()) + ".", ""]
+        out = [c for c in res["comparisons"] if not c["inside"]]
+        if out:
+            lines += ["Outside the per-run bounds: " + "; ".join(
+                f"runs {c['runs'][0]}-{c['runs'][1]} {c['parameter']} ({c['gap'] / c['bound']:.2f}x, "
+                + (f"explained by {c['explained_by']})" if c.get("explained_by") else "UNEXPLAINED)")
+                for c in out) + ".", ""]
+    return "\n".join(lines)
+
+
+def _p(x):
+    return "n/a" if x is None else f"{x:.1%}"

@@ -1,0 +1,75 @@
+"""The MIMU4444BT binary stream (docs/formats.md): 8 IMUs per packet, checksummed, read vectorised.
+
+Packet (106 bytes): 0xAA; a 3-byte packet counter; a big-endian uint32 time stamp; for each of the
+8 IMUs six big-endian int16 (accelerometer x, y, z, gyro x, y, z, counts); a big-endian uint16
+checksum = the sum of all preceding bytes mod 2^16. A packet that fails its checksum is dropped and
+reading resynchronises on the next 0xAA. IMUs 2, 4, 6, 8 sit on the bottom of the board: their axes
+map into the array frame by C_BOTTOM.
+"""
+import numpy as np
+
+from ..errors import DataError
+
+IMUS = 8
+PACKET = 1 + 3 + 4 + IMUS * 12 + 2
+RATE_HZ = 62.5                      # the board's sample rate (the stream's README); sets the tick rate
+COUNTS_PER_G = 2048                 # +-16 g range
+G_DATASHEET = 9.80665               # m/s^2 per g of the counts (the stream's README)
+C_BOTTOM = np.array([[0, -1, 0], [-1, 0, 0], [0, 0, -1]])
+
+
+def looks_like(head):
+    """True when the first bytes of a file hold two consecutive packets that pass their checksum."""
+    b = np.frombuffer(head, dtype=np.uint8).astype(np.int64)
+    for s in np.flatnonzero(b[: max(len(b) - 2 * PACKET + 1, 0)] == 0xAA):
+        if all(b[p: p + PACKET - 2].sum() % 65536 == b[p + PACKET - 2] * 256 + b[p + PACKET - 1]
+               for p in (s, s + PACKET)):
+            return True
+    return False
+
+
+def packets(path):
+    """The packets that pass their checksum, in stream order, as a (P, 106) uint8 array, and the number
+    of bytes outside them (a cut first packet, packets that failed their checksum)."""
+    try:
+        b = np.fromfile(path, dtype=np.uint8)
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    if len(b) < PACKET:
+        raise DataError(f"{path}: {len(b)} bytes, shorter than one {PACKET}-byte MIMU packet")
+    starts = np.flatnonzero(b[: len(b) - PACKET + 1] == 0xAA)
+    c = np.concatenate([[0], np.cumsum(b, dtype=np.int64)])          # byte sums without a copy per packet
+    stated = b[starts + PACKET - 2].astype(np.int64) * 256 + b[starts + PACKET - 1]
+    ok = (c[starts + PACKET - 2] - c[starts]) % 65536 == stated
+    kept, end = [], -1
+    for s in starts[ok].tolist():           # resynchronise: a valid packet never overlaps the previous one
+        if s >= end:
+            kept.append(s)
+            end = s + PACKET
+    if not kept:
+        raise DataError(f"{path}: no packet with a valid checksum; not a MIMU4444BT stream")
+    kept = np.array(kept)
+    return b[kept[:, None] + np.arange(PACKET)], len(b) - len(kept) * PACKET
+
+
+def read(path, imu):
+    """Time (s, from the unwrapped time stamps) and the accelerometer of IMU `imu` (1-8) in the array
+    frame, m/s^2 (COUNTS_PER_G counts per G_DATASHEET); the quantisation step (one count, m/s^2); and
+    the number of bytes skipped (outside packets that pass their checksum)."""
+    if not 1 <= imu <= IMUS:
+        raise DataError(f"--imu {imu}: the MIMU4444BT stream holds IMUs 1 to {IMUS}")
+    pk, skipped = packets(path)
+    ts = pk[:, 4:8].astype(np.int64) @ np.array([1 << 24, 1 << 16, 1 << 8, 1])
+    ticks = np.diff(ts) % (1 << 32)                                  # the 32-bit stamp wraps
+    step = float(np.median(ticks))
+    if step <= 0:
+        raise DataError(f"{path}: the time stamps do not advance")
+    t = np.concatenate([[0.0], np.cumsum(ticks)]) / (step * RATE_HZ)
+    off = 8 + (imu - 1) * 12
+    raw = pk[:, off: off + 6].astype(np.int64)
+    counts = raw[:, 0::2] * 256 + raw[:, 1::2]
+    counts = np.where(counts >= 32768, counts - 65536, counts)       # big-endian int16
+    if imu % 2 == 0:
+        counts = counts @ C_BOTTOM.T
+    unit = G_DATASHEET / COUNTS_PER_G
+    return t, counts * unit, unit, skipped
