@@ -275,8 +275,18 @@ def from_data(data, path="<description>"):
 
 
 def check_observable(model, J):
-    """Every physical parameter must move the readings to first order; else name it and its link."""
+    """Every physical parameter must move the readings to first order; else name it and its link, or,
+    for the block's own parameters, the axis the stand never turns towards gravity."""
     n = len(model.stand.chain)
+    blind = [p.name for k, p in enumerate(model.parameters) if p.name.startswith("Gamma")
+             and all(v == 0 for v in J.col(k))]
+    if blind:
+        axes = sorted({int(b[-1]) for b in blind if all(f"Gamma{i}{b[-1]}" in blind for i in (1, 2, 3))})
+        why = (f"no position turns gravity onto block axis {', '.join(map(str, axes))}" if axes
+               else "the positions do not vary gravity enough")
+        raise DescriptionError(f"{model.source_file}: the stand cannot observe the block's {', '.join(blind)}: {why}; "
+                               "add a mounting that turns that axis (block.mountings, e.g. [\"+x+y+z\", \"+z+x+y\"]) "
+                               "or a link that tilts it (a wedge angle other than 90 degrees, an axis not parallel)")
     for k, p in enumerate(model.parameters):
         if all(v == 0 for v in J.col(k)):
             where = next((f"link[{n - i}].{'offset' if l.angle and l.error == p.name else 'error'}"

@@ -42,7 +42,7 @@ def write_multi_csv(path, angles, mounts, names, mount_names, f):
 def test_simulate_estimate_round_trip(name, tmp_path):
     mod = models.load(name)
     names, mount_names = models.layout(mod)
-    r = plans.search(mod)
+    r = plans.search(mod, count_limit=1)
     plan = list(r.optimal_plans[0])
     angles, mounts = r.angles_deg[plan], r.mounts[plan]
     rng = np.random.default_rng(3)

@@ -51,6 +51,16 @@ def stand_model(name):
     return BUILTIN[key]
 
 
+def symbolic_H(mod):
+    """The symbolic H (rows: 3 per mounting) and the angle symbols of a stand module, re-derived from
+    its description (built-in or the TOML file it was loaded from)."""
+    from garant.derive.derivation import derive
+    source = getattr(mod, "__file__", "") or ""
+    name = source if source.endswith(".toml") else mod.__name__.rsplit(".", 1)[-1].replace("_", "-")
+    d = derive(stand_model(name))
+    return d.ident.H, d.model.angle_symbols
+
+
 def load_remount(name):
     """The generated remount module (25)-(29) of a built-in model, or None."""
     load(name)

@@ -44,7 +44,10 @@ def main(argv=None):
     try:
         _check_outputs(args)
         return args.run(args)
-    except (DataError, LPFailed, ValueError) as e:
+    except LPFailed as e:
+        print(f"garant: error: {_plain(e)}", file=sys.stderr)
+        return 2
+    except (DataError, ValueError) as e:
         print(f"garant: error: {e}", file=sys.stderr)
         return 2
     except BrokenPipeError:                            # output piped into a reader that stopped (head)
@@ -53,6 +56,18 @@ def main(argv=None):
     except OSError as e:
         print(f"garant: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
         return 2
+
+
+def _plain(e):
+    """A solver failure said in the user's terms: what it means for the stand or the plan."""
+    text = str(e)
+    what = text.split(":", 1)[0]
+    low = text.lower()
+    if "unbounded" in low or "infeasible" in low:
+        return (f"{what}: the positions cannot estimate every combination q (no unbiased estimator exists on "
+                "them); add positions (garant identify STAND --plan PLAN.csv says which q are missing)")
+    return f"{what}: the linear program did not reach an optimum ({text.split(':', 1)[-1].strip()}); " \
+           "check the positions and the noise bound for extreme values"
 
 
 def _check_outputs(args):

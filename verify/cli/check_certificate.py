@@ -1,4 +1,6 @@
 """garant check-certificate: re-check an optimality certificate without any solver."""
+from pathlib import Path
+
 from ..errors import DataError
 
 
@@ -12,7 +14,7 @@ def run(args):
     from ..proof import check
     try:
         cert = check.read(args.file)
-        steps = check.check(cert)
+        steps = check.check(cert, base=str(Path(args.file).resolve().parent))
     except check.MalformedCertificate as e:
         raise DataError(f"{args.file}: not a valid certificate: {e}") from None
     print(f"{cert.get('claim', '?')} ({cert.get('model', '?')}), value {cert.get('value', '?')}")

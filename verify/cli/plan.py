@@ -1,6 +1,7 @@
 """garant plan: optimal guaranteed errors and a minimal optimal plan of a stand."""
 import numpy as np
 
+from ..errors import DataError
 from . import args as a
 
 
@@ -9,6 +10,12 @@ def add(sub):
     p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or norm "
                    "(the coarse stand of 001: which orientations to hold the IMU in)")
     a.json(p)
+    p.add_argument("--grid", type=a.positive, metavar="STEP", help="search positions every STEP degrees (detents "
+                   "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
+    p.add_argument("--count-seconds", type=a.positive, default=5.0, metavar="S",
+                   help="time allowed for counting the optimal plans on a large grid (default 5 s)")
+    p.add_argument("--certificates", metavar="DIR", help="write a certificate of the plan's optimality for each "
+                   "q (garant check-certificate re-checks it without any solver)")
     p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
     return p
@@ -23,24 +30,59 @@ def run(args):
     from ..solve import continuum, plans
     mod = models.load(args.model)
     names, mounts = models.layout(mod)
-    r = plans.search(mod)
+    if args.grid is not None and 360 % args.grid:
+        raise DataError(f"--grid {args.grid:g}: give a step that divides 360 degrees")
+    P, M = _grid(mod, args.grid or 90.0) if args.grid else plans.grid(mod)
+    r = plans.search(mod, P, M, count_seconds=args.count_seconds)
+    n = len(names)
+    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
+    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
+    finite = all(len(d) for d in detents)
+    cont, added = None, 0
+    if not finite:                          # the continuum of reachable angles: the exchange method there
+        sol = continuum.solve(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
+        cont = sol.values
+        if any(e > c + 1e-7 for e, c in zip(r.errors, cont)):   # the exchange positions become candidates
+            X = _snap(np.rad2deg(sol.positions), ranges, detents)
+            base = P[M == 0]
+            new_all = [x for x in X if not np.any(np.all(np.isclose(base, x), axis=1))]
+            exact = [x for x in new_all if np.all(x % 15 == 0)]
+            for new in ([exact, new_all] if exact and len(exact) < len(new_all) else [new_all]):
+                if not new:
+                    continue                 # exact candidates first (multiples of 15 degrees), then all
+                k = len(mounts)
+                P2 = np.vstack([base, np.array(new)])
+                P, M = np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2))
+                r, added = plans.search(mod, P, M, count_seconds=args.count_seconds), len(new)
+                if all(e <= c + 1e-7 for e, c in zip(r.errors, cont)):
+                    break
     plan = _preferred_plan(mod, r)
     multi = len(mounts) > 1
 
     def fmt(s):
         return [*(float(v) for v in r.angles_deg[s]), *([mounts[r.mounts[s]]] if multi else [])]
-    cont = continuum.solve(build.stacked_H(mod), len(names), np.eye(len(mod.Q_NAMES))).values
-    report.table(("q", "definition", "optimal error on the grid (sigma)", "continuum optimum (exchange)", "grid is"),
-                 [(q, d, f"{e:g}", f"{c:.6g}", "optimal (proven)" if pr else
+    report.table(("q", "definition", "optimal error on the candidates (sigma)",
+                  "continuum optimum (exchange)", "candidates are"),
+                 [(q, d, f"{e:g}", "-" if c is None else f"{c:.6g}",
+                   "optimal on every reachable position (detents)" if finite else "optimal (proven)" if pr else
                    "optimal" if abs(c - e) < 1e-6 else "NOT optimal: use intermediate angles")
-                  for q, d, e, c, pr in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, r.errors, cont, r.proven)])
-    where = "grid of " + ("detents/quarter turns" if not multi else "quarter turns x mountings")
+                  for q, d, e, c, pr in zip(mod.Q_NAMES, mod.Q_DEFINITIONS, r.errors,
+                                            cont if cont is not None else [None] * len(r.errors), r.proven)])
+    if added:
+        print(f"candidates: the grid and {added} position(s) of the exchange method's optimum on the continuum")
+    exact = r.exact_errors()
+    if any(e is not None and not e.lstrip("-").isdigit() and "/" not in e for e in exact):
+        print("exact optimal errors: " + ", ".join(f"{q} {e}" for q, e in zip(mod.Q_NAMES, exact) if e))
+    where = (f"grid of {args.grid:g}-degree steps" if args.grid else "grid of detents/quarter turns") + (
+        " and the exchange positions" if added else "") + (
+        " x mountings" if multi else "")
     print(f"\nminimal number of positions optimal for every q ({where}, {len(r.angles_deg)} positions): "
           f"{r.min_positions}")
-    if r.exhaustive:
-        print(f"optimal plans of {r.min_positions} positions on that grid: {len(r.optimal_plans)}")
-    else:
-        print("optimal plan found by a mixed-integer program (too many candidate sets to count every plan)")
+    on_quarter = all(np.all(np.isclose(r.angles_deg[list(p)] % 90, 0)) for p in r.optimal_plans)
+    print(f"optimal plans of {r.min_positions} positions on that grid: "
+          + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped; "
+                                                             "--count-seconds for more)")
+          + f"; counted by {r.method}" + ("; every one on quarter turns" if on_quarter and args.grid else ""))
     print(f"plan ({', '.join(a + '_deg' for a in names)}{', mounting' if multi else ''}): "
           + ", ".join("(" + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in fmt(s)) + ")"
                       for s in plan))
@@ -48,17 +90,58 @@ def run(args):
         report.write_json(args.json, {
             "model": args.model, "angles": names, "mountings": mounts, "q_names": list(mod.Q_NAMES),
             "definitions": list(mod.Q_DEFINITIONS), "guaranteed_errors": list(r.errors),
-            "proven_on_continuum": list(r.proven), "continuum_errors": [float(c) for c in cont],
+            "proven_on_continuum": list(r.proven),
+            "continuum_errors": None if cont is None else [float(c) for c in cont],
+            "reachable_set": "detents" if finite else "continuum", "exchange_candidates_added": added,
+            "guaranteed_errors_exact": exact, "grid_step_deg": args.grid, "count_method": r.method,
             "min_positions": r.min_positions,
             "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
+            "optimal_plans_on_quarter_turns": bool(on_quarter),
             "plan": [fmt(s) for s in plan],
             "optimal_plans": [[fmt(s) for s in pl] for pl in r.optimal_plans]})
+    if args.certificates:
+        _certificates(mod, args, r, plan)
     if args.csv:
         header = [f"{a}_deg" for a in names] + (["mount"] if multi else [])
         report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
             f"{v:g}" if not isinstance(v, str) else v for v in fmt(s)) for s in plan]) + "\n")
         print(f"wrote {args.csv}")
     return 0
+
+
+def _certificates(mod, args, r, plan):
+    from pathlib import Path
+
+    from ..proof import build, check
+    folder = Path(args.certificates)
+    folder.mkdir(parents=True, exist_ok=True)
+    certs = build.for_plan(mod, args.model, r, plan)
+    stem = Path(args.model).stem.replace("_", "-")
+    for q, cert in certs:
+        check.write(cert, folder / f"{stem}_plan_{q}.json")
+    missing = [q for q in mod.Q_NAMES if q not in {q for q, _ in certs}]
+    print(f"wrote {len(certs)} certificate(s) to {folder}/ (garant check-certificate FILE re-checks each)"
+          + (f"; none for {', '.join(missing)}: no exact dual or estimator (off the 15-degree grid?)"
+             if missing else ""))
+
+
+def _snap(X, ranges, detents, step=15.0, tol=1e-6):
+    """Exchange positions (degrees): onto multiples of 15 degrees where within tol (then exact), within
+    the range of each angle; positions a stand cannot take are dropped."""
+    from ..models import unreachable
+    k = np.round(X / step) * step
+    X = np.where(np.abs(X - k) < tol, k, X) % 360
+    return [x for x in X if unreachable(ranges, detents, x[None]) is None]
+
+
+def _grid(mod, step):
+    """Positions every `step` degrees that the stand can take, in every mounting."""
+    from ..models import layout, reachable_grid
+    n = len(mod.ANGLES)
+    P = reachable_grid(getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n),
+                       getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n), step)
+    k = len(layout(mod)[1])
+    return np.tile(P, (k, 1)), np.repeat(np.arange(k), len(P))
 
 
 def _preferred_plan(mod, r):

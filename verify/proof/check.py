@@ -9,7 +9,9 @@ vector lambda, all exact (rationals, or algebraic numbers like sqrt(3)/2). The c
 (c) dual feasibility: |H^(p)(x)^T lambda| <= 1 for every x of the continuum and every p: exactly
     when the trigonometric form gives it (sum of |coefficients| of canonical monomials <= 1), else by
     rigorous interval branch and bound, which proves it to 1 + ETA.
-By weak duality (a)-(c) prove v/(1 + ETA) <= optimum <= v (= v when (c) closes exactly).
+By weak duality (a)-(c) prove v/(1 + ETA) <= optimum <= v (= v when (c) closes exactly). A plan's
+certificate (`garant plan --certificates`) has a finite domain, the positions the plan was chosen
+from, each checked to be one the stand can take; (c) is then exact at each of them.
 Before (a), step (0) ties the certificate to its model: its H and domain must be those re-derived
 from the model it names (reference.py), and its target the e_nu of the q its claim names. Every
 string is read by the whitelist grammar of parse.py and every list is size-capped: a hostile file
@@ -88,8 +90,8 @@ def parsed(cert):
     if not isinstance(cert, dict):
         raise MalformedCertificate(f"expected a JSON object, found {type(cert).__name__}")
     dom = _field(cert, "domain", dict)
-    if dom.get("kind") not in ("angles", "sphere"):
-        raise MalformedCertificate(f"domain.kind: {dom.get('kind')!r} is neither 'angles' nor 'sphere'")
+    if dom.get("kind") not in ("angles", "sphere", "positions"):
+        raise MalformedCertificate(f"domain.kind: {dom.get('kind')!r} is not 'angles', 'sphere' or 'positions'")
     names = _list(dom.get("names"), "domain.names")
     if not all(isinstance(n, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,40}", n) for n in names) \
             or len(set(names)) != len(names) or len(names) > 12:
@@ -110,26 +112,40 @@ def parsed(cert):
         at = {s: _exact(x, (), f"primal[{k}].at") for s, x in zip(syms, _list(term.get("at"), f"primal[{k}].at",
                                                                               len(syms)))}
         primal.append((at, term["row"], _exact(term.get("weight"), (), f"primal[{k}].weight")))
-    ranges = None
+    ranges = positions = None
+    if dom["kind"] == "positions":                     # a finite set of positions: the plan's candidates
+        positions = [[_exact(x, (), f"domain.positions[{k}]") for x in _list(p_, f"domain.positions[{k}]", len(syms))]
+                     for k, p_ in enumerate(_list(dom.get("positions"), "domain.positions"))]
     if dom["kind"] == "angles":
         ranges = [[_exact(x, (), "domain.ranges") for x in _list(r, "domain.ranges[]", 2)]
                   for r in _list(dom.get("ranges"), "domain.ranges", len(syms))]
-    return dict(syms=syms, H=H, a=a, lam=lam, v=v, primal=primal, ranges=ranges)
+    return dict(syms=syms, H=H, a=a, lam=lam, v=v, primal=primal, ranges=ranges, positions=positions)
 
 
-def tied_to_model(cert, c):
-    """(passed, detail): H and domain are those of the model the certificate names, and the target is
-    the e_nu of the q its claim names."""
+def tied_to_model(cert, c, base=None):
+    """(passed, detail): H and domain are those of the model the certificate names (a description
+    file: the very file, by its SHA-256), and the target is the e_nu of the q its claim names."""
+    import hashlib
+
+    from .reference import stand_file
     if not isinstance(cert.get("model"), str):
         return False, "names no model"
     try:
-        H_ref, dom_ref, q_names = reference(cert["model"])
+        path = stand_file(cert["model"], base)
+        if path is not None and hashlib.sha256(path.read_bytes()).hexdigest() != cert.get("model_sha256"):
+            return False, f"{cert['model']} is not the description the certificate was made for (SHA-256 differs)"
+        H_ref, dom_ref, q_names = reference(cert["model"], base)
     except ValueError as e:
         return False, str(e)
-    if [str(s) for s in c["syms"]] != dom_ref["names"] or cert["domain"]["kind"] != dom_ref["kind"]:
+    kind = cert["domain"]["kind"]
+    if [str(s) for s in c["syms"]] != dom_ref["names"] or (kind != dom_ref["kind"] and kind != "positions"):
         return False, f"domain {cert['domain'].get('names')} is not that of {cert['model']} ({dom_ref['names']})"
-    if dom_ref["kind"] == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
+    if kind == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
         return False, "the domain is not the whole box of angles of the model"
+    if kind == "positions":
+        bad = _unreachable(c["positions"], dom_ref)
+        if bad:
+            return False, bad
     syms = {s.name: s for s in c["syms"]}
     ref = [[e.subs({x: syms[x.name] for x in e.free_symbols}) for e in row] for row in H_ref]
     if len(ref) != len(c["H"]) or len(ref[0]) != len(c["H"][0]):
@@ -145,15 +161,32 @@ def tied_to_model(cert, c):
     return True, f"H and domain re-derived from {cert['model']}; target e_{nu + 1} ({q_names[nu]})"
 
 
-def check(cert):
+def _unreachable(positions, dom_ref):
+    """Why a position of the certificate is not one the stand can take, or None."""
+    for k, pos in enumerate(positions):
+        for i, x in enumerate(pos):
+            deg = sp.nsimplify(x * 180 / sp.pi)
+            if not deg.is_Rational:
+                return f"position {k + 1}: {x} is not a rational number of degrees"
+            det = dom_ref["detents_deg"][i]
+            lo, hi = dom_ref["ranges_deg"][i]
+            if det and not any((deg - sp.Rational(str(d))) % 360 == 0 for d in det):
+                return f"position {k + 1}: {deg} degrees is not a detent of the stand"
+            if not det and not any(lo <= deg + t <= hi for t in (-360, 0, 360)):
+                return f"position {k + 1}: {deg} degrees is outside the range [{lo}, {hi}]"
+    return None
+
+
+def check(cert, base=None):
     """[(step, passed, detail)] for the steps (0), (a), (b), (c); a certificate holds iff all pass.
-    MalformedCertificate when the file is not of the certificate form."""
+    MalformedCertificate when the file is not of the certificate form. `base`: the certificate's
+    folder, where a description file it names may lie."""
     if not isinstance(cert, dict) or cert.get("format") != FORMAT:
         raise MalformedCertificate(f"not a {FORMAT} certificate (no \"format\": \"{FORMAT}\")")
     c = parsed(cert)
     syms, H, a, lam, v = c["syms"], c["H"], c["a"], c["lam"], c["v"]
     m = len(H[0])
-    out = [("(0) model", *tied_to_model(cert, c))]
+    out = [("(0) model", *tied_to_model(cert, c, base))]
     if not out[0][1]:
         return out
     image = [sp.Integer(0)] * m
@@ -166,8 +199,59 @@ def check(cert):
     dual_value = sp.simplify(sum((x * y for x, y in zip(a, lam)), sp.Integer(0)))
     ok = sp.simplify(l1 - v) == 0 and sp.simplify(dual_value - v) == 0
     out.append(("(b) primal = dual = value", ok, f"sum|w| = {l1}, a.lambda = {dual_value}, value = {v}"))
-    out.append(("(c) dual feasible",) + feasible(H, lam, cert["domain"], syms, c["ranges"]))
+    if cert["domain"]["kind"] == "positions":
+        out.append(("(c) dual feasible",) + feasible_at(H, lam, syms, c["positions"]))
+        for at, _, _ in c["primal"]:                          # the estimator uses candidate positions only
+            if [at[s] for s in syms] not in c["positions"]:
+                out[-1] = ("(c) dual feasible", False, "a primal position is not among the domain's positions")
+                break
+    else:
+        out.append(("(c) dual feasible",) + feasible(H, lam, cert["domain"], syms, c["ranges"]))
     return out
+
+
+def _feasible_in_field(polys, syms, positions):
+    """feasible_at in Q(sqrt2, sqrt3) arithmetic (solve/field.py), when the positions are multiples of
+    15 degrees and the expressions live there; None otherwise (then SymPy decides)."""
+    from ..solve import field
+    try:
+        degs = [[sp.nsimplify(v * 180 / sp.pi) for v in pos] for pos in positions]
+        if not all(d.is_Integer for pos in degs for d in pos):
+            return None
+        f = field.evaluator(polys, syms)
+        touching = 0
+        for k, pos in enumerate(degs):
+            for r, v in enumerate(f([int(d) for d in pos])):
+                a = abs(v)
+                if a > 1:
+                    return False, f"position {k + 1}, row {r}: |H^T lambda| = {float(a):.8g} > 1 (exact)"
+                touching += a == 1
+        return True, f"exact at all {len(positions)} positions x {len(polys)} rows ({touching} touch 1)"
+    except ValueError:
+        return None
+
+
+def feasible_at(H, lam, syms, positions):
+    """|H^(p)(x)^T lambda| <= 1 at each of finitely many positions, every row: exactly (a touching
+    value is shown equal to 1 by its minimal polynomial; any other is separated from 1 numerically
+    with 50 digits, far beyond its distance from 1)."""
+    x = sp.Symbol("x")
+    touching = 0
+    polys = [sum((l * h for l, h in zip(lam, row) if l != 0), sp.Integer(0)) for row in H]
+    fast = _feasible_in_field(polys, syms, positions)
+    if fast is not None:
+        return fast
+    for k, pos in enumerate(positions):
+        at = dict(zip(syms, pos))
+        for r, p in enumerate(polys):
+            d = sp.expand(1 - sp.expand_trig(p.subs(at)) ** 2)
+            if d == 0 or sp.minimal_polynomial(d, x) == x:
+                touching += 1
+                continue
+            val = d.evalf(50)
+            if not val.is_real or val < sp.Float("1e-40", 50):
+                return False, f"position {k + 1}, row {r}: |H^T lambda| = {sp.sqrt(1 - val).evalf(8)} > 1"
+    return True, f"exact at all {len(positions)} positions x {len(H)} rows ({touching} touch 1)"
 
 
 def feasible(H, lam, dom, syms, ranges=None, max_boxes=1_500_000):

@@ -11,8 +11,32 @@ class UnknownModel(ValueError):
     """A certificate names a model garant does not know."""
 
 
-def reference(key):
-    """(H rows as SymPy expressions, domain dict, names of q) of the model a certificate names."""
+def stand_file(key, base=None):
+    """The description file a certificate names (as written, else beside the certificate), or None."""
+    from pathlib import Path
+    if not str(key).endswith(".toml"):
+        return None
+    for p in (Path(key), Path(base or ".") / key, Path(base or ".") / Path(key).name):
+        if p.is_file():
+            return p
+    raise UnknownModel(f"the stand description {key!r} is not found (as written, or beside the certificate)")
+
+
+def reference(key, base=None):
+    """(H rows as SymPy expressions, domain dict, names of q) of the model a certificate names: a
+    built-in stand, the norm model, or a stand description file (read by the safe loader, re-derived)."""
+    path = stand_file(key, base)
+    if path is not None:
+        from garant.derive import description
+        from garant.derive.derivation import derive
+        try:
+            d = derive(description.load(path))
+        except description.DescriptionError as e:
+            raise UnknownModel(str(e)) from None
+        H = d.ident.H
+        return ([list(H.row(r)) for r in range(H.rows)],
+                {"kind": "positions", "names": [a.name for a in d.model.stand.angles], **_reach(d)},
+                [f"q{nu + 1}" for nu in range(H.cols)])
     if key == "norm":
         from garant.derive import norm
         from garant.generated import norm as mod
@@ -27,5 +51,11 @@ def reference(key):
     names = [a.name for a in d.model.stand.angles]
     H = d.ident.H
     return ([list(H.row(r)) for r in range(H.rows)],
-            {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names)},
+            {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names), **_reach(d)},
             [f"q{nu + 1}" for nu in range(H.cols)])
+
+
+def _reach(d):
+    """The positions a stand can take: each angle's range and detents, degrees."""
+    return {"ranges_deg": [list(a.range_deg) for a in d.model.stand.angles],
+            "detents_deg": [list(a.detents_deg) for a in d.model.stand.angles]}

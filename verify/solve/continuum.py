@@ -56,14 +56,21 @@ def _refine(H, X, Lam, step, lo, hi, iterations=400):
     return X, best
 
 
-def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60, top=12):
-    """Exchange method on [0, 2 pi)^n_angles for the targets (columns of `targets`, m x T)."""
-    lo, hi = np.zeros(n_angles), np.full(n_angles, 2 * np.pi)
-    g = np.deg2rad(np.arange(0, 360, scan_deg))
-    scan = np.array(np.meshgrid(*[g] * n_angles, indexing="ij")).reshape(n_angles, -1).T
+def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60, top=12, ranges_deg=None):
+    """Exchange method on the box of angles (default [0, 2 pi)^n_angles; `ranges_deg` (lo, hi) per
+    angle for a stand with limited ranges) for the targets (columns of `targets`, m x T)."""
+    ranges = np.array(ranges_deg if ranges_deg is not None else [(0, 360)] * n_angles, float)
+    full = ranges[:, 1] - ranges[:, 0] >= 360
+    lo, hi = np.deg2rad(ranges[:, 0]), np.deg2rad(np.where(full, ranges[:, 0] + 360, ranges[:, 1]))
+    axes = [np.deg2rad(np.arange(a, b + (0 if f else 1e-9), scan_deg)) for (a, b), f in
+            zip(np.where(full[:, None], [[r[0], r[0] + 360] for r in ranges], ranges), full)]
+    scan = np.array(np.meshgrid(*axes, indexing="ij")).reshape(n_angles, -1).T
     if start is None:                                   # quarter turns: identify every q of the stands here
-        q = np.deg2rad([0, 90, 180, 270])
-        start = np.array(np.meshgrid(*[q] * n_angles, indexing="ij")).reshape(n_angles, -1).T
+        quarter = [np.deg2rad([v for v in (0, 90, 180, 270, 360, -90) if a <= v <= b or f][:4] or [a, b])
+                   for (a, b), f in zip(ranges, full)]
+        start = np.array(np.meshgrid(*quarter, indexing="ij")).reshape(n_angles, -1).T
+        if ranges_deg is not None and not full.all():
+            start = np.vstack([start, scan])            # a limited range: every scan point to start from
     X = np.asarray(start, float)
     for it in range(1, max_iter + 1):
         A = lp.measurement_matrix(H, X)

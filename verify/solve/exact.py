@@ -14,6 +14,41 @@ import numpy as np
 from ..models import H_at
 
 
+def exact_columns(mod, angles_deg, mounts=None):
+    """H^(p) at grid positions exactly, shape (S, 3, m): integers where H is integer there (int64),
+    else elements of Q(sqrt2, sqrt3) (field.QF, object array) from the stand's symbolic H, on grids of
+    multiples of 15 degrees. ValueError, saying why, when neither holds."""
+    try:
+        return integer_columns(mod, angles_deg, mounts)
+    except ValueError:
+        pass
+    from ..models import symbolic_H
+    from .field import evaluator
+    H, symbols = symbolic_H(mod)
+    f = evaluator(list(H), symbols)
+    P = np.atleast_2d(np.asarray(angles_deg, float))
+    mounts = np.zeros(len(P), int) if mounts is None else np.asarray(mounts)
+    m = H.cols
+    out = np.empty((len(P), 3, m), dtype=object)
+    cache = {}
+    for s, (deg, k) in enumerate(zip(P, mounts)):
+        key = tuple(deg)
+        if key not in cache:
+            try:
+                cache[key] = f(key)
+            except ValueError as e:
+                raise ValueError(f"H is not exact on these positions ({e}); exact plan search takes grids of "
+                                 "multiples of 15 degrees and wedges of multiples of 15 degrees") from None
+        vals = cache[key]
+        for p in range(3):
+            out[s, p] = vals[(3 * int(k) + p) * m: (3 * int(k) + p + 1) * m]
+    check = np.vectorize(float, otypes=[float])(out)
+    want = np.moveaxis(H_at(mod, np.deg2rad(P), mounts), -1, 0)
+    if np.abs(check - want).max() > 1e-9:
+        raise AssertionError("the exact H disagrees with the generated H")
+    return out
+
+
 def integer_columns(mod, angles_deg, mounts=None):
     """H^(p) at grid positions as exact integers, shape (S, 3, m); fails if not integer."""
     if callable(mod):                                  # an H function of the angles

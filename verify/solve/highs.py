@@ -141,3 +141,49 @@ def sparse_dual(A, targets=None, slack=1e-9):
                         np.r_[np.full(m, -INF), np.zeros(m)], INF, "sparse dual")
         Lam[:, k] = x[:m]
     return Lam, values
+
+
+def covering_plans(S, blocks, limit, seconds=30.0):
+    """Every smallest set of positions x (binary, S) such that, for each block (V (m x C), owner (C,)
+    position of each column, cap), some w >= 0 has V w = e and w_k <= cap x_owner(k): a mixed-integer
+    program solved, then re-solved with each set found cut off (sum over it <= size - 1) and the size
+    fixed, until infeasible, `limit` sets or `seconds` of solving. Returns (size, sets, complete)."""
+    import time
+    start = time.perf_counter()
+    h = new()
+    h.setOptionValue("mip_rel_gap", 0.0)
+    inf = INF
+    h.addVars(S, np.zeros(S), np.ones(S))
+    h.changeColsIntegrality(S, np.arange(S, dtype=np.int32), np.full(S, highspy.HighsVarType.kInteger))
+    h.changeColsCost(S, np.arange(S, dtype=np.int32), np.ones(S))
+    n = S
+    for V, owner, cap, e in blocks:
+        m, C = V.shape
+        h.addVars(C, np.zeros(C), np.full(C, inf))
+        idx = np.arange(n, n + C, dtype=np.int32)
+        for i in range(m):
+            nz = np.flatnonzero(V[i])
+            h.addRow(e[i], e[i], len(nz), idx[nz], V[i, nz])
+        for k in range(C):                                   # w_k - cap x_owner <= 0
+            h.addRow(-inf, 0.0, 2, np.array([idx[k], owner[k]], dtype=np.int32), np.array([1.0, -cap]))
+        n += C
+    found, size = [], None
+    while len(found) < limit and (not found or time.perf_counter() - start < seconds):
+        if found:                                   # the first plan always; the count within the time left
+            h.setOptionValue("time_limit", max(seconds - (time.perf_counter() - start), 0.1))
+        h.run()
+        status = h.getModelStatus()
+        if found and status == highspy.HighsModelStatus.kTimeLimit:
+            return size, tuple(found), False
+        if status != highspy.HighsModelStatus.kOptimal:
+            if found:
+                return size, tuple(found), True
+            raise LPFailed(f"the plan search (mixed-integer program): {h.modelStatusToString(h.getModelStatus())}")
+        x = np.array(h.getSolution().col_value[:S])
+        plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
+        if size is None:
+            size = len(plan)
+            h.addRow(size, size, S, np.arange(S, dtype=np.int32), np.ones(S))
+        found.append(plan)
+        h.addRow(-inf, size - 1, size, np.array(plan, dtype=np.int32), np.ones(size))
+    return size, tuple(found), False

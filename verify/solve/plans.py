@@ -8,8 +8,10 @@ those signed measurement vectors on P, and the minimal such P (the "necessary se
 exactly the linearly independent candidate sets that represent e_nu with positive weights
 (Caratheodory). On grids where H is integer each minimal set is confirmed in rational arithmetic.
 A plan is optimal for all parameters iff it contains a minimal set of each: evaluated for every
-subset of a small grid with bit masks (exact count), or as a mixed-integer program (HiGHS) on a
-larger one (the minimal size and one plan).
+subset of a small grid with bit masks (exact count), or on a larger one by a mixed-integer program
+(HiGHS) re-solved with each plan cut off (every plan of the minimal size, each confirmed exactly).
+Grids where H is not integer (15-, 30-, 45-degree steps, wedges) are exact in Q(sqrt2, sqrt3)
+(field.py).
 """
 from dataclasses import dataclass
 from fractions import Fraction
@@ -20,8 +22,9 @@ import numpy as np
 
 from garant.derive.estimators import solve_exact
 
-from ..models import layout
-from .exact import dual_lower_bound, integer_columns
+from ..models import H_at, layout
+from . import field
+from .exact import dual_lower_bound, exact_columns
 
 QUARTER_DEG = tuple((a, b) for a in (0, 90, 180, 270) for b in (0, 90, 180, 270))
 BITMASK_LIMIT = 20
@@ -50,54 +53,170 @@ class MinimalSet:
     weights: tuple[tuple[int, int, Fraction], ...]   # (position index, component 0-2, weight)
 
 
-def dual_on_grid(cols, nu):
+def dual_on_grid(cols, nu, enumerate_sets=True):
     """An optimal dual vector of (9)-(10) for q_nu on the grid (rational when it can be made so),
     and the minimal optimal sets it gives (None when too many to enumerate).
 
     First lambda = e_nu / max|H_nu| (the Chebyshev polynomial with y = 0); if the grid has no
     estimator reaching its value, the LP's own dual, rationalised and checked exactly on the grid."""
     S, _, m = cols.shape
-    top = int(np.abs(cols[:, :, nu]).max())
-    lam = [Fraction(int(i == nu), top) for i in range(m)]
-    sets = _minimal(cols, nu, lam)
+    if _algebraic(cols):
+        entries = [abs(field.QF.of(v)) for v in cols[:, :, nu].ravel()]
+        fmax = max(float(v) for v in entries)
+        top = max(v for v in entries if float(v) > fmax - 1e-9)              # exact comparisons decide
+        lam = [top.inverse() if i == nu else field.QF() for i in range(m)]
+    elif cols.dtype.kind == "f":                       # positions off every exact grid: floating point
+        top = float(np.abs(cols[:, :, nu]).max())
+        lam = [1 / top if i == nu else 0.0 for i in range(m)]
+    else:
+        top = int(np.abs(cols[:, :, nu]).max())
+        lam = [Fraction(int(i == nu), top) for i in range(m)]
+    from . import lp
+    A = _float(cols).reshape(S * 3, m).T
+    sets = _minimal(cols, nu, lam) if enumerate_sets else None
     if sets:
         return lam, sets
-    from . import lp
-    A = cols.reshape(S * 3, m).T.astype(float)
+    if sets is None:                       # not enumerated: lambda = e_nu / L if the LP reaches 1 / L there
+        _, value = lp.primal(A, np.eye(m)[nu])
+        if abs(value[0] - 1 / float(top)) <= 1e-9 * value[0]:
+            return lam, None
     L, _ = lp.dual(A, np.eye(m)[nu])
-    lam = [Fraction(v).limit_denominator(1000) for v in L[:, 0]]
-    ok = all(abs(sum(l * int(h) for l, h in zip(lam, col))) <= 1 for col in A.T.astype(int))
-    lam = lam if ok else [float(v) for v in L[:, 0]]
-    return lam, _minimal(cols, nu, lam)
+    if _algebraic(cols):
+        lam = _exact_dual(cols, L[:, 0]) or _slackness_dual(cols, nu, A, L[:, 0])
+        if lam is not None:
+            return lam, _minimal(cols, nu, lam) if enumerate_sets else None
+    if cols.dtype.kind == "i":
+        lam = [Fraction(v).limit_denominator(1000) for v in L[:, 0]]
+        ok = all(abs(sum(l * int(h) for l, h in zip(lam, col))) <= 1 for col in A.T.astype(int))
+        lam = lam if ok else _slackness_dual(cols, nu, A, L[:, 0])
+        if lam is not None:
+            lam = [Fraction(v.c[0]) if isinstance(v, field.QF) else v for v in lam]
+            return lam, _minimal(cols, nu, lam) if enumerate_sets else None
+    lam = [float(v) for v in L[:, 0]]                  # the LP's own dual, not made exact: flagged inexact
+    return lam, _minimal(cols, nu, lam) if enumerate_sets else None
+
+
+def _slackness_dual(cols, nu, A, lam_float):
+    """An exact dual by complementary slackness: the measurements the float dual touches
+    (|h^T lambda| = 1) are active, so h_k^T lambda = sign_k there; m independent ones among them give
+    lambda exactly (rationals or Q(sqrt2, sqrt3)), then checked feasible exactly. None if they do not
+    determine it."""
+    S, _, m = cols.shape
+    colsf = _float(cols)
+    v = colsf @ lam_float                                           # (S, 3)
+    active = sorted(zip(*np.nonzero(np.abs(np.abs(v) - 1) < 1e-7)), key=lambda sp_: -abs(v[sp_]))
+    chosen, rows = [], []
+    for s_, p in active:
+        trial = rows + [colsf[s_, p]]
+        if np.linalg.matrix_rank(np.array(trial)) == len(trial):
+            chosen.append((s_, p))
+            rows = trial
+        if len(rows) == m:
+            break
+    zeros = []                         # a basic solution may hold components at zero: those are active too
+    for i in np.argsort(np.abs(lam_float)):
+        if len(rows) == m or abs(lam_float[i]) > 1e-12:
+            break
+        trial = rows + [np.eye(m)[i]]
+        if np.linalg.matrix_rank(np.array(trial)) == len(trial):
+            zeros.append(int(i))
+            rows = trial
+    if len(rows) < m:
+        return None
+    # solve sum_i lambda_i (column i of the active rows) = signs (0 for the components held at zero)
+    columns = [[field.QF.of(cols[s_, p][i] if _algebraic(cols) else int(cols[s_, p][i])) for s_, p in chosen]
+               + [field.QF(int(i == z)) for z in zeros] for i in range(m)]
+    signs = [1 if v[s_, p] > 0 else -1 for s_, p in chosen] + [0] * len(zeros)
+    lam = field.solve(columns, signs)
+    if lam is None or abs(float(lam[nu]) - lam_float[nu]) > 1e-6:
+        return None
+    return _exact_dual(cols, lam, exact=lam)
+
+
+def _exact_dual(cols, lam, exact=None):
+    """The LP's float dual made exact in Q(sqrt2, sqrt3) and checked feasible exactly (|H^T lambda| <= 1
+    at every measurement of the grid), or None."""
+    import sympy as sp
+    if exact is None:
+        try:
+            exact = [field.from_sympy(sp.nsimplify(float(v), [sp.sqrt(2), sp.sqrt(3)], tolerance=1e-10))
+                     if abs(v) > 1e-12 else field.QF() for v in lam]
+        except ValueError:
+            return None
+    nz = [i for i, v in enumerate(exact) if not v.is_zero()]
+    colsf, lamf = _float(cols), np.array([float(v) for v in exact])
+    near = np.abs(colsf @ lamf) > 1 - 1e-6                  # only these can reach 1: decided exactly
+    if np.any(np.abs(colsf @ lamf) > 1 + 1e-6):
+        return None
+    for s, p in zip(*np.nonzero(near)):
+        h = cols[s, p] if _algebraic(cols) else [int(x) for x in cols[s, p]]
+        if abs(sum((exact[i] * h[i] for i in nz), field.QF())) > 1:
+            return None
+    return exact
 
 
 ENUMERATION_LIMIT = 200_000
 
 
+def _algebraic(cols):
+    return cols.dtype == object
+
+
+_FLOATS = {}
+
+
+def _float(cols):
+    """cols as floats (the screen before exact checks); the last few conversions of exact arrays kept."""
+    if not _algebraic(cols):
+        return cols.astype(float)
+    hit = _FLOATS.get(id(cols))
+    if hit is not None and hit[0] is cols:
+        return hit[1]
+    if len(_FLOATS) > 8:
+        _FLOATS.clear()
+    out = np.vectorize(float, otypes=[float])(cols)
+    _FLOATS[id(cols)] = (cols, out)
+    return out
+
+
+def is_exact(lam):
+    return all(isinstance(v, (Fraction, field.QF)) for v in lam)
+
+
 def touching(cols, lam):
-    """Measurements (s, p) where |H^T lambda| = 1, and the sign there."""
+    """Measurements (s, p) where |H^T lambda| = 1, and the sign there (exactly when lambda is exact)."""
     S = cols.shape[0]
-    exact = all(isinstance(v, Fraction) for v in lam)
+    exact = is_exact(lam)
+    colsf, lamf = _float(cols), np.array([float(v) for v in lam])
+    near = np.abs(np.abs(colsf @ lamf) - 1) < 1e-7                       # (S, 3): the float screen
     cand, signs = [], []
-    for s in range(S):
-        for p in range(3):
-            v = sum(l * int(h) for l, h in zip(lam, cols[s, p])) if exact else float(np.dot(lam, cols[s, p]))
-            if (abs(v) == 1) if exact else abs(abs(v) - 1) < 1e-9:
-                cand.append((s, p))
-                signs.append(1 if v > 0 else -1)
+    for s, p in zip(*np.nonzero(near)):
+        if exact:
+            h = cols[s, p]
+            v = sum((l * (h_ if isinstance(h_, field.QF) else int(h_)) for l, h_ in zip(lam, h) if l != 0),
+                    Fraction(0))
+            if abs(v) != 1:
+                continue
+            sign = 1 if v > 0 else -1
+        else:
+            sign = 1 if colsf[s, p] @ lamf > 0 else -1
+        cand.append((int(s), int(p)))
+        signs.append(sign)
     return cand, signs
 
 
-def _minimal(cols, nu, lam):
+def _minimal(cols, nu, lam, first=False):
     """Minimal position sets of q_nu among the measurements where |H^T lambda| = 1 (with its sign);
     None if there are too many candidate subsets to enumerate."""
     S, _, m = cols.shape
-    exact = all(isinstance(v, Fraction) for v in lam)
+    exact = is_exact(lam)
+    algebraic = _algebraic(cols)
     cand, signs = touching(cols, lam)
     if not cand:
         return []
-    vec = np.array([cols[s, p] * g for (s, p), g in zip(cand, signs)], float)      # (C, m)
-    den = int(np.lcm.reduce([v.denominator for v in lam])) if exact else 1
+    colsf = _float(cols)
+    vec = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float)      # (C, m)
+    den = int(np.lcm.reduce([v.denominator for v in lam])) if exact and not algebraic else 1
     e = np.eye(m)[nu] * den
     rank = np.linalg.matrix_rank(vec)
     if sum(comb(len(cand), k) for k in range(1, rank + 1)) > ENUMERATION_LIMIT:
@@ -109,13 +228,19 @@ def _minimal(cols, nu, lam):
             break
         B = vec[idx]                                          # (N, k, m)
         G = B @ B.transpose(0, 2, 1)
-        ok = np.abs(np.linalg.det(G)) > 0.5                   # integer Gram: det >= 1 if independent
+        ok = (np.abs(np.linalg.det(G)) > 0.5 if not algebraic     # integer Gram: det >= 1 if independent
+              else np.linalg.matrix_rank(B) == k)
         if not ok.any():
             continue
         x = np.linalg.solve(G[ok], (B[ok] @ e)[..., None])[..., 0]
         resid = np.abs(np.einsum("nk,nkm->nm", x, B[ok]) - e).max(axis=1)
         for row in idx[ok][(resid < 1e-9) & (x.min(axis=1) > 1e-9)]:
-            if exact:
+            if exact and algebraic:                            # confirmed in Q(sqrt2, sqrt3)
+                w = field.solve([[h * signs[i] for h in cols[cand[i]]] for i in row],
+                                [int(j == nu) for j in range(m)])
+                if w is None or min(x.sign() for x in w) <= 0:
+                    raise AssertionError("float and exact arithmetic disagree on a minimal set")
+            elif exact:
                 w = solve_exact([vec[i] for i in row], e.astype(int))
                 if w is None or min(w) <= 0:
                     raise AssertionError("float and rational arithmetic disagree on a minimal set")
@@ -124,6 +249,8 @@ def _minimal(cols, nu, lam):
                 w = list(np.linalg.lstsq(vec[list(row)].T, np.eye(m)[nu], rcond=None)[0])
             weights = tuple((cand[i][0], cand[i][1], wi * signs[i]) for i, wi in zip(row, w))
             found.append(MinimalSet(tuple(sorted({cand[i][0] for i in row})), weights))
+            if first:
+                return found
     # Two measurements can share a position: keep the minimal position sets only.
     sets = {ms.positions for ms in found}
     keep = {p for p in sets if not any(set(o) < set(p) for o in sets)}
@@ -154,6 +281,8 @@ class PlanSearch:
     minimal: tuple                              # per nu: list of MinimalSet
     errors: tuple                               # per nu: optimal guaranteed error (units of sigma)
     proven: tuple                               # per nu: the error holds on the whole continuum
+    duals: tuple = ()                           # per nu: the dual vector lambda (exact when it could be)
+    method: str = ""                            # how the plans were counted
 
     def plan_deg(self, plan):
         return [tuple(float(v) for v in self.angles_deg[s]) for s in plan]
@@ -161,6 +290,11 @@ class PlanSearch:
     def is_optimal_for(self, nu, positions):
         """Whether a plan (grid indices) contains a minimal optimal set of q_nu."""
         return any(set(ms.positions) <= set(positions) for ms in self.minimal[nu] or ())
+
+    def exact_errors(self):
+        """The optimal errors as exact numbers (text), where the duals are exact."""
+        return [str(lam[nu].sympy() if isinstance(lam[nu], field.QF) else lam[nu]) if is_exact(lam) else None
+                for nu, lam in enumerate(self.duals)]
 
     @property
     def grid_deg(self):
@@ -184,42 +318,82 @@ def _bitmask_plans(S, per_nu):
     return n, tuple(tuple(s for s in range(S) if (int(v) >> s) & 1) for v in good[sizes == n])
 
 
-def _milp_plan(cols, lams):
-    """Fewest positions carrying an optimal estimator of every q: a mixed-integer program (HiGHS).
+PLAN_COUNT_LIMIT = 200
+
+
+def _milp_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0):
+    """The fewest positions carrying an optimal estimator of every q, and every plan of that size: a
+    mixed-integer program (HiGHS), re-solved with each plan found cut off until the size grows (or
+    `limit` plans). Returns (size, plans, complete).
 
     For each q_nu, weights w >= 0 on the measurements where its dual certificate touches, with
     sum_k w_k sign_k H_k = e_nu (then sum w = lambda_nu, the optimum), and w_k <= lambda_nu x_s."""
-    import cvxpy as cp
-
-    from . import lp
+    from . import highs
     S, _, m = cols.shape
-    x = cp.Variable(S, boolean=True)
-    cons = []
+    blocks = []
     for nu, lam in enumerate(lams):
         cand, signs = touching(cols, lam)
-        V = np.array([cols[s, p] * g for (s, p), g in zip(cand, signs)], float).T        # (m, C)
-        w = cp.Variable(len(cand), nonneg=True)
-        sel = np.zeros((len(cand), S))
-        sel[range(len(cand)), [s for s, _ in cand]] = 1
-        cons += [V @ w == np.eye(m)[nu], w <= float(lam[nu]) * (sel @ x)]
-    prob = cp.Problem(cp.Minimize(cp.sum(x)), cons)
-    lp.solve(prob, "the plan search (mixed-integer program)")
-    plan = tuple(int(s) for s in np.flatnonzero(np.round(x.value) > 0.5))
-    return len(plan), (plan,)
+        V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float).T        # (m, C)
+        blocks.append((V, np.array([s for s, _ in cand]), float(lam[nu]), np.eye(m)[nu]))
+    return highs.covering_plans(S, blocks, limit, seconds)
 
 
-def search(mod, angles_deg=None, mounts=None):
+def estimator_in(cols, nu, lam):
+    """An optimal estimator of q_nu on the positions of cols: a vertex of {w >= 0 : sum_k w_k sign_k
+    H_k = e_nu} over the measurements the dual touches (HiGHS), its support solved again exactly
+    (rationals or Q(sqrt2, sqrt3)) and found positive when lambda is exact. [(position, component,
+    weight)], or None when there is none."""
+    from . import highs
+    colsf = _float(cols)
+    cand, signs = touching(cols, lam)
+    if not cand:
+        return None
+    V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float)          # (C, m)
+    m = V.shape[1]
+    try:
+        w, _, _ = highs.solve(np.zeros(len(cand)), V.T, np.eye(m)[nu], np.eye(m)[nu], 0.0, highs.INF,
+                              "an estimator on the plan")
+    except Exception:
+        return None
+    chosen = []
+    for k in np.argsort(-w):
+        if w[k] > 1e-12 and np.linalg.matrix_rank(V[chosen + [k]]) == len(chosen) + 1:
+            chosen.append(int(k))
+    if not is_exact(lam):
+        return [(cand[k][0], cand[k][1], float(w[k]) * signs[k]) for k in chosen]
+    vecs = [[field.QF.of(h if _algebraic(cols) else int(h)) * signs[k] for h in cols[cand[k]]] for k in chosen]
+    x = field.solve(vecs, [int(j == nu) for j in range(m)])
+    if x is None or any(v.sign() <= 0 for v in x):
+        return None
+    return [(cand[k][0], cand[k][1], xi * signs[k]) for k, xi in zip(chosen, x)]
+
+
+def _confirm(cols, lams, plan):
+    """Every q_nu has an optimal estimator inside the plan (a plan the solver found), exactly where
+    the dual is exact. Returns whether every check was exact."""
+    sub = cols[list(plan)]
+    for nu, lam in enumerate(lams):
+        if estimator_in(sub, nu, lam) is None:
+            raise AssertionError(f"a plan found by the solver is not optimal for q{nu + 1}")
+    return all(is_exact(lam) for lam in lams)
+
+
+def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0):
     """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans."""
     if angles_deg is None:
         angles_deg, mounts = grid(mod)
     mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
-    cols = integer_columns(mod, angles_deg, mounts)
+    try:
+        cols = exact_columns(mod, angles_deg, mounts)
+    except ValueError:                                  # e.g. exchange positions at 22.5 degrees
+        cols = np.moveaxis(H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts), -1, 0)
     m = cols.shape[2]
-    lams, per_nu = zip(*[dual_on_grid(cols, nu) for nu in range(m)])
+    small = len(angles_deg) <= BITMASK_LIMIT
+    lams, per_nu = zip(*[dual_on_grid(cols, nu, small) for nu in range(m)])
     if any(sets == [] for sets in per_nu):
         bad = ", ".join(f"q{nu + 1}" for nu, sets in enumerate(per_nu) if sets == [])
         raise ValueError(f"the grid has no optimal estimator of {bad} (not identifiable there?)")
-    errors = tuple(float(lam[nu]) for nu, lam in enumerate(lams))
+    errors = tuple(float(lam[nu]) for nu, lam in enumerate(lams))          # a^T lambda with a = e_nu
     sup = getattr(mod, "H_SUP", None)
     proven = tuple(bool(sup is not None and all(isinstance(v, Fraction) for v in lam)
                         and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
@@ -227,10 +401,14 @@ def search(mod, angles_deg=None, mounts=None):
     S = len(angles_deg)
     if S <= BITMASK_LIMIT and all(sets is not None for sets in per_nu):
         n, plans = _bitmask_plans(S, per_nu)
-        exhaustive = True
+        exhaustive, method = True, "every subset of the grid (bit masks)" + (
+            ", in floating point (positions off the 15-degree grid)" if cols.dtype.kind == "f" else "")
     else:
-        n, plans = _milp_plan(cols, lams)
-        exhaustive = False
+        n, plans, exhaustive = _milp_plans(_float(cols), cols, lams, count_limit, count_seconds)
+        exact = all([_confirm(cols, lams, plan) for plan in plans])
+        method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
+                  + ("exactly" if exact else "(in floating point where the dual is not exact)"))
     if not plans:
         raise ValueError("no plan on this grid is optimal for every parameter")
-    return PlanSearch(np.asarray(angles_deg, float), mounts, n, plans, exhaustive, tuple(per_nu), errors, proven)
+    return PlanSearch(np.asarray(angles_deg, float), mounts, n, plans, exhaustive, tuple(per_nu), errors, proven,
+                      tuple(lams), method)

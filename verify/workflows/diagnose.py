@@ -51,8 +51,14 @@ class Study:
             missing = need - set(self.columns)
             if missing:
                 skipped[name] = f"needs column {', '.join(sorted(missing))}"
-            else:
-                ok.append(name)
+                continue
+            try:                                     # the stand may not see some of its parameters at all
+                from garant.derive.derivation import derive
+                derive(self.model([name]))
+            except ValueError as e:
+                skipped[name] = "this stand cannot observe it (" + str(e).split(": ", 2)[-1].split(";")[0] + ")"
+                continue
+            ok.append(name)
         return ok, skipped
 
     def model(self, names):

@@ -1,0 +1,247 @@
+"""Exact arithmetic in the number field Q(sqrt2, sqrt3): where H lives on 15-, 30- and 45-degree grids
+and on stands with 30- or 45-degree wedges (cos 15 deg = (sqrt6 + sqrt2)/4).
+
+An element is a + b sqrt2 + c sqrt3 + d sqrt6 with rational a, b, c, d (a basis over Q, so an element
+is zero exactly when its four coordinates are). Its sign is decided by rational interval bounds of
+the three roots, refined until the interval excludes zero, which it must since the element is not
+zero: no floating point decides anything here.
+"""
+from fractions import Fraction
+from functools import lru_cache
+from math import isqrt
+
+import numpy as np
+
+ROOTS = (2, 3, 6)
+
+
+class QF:
+    """a + b sqrt2 + c sqrt3 + d sqrt6, exact."""
+
+    __slots__ = ("c",)
+
+    def __init__(self, a=0, b=0, c=0, d=0):
+        self.c = (Fraction(a), Fraction(b), Fraction(c), Fraction(d))
+
+    @staticmethod
+    def of(x):
+        return x if isinstance(x, QF) else QF(x)
+
+    def __add__(self, o):
+        o = QF.of(o)
+        return QF(*(x + y for x, y in zip(self.c, o.c)))
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return QF(*(-x for x in self.c))
+
+    def __sub__(self, o):
+        return self + (-QF.of(o))
+
+    def __rsub__(self, o):
+        return QF.of(o) - self
+
+    def __mul__(self, o):
+        a, b, c, d = self.c
+        if not isinstance(o, QF):                                        # a rational: coordinate-wise
+            o = Fraction(o)
+            return QF(a * o, b * o, c * o, d * o)
+        e, f, g, h = o.c
+        if not (f or g or h):
+            return QF(a * e, b * e, c * e, d * e)
+        if not (b or c or d):
+            return QF(a * e, a * f, a * g, a * h)
+        return QF(a * e + 2 * b * f + 3 * c * g + 6 * d * h, a * f + b * e + 3 * (c * h + d * g),
+                  a * g + c * e + 2 * (b * h + d * f), a * h + d * e + b * g + c * f)
+
+    __rmul__ = __mul__
+
+    def _matrix(self):
+        """Multiplication by self as a 4 x 4 rational matrix on the basis (1, sqrt2, sqrt3, sqrt6)."""
+        cols = [(self * QF(*np.eye(4, dtype=int)[k].tolist())).c for k in range(4)]
+        return [[cols[j][i] for j in range(4)] for i in range(4)]
+
+    def inverse(self):
+        if self.is_zero():
+            raise ZeroDivisionError("division by an exact zero")
+        return QF(*_solve(self._matrix(), [Fraction(1), 0, 0, 0]))
+
+    def __truediv__(self, o):
+        return self * QF.of(o).inverse()
+
+    def __rtruediv__(self, o):
+        return QF.of(o) * self.inverse()
+
+    def __pow__(self, n):
+        out = QF(1)
+        for _ in range(n):
+            out = out * self
+        return out
+
+    def is_zero(self):
+        return not any(self.c)
+
+    def __eq__(self, o):
+        return isinstance(o, (QF, int, Fraction)) and self.c == QF.of(o).c
+
+    def __hash__(self):
+        return hash(self.c)
+
+    def sign(self):
+        """-1, 0 or +1, exactly."""
+        if self.is_zero():
+            return 0
+        if not any(self.c[1:]):
+            return 1 if self.c[0] > 0 else -1
+        k = 20
+        while True:
+            lo = hi = self.c[0]
+            for coef, r in zip(self.c[1:], ROOTS):
+                s = isqrt(r * 10 ** (2 * k))
+                lo_r, hi_r = Fraction(s, 10 ** k), Fraction(s + 1, 10 ** k)
+                lo, hi = (lo + coef * lo_r, hi + coef * hi_r) if coef >= 0 else (lo + coef * hi_r, hi + coef * lo_r)
+            if lo > 0:
+                return 1
+            if hi < 0:
+                return -1
+            k *= 2
+
+    def __abs__(self):
+        return -self if self.sign() < 0 else self
+
+    def __lt__(self, o):
+        return (self - o).sign() < 0
+
+    def __gt__(self, o):
+        return (self - o).sign() > 0
+
+    def __le__(self, o):
+        return (self - o).sign() <= 0
+
+    def __ge__(self, o):
+        return (self - o).sign() >= 0
+
+    def __float__(self):
+        a, b, c, d = self.c
+        return float(a) + float(b) * 2 ** 0.5 + float(c) * 3 ** 0.5 + float(d) * 6 ** 0.5
+
+    def sympy(self):
+        import sympy as sp
+        return sum((sp.Rational(x.numerator, x.denominator) * (sp.sqrt(r) if r > 1 else 1)
+                    for x, r in zip(self.c, (1, *ROOTS))), sp.Integer(0))
+
+    def __repr__(self):
+        return f"QF({', '.join(str(x) for x in self.c)})"
+
+
+def _solve(A, b):
+    """Exact solution of a square rational system (Gauss-Jordan in Fractions)."""
+    n = len(A)
+    M = [[Fraction(x) for x in row] + [Fraction(y)] for row, y in zip(A, b)]
+    for i in range(n):
+        p = next(r for r in range(i, n) if M[r][i] != 0)
+        M[i], M[p] = M[p], M[i]
+        M[i] = [x / M[i][i] for x in M[i]]
+        for r in range(n):
+            if r != i and M[r][i] != 0:
+                M[r] = [x - M[r][i] * y for x, y in zip(M[r], M[i])]
+    return [M[i][n] for i in range(n)]
+
+
+def solve(vectors, target):
+    """Exact x with sum_k x_k vectors[k] = target in QF (vectors linearly independent), or None when
+    target is not in their span."""
+    k, m = len(vectors), len(target)
+    rows = [[QF.of(vectors[j][i]) for j in range(k)] + [QF.of(target[i])] for i in range(m)]
+    piv, r = [], 0
+    for c in range(k):
+        p = next((i for i in range(r, m) if not rows[i][c].is_zero()), None)
+        if p is None:
+            return None
+        rows[r], rows[p] = rows[p], rows[r]
+        inv = rows[r][c].inverse()
+        rows[r] = [x * inv for x in rows[r]]
+        for i in range(m):
+            if i != r and not rows[i][c].is_zero():
+                f = rows[i][c]
+                rows[i] = [x - f * y for x, y in zip(rows[i], rows[r])]
+        piv.append(c)
+        r += 1
+    if any(not rows[i][k].is_zero() for i in range(r, m)):
+        return None
+    return [rows[i][k] for i in range(k)]
+
+
+def from_sympy(expr):
+    """A SymPy number of Q(sqrt2, sqrt3) as a QF; ValueError when it is not one."""
+    import sympy as sp
+    out = QF()
+    basis = {sp.Integer(1): 0, sp.sqrt(2): 1, sp.sqrt(3): 2, sp.sqrt(6): 3}
+    for term in sp.Add.make_args(sp.expand(expr)):
+        coef, rest = term.as_coeff_Mul()
+        if rest not in basis or not coef.is_Rational:
+            raise ValueError(f"{expr} is not in Q(sqrt2, sqrt3)")
+        c = [0, 0, 0, 0]
+        c[basis[rest]] = Fraction(int(coef.p), int(coef.q))
+        out = out + QF(*c)
+    return out
+
+
+def trig(deg):
+    """(cos, sin) of an angle in degrees that is a multiple of 15, exactly; ValueError otherwise."""
+    d = Fraction(deg).limit_denominator(10**6)
+    if abs(float(d) - float(deg)) > 1e-9 or d.denominator != 1 or d.numerator % 15:
+        raise ValueError(f"{float(deg):g} degrees is not a multiple of 15")
+    return _trig(int(d) % 360)
+
+
+@lru_cache(maxsize=None)
+def _trig(deg):
+    import sympy as sp
+    x = sp.pi * deg / 180
+    return from_sympy(sp.cos(x)), from_sympy(sp.sin(x))
+
+
+def evaluator(exprs, symbols):
+    """A function of angles in degrees (multiples of 15) giving the SymPy expressions `exprs` exactly
+    as QF: sums, products, integer powers, square roots of 2, 3, 6 and sin/cos of integer combinations
+    of the angles (plus rational multiples of pi). ValueError for anything else."""
+    import sympy as sp
+    symbols = list(symbols)
+
+    def compile_(e):
+        if e in symbols:
+            raise ValueError(f"{e} appears outside sin/cos")
+        if e.is_Rational:
+            return lambda deg, v=QF(Fraction(int(e.p), int(e.q))): v
+        if e.is_Add or e.is_Mul:
+            parts = [compile_(a) for a in e.args]
+            if e.is_Add:
+                return lambda deg: sum((p(deg) for p in parts), QF())
+            return lambda deg: _prod(p(deg) for p in parts)
+        if e.is_Pow and e.exp.is_Integer and e.exp > 0:
+            base, n = compile_(e.base), int(e.exp)
+            return lambda deg: base(deg) ** n
+        if e.is_Pow or isinstance(e, (sp.Float,)) or e.is_number:
+            v = from_sympy(e)
+            return lambda deg: v
+        if isinstance(e, (sp.sin, sp.cos)):
+            arg = e.args[0]
+            coef = [int(arg.coeff(s)) if arg.coeff(s).is_Integer else None for s in symbols]
+            rest = sp.simplify((arg - sum(c * s for c, s in zip(coef, symbols) if c)) * 180 / sp.pi)
+            if None in coef or not rest.is_Rational:
+                raise ValueError(f"{e}: not a turn by an integer combination of the angles")
+            k = 0 if isinstance(e, sp.cos) else 1
+            return lambda deg: trig(sum(c * d for c, d in zip(coef, deg)) + Fraction(int(rest.p), int(rest.q)))[k]
+        raise ValueError(f"{e} is not an expression garant evaluates exactly")
+
+    fns = [compile_(sp.sympify(e)) for e in exprs]
+    return lambda deg: [f(deg) for f in fns]
+
+
+def _prod(it):
+    out = QF(1)
+    for x in it:
+        out = out * x
+    return out
