@@ -52,24 +52,37 @@ class Identification:
     free: tuple[str, ...]            # parameters that appear only inside combinations
 
 
-def identify(J, names, preferred, angles, others=()):
-    """Rank analysis of J (3 x n, trig entries): combinations q, linearised H, null space."""
+def identify(J, names, preferred, angles, others=(), positions=None):
+    """Rank analysis of J (3 x n, trig entries): combinations q, linearised H, null space.
+
+    With `positions` (the finite set a stand with detents can reach: dicts angle -> exact value), the
+    combinations are those of J at those positions, and H = J R^T (R R^T)^-1, which equals J's
+    coordinates in q at every reachable position (J there lies in the row space of R)."""
     index = [names.index(n) for n in preferred]
     rows, keys = [], []
-    for p in range(J.rows):
-        parts = [trig_basis(J[p, k], angles, others) for k in range(J.cols)]
-        for term in sorted({t for d in parts for t in d}, key=sp.default_sort_key):
-            keys.append((p, term))
-            rows.append([parts[k].get(term, 0) for k in index])
+    if positions is None:
+        for p in range(J.rows):
+            parts = [trig_basis(J[p, k], angles, others) for k in range(J.cols)]
+            for term in sorted({t for d in parts for t in d}, key=sp.default_sort_key):
+                keys.append((p, term))
+                rows.append([parts[k].get(term, 0) for k in index])
+    else:
+        for at in positions:
+            for p in range(J.rows):
+                rows.append([sp.nsimplify(sp.expand_trig(J[p, k].subs(at))) for k in index])
     M = sp.Matrix(rows)
     rref, pivots = M.rref()
     rank = len(pivots)
     R_pref = rref[:rank, :]
-    B = M.extract(list(range(M.rows)), list(pivots))
-    H = sp.zeros(J.rows, rank)
-    for (p, term), row in zip(keys, B.tolist()):
-        for nu in range(rank):
-            H[p, nu] += row[nu] * term
+    if positions is None:
+        B = M.extract(list(range(M.rows)), list(pivots))
+        H = sp.zeros(J.rows, rank)
+        for (p, term), row in zip(keys, B.tolist()):
+            for nu in range(rank):
+                H[p, nu] += row[nu] * term
+    else:
+        Rp = R_pref.extract(list(range(rank)), [index.index(k) for k in range(len(names))])
+        H = (J * Rp.T * (Rp * Rp.T).inv()).applyfunc(sp.expand)
     back = [index.index(k) for k in range(len(names))]
     R = R_pref.extract(list(range(rank)), back)
     free = [k for k in range(len(preferred)) if k not in pivots]

@@ -33,12 +33,27 @@ def derive(model):
     check_observable(model, J)
     names = [p.name for p in model.parameters]
     ident = combinations.identify(J, names, model.preferred, model.angle_symbols, model.variables)
+    reach = reachable_positions(model)
+    if reach is not None:                      # detents: what the stand can reach decides, if it sees less
+        finite = combinations.identify(J, names, model.preferred, model.angle_symbols, positions=reach)
+        if finite.R.rows < ident.R.rows:
+            ident = finite
     est = (estimators.optimal_estimators(ident.H, model.angle_symbols, model.plan_deg)
            if model.plan_deg else ())
     Qs = model_mod.mount_matrices(model)
     return Derivation(model=model, up_nominal=tuple(model_mod.up_nominal(model, Q) for Q in Qs),
                       force_over_g=tuple(model_mod.specific_force_over_g(model, Q) for Q in Qs), J=J,
                       ident=ident, estimators=tuple(est))
+
+
+def reachable_positions(model):
+    """Every position of a stand whose angles all have detents (exact angles), or None."""
+    from itertools import product
+    angles = model.stand.angles
+    if model.variables or not all(a.detents_deg for a in angles):
+        return None
+    values = [[sp.pi * sp.Rational(str(d)) / 180 for d in a.detents_deg] for a in angles]
+    return [dict(zip(model.angle_symbols, combo)) for combo in product(*values)]
 
 
 @lru_cache(maxsize=None)

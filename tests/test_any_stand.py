@@ -101,3 +101,22 @@ def test_diagnose_advises_only_reachable_positions(tmp_path, capsys):
     for line in advice:
         for deg in [float(v) for v in __import__("re").findall(r"\((-?\d+(?:\.\d+)?)\)", line)]:
             assert deg in (0, 90, 180, 270)
+
+
+def test_identifiability_on_the_reachable_set(tmp_path):
+    """A wedge table with one detent reaches one position: 3 readings, so 3 combinations (not the 9 of
+    the free angle), and estimate identifies every one of them there."""
+    import json
+    toml = tmp_path / "one.toml"
+    toml.write_text((STANDS / "wedge45.toml").read_text().replace("detents_deg = [0, 90, 180, 270]",
+                                                                 "detents_deg = [0]"))
+    mod = models.load(str(toml))
+    assert len(mod.Q_NAMES) == 3
+    assert len(models.load(str(STANDS / "wedge45.toml")).Q_NAMES) == 9
+    data = tmp_path / "d.csv"
+    assert main(["simulate", "--model", str(toml), "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)]) == 0
+    out = tmp_path / "e.json"
+    assert main(["estimate", "--model", str(toml), str(data), "--sigma", "1e-5", "--json", str(out)]) == 0
+    res, truth = json.loads(out.read_text()), json.loads((tmp_path / "d.truth.json").read_text())
+    for q, v in res["q"].items():
+        assert abs(v - truth["q"][q]) <= res["guaranteed_error"][q]

@@ -185,7 +185,6 @@ def is_exact(lam):
 
 def touching(cols, lam):
     """Measurements (s, p) where |H^T lambda| = 1, and the sign there (exactly when lambda is exact)."""
-    S = cols.shape[0]
     exact = is_exact(lam)
     colsf, lamf = _float(cols), np.array([float(v) for v in lam])
     near = np.abs(np.abs(colsf @ lamf) - 1) < 1e-7                       # (S, 3): the float screen
