@@ -223,17 +223,17 @@ def jacobian(model):
 
 def _jacobian(model, Q):
     syms = [p.symbol for p in model.parameters]
-    zero = {x: 0 for x in syms}
+    zero = {x: sp.Integer(0) for x in syms}          # xreplace: a plain symbol swap, rebuilt and evaluated
     factors = _force_factors(model, Q)
-    at0 = [f.subs(zero) for f in factors]
+    at0 = [f.xreplace(zero) for f in factors]
     bias = block_matrices(model)[1] + _effects_over_g(model, Q, nominal=True)
     cols = []
     for x in syms:
-        col = bias.diff(x).subs(zero)
+        col = bias.diff(x).xreplace(zero)
         for i, f in enumerate(factors):
             df = f.diff(x)
             if df.is_zero_matrix:
                 continue
-            col += _product(at0[:i] + [df.subs(zero)] + at0[i + 1:])
+            col += _product(at0[:i] + [df.xreplace(zero)] + at0[i + 1:])
         cols.append(col.applyfunc(sp.expand))
     return sp.Matrix.hstack(*cols)
