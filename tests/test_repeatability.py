@@ -163,3 +163,15 @@ def test_fixture_stand_with_known_directions(capsys):
     norm = rp.run(models.load("norm"), means.read(str(MIMU / "static_positions_runs1-5.csv"), 1, quantum=COUNT)[:2], G)
     a, e = norm["runs"][0]["parameters"]["eps3/g"], norm["runs"][0]["guaranteed_error"]["eps3/g"]
     assert abs(est - a) <= err + e and err > 10 * e
+
+
+@needs_real
+def test_calibrate_norm_every_imu_of_the_stream(tmp_path):
+    out = tmp_path / "all.json"
+    assert main(["calibrate-norm", str(MIMU / "raw" / "exp_2" / "data.bin"), "--imu", "all", "--g", str(G),
+                 "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    assert list(res) == [f"IMU {k}" for k in range(1, 9)] and all(r["consistent"] for r in res.values())
+    assert main(["calibrate-norm", str(MIMU / "raw" / "exp_2" / "data.bin"), "--imu", "all",
+                 "--save", str(tmp_path / "c.json")]) == 2
+    assert not (tmp_path / "c.json").exists()

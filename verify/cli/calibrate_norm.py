@@ -1,6 +1,7 @@
 """garant calibrate-norm: a real static log calibrated through the norm relation (2.2) of 001."""
 import sys
 
+from ..errors import DataError
 from ..io.recordings import FORMATS, SENSORS
 from . import args as a
 from .estimate import EXIT_INCONSISTENT
@@ -11,7 +12,8 @@ def add(sub):
     p.add_argument("log", metavar="LOG")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
-    p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
+    p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or all of them "
+                   "in turn (then --json holds one result per IMU)")
     a.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
@@ -34,6 +36,31 @@ def add(sub):
 
 
 def run(args):
+    if args.imu is None or args.imu != "all":
+        if args.imu is not None:
+            try:
+                args.imu = int(args.imu)
+            except ValueError:
+                raise DataError(f"--imu {args.imu!r}: give an IMU number or all") from None
+        return _run(args)
+    import copy
+
+    from ..io import mimu, report
+    for opt in ("save", "export_imu_tk", "export_kalibr", "plot", "report"):
+        if getattr(args, opt):
+            raise DataError(f"--{opt.replace('_', '-')} writes one sensor's calibration: give one IMU with --imu K")
+    results, codes = {}, []
+    for k in range(1, mimu.IMUS + 1):
+        print(f"\n== IMU {k}")
+        one = copy.copy(args)
+        one.imu, one.json = k, None
+        codes.append(_run(one, results.setdefault(f"IMU {k}", {})))
+    if args.json:
+        report.write_json(args.json, results)
+    return max(codes)
+
+
+def _run(args, into=None):
     import numpy as np
 
     from .. import models
@@ -101,6 +128,8 @@ def run(args):
         print(f"wrote {args.export_kalibr}")
     if args.report:
         _report(res, args)
+    if into is not None:
+        into.update(res)
     return 0 if res["consistent"] else EXIT_INCONSISTENT
 
 

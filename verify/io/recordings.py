@@ -178,9 +178,21 @@ class Still:
     samples: int
 
 
-def moving_variance(x, n):
-    c = np.cumsum(np.vstack([np.zeros(3), x]), axis=0)
-    c2 = np.cumsum(np.vstack([np.zeros(3), x**2]), axis=0)
+def _sums(x):
+    """Cumulative sums of x - x[0] and of its square, a zero row first: any window's mean and variance
+    in O(1) (the shift keeps the sums small, so the variance does not cancel)."""
+    d = x - x[0]
+    c = np.empty((len(x) + 1, 3))
+    c2 = np.empty((len(x) + 1, 3))
+    c[0] = c2[0] = 0.0
+    np.cumsum(d, axis=0, out=c[1:])
+    np.multiply(d, d, out=d)
+    np.cumsum(d, axis=0, out=c2[1:])
+    return c, c2
+
+
+def moving_variance(x, n, sums=None):
+    c, c2 = sums or _sums(x)
     mean = (c[n:] - c[:-n]) / n
     return ((c2[n:] - c2[:-n]) / n - mean**2).sum(axis=1)
 
@@ -192,7 +204,9 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     """
     dt = float(np.median(np.diff(log.t)))
     n = max(int(round(window / dt)), 5)
-    var = moving_variance(log.raw, n)
+    sums = _sums(log.raw)
+    c, c2 = sums
+    var = moving_variance(log.raw, n, sums)
     first = var[: max(int(init / dt) - n, 1)]
     floor = np.quantile(var, 0.05)
     base = float(np.median(first))
@@ -206,7 +220,9 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     for i, j in zip(edges[::2], edges[1::2]):                  # runs [i, j) of still windows
         a, b = i + n // 2, j + n // 2                            # window centre indices
         if log.t[min(b, last)] - log.t[a] >= min_still:
-            seg = log.raw[a:b]
-            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), seg.mean(axis=0),
-                             seg.std(axis=0, ddof=1) / np.sqrt(len(seg)), len(seg)))
+            k = b - a                                           # the segment's mean and std from the sums
+            s1, s2 = c[b] - c[a], c2[b] - c2[a]
+            var = np.maximum(s2 - s1 * s1 / k, 0.0) / (k - 1)
+            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), log.raw[0] + s1 / k,
+                             np.sqrt(var / k), int(k)))
     return out, note
