@@ -175,3 +175,17 @@ def test_calibrate_norm_every_imu_of_the_stream(tmp_path):
     assert main(["calibrate-norm", str(MIMU / "raw" / "exp_2" / "data.bin"), "--imu", "all",
                  "--save", str(tmp_path / "c.json")]) == 2
     assert not (tmp_path / "c.json").exists()
+
+
+@needs_real
+def test_the_published_repeatability_tables_are_what_the_command_writes(tmp_path, monkeypatch):
+    """docs/repeatability_mimu4444bt.md is the output of the command it names: rerun it and compare."""
+    monkeypatch.chdir(ROOT)
+    doc = ROOT / "docs" / "repeatability_mimu4444bt.md"
+    command = doc.read_text().splitlines()[0].split("`")[1].split()
+    assert command[:2] == ["garant", "repeatability"]
+    out = tmp_path / "rep.md"
+    args = command[1:]
+    args[args.index("--markdown") + 1] = str(out)
+    assert main(args) == 0
+    assert out.read_text().replace(str(out), "docs/repeatability_mimu4444bt.md") == doc.read_text()
