@@ -80,6 +80,7 @@ def model_context(d):
                        for i in range(ident.R.rows)],
         q_units=[m.parameters[names.index(n)].unit for n in ident.leading],
         R=[[pycode(v) for v in ident.R.row(i)] for i in range(ident.R.rows)],
+        H_exact=[[sp.sstr(e) for e in ident.H.row(i)] for i in range(ident.H.rows)],
         null_space=[[pycode(v) for v in vec] for vec in ident.null_space],
         mounts=[_mount_context(d, k, name) for k, name in enumerate(m.mountings)],
         H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) if not m.variables else "np.inf"

@@ -60,6 +60,19 @@ Q_DEFINITIONS = (
 #: Unit of each q_nu (that of its leading parameter; "1" is dimensionless, biases are over g).
 Q_UNITS = ("rad", "rad", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1", "rad")
 
+#: H of (3) as exact expressions, rows 3 per mounting: what a certificate of this model is checked against.
+H_EXACT = (
+    ("-1", "0", "0", "sin(phi)", "cos(phi)", "0", "0", "0", "0", "0", "0", "1", "0", "0", "-cos(phi)"),
+    ("0", "-cos(phi)", "0", "0", "0", "0", "sin(phi)", "cos(phi)", "0", "0", "0", "0", "1", "0", "0"),
+    ("0", "sin(phi)", "0", "0", "0", "0", "0", "0", "0", "sin(phi)", "cos(phi)", "0", "0", "1", "0"),
+    ("0", "-cos(phi)", "sin(phi)", "cos(phi)", "0", "0", "0", "0", "0", "0", "0", "1", "0", "0", "0"),
+    ("0", "sin(phi)", "0", "0", "0", "sin(phi)", "cos(phi)", "0", "0", "0", "0", "0", "1", "0", "0"),
+    ("-1", "0", "0", "0", "0", "0", "0", "0", "sin(phi)", "cos(phi)", "0", "0", "0", "1", "-cos(phi)"),
+    ("0", "sin(phi)", "cos(phi)", "0", "sin(phi)", "0", "0", "0", "0", "0", "0", "1", "0", "0", "0"),
+    ("-1", "0", "0", "0", "0", "cos(phi)", "0", "sin(phi)", "0", "0", "0", "0", "1", "0", "-cos(phi)"),
+    ("0", "-cos(phi)", "0", "0", "0", "0", "0", "0", "cos(phi)", "0", "sin(phi)", "0", "0", "1", "0"),
+)
+
 #: q = PHYSICAL_TO_Q @ physical (exact integers), shape (15, 18).
 PHYSICAL_TO_Q = np.array([
     [1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0],

@@ -66,6 +66,13 @@ Q_DEFINITIONS = (
 #: Unit of each q_nu (that of its leading parameter; "1" is dimensionless, biases are over g).
 Q_UNITS = ("rad", "rad", "rad", "rad", "rad", "rad", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1")
 
+#: H of (3) as exact expressions, rows 3 per mounting: what a certificate of this model is checked against.
+H_EXACT = (
+    ("sin(phi)*sin(theta)*cos(psi) + sin(psi)*cos(phi)", "sin(phi)*sin(psi)*sin(theta) - cos(phi)*cos(psi)", "-cos(phi)", "-sin(phi)*sin(theta)", "sin(theta)*cos(phi)", "cos(phi)*cos(theta)", "-sin(phi)*cos(theta)", "sin(theta)", "cos(phi)*cos(theta)", "0", "0", "0", "0", "0", "1", "0", "0"),
+    ("cos(psi)*cos(theta)", "sin(psi)*cos(theta)", "0", "-cos(theta)", "0", "0", "0", "0", "0", "-sin(phi)*cos(theta)", "sin(theta)", "cos(phi)*cos(theta)", "0", "0", "0", "1", "0"),
+    ("sin(phi)*sin(psi) - sin(theta)*cos(phi)*cos(psi)", "-sin(phi)*cos(psi) - sin(psi)*sin(theta)*cos(phi)", "-sin(phi)", "sin(theta)*cos(phi)", "sin(phi)*sin(theta)", "sin(phi)*cos(theta)", "0", "0", "0", "0", "0", "0", "sin(theta)", "cos(phi)*cos(theta)", "0", "0", "1"),
+)
+
 #: q = PHYSICAL_TO_Q @ physical (exact integers), shape (17, 22).
 PHYSICAL_TO_Q = np.array([
     [1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0],

@@ -63,6 +63,13 @@ Q_DEFINITIONS = (
 #: Unit of each q_nu (that of its leading parameter; "1" is dimensionless, biases are over g).
 Q_UNITS = ("rad", "rad", "rad", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1", "1")
 
+#: H of (3) as exact expressions, rows 3 per mounting: what a certificate of this model is checked against.
+H_EXACT = (
+    ("-cos(beta)", "-sin(beta)*cos(alpha)", "-cos(alpha)*cos(beta)", "cos(alpha)", "sin(alpha)*sin(beta)", "sin(alpha)*cos(beta)", "1", "0", "0", "0", "0", "0", "0", "0", "0"),
+    ("sin(beta)", "-cos(alpha)*cos(beta)", "sin(beta)*cos(alpha)", "0", "0", "0", "0", "cos(alpha)", "sin(alpha)*sin(beta)", "sin(alpha)*cos(beta)", "1", "0", "0", "0", "0"),
+    ("0", "sin(alpha)", "0", "0", "0", "0", "0", "0", "0", "0", "0", "sin(alpha)*sin(beta)", "sin(alpha)*cos(beta)", "cos(alpha)", "1"),
+)
+
 #: q = PHYSICAL_TO_Q @ physical (exact integers), shape (15, 21).
 PHYSICAL_TO_Q = np.array([
     [1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0],

@@ -45,14 +45,20 @@ def reference(key, base=None):
     stand = MODELS.get(key) or (key if key in MODELS.values() else None)
     if stand is None:
         raise UnknownModel(f"unknown model {key!r} (certificates exist for {', '.join(MODELS)})")
-    from garant.derive.builtin import MODELS as BUILTIN
-    from garant.derive.derivation import derive
-    d = derive(BUILTIN[stand])
-    names = [a.name for a in d.model.stand.angles]
-    H = d.ident.H
-    return ([list(H.row(r)) for r in range(H.rows)],
-            {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names), **_reach(d)},
-            [f"q{nu + 1}" for nu in range(H.cols)])
+    # A built-in model's H is the one its generated module carries (H_EXACT): `python -m derive --check`
+    # (run by a test) proves that module equal to a fresh derivation, so nothing is re-derived here.
+    import importlib
+    import sympy as sp
+
+    from .parse import exact
+    mod = importlib.import_module(f"garant.generated.{stand}")
+    names = list(mod.ANGLES)
+    syms = [sp.Symbol(n, real=True) for n in names]
+    H = [[exact(e, syms) for e in row] for row in mod.H_EXACT]
+    return (H, {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names),
+                "ranges_deg": [list(r) for r in mod.ANGLE_RANGES_DEG],
+                "detents_deg": [list(d) for d in mod.ANGLE_DETENTS_DEG]},
+            list(mod.Q_NAMES))
 
 
 def _reach(d):
