@@ -117,3 +117,22 @@ def test_real_diagnosis_is_reported(tmp_path):
     assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--diagnose",
                  "--json", str(out)]) == 0
     assert json.loads(out.read_text())["diagnosis"]["consistent_before"]
+
+
+def test_parameter_bounds_carry_the_q_box_exactly():
+    """calibrate_norm.parameter_bounds: the printed parameters (inv(M) - I entries, b/g) move by
+    P_fit dA and P_fit dq_b over the box |dq| <= e; the vertices of the box reach the bound (linear)."""
+    import itertools
+    from garant.verify.workflows import calibrate_norm as cn
+    rng = np.random.default_rng(5)
+    M = np.tril(np.eye(3) + rng.uniform(-0.05, 0.05, (3, 3)))
+    e = rng.uniform(1e-4, 1e-3, 9)
+    bound = cn.parameter_bounds(M, e)
+    base = cn.parameters(*cn.fold(M, np.zeros(3), np.zeros(3), np.zeros(9), 9.81)[:2], 9.81)
+    worst = np.zeros(9)
+    for signs in itertools.product((-1, 1), repeat=9):
+        q = np.array(signs) * e
+        M2, b2, _ = cn.fold(M, np.zeros(3), np.zeros(3), q, 9.81)
+        worst = np.maximum(worst, np.abs(cn.parameters(M2, b2, 9.81) - base))
+    assert np.all(worst <= bound * (1 + 1e-12)) and np.allclose(worst, bound, rtol=1e-9)   # equal: linear
+    assert not np.allclose(bound, e, rtol=1e-3)          # the old bound (e itself) is not this one

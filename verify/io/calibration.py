@@ -39,7 +39,7 @@ FIELDS = {"format": str, "kind": str, "M": list, "b": list, "bound_matrix": list
 
 def from_norm(res, axes):
     """The calibration dictionary of a consistent `calibrate-norm` result."""
-    e = res["guaranteed_error"]
+    e = res["guaranteed_error_q"]                 # bounds of the correction (I + A) of the calibrated block
     B = [[e["lambda1"], 0.0, 0.0], [e["alpha"], e["lambda2"], 0.0], [e["beta"], e["gamma"], e["lambda3"]]]
     delta = [e.get(f"delta{i}*g", 0.0) for i in (1, 2, 3)]
     raw_unit = "m/s^2" if res["start"].startswith("log in m/s^2") else "count"

@@ -183,13 +183,29 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     q = parameters(M, b, g).tolist() + delta.tolist()[: params - 9] if si else None
     out.update({
         "parameters": None if q is None else dict(zip(PARAM_LABELS, q)),
-        "guaranteed_error": dict(zip(PARAM_LABELS, bound.tolist())),
-        "guaranteed_error_linear": dict(zip(PARAM_LABELS, err.tolist())),
-        "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (best * dsig).tolist())),
+        # the printed parameters' bounds (relative to the raw axes: carried through inv(M) exactly); for a
+        # log in raw units, those of (1.3)'s parameters of the calibrated block, as q itself
+        "guaranteed_error": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], bound) if si else bound).tolist())),
+        "guaranteed_error_linear": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], err) if si else err).tolist())),
+        "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], best * dsig) if si
+                                                                 else best * dsig).tolist())),
+        "guaranteed_error_q": dict(zip(PARAM_LABELS, bound.tolist())),
         "directions_to_add": [{"n": d, "nearest_present_deg": a}
                               for d, a in directions_to_add(mod, res["n"], params)],
     })
     return out
+
+
+def parameter_bounds(M_fit, e):
+    """Bounds of the printed parameters from bounds e of q (2.2) around the fit M_fit. The estimate and
+    the truth are (I + A) corrections of M_fit (fold), so P = inv(M) moves by P_fit dA and b/g by
+    P_fit dq_b, exactly linear: |P_fit| |dA| and |P_fit| |dq_b| bound them (componentwise)."""
+    e = np.asarray(e, float)
+    Pabs = np.abs(np.linalg.inv(M_fit))
+    E = np.array([[e[0], 0, 0], [e[3], e[1], 0], [e[4], e[5], e[2]]])
+    EP = Pabs @ E
+    out = np.array([EP[0, 0], EP[1, 1], EP[2, 2], EP[1, 0], EP[2, 0], EP[2, 1], *(Pabs @ e[6:9]), *e[9:]])
+    return np.nextafter(out, np.inf)
 
 
 def linearisation_remainder(mod, e, params):
