@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError
+from .positions import _number
 from .recordings import Still
 
 REQUIRED = ("f_x", "f_y", "f_z", "std_x", "std_y", "std_z", "n_samples")
@@ -44,13 +45,9 @@ def _rows(path):
 
 
 def _num(path, line, col, text, integer=False):
-    try:
-        v = float(text)
-    except ValueError:
-        raise DataError(f"{path} line {line}: column {col}: {text.strip()[:40]!r} is not a number") from None
-    if not math.isfinite(v) or (integer and v != int(v)):
-        raise DataError(f"{path} line {line}: column {col}: {text.strip()} is not a finite "
-                        + ("integer" if integer else "number"))
+    v = _number(text, path, line, col)
+    if integer and v != int(v):
+        raise DataError(f"{path} line {line}: column {col}: {text.strip()} is not an integer")
     return v
 
 
