@@ -9,6 +9,7 @@ import sympy as sp
 from .derivation import derive
 from .effects import VARIABLE_DEFAULTS
 from .estimators import sup_bound
+from .model import trig_degrees
 from .printer import linear_text, pycode
 from .report import report_context, stand_report_context
 from .builtin import MODELS
@@ -86,6 +87,7 @@ def model_context(d):
         H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) if not m.variables else "np.inf"
                 for nu in range(ident.H.cols)] for p in range(ident.H.rows)],
         plan_deg=[list(pos) for pos in m.plan_deg],
+        trig_degree=trig_degrees(m),
         estimator_terms=[[(s, p, w.p, w.q) for (s, p), w in sorted(psi.items())]
                          for psi in d.estimators],
     )

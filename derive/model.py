@@ -139,6 +139,25 @@ def link_angle(link, symbols, angles):
     return link.sign * (read - error - wobble)
 
 
+def trig_degrees(model):
+    """Degree of the readings as a trigonometric polynomial in each read angle, or None when they are not
+    one. Each link the angle drives is C(axis, sign (read - offset)): entries of degree 1 in the read
+    angle, so a chain of k such links gives degree k; a sensor effect polynomial of degree d in the
+    specific force multiplies it by d; a harmonic encoder error (sin of sin) or |w| is no polynomial."""
+    if any(link.harmonic for link in model.stand.chain) or model.variables:
+        return None
+    w = sp.symbols("w1:4", real=True)
+    factor = 1
+    for name in model.effects:
+        term = CATALOGUE[name].term(sp.Matrix(w), model.symbols)
+        for e in term:
+            try:
+                factor = max(factor, sp.Poly(e, *w).total_degree())
+            except sp.PolynomialError:
+                return None
+    return tuple(factor * sum(link.angle == a.name for link in model.stand.chain) for a in model.stand.angles)
+
+
 def chain_factors(stand, symbols, angles):
     """The chain's link matrices, instrument side first (000, section 2); their product is table_from_base."""
     return [C(link.axis, link_angle(link, symbols, angles)) for link in stand.chain]

@@ -15,6 +15,10 @@ ANGLES = ("phi",)
 ANGLE_RANGES_DEG = ((0, 360),)
 ANGLE_DETENTS_DEG = ((0, 90, 180, 270),)
 
+#: Degree of the readings as a trigonometric polynomial in each angle (None: not one), so that 2d + 1
+#: equispaced nodes per angle determine them, and their Hessian, exactly (verify/solve/taylor.py).
+TRIG_DEGREE = (1,)
+
 #: Physical error parameters: (name, unit, meaning), in the order of the `physical` vector.
 PARAMETERS = (
     ("kappa", "rad", "tilt of the table axis from the horizontal (turn about y)"),

@@ -15,6 +15,10 @@ ANGLES = ("alpha", "beta")
 ANGLE_RANGES_DEG = ((0, 360), (0, 360))
 ANGLE_DETENTS_DEG = ((), ())
 
+#: Degree of the readings as a trigonometric polynomial in each angle (None: not one), so that 2d + 1
+#: equispaced nodes per angle determine them, and their Hessian, exactly (verify/solve/taylor.py).
+TRIG_DEGREE = (1, 1)
+
 #: Physical error parameters: (name, unit, meaning), in the order of the `physical` vector.
 PARAMETERS = (
     ("kappa", "rad", "tilt of the outer axis from the horizontal"),

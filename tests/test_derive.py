@@ -100,3 +100,32 @@ def test_small_turn_is_E_plus_hat_to_first_order(theta):
     R = np.array(small_turn([sp.Float(t) for t in theta]), float)
     E_hat = np.eye(3) + np.array(hat(theta), float)
     assert np.abs(R - E_hat).max() <= 2 * max(abs(t) for t in theta) ** 2 + 1e-15
+
+
+def test_trig_degree_counts_links_and_effect_powers():
+    # The readings are a trigonometric polynomial of degree (links driven by the angle) x (the power of
+    # the specific force in the sensor effects); no polynomial with a harmonic encoder error or |w|.
+    from garant.derive.effects import extend
+    from garant.derive.model import trig_degrees
+    assert trig_degrees(TWO_AXIS_MODEL) == (1, 1)
+    quadratic = extend(TWO_AXIS_MODEL, ["scale_quadratic"])
+    assert trig_degrees(quadratic) == (2, 2)
+    for name in ("scale_asymmetry", "alpha_encoder_harmonic", "bias_drift"):
+        assert trig_degrees(extend(TWO_AXIS_MODEL, [name])) is None
+    # The degree is what interpolation needs: 2d + 1 nodes per angle reproduce the readings, d - 1 do not.
+    from garant.derive.model import specific_force_over_g
+    f = specific_force_over_g(quadratic)
+    syms = [p.symbol for p in quadratic.parameters]
+    a, b = quadratic.angle_symbols
+    rng = np.random.default_rng(0)
+    fn = sp.lambdify([a, b], f.subs(dict(zip(syms, rng.uniform(-0.05, 0.05, len(syms))))), "numpy")
+
+    def interpolated(x, y, d):
+        n = 2 * d + 1
+        nodes = 2 * np.pi * np.arange(n) / n
+        w = lambda t: (1 + 2 * sum(np.cos(m * (t - nodes)) for m in range(1, d + 1))) / n
+        return sum(w(x)[i] * w(y)[j] * np.array(fn(nodes[i], nodes[j]), float) for i in range(n) for j in range(n))
+    x, y = 0.7, -2.1
+    exact = np.array(fn(x, y), float)
+    assert np.abs(interpolated(x, y, 2) - exact).max() < 1e-12
+    assert np.abs(interpolated(x, y, 1) - exact).max() > 1e-4

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from garant.verify.io import calibration, recordings
+from garant.verify.errors import DataError
 from garant.verify.io.positions import read_positions
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -60,3 +61,22 @@ def test_means_example(tmp_path):
     assert len(runs) == 1 and runs[0].stills[0].mean.tolist() == [-0.203, -9.391, 2.858]
     assert runs[0].stills[0].std_error[0] == pytest.approx(0.036 / 1380 ** 0.5)
     assert runs[0].nominal.tolist() == [[0, -0.934172, 0.356822]]
+
+
+def test_a_large_numeric_positions_file_is_read_in_c_exactly_as_cell_by_cell(tmp_path, monkeypatch):
+    # The fast reader (np.loadtxt, files of only the required columns) and the cell-by-cell reader
+    # (which names any bad cell) give the same numbers; any file the fast one cannot read falls through.
+    from garant.verify.io import positions
+    rng = np.random.default_rng(0)
+    rows = np.column_stack([rng.uniform(0, 360, (50, 2)), rng.normal(0, 9.81, (50, 3))])
+    path = tmp_path / "p.csv"
+    path.write_text("alpha_deg,beta_deg,f1,f2,f3\n" + "\n".join(",".join(repr(float(x)) for x in r) for r in rows) + "\n")
+    assert positions._numeric(str(path), ["alpha_deg", "beta_deg", "f1", "f2", "f3"]) is not None
+    fast = positions.read_positions(str(path))
+    monkeypatch.setattr(positions, "_numeric", lambda *a: None)
+    slow = positions.read_positions(str(path))
+    assert np.array_equal(fast.angles_deg, slow.angles_deg) and np.array_equal(fast.f, slow.f)
+    monkeypatch.undo()
+    path.write_text(path.read_text().replace(repr(float(rows[7, 3])), "nan", 1))
+    with pytest.raises(DataError, match="line 9: column f2"):
+        positions.read_positions(str(path))

@@ -63,7 +63,7 @@ def test_remainder_bound_of_a_jet_matches_the_exact_hessian():
     h = 0.1
     x, y = Jet2.variables([-h, -h], [h, h], (1,))
     f = x * y + x.sin()
-    H = f.h
+    H = f.hessian()
     assert H.lo[0, 1, 0] <= 1 <= H.hi[0, 1, 0] and H.lo[1, 1, 0] <= 0 <= H.hi[1, 1, 0]
     assert H.lo[0, 0, 0] <= -np.sin(h) and np.sin(h) <= H.hi[0, 0, 0] < np.sin(h) + 1e-12
 
@@ -139,9 +139,67 @@ def test_absorbed_curvature_decomposition_is_sound(name, step):
     V = np.hstack([rng.choice([-1.0, 1.0], (len(lo), 30)) * hi[:, None], rng.uniform(lo[:, None], hi[:, None], (len(lo), 10))])
     for v in V.T:
         p = L @ v
-        Cp = 0.5 * rem.C @ np.outer(v, v).reshape(-1)
+        Cp = rem.shift(v)
         z = mod.residual(*pos.radians, mod.readings(*pos.radians, p, 1.0, **kw), 1.0, **kw).T.reshape(-1)
         r = z - A.T @ (mod.PHYSICAL_TO_Q @ p + Cp)
         assert np.all(np.abs(r) <= rb) and np.all(np.abs(Cp) <= cb)
     plain = taylor.remainder_bound(mod, pos.radians, L, lo, hi, pos.mounts)
     assert rb.max() < 0.5 * plain.max()
+
+
+def _random_positions(mod, n, seed=0):
+    names, mounts = models.layout(mod)
+    rng = np.random.default_rng(seed)
+    P = rng.uniform(-180, 360, (n, len(names)))
+    m = None if len(mounts) == 1 else rng.integers(0, len(mounts), n)
+    return Positions("random", P, np.zeros((n, 3)), m)
+
+
+@pytest.mark.parametrize("name", ["two-axis", "single-axis", "three-axis"])
+def test_interpolated_hessian_encloses_the_one_at_each_position(name):
+    # The readings are trigonometric polynomials of degree TRIG_DEGREE in the angles, so the Hessian at
+    # any angle is the weighted sum of its values at 2d + 1 nodes per angle: the enclosure so formed
+    # holds the Hessian enclosed position by position (zero box: a point), and is nearly as tight.
+    mod = models.load(name)
+    pos = _random_positions(mod, 40)
+    L, lo, hi = guarantee.box(mod, 1e-3)
+    interp = taylor.Interpolation(mod.TRIG_DEGREE)
+    W = interp.weights(pos.radians)
+    for box_lo, box_hi in ((np.zeros_like(lo), np.zeros_like(hi)), (lo, hi)):
+        d_lo, d_hi = taylor.packed_hessian(mod, pos.radians, L, box_lo, box_hi, pos.mounts)
+        for k in ([None] if pos.mounts is None else range(int(pos.mounts.max()) + 1)):
+            sel = slice(None) if k is None else pos.mounts == k
+            mid, rad = interp.enclose(W[sel], *interp.at_nodes(mod, L, box_lo, box_hi, k))
+            mid, rad = mid.reshape(d_lo[sel].shape), rad.reshape(d_lo[sel].shape)
+            centre = 0.5 * (d_lo[sel] + d_hi[sel])
+            assert np.all(np.abs(centre - mid) <= rad + 0.5 * (d_hi[sel] - d_lo[sel]))
+            assert rad.max() <= 4 * (0.5 * (d_hi[sel] - d_lo[sel])).max() + 1e-9
+
+
+def test_a_wrong_trigonometric_degree_is_caught_by_the_enclosure_check():
+    # The identity needs the right degree: claiming degree 0 (a constant in each angle) misses the
+    # Hessian at the positions, and the check above turns red.
+    mod = models.load("two-axis")
+    pos = _random_positions(mod, 40)
+    L, lo, hi = guarantee.box(mod, 1e-3)
+    interp = taylor.Interpolation((0, 0))
+    mid, rad = interp.enclose(interp.weights(pos.radians), *interp.at_nodes(mod, L, lo, hi))
+    d_lo, d_hi = taylor.packed_hessian(mod, pos.radians, L, lo, hi)
+    centre = 0.5 * (d_lo + d_hi)
+    assert np.any(np.abs(centre - mid.reshape(d_lo.shape)) > rad.reshape(d_lo.shape) + 0.5 * (d_hi - d_lo))
+
+
+def test_remainder_with_many_positions_equals_the_remainder_position_by_position(tmp_path):
+    # The estimate's remainder at 400 random positions, interpolated and only the last a posteriori box
+    # at every position, against the bound over the same box evaluated position by position.
+    mod = models.load("two-axis")
+    pos = _random_positions(mod, 400, seed=2)
+    A = lp.measurement_matrix(mod, np.column_stack(pos.radians))
+    L, lo, hi = guarantee.box(mod, 1e-4)
+    rem = guarantee.Remainder(mod, pos, A)
+    assert rem.interp is not None
+    rb, _ = rem(lo, hi)
+    direct = guarantee.Remainder.__new__(guarantee.Remainder)
+    direct.__dict__.update(rem.__dict__, interp=None)
+    rb_direct, _ = direct(lo, hi)
+    assert rb.max() <= 1.5 * rb_direct.max() and rb_direct.max() <= 1.5 * rb.max()   # as tight, either way

@@ -1,6 +1,7 @@
 """Reading measured positions from CSV, with one clear line for every way a file can be wrong."""
 import csv
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -47,6 +48,13 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
     such as +y+z+x) when the stand uses several mountings; other columns are kept."""
     angle_cols = [f"{a}_deg" for a in angles]
     required = angle_cols + ["f1", "f2", "f3"] + (["mount"] if mountings and len(mountings) > 1 else [])
+    fast = _numeric(path, required)
+    if fast is not None:
+        header, data = fast
+        pos = Positions(path, data[:, [header.index(c) for c in angle_cols]],
+                        data[:, [header.index(c) for c in ("f1", "f2", "f3")]])
+        _check_degrees(path, angle_cols, pos)
+        return pos
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = list(csv.reader(fh))
@@ -82,11 +90,33 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
     pos = Positions(path, np.column_stack([data[c] for c in angle_cols]),
                     np.array([data["f1"], data["f2"], data["f3"]]).T, mounts,
                     {c: v for c, v in data.items() if c not in required})
+    _check_degrees(path, angle_cols, pos)
+    return pos
+
+
+def _check_degrees(path, angle_cols, pos):
     for c, v in zip(angle_cols, pos.angles_deg.T):
         if len(v) > 2 and np.abs(v).max() <= 2 * math.pi + 1e-9 and np.any(np.abs(v) > 1e-9):
             raise DataError(f"{path}: column {c} lies within +-2pi ({v.min():g} to {v.max():g}): "
                             "these look like radians; the column is in degrees")
-    return pos
+
+
+def _numeric(path, required):
+    """(header, data) when the file is exactly the required columns, all finite numbers, read in C
+    (a large file of positions); None otherwise: the reader below then finds and names any problem."""
+    try:
+        with open(path, encoding="utf-8-sig") as fh:
+            header = [h.strip() for h in fh.readline(1_000_000).split(",")]
+            if sorted(header) != sorted(required) or "mount" in header:
+                return None
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)        # no data rows: said by the reader below
+                data = np.loadtxt(fh, delimiter=",", dtype=float, comments=None, ndmin=2)
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    if not len(data) or data.shape[1] != len(header) or not np.isfinite(data).all():
+        return None
+    return header, data
 
 
 def read_plan(path, angles, mountings=None):

@@ -18,6 +18,7 @@ class Log:
     raw: np.ndarray        # (N, 3), the sensor's own units (counts or m/s^2)
     step: float = None     # quantisation step in raw units when the format states it
     note: str = ""         # what the reader did (skipped bytes, the IMU read)
+    dt: float = None       # median sample interval, s (computed when None)
 
 
 #: Time column names of a `csv` log, and the unit each one states (factor to seconds).
@@ -105,7 +106,8 @@ def _csv_columns(path, header):
 
 
 def _check_time(path, t, named_unit):
-    """Time must increase and be in seconds: a reset or a unit that is not seconds is refused."""
+    """Time must increase and be in seconds: a reset or a unit that is not seconds is refused. Returns
+    the median sample interval."""
     dt = np.diff(t)
     if np.all(dt == 0):
         raise DataError(f"{path}: the time column is constant")
@@ -117,6 +119,7 @@ def _check_time(path, t, named_unit):
     if named_unit and not 1e-5 <= step <= 0.5:
         raise DataError(f"{path}: the time column has a median step of {step:g}, not a sample interval in "
                         "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds")
+    return step
 
 
 def read_log(path, fmt=None, sensor="adxl355", imu=None):
@@ -157,8 +160,8 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     if len(t) < MIN_SAMPLES:
         raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording")
-    _check_time(path, t, unit)
-    return Log(path, t - t[0], raw, step, note)
+    dt = _check_time(path, t, unit)
+    return Log(path, t - t[0], raw, step, note, dt)
 
 
 def quantum(log):
@@ -166,6 +169,9 @@ def quantum(log):
     integer log, else 0 (already scaled)."""
     if log.step is not None:
         return log.step
+    head = log.raw[:1000]
+    if not np.all(head == np.round(head)):          # a fraction in the first rows settles it
+        return 0.0
     return 1.0 if np.all(log.raw == np.round(log.raw)) else 0.0
 
 
@@ -179,22 +185,24 @@ class Still:
 
 
 def _sums(x):
-    """Cumulative sums of x - x[0] and of its square, a zero row first: any window's mean and variance
-    in O(1) (the shift keeps the sums small, so the variance does not cancel)."""
-    d = x - x[0]
-    c = np.empty((len(x) + 1, 3))
-    c2 = np.empty((len(x) + 1, 3))
-    c[0] = c2[0] = 0.0
-    np.cumsum(d, axis=0, out=c[1:])
+    """Cumulative sums of x - x[0] and of its square, axis by axis ((3, N + 1), a zero column first):
+    any window's mean and variance in O(1) (the shift keeps the sums small, so the variance does not
+    cancel; each axis contiguous, so the window differences run at memory speed)."""
+    d = np.subtract(x.T, x[0][:, None], out=np.empty((3, len(x))))
+    c = np.empty((3, len(x) + 1))
+    c2 = np.empty((3, len(x) + 1))
+    c[:, 0] = c2[:, 0] = 0.0
+    np.cumsum(d, axis=1, out=c[:, 1:])
     np.multiply(d, d, out=d)
-    np.cumsum(d, axis=0, out=c2[1:])
+    np.cumsum(d, axis=1, out=c2[:, 1:])
     return c, c2
 
 
 def moving_variance(x, n, sums=None):
+    """Sum over the axes of the variance of each window of n samples: (N - n + 1,)."""
     c, c2 = sums or _sums(x)
-    mean = (c[n:] - c[:-n]) / n
-    return ((c2[n:] - c2[:-n]) / n - mean**2).sum(axis=1)
+    mean = (c[:, n:] - c[:, :-n]) / n
+    return ((c2[:, n:] - c2[:, :-n]) / n - mean**2).sum(axis=0)
 
 
 def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
@@ -202,7 +210,7 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
 
     Returns (intervals, note): the note says how the threshold was set.
     """
-    dt = float(np.median(np.diff(log.t)))
+    dt = log.dt or float(np.median(np.diff(log.t)))
     n = max(int(round(window / dt)), 5)
     sums = _sums(log.raw)
     c, c2 = sums
@@ -221,7 +229,7 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
         a, b = i + n // 2, j + n // 2                            # window centre indices
         if log.t[min(b, last)] - log.t[a] >= min_still:
             k = b - a                                           # the segment's mean and std from the sums
-            s1, s2 = c[b] - c[a], c2[b] - c2[a]
+            s1, s2 = c[:, b] - c[:, a], c2[:, b] - c2[:, a]
             var = np.maximum(s2 - s1 * s1 / k, 0.0) / (k - 1)
             out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), log.raw[0] + s1 / k,
                              np.sqrt(var / k), int(k)))

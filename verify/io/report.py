@@ -23,10 +23,17 @@ def table(headers, rows, out=None):
 def write_json(path, obj):
     """Strict JSON (no NaN or Infinity), written atomically."""
     try:
-        text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
+        text = json.dumps(obj, indent=2, allow_nan=False, default=_plain) + "\n"
     except ValueError:
         raise DataError(f"{path}: a result is not finite (NaN or infinity); nothing written") from None
     write_text(path, text)
+
+
+def _plain(x):
+    """numpy arrays and numbers in a result become JSON lists and numbers (converted only when written)."""
+    if hasattr(x, "tolist"):
+        return x.tolist()
+    raise TypeError(f"{type(x).__name__} is not JSON serialisable")
 
 
 def write_text(path, text, mode="w"):

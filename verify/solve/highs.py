@@ -59,17 +59,69 @@ def solve(c, M, row_lo, row_hi, col_lo, col_hi, what):
     return np.array(sol.col_value), np.array(sol.row_dual), h.getInfo().objective_function_value
 
 
+GENERATE_ABOVE = 900     # measurements: above this, an LP starts from a spread subset and adds what it violates
+TOLERANCE = 1e-9         # relative: a measurement violating by less is within the solver's own tolerance
+
+
+def _spread(K, size):
+    """`size` indices spread evenly over range(K)."""
+    return np.unique(np.linspace(0, K - 1, min(K, size)).round().astype(int))
+
+
+def _generate(K, solve_on, violation, what):
+    """An LP over K measurements solved on a subset S, measurements that violate its optimum added
+    (the worst first), until none does: then that optimum is the optimum over all K (the others'
+    constraints hold at it). A subset too small to be feasible is doubled."""
+    S = _spread(K, GENERATE_ABOVE // 3)
+    for _ in range(100):
+        try:
+            out = solve_on(S)
+        except LPFailed:
+            if len(S) == K:
+                raise
+            S = np.union1d(S, _spread(K, 2 * len(S)))
+            continue
+        v = violation(out, S)
+        v[S] = -np.inf
+        new = np.flatnonzero(v > 0)
+        if not len(new):
+            return S, out
+        keep = GENERATE_ABOVE // 9
+        if len(new) > keep:
+            new = new[np.argpartition(-v[new], keep)[:keep]]
+        S = np.union1d(S, new)
+    raise LPFailed(f"{what}: no convergence adding measurements")
+
+
 def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
     """min t over q with |z_k - a_k^T q| <= t w_k + s_k for every k (A: m x K; w = 1, s = 0 unless
-    given): (q, t, the residual vector z - A^T q). Plain, it is the minimax (Chebyshev) fit."""
+    given): (q, t, the residual vector z - A^T q). Plain, it is the minimax (Chebyshev) fit. Many
+    measurements: constraint generation (_generate), the same optimum."""
     m, K = A.shape
     w = np.ones(K) if weights is None else np.asarray(weights, float)
     s = np.zeros(K) if slack is None else np.asarray(slack, float)
+    c = max(np.abs(z).max(), np.abs(s).max(), 1e-300)   # HiGHS's tolerances are absolute: solve with data of size 1
+    if c != 1.0:
+        q, t, _ = chebyshev_fit(A, z / c, w, s / c if slack is not None else None, what)
+        return q * c, t * c, z - A.T @ (q * c)
+    if K <= GENERATE_ABOVE:
+        return _chebyshev(A, z, w, s, slack is not None, what)
+
+    def violation(out, S):
+        q, t, _ = out
+        return (np.abs(z - A.T @ q) - s) / w - t - TOLERANCE * max(abs(t), np.abs(z).max())
+    _, (q, t, _) = _generate(K, lambda S: _chebyshev(A[:, S], z[S], w[S], s[S], slack is not None, what),
+                             violation, what)
+    return q, t, z - A.T @ q
+
+
+def _chebyshev(A, z, w, s, free, what):
+    m, K = A.shape
     M = np.block([[A.T, w[:, None]], [A.T, -w[:, None]]])
     c = np.zeros(m + 1)
     c[-1] = 1.0
     x, _, t = solve(c, M, np.r_[z - s, np.full(K, -INF)], np.r_[np.full(K, INF), z + s],
-                    np.r_[np.full(m, -INF), -INF if slack is not None else 0.0], INF, what)
+                    np.r_[np.full(m, -INF), -INF if free else 0.0], INF, what)
     q = x[:m]
     return q, float(t), z - A.T @ q
 
@@ -77,10 +129,25 @@ def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
 def l1_estimators(A, targets=None):
     """The primal (7)-(8) of 000 for each target a (columns of `targets`, default every e_nu):
     min sum |Phi| subject to A Phi = a, as u - v with u, v >= 0. One model, the targets solved in turn
-    with the previous basis (only the right-hand side changes): (Phi (K x n), sum |Phi| (n,))."""
+    with the previous basis (only the right-hand side changes): (Phi (K x n), sum |Phi| (n,)).
+    Many measurements: column generation (_generate) on the duals, |a_k^T lambda| <= 1 for every k."""
     A = np.asarray(A, float)
     m, K = A.shape
     T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
+    if K <= GENERATE_ABOVE:
+        return _l1(A, T)[:2]
+    Phi, err = np.zeros((K, T.shape[1])), np.zeros(T.shape[1])
+    for k in range(T.shape[1]):                         # target by target: each dual has its own peaks
+        S, (Phi_S, e, _) = _generate(K, lambda S: _l1(A[:, S], T[:, [k]]),
+                                     lambda out, S: np.abs(A.T @ out[2][:, 0]) - 1 - TOLERANCE,
+                                     f"primal (7)-(8), target {k + 1}")
+        Phi[S, k], err[k] = Phi_S[:, 0], e[0]
+    return Phi, err
+
+
+def _l1(A, T):
+    """(Phi, sum |Phi|, row duals lambda (m x n)) on the measurements A."""
+    m, K = A.shape
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = 2 * K, m
     lp.col_cost_ = np.ones(2 * K)
@@ -97,7 +164,7 @@ def l1_estimators(A, targets=None):
     h = new()
     h.passModel(lp)
     idx = np.arange(m, dtype=np.int32)
-    Phi, err = np.zeros((K, T.shape[1])), np.zeros(T.shape[1])
+    Phi, err, Y = np.zeros((K, T.shape[1])), np.zeros(T.shape[1]), np.zeros((m, T.shape[1]))
     for k in range(T.shape[1]):
         if k:
             h.changeRowsBounds(m, idx, T[:, k], T[:, k])
@@ -105,10 +172,12 @@ def l1_estimators(A, targets=None):
         status = h.getModelStatus()
         if status != highspy.HighsModelStatus.kOptimal:
             raise LPFailed(f"primal (7)-(8), target {k + 1}: {h.modelStatusToString(status)}")
-        x = np.array(h.getSolution().col_value)
+        sol = h.getSolution()
+        x = np.array(sol.col_value)
         Phi[:, k] = x[:K] - x[K:]
         err[k] = np.abs(Phi[:, k]).sum()
-    return Phi, err
+        Y[:, k] = sol.row_dual
+    return Phi, err, Y
 
 
 def dual(A, targets=None):

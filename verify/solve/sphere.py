@@ -8,7 +8,7 @@ arithmetic in the mean-value form (`interval.py`).
 """
 import numpy as np
 
-from .interval import mean_value_enclosure, variables
+from .interval import Grad, Iv, mean_value_enclosure, variables
 
 # Faces of the cube: n = sign * (v permuted) / |v| with v = (1, s, t).
 FACES = [(axis, sign) for axis in range(3) for sign in (1, -1)]
@@ -25,13 +25,26 @@ def grid(step_deg=5):
 
 
 def _face_direction(axis, sign, s, t):
-    """n = v/|v| on a cube face as Grad objects (components in order 1, 2, 3)."""
+    """n = v/|v| on cube faces as Grad objects (components in order 1, 2, 3); axis and sign are one
+    face's, or arrays giving each box its face."""
     r = (s * s + t * t + 1.0).sqrt().recip()
-    others = [k for k in range(3) if k != axis]
-    comps = [None] * 3
-    comps[axis] = r * float(sign)
-    comps[others[0]], comps[others[1]] = s * r, t * r
-    return comps
+    if np.ndim(axis) == 0:
+        others = [k for k in range(3) if k != axis]
+        comps = [None] * 3
+        comps[axis] = r * float(sign)
+        comps[others[0]], comps[others[1]] = s * r, t * r
+        return comps
+    options = [r * np.asarray(sign, float), s * r, t * r]
+    # component k is the face's own axis (option 0), else the lower (s) or the higher (t) of the others
+    return [_pick(options, np.where(axis == k, 0, np.where(k < 3 - axis - k, 1, 2))) for k in range(3)]
+
+
+def _pick(options, code):
+    """The Grad whose entries are those of options[code] box by box."""
+    def iv(xs):
+        return Iv(np.choose(code, [np.broadcast_to(x.lo, code.shape) for x in xs]),
+                  np.choose(code, [np.broadcast_to(x.hi, code.shape) for x in xs]))
+    return Grad(iv([o.v for o in options]), [iv([o.d[i] for o in options]) for i in range(len(options[0].d))])
 
 
 def polynomial(exponents, lam):
@@ -67,34 +80,35 @@ def prove_dual(exponents, lam, eta=1e-9, max_boxes=2_000_000, start=8, locate=1e
     """
     p = p or polynomial(exponents, lam)
     evaluated, touching = 0, []
-    for axis, sign in FACES:
-        edges = np.linspace(-1, 1, start + 1)
-        s_lo, t_lo = np.meshgrid(edges[:-1], edges[:-1], indexing="ij")
-        s_lo, t_lo = s_lo.ravel(), t_lo.ravel()
-        w = np.full(s_lo.shape, 2.0 / start)
-        while s_lo.size:
-            evaluated += s_lo.size
-            if evaluated > max_boxes:
-                return False, evaluated, touching
+    edges = np.linspace(-1, 1, start + 1)
+    s0, t0 = (g.ravel() for g in np.meshgrid(edges[:-1], edges[:-1], indexing="ij"))
+    axis = np.repeat([a for a, _ in FACES], s0.size)            # every face at once, box by box
+    sign = np.repeat([g for _, g in FACES], s0.size)
+    s_lo, t_lo = np.tile(s0, len(FACES)), np.tile(t0, len(FACES))
+    w = np.full(s_lo.shape, 2.0 / start)
+    while s_lo.size:
+        evaluated += s_lo.size
+        if evaluated > max_boxes:
+            return False, evaluated, touching
 
-            def f(s, t, axis=axis, sign=sign):
-                return p(_face_direction(axis, sign, s, t))
-            enc = mean_value_enclosure(f, s_lo, s_lo + w, t_lo, t_lo + w)
-            cs, ct = s_lo + w / 2, t_lo + w / 2
-            at_centre = f(*variables(cs, cs, ct, ct)).v
-            if np.any(np.minimum(np.abs(at_centre.lo), np.abs(at_centre.hi)) > 1 + eta):
-                return False, evaluated, touching          # a point where |p| > 1 + eta: disproved
-            bad = enc.mag() > 1 + eta
-            near = (enc.mag() > 1 - 1e-6) & ~bad
-            for k in np.flatnonzero(near & (w <= locate)):
-                touching.append((axis, sign, s_lo[k], t_lo[k], w[k]))
-            if np.any(bad & (w < 1e-7)):
-                return False, evaluated, touching
-            split = bad | (near & (w > locate))
-            s_lo, t_lo, w = s_lo[split], t_lo[split], w[split] / 2
-            s_lo, t_lo = (np.concatenate([s_lo, s_lo + w, s_lo, s_lo + w]),
-                          np.concatenate([t_lo, t_lo, t_lo + w, t_lo + w]))
-            w = np.concatenate([w] * 4)
+        def f(s, t, axis=axis, sign=sign):
+            return p(_face_direction(axis, sign, s, t))
+        enc = mean_value_enclosure(f, s_lo, s_lo + w, t_lo, t_lo + w)
+        cs, ct = s_lo + w / 2, t_lo + w / 2
+        at_centre = f(*variables(cs, cs, ct, ct)).v
+        if np.any(np.minimum(np.abs(at_centre.lo), np.abs(at_centre.hi)) > 1 + eta):
+            return False, evaluated, touching              # a point where |p| > 1 + eta: disproved
+        bad = enc.mag() > 1 + eta
+        near = (enc.mag() > 1 - 1e-6) & ~bad
+        for k in np.flatnonzero(near & (w <= locate)):
+            touching.append((int(axis[k]), int(sign[k]), s_lo[k], t_lo[k], w[k]))
+        if np.any(bad & (w < 1e-7)):
+            return False, evaluated, touching
+        split = bad | (near & (w > locate))
+        s_lo, t_lo, w, axis, sign = s_lo[split], t_lo[split], w[split] / 2, axis[split], sign[split]
+        s_lo, t_lo = (np.concatenate([s_lo, s_lo + w, s_lo, s_lo + w]),
+                      np.concatenate([t_lo, t_lo, t_lo + w, t_lo + w]))
+        w, axis, sign = (np.concatenate([x] * 4) for x in (w, axis, sign))
     return True, evaluated, touching
 
 

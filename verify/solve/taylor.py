@@ -11,21 +11,42 @@ a proof of the linearisation remainder of (1) -> (2) of 000, position by positio
 function is evaluated unchanged: its `np` is replaced, for that call only, by a namespace whose
 sin, cos, array and asarray accept jets.
 """
+import functools
 import types
 
 import numpy as np
 
 from .interval import Iv
 
-CHUNK = 1000          # positions per evaluation: the jets of one chunk hold (nv, nv, CHUNK) intervals
+CHUNK = 100           # positions per evaluation: a chunk's jets, (nv (nv + 1) / 2, CHUNK) intervals, stay in cache
 
 
-def _outer(a, b):
-    return Iv(a.lo[:, None], a.hi[:, None]) * Iv(b.lo[None, :], b.hi[None, :])
+@functools.lru_cache(maxsize=None)
+def triangle(n):
+    """Index pairs (k, j), k <= j, of the packed upper triangle of a symmetric n x n matrix."""
+    return np.triu_indices(n)
+
+
+def _take(a, idx):
+    return Iv(a.lo[idx], a.hi[idx])
+
+
+def _sym(a, b):
+    """The packed triangle of outer(a, b) + outer(b, a): a_k b_j + b_k a_j (a_k b_k twice on the diagonal)."""
+    k, j = triangle(len(a.lo))
+    return _take(a, k) * _take(b, j) + _take(b, k) * _take(a, j)
+
+
+def _square(a):
+    """The packed triangle of outer(a, a)."""
+    k, j = triangle(len(a.lo))
+    return _take(a, k) * _take(a, j)
 
 
 class Jet2:
-    """Value (S,), gradient (n, S), Hessian (n, n, S), all intervals."""
+    """Value (S,), gradient (n, S) and the upper triangle of the symmetric Hessian (n (n + 1) / 2, S),
+    all intervals. S is 1 for what depends on the parameters alone (numpy broadcasts it to the
+    positions where an angle enters), so the stand's own constants are computed once, not per position."""
 
     __slots__ = ("v", "g", "h")
     __array_ufunc__ = None            # ndarray * jet defers to the jet's own __rmul__
@@ -35,11 +56,23 @@ class Jet2:
 
     @staticmethod
     def variables(lo, hi, shape):
-        """One jet per variable k over [lo_k, hi_k], broadcast to positions of `shape`."""
+        """One jet per variable k over [lo_k, hi_k], of the given shape (positions; (1,) for none)."""
         n = len(lo)
         eye = np.eye(n)[:, :, None] * np.ones((1, 1) + shape)
-        zero = Iv(np.zeros((n, n) + shape))
+        zero = Iv(np.zeros((n * (n + 1) // 2,) + shape))
         return [Jet2(Iv(np.full(shape, lo[k]), np.full(shape, hi[k])), Iv(eye[k]), zero) for k in range(n)]
+
+    def hessian(self):
+        """The full symmetric Hessian, intervals of shape (n, n, S)."""
+        n = len(self.g.lo)
+        k, j = triangle(n)
+        out = []
+        for half in (self.h.lo, self.h.hi):
+            full = np.empty((n, n) + half.shape[1:])
+            full[k, j] = half
+            full[j, k] = half
+            out.append(full)
+        return Iv(*out)
 
     def __add__(self, o):
         if isinstance(o, Jet2):
@@ -62,13 +95,13 @@ class Jet2:
             c = Iv(np.asarray(o, float))
             return Jet2(self.v * c, self.g * c, self.h * c)
         return Jet2(self.v * o.v, self.g * o.v + o.g * self.v,
-                    self.h * o.v + o.h * self.v + _outer(self.g, o.g) + _outer(o.g, self.g))
+                    self.h * o.v + o.h * self.v + _sym(self.g, o.g))
 
     __rmul__ = __mul__
 
     def _chain(self, f1, f2):
         """f(self) from f = value, f1 = f', f2 = f'' (intervals over the value's box)."""
-        return lambda f0: Jet2(f0, self.g * f1, _outer(self.g, self.g) * f2 + self.h * f1)
+        return lambda f0: Jet2(f0, self.g * f1, _square(self.g) * f2 + self.h * f1)
 
     def sin(self):
         s, c = self.v.sin(), self.v.cos()
@@ -112,52 +145,136 @@ def with_jets(fn):
     return types.FunctionType(fn.__code__, {**fn.__globals__, "np": JET_NUMPY}, fn.__name__, fn.__defaults__)
 
 
-def hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
+SUM_ERROR = 1e-12     # relative: covers the float rounding of a sum or product of a few hundred terms
+
+
+def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
     """Enclosure of the Hessian of z_exact(L v) with respect to v over the hull of the box [lo, hi]
-    and 0, at every position: (lower, upper), each of shape (N, 3, nv, nv). The physical parameters
-    are p = L v (L: n x nv), coordinates in which the directions no data can see are variables of
-    their own, so that their exact invariances (turns about one axis that add up) cost nothing."""
+    and 0, at every position, upper triangles packed (`triangle`): (lower, upper), each (N, 3, P).
+    The physical parameters are p = L v (L: n x nv), coordinates in which the directions no data
+    can see are variables of their own, so that their exact invariances cost nothing."""
     lo, hi = np.minimum(lo, 0.0), np.maximum(hi, 0.0)
     L = np.asarray(L, float)
     angles = [np.atleast_1d(np.asarray(a, float)) for a in angles]
     N, nv = len(angles[0]), L.shape[1]
-    H_lo, H_hi = np.zeros((N, 3, nv, nv)), np.zeros((N, 3, nv, nv))
+    P = nv * (nv + 1) // 2
+    H_lo, H_hi = np.zeros((N, 3, P)), np.zeros((N, 3, P))
     groups = [(None, np.arange(N))] if mounts is None else [(k, np.flatnonzero(mounts == k))
                                                               for k in np.unique(mounts)]
     chunks = [(k, rows[c:c + CHUNK]) for k, rows in groups for c in range(0, len(rows), CHUNK)]
+    physical = _linear_jets(L, lo, hi)
     for k, rows in chunks:
         fn = mod.readings if k is None else getattr(mod, f"_readings_{k}")
-        physical = _linear_jets(L, lo, hi, len(rows))
         extra = [np.asarray(v, float)[rows] for v in variables]
         f = with_jets(fn)(*[a[rows] for a in angles], physical, 1.0, *extra)
         for i, fi in enumerate(f):
             if isinstance(fi, Jet2):
-                H_lo[rows, i] = np.moveaxis(fi.h.lo, -1, 0)
-                H_hi[rows, i] = np.moveaxis(fi.h.hi, -1, 0)
+                H_lo[rows, i] = fi.h.lo.T
+                H_hi[rows, i] = fi.h.hi.T
     return H_lo, H_hi
+
+
+def unpack(H):
+    """(..., P) packed upper triangles to full symmetric (..., nv, nv)."""
+    P = H.shape[-1]
+    nv = int(round((np.sqrt(8 * P + 1) - 1) / 2))
+    k, j = triangle(nv)
+    full = np.empty(H.shape[:-1] + (nv, nv))
+    full[..., k, j] = H
+    full[..., j, k] = H
+    return full
+
+
+def hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
+    """The enclosure of packed_hessian as full matrices: (lower, upper), each (N, 3, nv, nv)."""
+    return tuple(unpack(H) for H in packed_hessian(mod, angles, L, lo, hi, mounts, variables))
+
+
+def pair_weights(P_abs):
+    """w with w . packed(M) = 1/2 sum_kj P_k P_j M_kj for a symmetric M: 1/2 P_k^2 on the diagonal,
+    P_k P_j off it (each pair counted twice)."""
+    k, j = triangle(len(P_abs))
+    return np.where(k == j, 0.5, 1.0) * P_abs[k] * P_abs[j]
 
 
 def remainder_bound(mod, angles, L, lo, hi, mounts=None, variables=()):
     """Proven bound of |z_exact(L v) - H^T R L v| for every v in the box, per position and component,
     shape (N, 3): by Taylor's theorem (Lagrange form) around v = 0, 1/2 sum_kj |v_k| |v_j| sup |H_kj|."""
-    H_lo, H_hi = hessian(mod, angles, L, lo, hi, mounts, variables)
+    H_lo, H_hi = packed_hessian(mod, angles, L, lo, hi, mounts, variables)
     P = np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0))
-    return np.nextafter(0.5 * np.einsum("k,j,sikj->si", P, P, np.maximum(-H_lo, H_hi)), np.inf)
+    return (np.maximum(-H_lo, H_hi) @ pair_weights(P)) * (1 + SUM_ERROR)
 
 
-def _linear_jets(L, lo, hi, S):
-    """p = L v as jets: value intervals by interval arithmetic, constant gradients, zero Hessians
-    (rows of L that are zero give the number 0)."""
+class Interpolation:
+    """The Hessian at many positions from its values at a few nodes, for readings that are a
+    trigonometric polynomial of degree d_i in each angle i (the module's TRIG_DEGREE; derive counts it).
+
+    With 2 d_i + 1 equispaced nodes x_j per angle, every such polynomial, and so every entry of its
+    Hessian in v for each fixed v, equals sum_j w_j(x) h(x_j) exactly, w_j the tensor product of
+    w(x - x_j) = (1 + 2 sum_{m <= d} cos(m (x - x_j))) / (2 d + 1). The enclosures [h_j] at the nodes
+    (interval Taylor arithmetic, once per box) then enclose h(x) by sum_j w_j [h_j]: a proof at
+    every position for the cost of a matrix product. WEIGHT_ERROR bounds the float error of each
+    computed w_j (|x| <= MAX_ANGLE, d <= 3, at most 3 angles) and is added, times sum_j |h_j|."""
+
+    WEIGHT_ERROR = 1e-11
+    MAX_ANGLE = 100.0            # rad
+    MAX_DEGREE = 3
+
+    def __init__(self, degrees):
+        self.degrees = tuple(degrees)
+        grids = [2 * np.pi * np.arange(2 * d + 1) / (2 * d + 1) for d in self.degrees]
+        self.nodes = [g.ravel() for g in np.meshgrid(*grids, indexing="ij")]
+
+    @classmethod
+    def usable(cls, mod, angles, variables):
+        """Whether the identity applies (and pays): a trigonometric polynomial, no row variables, the
+        angles within range and more positions than nodes."""
+        degrees = getattr(mod, "TRIG_DEGREE", None)
+        if degrees is None or variables or len(degrees) > 3 or max(degrees, default=0) > cls.MAX_DEGREE:
+            return False
+        nodes = int(np.prod([2 * d + 1 for d in degrees]))
+        return len(angles[0]) > nodes and max(np.abs(a).max() for a in angles) <= cls.MAX_ANGLE
+
+    def weights(self, angles):
+        """w_j at each position: (N, number of nodes)."""
+        W = np.ones((len(angles[0]), 1))
+        for x, d in zip(angles, self.degrees):
+            n = 2 * d + 1
+            delta = x[:, None] - 2 * np.pi * np.arange(n)[None, :] / n
+            w = (1 + 2 * sum((np.cos(m * delta) for m in range(1, d + 1)), np.zeros_like(delta))) / n
+            W = (W[:, :, None] * w[:, None, :]).reshape(len(x), -1)
+        return W
+
+    def at_nodes(self, mod, L, lo, hi, mount=None):
+        """(midpoints, radii) of the node enclosures, (nodes, 3 P) each, and sum_j |h_j| (3 P,)."""
+        H_lo, H_hi = packed_hessian(mod, self.nodes, L, lo, hi,
+                                    None if mount is None else np.full(len(self.nodes[0]), mount))
+        mid = 0.5 * (H_lo + H_hi)
+        rad = np.maximum(H_hi - mid, mid - H_lo) * (1 + SUM_ERROR) + 1e-300
+        mid, rad = mid.reshape(len(mid), -1), rad.reshape(len(rad), -1)
+        return mid, rad, (np.abs(mid) + rad).sum(axis=0)
+
+    def enclose(self, W, mid, rad, total):
+        """(midpoints, radii) of sum_j w_j [h_j] at positions with weights W: every rounding (the
+        products, the weights) inside the radii."""
+        m = W @ mid
+        r = (np.abs(W) @ (rad + SUM_ERROR * np.abs(mid))) * (1 + SUM_ERROR) + self.WEIGHT_ERROR * total
+        return m, r
+
+
+def _linear_jets(L, lo, hi):
+    """p = L v as jets of one position (broadcast to all): value intervals by interval arithmetic,
+    constant gradients, zero Hessians (rows of L that are zero give the number 0)."""
     nv = L.shape[1]
-    zero_h = Iv(np.zeros((nv, nv, S)))
+    zero_h = Iv(np.zeros((nv * (nv + 1) // 2, 1)))
     out = []
     for row in L:
         if not row.any():
             out.append(0.0)
             continue
-        v = Iv(np.zeros(S))
+        v = Iv(np.zeros(1))
         for c, a, b in zip(row, lo, hi):
             if c:
-                v = v + Iv(np.full(S, a), np.full(S, b)) * c
-        out.append(Jet2(v, Iv(np.repeat(row[:, None], S, axis=1)), zero_h))
+                v = v + Iv(np.full(1, a), np.full(1, b)) * c
+        out.append(Jet2(v, Iv(row[:, None].copy()), zero_h))
     return out

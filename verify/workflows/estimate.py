@@ -94,14 +94,14 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     check_residual_size(residuals_table_axes(mod, all_rows, g, Q), positions.path)
     W, method = choose_estimator(mod, positions, A)
     v = guarantee.verdict(mod, positions, z.reshape(-1), A, sigma, g, prior, W)
-    out = {
+    out = {                                    # arrays stay arrays until a JSON file is written
         "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma, "prior": prior,
         "positions": rows, "distinct_positions": distinct, "consistent": v.consistent,
         "sigma_min_supported": v.sigma_min_supported, "remainder_bound": float(v.remainder.max()),
         "minimax_residual": v.minimax_exact, "minimax_residual_linear": v.minimax_linear,
         "definitions": dict(zip(mod.Q_NAMES, mod.Q_DEFINITIONS)), "units": dict(zip(mod.Q_NAMES, mod.Q_UNITS)),
-        "positions_deg": positions.angles_deg.tolist(),
-        "residual_minimax": v.residual.reshape(-1, 3).tolist(),
+        "positions_deg": positions.angles_deg,
+        "residual_minimax": v.residual.reshape(-1, 3),
     }
     if not v.consistent:
         names = list(mod.ANGLES)
@@ -117,7 +117,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         "guaranteed_error": dict(zip(mod.Q_NAMES, v.guaranteed_error.tolist())),
         "guaranteed_error_linear": dict(zip(mod.Q_NAMES, v.error_linear.tolist())),
         "guaranteed_error_remainder": dict(zip(mod.Q_NAMES, v.error_remainder.tolist())),
-        "residual": (z - (A.T @ q).reshape(-1, 3)).tolist(),
+        "residual": z - (A.T @ q).reshape(-1, 3),
     })
     if remount is not None:
         phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, q, W, sigma + v.remainder, g,

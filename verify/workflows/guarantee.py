@@ -36,7 +36,6 @@ class Verdict:
     exact_fit: np.ndarray            # q of the exact-model minimax fit
     minimax_exact: float             # its residual: the fit quality
     remainder: np.ndarray            # R_k, proven, per residual component (N*3,)
-    remainder_prior: np.ndarray      # the same over the prior box alone
     disagree: np.ndarray             # indices k where |z_k - a_k^T q*| - R_k > sigma
     residual: np.ndarray             # z - A^T q* at that minimax fit (N*3,)
     error_linear: np.ndarray = None  # sigma sum |W| per q
@@ -89,34 +88,74 @@ class Remainder:
     Part of the second-order term is a function of the parameters times a column of H (e.g. along the
     unseparable direction Gamma_ii = Delta_g the readings move by Gamma_ii Delta_g u_i, which is q's own
     column): a q shifted by C(p) = 1/2 v^T C v absorbs it exactly. C is fitted once, by least squares
-    over the positions, to the Hessian at 0; then for every v in a box
+    over (at most FIT_ROWS of) the positions, to the Hessian at 0 (any C is valid: it only moves
+    curvature between the two bounds); then for every v in a box
         z_exact = H^T (q + C(p)) + R',  |R'_k| <= 1/2 sum |v_k| |v_j| sup |Hess_kj - (H^T C)_kj|,
     |C(p)_nu| <= 1/2 sum |C_nu,kj| |v_k| |v_j|: both proven (the Hessian enclosed by interval Taylor
-    arithmetic, the fit's float rounding covered by a margin)."""
+    arithmetic, at every position or, for readings that are trigonometric polynomials in the angles,
+    interpolated exactly from nodes (taylor.Interpolation); float rounding covered by margins).
+    Hessians are symmetric: they are held as packed upper triangles."""
+
+    FIT_ROWS = 256
+    BLOCK = 2048             # positions per block of the bound: memory stays linear and small
 
     def __init__(self, mod, positions, A):
-        self.mod, self.positions = mod, positions
-        self.kw = {"mounts": positions.mounts} if positions.mounts is not None else {}
-        self.extra = [positions.extra[str(v)] for v in getattr(mod, "VARIABLES", ())]
+        self.mod, self.A = mod, A
+        self.angles = [np.atleast_1d(np.asarray(a, float)) for a in positions.radians]
+        self.mounts = positions.mounts
+        self.extra = [np.asarray(positions.extra[str(v)], float) for v in getattr(mod, "VARIABLES", ())]
         self.L = coordinates(mod)[0]
-        nv = self.L.shape[1]
-        H0, _ = taylor.hessian(mod, positions.radians, self.L, np.zeros(nv), np.zeros(nv), variables=self.extra,
-                               **self.kw)
-        Y = H0.reshape(-1, nv * nv)                                          # (N*3, nv*nv)
-        self.C = np.linalg.lstsq(A.T, Y, rcond=None)[0]                      # (m, nv*nv)
-        self.fit = (A.T @ self.C).reshape(H0.shape)
+        n, nv = len(self.angles[0]), self.L.shape[1]
+        self.P = nv * (nv + 1) // 2
+        self.interp = (taylor.Interpolation(mod.TRIG_DEGREE)
+                       if taylor.Interpolation.usable(mod, self.angles, self.extra) else None)
+        self._nodes = {}
+        fit_rows = np.unique(np.linspace(0, n - 1, min(n, self.FIT_ROWS)).round().astype(int))
+        mid, _ = self._enclosure(np.zeros(nv), np.zeros(nv), fit_rows)
+        self.C = np.linalg.lstsq(A[:, _columns(fit_rows)].T, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
 
-    def __call__(self, lo, hi):
-        """(bound of |R'| per residual component (N*3,), bound of |C(p)| per q (m,)) over the box."""
-        H_lo, H_hi = taylor.hessian(self.mod, self.positions.radians, self.L, lo, hi, variables=self.extra,
-                                    **self.kw)
-        margin = 1e-12 * (1 + np.abs(self.fit))
-        mag = np.maximum(np.abs(H_lo - self.fit), np.abs(H_hi - self.fit)) + margin
-        P = np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0))
-        PP = np.outer(P, P)
-        rb = 0.5 * np.einsum("kj,sikj->si", PP, mag).reshape(-1)
-        cb = 0.5 * np.abs(self.C) @ PP.reshape(-1)
-        return np.nextafter(rb, np.inf), np.nextafter(cb, np.inf)
+    def _enclosure(self, lo, hi, rows):
+        """(midpoints, radii) of the packed Hessian enclosure at the given positions: (rows, 3, P)."""
+        mounts = None if self.mounts is None else self.mounts[rows]
+        if self.interp is None:
+            H_lo, H_hi = taylor.packed_hessian(self.mod, [a[rows] for a in self.angles], self.L, lo, hi, mounts,
+                                               [v[rows] for v in self.extra])
+            mid = 0.5 * (H_lo + H_hi)
+            return mid, np.maximum(H_hi - mid, mid - H_lo) * (1 + taylor.SUM_ERROR) + 1e-300
+        W = self.interp.weights([a[rows] for a in self.angles])
+        key = (tuple(lo), tuple(hi))
+        mid, rad = np.empty((len(rows), 3 * self.P)), np.empty((len(rows), 3 * self.P))
+        for k in ([None] if mounts is None else np.unique(mounts)):
+            if (key, k) not in self._nodes:
+                self._nodes[key, k] = self.interp.at_nodes(self.mod, self.L, lo, hi, k)
+            sel = slice(None) if k is None else mounts == k
+            mid[sel], rad[sel] = self.interp.enclose(W[sel], *self._nodes[key, k])
+        return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1)
+
+    def shift(self, v):
+        """C(p) = 1/2 v^T C_nu v for each q_nu (C held packed)."""
+        k, j = taylor.triangle(len(v))
+        return self.C @ (np.where(k == j, 0.5, 1.0) * v[k] * v[j])
+
+    def __call__(self, lo, hi, rows=None):
+        """(bound of |R'| per residual component (3 per position of `rows`, default all), bound of
+        |C(p)| per q (m,)) over the box."""
+        rows = np.arange(len(self.angles[0])) if rows is None else np.asarray(rows)
+        w = taylor.pair_weights(np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0)))
+        rb = np.empty((len(rows), 3))
+        for b in range(0, len(rows), self.BLOCK):
+            block = rows[b:b + self.BLOCK]
+            mid, rad = self._enclosure(lo, hi, block)
+            fit = (self.A[:, _columns(block)].T @ self.C).reshape(mid.shape)
+            margin = taylor.SUM_ERROR * (1 + np.abs(fit) + np.abs(mid))
+            rb[b:b + self.BLOCK] = (np.abs(mid - fit) + rad + margin) @ w
+        cb = np.abs(self.C) @ w
+        return rb.reshape(-1) * (1 + taylor.SUM_ERROR), cb * (1 + taylor.SUM_ERROR)
+
+
+def _columns(rows):
+    """Columns of A (and components of z) of the given positions: 3 per position."""
+    return (3 * np.asarray(rows)[:, None] + np.arange(3)).reshape(-1)
 
 
 def _weighted_minimax(A, z, rb):
@@ -147,19 +186,30 @@ def exact_fit(mod, positions, z, A, g, iterations=6):
 def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2):
     """The consistency verdict and, with an estimator W (m x K), the guaranteed errors with remainder."""
     rem = Remainder(mod, positions, A)
-    rb_prior, cb_prior = rem(*box(mod, prior)[1:])
+    if W is not None:
+        support = np.flatnonzero(np.abs(W).reshape(len(W), -1, 3).max(axis=(0, 2)) > 0)
+        cols = _columns(support)
 
     def proven(s):
-        """(R', C) bounds when the noise bound is s: a priori, then a posteriori (each step valid if the
-        premises hold)."""
-        rb, cb = rb_prior, cb_prior
-        if W is not None:
-            q = W @ z
-            for _ in range(steps):
-                e = np.abs(W) @ (s + rb) + cb
-                rb2, cb2 = rem(*box(mod, prior, q, e)[1:])
-                rb, cb = np.minimum(rb, rb2), np.minimum(cb, cb2)
-        return rb, cb
+        """(R' per residual component, C) bounds when the noise bound is s: over the prior box; with an
+        estimator, then over a posteriori boxes (each valid if the premises hold, each inside the last),
+        the intermediate ones at the estimator's positions only, the last at every position."""
+        lo, hi = box(mod, prior)[1:]
+        if W is None:
+            return rem(lo, hi)
+        rb_s, cb = rem(lo, hi, support)
+        q = W @ z
+        for step in range(steps):
+            e = np.abs(W[:, cols]) @ (s + rb_s) + cb
+            lo, hi = box(mod, prior, q, e)[1:]
+            last = step == steps - 1
+            rb2, cb2 = rem(lo, hi, None if last else support)
+            cb = np.minimum(cb, cb2)
+            if last:
+                rb2[cols] = np.minimum(rb2[cols], rb_s)
+                return rb2, cb
+            rb_s = np.minimum(rb_s, rb2)
+        return rem(lo, hi)[0], cb
     rb, cb = proven(sigma)
     t, _, r = _weighted_minimax(A, z, rb)
     t_lin = highs.chebyshev_fit(A, z)[1]
@@ -168,7 +218,7 @@ def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2
     supported = sigma if consistent else _smallest_sigma(A, z, sigma, t_lin, lambda s: proven(s)[0])
     v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
                 minimax_less_remainder=float(t), minimax_linear=t_lin, exact_fit=q_exact,
-                minimax_exact=t_exact, remainder=rb, remainder_prior=rb_prior,
+                minimax_exact=t_exact, remainder=rb,
                 disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
     if W is not None:
         v.error_linear = sigma * np.abs(W).sum(axis=1)

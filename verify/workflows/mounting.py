@@ -33,7 +33,9 @@ def recover(remount, mount, gamma, q, weights, noise, g, q_shift=0.0):
     """
     K = remount.recovery_matrix(mount, gamma)
     value = K @ q
-    bound = np.abs(K @ weights) @ np.broadcast_to(noise, weights.shape[1]) + np.abs(K) @ np.broadcast_to(q_shift, len(q))
+    used = np.flatnonzero(np.any(weights != 0, axis=0))         # the estimator's own measurements
+    bound = (np.abs(K @ weights[:, used]) @ np.broadcast_to(noise, weights.shape[1])[used]
+             + np.abs(K) @ np.broadcast_to(q_shift, len(q)))
     out, err = {}, {}
     names = list(remount.OUTPUTS)
     for key in PHYSICAL_KEYS:
