@@ -100,14 +100,15 @@ def read(path):
 
 
 def apply(cal, raw):
-    """Corrected specific force (N, 3) in m/s^2 and its worst-case error per sample (N, 3)."""
-    a = (np.asarray(raw, float) - cal["b"]) @ cal["M"].T
-    n = a / np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-300)
+    """Corrected specific force (N, 3) in m/s^2 and its worst-case error per sample (N, 3). Computed
+    axis by axis ((3, N), each axis contiguous): |n_i n_j| = |a_i a_j| / |a|^2."""
+    a = cal["M"] @ (np.asarray(raw, float) - cal["b"]).T
+    inv2 = 1.0 / np.maximum((a * a).sum(axis=0), 1e-300)
     axes = cal["pendulosity_axes"].astype(int) - 1
-    nonlinear = cal["g"] * cal["bound_delta"] * np.abs(n[:, axes] * n)
-    v = np.abs(a) @ cal["bound_matrix"].T + cal["bound_bias"] + nonlinear
-    bound = v @ np.linalg.inv(np.eye(3) - cal["bound_matrix"]).T
-    return a, bound * (1 + 1e-12)
+    nonlinear = (cal["g"] * cal["bound_delta"])[:, None] * (np.abs(a[axes] * a) * inv2)
+    v = cal["bound_matrix"] @ np.abs(a) + cal["bound_bias"][:, None] + nonlinear
+    bound = np.linalg.inv(np.eye(3) - cal["bound_matrix"]) @ v
+    return a.T, (bound * (1 + 1e-12)).T
 
 
 def imu_tk_text(cal):

@@ -61,10 +61,10 @@ def _load(path, delimiter, usecols, skip):
         raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}") from None
     if data.shape[0] == 0:
         raise DataError(f"{path}: no data rows")
-    bad = ~np.isfinite(data)
-    if bad.any():
-        row = int(np.flatnonzero(bad.any(axis=1))[0])
-        raise DataError(f"{path} line {row + skip + 1}: NaN or infinite value")
+    if not np.isfinite(data.sum()):                  # a NaN or an infinity makes the sum one (so can
+        bad = np.flatnonzero(~np.isfinite(data).all(axis=1))             # an overflow: then no row is bad)
+        if bad.size:
+            raise DataError(f"{path} line {int(bad[0]) + skip + 1}: NaN or infinite value")
     return data
 
 
@@ -216,12 +216,13 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     c, c2 = sums
     var = moving_variance(log.raw, n, sums)
     first = var[: max(int(init / dt) - n, 1)]
-    floor = np.quantile(var, 0.05)
     base = float(np.median(first))
     note = f"threshold {k:g} x the moving variance of the first {init:g} s"
-    if base > 20 * floor:
-        base, note = floor, (f"the first {init:g} s are not still; threshold {k:g} x the 5th "
-                             "percentile of the moving variance")
+    h = 0.05 * (len(var) - 1)                     # the 5th percentile's place among the sorted values
+    below = np.count_nonzero(var < base / 20)
+    if below > np.floor(h) and (below > np.ceil(h) or np.quantile(var, 0.05) < base / 20):
+        base, note = float(np.quantile(var, 0.05)), (f"the first {init:g} s are not still; threshold {k:g} x "
+                                                     "the 5th percentile of the moving variance")
     still = np.concatenate([[False], var < k * base, [False]])
     edges = np.flatnonzero(np.diff(still.astype(np.int8)))
     out, last = [], len(log.t) - 1

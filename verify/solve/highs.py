@@ -68,11 +68,11 @@ def _spread(K, size):
     return np.unique(np.linspace(0, K - 1, min(K, size)).round().astype(int))
 
 
-def _generate(K, solve_on, violation, what):
-    """An LP over K measurements solved on a subset S, measurements that violate its optimum added
-    (the worst first), until none does: then that optimum is the optimum over all K (the others'
-    constraints hold at it). A subset too small to be feasible is doubled."""
-    S = _spread(K, GENERATE_ABOVE // 3)
+def _generate(K, solve_on, violation, what, start=None):
+    """An LP over K measurements solved on a subset S (spread over all, with `start` added), measurements
+    that violate its optimum added (the worst first), until none does: then that optimum is the optimum
+    over all K (the others' constraints hold at it). A subset too small to be feasible is doubled."""
+    S = _spread(K, GENERATE_ABOVE // 3) if start is None else np.union1d(_spread(K, GENERATE_ABOVE // 6), start)
     for _ in range(100):
         try:
             out = solve_on(S)
@@ -110,8 +110,11 @@ def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
     def violation(out, S):
         q, t, _ = out
         return (np.abs(z - A.T @ q) - s) / w - t - TOLERANCE * max(abs(t), np.abs(z).max())
+    # start where the minimax fit is decided: the largest residuals of the least-squares fit
+    r_ls = (np.abs(z - A.T @ np.linalg.lstsq(A.T, z, rcond=None)[0]) - s) / w
+    start = np.argpartition(-r_ls, GENERATE_ABOVE // 6)[:GENERATE_ABOVE // 6]
     _, (q, t, _) = _generate(K, lambda S: _chebyshev(A[:, S], z[S], w[S], s[S], slack is not None, what),
-                             violation, what)
+                             violation, what, start)
     return q, t, z - A.T @ q
 
 

@@ -45,7 +45,10 @@ class Iv:
         return _iv(o) + (-self)
 
     def __mul__(self, o):
-        o = _iv(o)
+        if not isinstance(o, Iv) or o.lo is o.hi:          # a number: two products, not four
+            c = o.lo if isinstance(o, Iv) else np.asarray(o, float)
+            a, b = self.lo * c, self.hi * c
+            return Iv(*_out(np.minimum(a, b), np.maximum(a, b)))
         a, b, c, d = self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi
         return Iv(*_out(np.minimum(np.minimum(a, b), np.minimum(c, d)), np.maximum(np.maximum(a, b), np.maximum(c, d))))
 

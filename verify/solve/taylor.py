@@ -152,8 +152,10 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
     """Enclosure of the Hessian of z_exact(L v) with respect to v over the hull of the box [lo, hi]
     and 0, at every position, upper triangles packed (`triangle`): (lower, upper), each (N, 3, P).
     The physical parameters are p = L v (L: n x nv), coordinates in which the directions no data
-    can see are variables of their own, so that their exact invariances cost nothing."""
+    can see are variables of their own, so that their exact invariances cost nothing. lo and hi are
+    (nv,), one box for all positions, or (nv, N), a box per position."""
     lo, hi = np.minimum(lo, 0.0), np.maximum(hi, 0.0)
+    per_position = np.ndim(lo) == 2
     L = np.asarray(L, float)
     angles = [np.atleast_1d(np.asarray(a, float)) for a in angles]
     N, nv = len(angles[0]), L.shape[1]
@@ -162,9 +164,11 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
     groups = [(None, np.arange(N))] if mounts is None else [(k, np.flatnonzero(mounts == k))
                                                               for k in np.unique(mounts)]
     chunks = [(k, rows[c:c + CHUNK]) for k, rows in groups for c in range(0, len(rows), CHUNK)]
-    physical = _linear_jets(L, lo, hi)
+    physical = None if per_position else _linear_jets(L, lo, hi)
     for k, rows in chunks:
         fn = mod.readings if k is None else getattr(mod, f"_readings_{k}")
+        if per_position:
+            physical = _linear_jets(L, lo[:, rows], hi[:, rows])
         extra = [np.asarray(v, float)[rows] for v in variables]
         f = with_jets(fn)(*[a[rows] for a in angles], physical, 1.0, *extra)
         for i, fi in enumerate(f):
@@ -245,14 +249,18 @@ class Interpolation:
             W = (W[:, :, None] * w[:, None, :]).reshape(len(x), -1)
         return W
 
-    def at_nodes(self, mod, L, lo, hi, mount=None):
-        """(midpoints, radii) of the node enclosures, (nodes, 3 P) each, and sum_j |h_j| (3 P,)."""
-        H_lo, H_hi = packed_hessian(mod, self.nodes, L, lo, hi,
-                                    None if mount is None else np.full(len(self.nodes[0]), mount))
+    def at_nodes(self, mod, L, boxes, mount=None):
+        """For each box (lo, hi): (midpoints, radii) of the node enclosures, (nodes, 3 P) each, and
+        sum_j |h_j| (3 P,). The boxes share one evaluation: the nodes repeated box by box."""
+        M, B = len(self.nodes[0]), len(boxes)
+        lo = np.repeat(np.stack([b[0] for b in boxes], axis=1), M, axis=1)
+        hi = np.repeat(np.stack([b[1] for b in boxes], axis=1), M, axis=1)
+        H_lo, H_hi = packed_hessian(mod, [np.tile(x, B) for x in self.nodes], L, lo, hi,
+                                    None if mount is None else np.full(M * B, mount))
         mid = 0.5 * (H_lo + H_hi)
         rad = np.maximum(H_hi - mid, mid - H_lo) * (1 + SUM_ERROR) + 1e-300
-        mid, rad = mid.reshape(len(mid), -1), rad.reshape(len(rad), -1)
-        return mid, rad, (np.abs(mid) + rad).sum(axis=0)
+        mid, rad = mid.reshape(B, M, -1), rad.reshape(B, M, -1)
+        return [(m, r, (np.abs(m) + r).sum(axis=0)) for m, r in zip(mid, rad)]
 
     def enclose(self, W, mid, rad, total):
         """(midpoints, radii) of sum_j w_j [h_j] at positions with weights W: every rounding (the
@@ -263,18 +271,16 @@ class Interpolation:
 
 
 def _linear_jets(L, lo, hi):
-    """p = L v as jets of one position (broadcast to all): value intervals by interval arithmetic,
-    constant gradients, zero Hessians (rows of L that are zero give the number 0)."""
+    """p = L v as jets: value intervals (lo, hi of shape (nv,): one position, broadcast to all;
+    (nv, S): a box per position), constant gradients, zero Hessians (rows of L that are zero give the
+    number 0). The values in midpoint-radius form, L mid +- |L| rad, every rounding inside the radius."""
     nv = L.shape[1]
+    shape = np.shape(lo)[1:] or (1,)
+    lo, hi = np.asarray(lo, float).reshape(nv, -1), np.asarray(hi, float).reshape(nv, -1)
+    mid = 0.5 * (lo + hi)
+    rad = np.maximum(hi - mid, mid - lo) * (1 + SUM_ERROR)
+    centre = L @ mid
+    radius = (np.abs(L) @ (rad + SUM_ERROR * np.abs(mid))) * (1 + SUM_ERROR) + 1e-300
     zero_h = Iv(np.zeros((nv * (nv + 1) // 2, 1)))
-    out = []
-    for row in L:
-        if not row.any():
-            out.append(0.0)
-            continue
-        v = Iv(np.zeros(1))
-        for c, a, b in zip(row, lo, hi):
-            if c:
-                v = v + Iv(np.full(1, a), np.full(1, b)) * c
-        out.append(Jet2(v, Iv(row[:, None].copy()), zero_h))
-    return out
+    return [Jet2(Iv((c - r).reshape(shape), (c + r).reshape(shape)), Iv(row[:, None].copy()), zero_h)
+            if row.any() else 0.0 for row, c, r in zip(L, centre, radius)]

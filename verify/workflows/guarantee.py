@@ -99,7 +99,7 @@ class Remainder:
     FIT_ROWS = 256
     BLOCK = 2048             # positions per block of the bound: memory stays linear and small
 
-    def __init__(self, mod, positions, A):
+    def __init__(self, mod, positions, A, boxes=()):
         self.mod, self.A = mod, A
         self.angles = [np.atleast_1d(np.asarray(a, float)) for a in positions.radians]
         self.mounts = positions.mounts
@@ -110,9 +110,20 @@ class Remainder:
         self.interp = (taylor.Interpolation(mod.TRIG_DEGREE)
                        if taylor.Interpolation.usable(mod, self.angles, self.extra) else None)
         self._nodes = {}
+        self.prepare([(np.zeros(nv), np.zeros(nv)), *boxes])
         fit_rows = np.unique(np.linspace(0, n - 1, min(n, self.FIT_ROWS)).round().astype(int))
         mid, _ = self._enclosure(np.zeros(nv), np.zeros(nv), fit_rows)
         self.C = np.linalg.lstsq(A[:, _columns(fit_rows)].T, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
+
+    def prepare(self, boxes):
+        """Enclose the Hessian at the nodes for several boxes (lo, hi) in one evaluation (interpolation
+        only; the boxes a computation will need, known in advance)."""
+        if self.interp is None:
+            return
+        for k in ([None] if self.mounts is None else np.unique(self.mounts)):
+            todo = [b for b in boxes if ((tuple(b[0]), tuple(b[1])), k) not in self._nodes]
+            for b, nodes in zip(todo, self.interp.at_nodes(self.mod, self.L, todo, k) if todo else ()):
+                self._nodes[(tuple(b[0]), tuple(b[1])), k] = nodes
 
     def _enclosure(self, lo, hi, rows):
         """(midpoints, radii) of the packed Hessian enclosure at the given positions: (rows, 3, P)."""
@@ -127,7 +138,7 @@ class Remainder:
         mid, rad = np.empty((len(rows), 3 * self.P)), np.empty((len(rows), 3 * self.P))
         for k in ([None] if mounts is None else np.unique(mounts)):
             if (key, k) not in self._nodes:
-                self._nodes[key, k] = self.interp.at_nodes(self.mod, self.L, lo, hi, k)
+                self._nodes[key, k] = self.interp.at_nodes(self.mod, self.L, [(lo, hi)], k)[0]
             sel = slice(None) if k is None else mounts == k
             mid[sel], rad[sel] = self.interp.enclose(W[sel], *self._nodes[key, k])
         return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1)
@@ -185,7 +196,7 @@ def exact_fit(mod, positions, z, A, g, iterations=6):
 
 def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2):
     """The consistency verdict and, with an estimator W (m x K), the guaranteed errors with remainder."""
-    rem = Remainder(mod, positions, A)
+    rem = Remainder(mod, positions, A, boxes=[box(mod, prior)[1:]])
     if W is not None:
         support = np.flatnonzero(np.abs(W).reshape(len(W), -1, 3).max(axis=(0, 2)) > 0)
         cols = _columns(support)
