@@ -178,6 +178,12 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
     return H_lo, H_hi
 
 
+def midrad(lo, hi):
+    """[lo, hi] as midpoint and radius, the radius rounded up: [lo, hi] lies in [mid - rad, mid + rad]."""
+    mid = 0.5 * (lo + hi)
+    return mid, np.maximum(hi - mid, mid - lo) * (1 + SUM_ERROR) + 1e-300
+
+
 def unpack(H):
     """(..., P) packed upper triangles to full symmetric (..., nv, nv)."""
     P = H.shape[-1]
@@ -257,8 +263,7 @@ class Interpolation:
         hi = np.repeat(np.stack([b[1] for b in boxes], axis=1), M, axis=1)
         H_lo, H_hi = packed_hessian(mod, [np.tile(x, B) for x in self.nodes], L, lo, hi,
                                     None if mount is None else np.full(M * B, mount))
-        mid = 0.5 * (H_lo + H_hi)
-        rad = np.maximum(H_hi - mid, mid - H_lo) * (1 + SUM_ERROR) + 1e-300
+        mid, rad = midrad(H_lo, H_hi)
         mid, rad = mid.reshape(B, M, -1), rad.reshape(B, M, -1)
         return [(m, r, (np.abs(m) + r).sum(axis=0)) for m, r in zip(mid, rad)]
 
@@ -277,8 +282,7 @@ def _linear_jets(L, lo, hi):
     nv = L.shape[1]
     shape = np.shape(lo)[1:] or (1,)
     lo, hi = np.asarray(lo, float).reshape(nv, -1), np.asarray(hi, float).reshape(nv, -1)
-    mid = 0.5 * (lo + hi)
-    rad = np.maximum(hi - mid, mid - lo) * (1 + SUM_ERROR)
+    mid, rad = midrad(lo, hi)
     centre = L @ mid
     radius = (np.abs(L) @ (rad + SUM_ERROR * np.abs(mid))) * (1 + SUM_ERROR) + 1e-300
     zero_h = Iv(np.zeros((nv * (nv + 1) // 2, 1)))

@@ -131,8 +131,7 @@ class Remainder:
         if self.interp is None:
             H_lo, H_hi = taylor.packed_hessian(self.mod, [a[rows] for a in self.angles], self.L, lo, hi, mounts,
                                                [v[rows] for v in self.extra])
-            mid = 0.5 * (H_lo + H_hi)
-            return mid, np.maximum(H_hi - mid, mid - H_lo) * (1 + taylor.SUM_ERROR) + 1e-300
+            return taylor.midrad(H_lo, H_hi)
         W = self.interp.weights([a[rows] for a in self.angles])
         key = (tuple(lo), tuple(hi))
         mid, rad = np.empty((len(rows), 3 * self.P)), np.empty((len(rows), 3 * self.P))
