@@ -4,16 +4,17 @@ A command module imports what its work needs inside `run`, so `garant --help` an
 not pay for SymPy, cvxpy or matplotlib.
 """
 import argparse
+import importlib
 import os
 import sys
 import warnings
 
 from ..errors import DataError, LPFailed
-from . import (apply, calibrate_norm, check_certificate, derive, diagnose, estimate, identify, plan, repeatability,
-               simulate, verify)
 
-COMMANDS = (verify, plan, estimate, calibrate_norm, repeatability, apply, identify, derive, simulate, diagnose,
-            check_certificate)
+#: The subcommands, in the order of `garant --help`: command name -> its module.
+COMMANDS = {"verify": "verify", "plan": "plan", "estimate": "estimate", "calibrate-norm": "calibrate_norm",
+            "repeatability": "repeatability", "apply": "apply", "identify": "identify", "derive": "derive",
+            "simulate": "simulate", "diagnose": "diagnose", "check-certificate": "check_certificate"}
 #: Output options of the commands: (attribute, what it is, a file or a folder).
 OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("output", "the data file", "file"),
            ("report", "the report folder", "folder"), ("certificates", "the certificate folder", "folder"),
@@ -30,16 +31,19 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def parser():
+def parser(only=None):
+    """The argument parser: every subcommand, or only the one named (its module alone is imported)."""
     ap = _Parser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     sub = ap.add_subparsers(dest="command", required=True)
-    for command in COMMANDS:
+    for name in ([only] if only in COMMANDS else COMMANDS):
+        command = importlib.import_module(f".{COMMANDS[name]}", __name__)
         command.add(sub).set_defaults(run=command.run)
     return ap
 
 
 def main(argv=None):
-    args = parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parser(argv[0] if argv else None).parse_args(argv)
     warnings.simplefilter("ignore", RuntimeWarning)     # inputs are checked; a failure is one line
     try:
         _check_outputs(args)

@@ -17,8 +17,9 @@ INF = highspy.kHighsInf
 _quiet = False
 
 
-def new():
-    """A HiGHS instance that prints nothing."""
+def new(presolve=True):
+    """A HiGHS instance that prints nothing. The LPs here are small and dense: presolve finds nothing
+    to remove and costs more than the solve (python -m verify.bench), so LP callers turn it off."""
     global _quiet
     if not _quiet:
         fd = os.dup(1)
@@ -33,6 +34,8 @@ def new():
     else:
         h = highspy.Highs()
     h.setOptionValue("output_flag", False)
+    if not presolve:
+        h.setOptionValue("presolve", "off")
     return h
 
 
@@ -49,7 +52,7 @@ def solve(c, M, row_lo, row_hi, col_lo, col_hi, what):
     lp.a_matrix_.start_ = np.arange(0, rows * cols + 1, rows, dtype=np.int32)
     lp.a_matrix_.index_ = np.tile(np.arange(rows, dtype=np.int32), cols)
     lp.a_matrix_.value_ = np.ascontiguousarray(M.T).ravel()
-    h = new()
+    h = new(presolve=False)
     h.passModel(lp)
     h.run()
     status = h.getModelStatus()
@@ -164,7 +167,7 @@ def _l1(A, T):
     vals = A.T[nz.T]
     lp.a_matrix_.index_ = np.r_[rows, rows]
     lp.a_matrix_.value_ = np.r_[vals, -vals]
-    h = new()
+    h = new(presolve=False)
     h.passModel(lp)
     idx = np.arange(m, dtype=np.int32)
     Phi, err, Y = np.zeros((K, T.shape[1])), np.zeros(T.shape[1]), np.zeros((m, T.shape[1]))
