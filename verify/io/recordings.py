@@ -201,8 +201,8 @@ def _sums(x):
 def moving_variance(x, n, sums=None):
     """Sum over the axes of the variance of each window of n samples: (N - n + 1,)."""
     c, c2 = sums or _sums(x)
-    mean = (c[:, n:] - c[:, :-n]) / n
-    return ((c2[:, n:] - c2[:, :-n]) / n - mean**2).sum(axis=0)
+    s1 = c[:, n:] - c[:, :-n]
+    return (c2[:, n:] - c2[:, :-n]).sum(axis=0) / n - np.einsum("ij,ij->j", s1, s1) / (n * n)
 
 
 def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
