@@ -203,3 +203,17 @@ def test_remainder_with_many_positions_equals_the_remainder_position_by_position
     direct.__dict__.update(rem.__dict__, interp=None)
     rb_direct, _ = direct(lo, hi)
     assert rb.max() <= 1.5 * rb_direct.max() and rb_direct.max() <= 1.5 * rb.max()   # as tight, either way
+
+
+def test_a_large_estimate_says_what_it_is_doing(tmp_path, monkeypatch, capsys):
+    # Seconds of work are announced on standard error, stage by stage; a small file stays quiet.
+    from garant.verify.workflows import estimate as workflow
+    mod = models.load("two-axis")
+    p = np.random.default_rng(4).uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    path = simulate_file(tmp_path, mod, p, 1e-5)
+    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5"]) == 0
+    assert "estimate:" not in capsys.readouterr().err
+    monkeypatch.setattr(workflow, "PROGRESS_ABOVE", 10)
+    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5"]) == 0
+    err = capsys.readouterr().err
+    assert "distinct positions: the optimal estimators" in err and "the proven remainder" in err

@@ -1,4 +1,6 @@
 """garant estimate: q with guaranteed error bounds from readings at any positions ((6)-(8) of 000)."""
+import sys
+
 from ..errors import DataError
 from . import args as a
 
@@ -39,7 +41,8 @@ def run(args):
                         f"+y+z+x; got {args.mount!r}")
     names, mounts = models.layout(mod)
     res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, args.g,
-                   remount=remount, mount=args.mount, gamma=args.gamma, prior=args.prior)
+                   remount=remount, mount=args.mount, gamma=args.gamma, prior=args.prior,
+                   progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     if args.json:
         report.write_json(args.json, res)
     if args.plot or args.report:
@@ -74,7 +77,6 @@ def _positions(args, mod, names, mounts):
 
 
 def _plots(res, mod, args):
-    import sys
     from pathlib import Path
 
     import numpy as np

@@ -71,11 +71,16 @@ def choose_estimator(mod, positions, A):
     return Phi.T, "optimal guaranteed estimator on these positions (LP (7)-(8) of 000)"
 
 
-def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", prior=guarantee.PRIOR_DEFAULT):
+PROGRESS_ABOVE = 100_000   # distinct positions: from here on each stage is announced (it takes seconds)
+
+
+def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", prior=guarantee.PRIOR_DEFAULT,
+             progress=None):
     """The verdict (are the data consistent with sigma?), then q with guaranteed errors that include
     the proven linearisation remainder (workflows/guarantee.py), and the block's physical errors.
 
     When the data refute sigma, `consistent` is False and no bound is given: its premise is false.
+    `progress(text)`, when given, hears of each stage of a large problem.
     """
     if sigma <= 0:
         raise DataError(f"--sigma must be positive (got {sigma:g})")
@@ -92,7 +97,10 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         raise DataError(f"{positions.path}: the {distinct} distinct positions cannot identify "
                         f"{describe(mod, missing)}; add positions (see `garant plan`)")
     check_residual_size(residuals_table_axes(mod, all_rows, g, Q), positions.path)
+    say = progress if progress is not None and distinct >= PROGRESS_ABOVE else (lambda text: None)
+    say(f"{rows} rows, {distinct} distinct positions: the optimal estimators (LP (7)-(8))")
     W, method = choose_estimator(mod, positions, A)
+    say("the verdict and the proven remainder")
     v = guarantee.verdict(mod, positions, z.reshape(-1), A, sigma, g, prior, W)
     out = {                                    # arrays stay arrays until a JSON file is written
         "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma, "prior": prior,
