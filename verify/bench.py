@@ -384,7 +384,7 @@ def main():
     three, _ = timed(lambda: (derive_model.cache_clear(), derive_model(description.load(STANDS_DIR / "three_axis.toml"))))
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(), bench_continuum(mod),
             bench_certificates(), bench_guarantee(mod), bench_diagnose(mod), *bench_estimate(), *bench_startup(mod),
-            bench_apply(), bench_calibrate_norm()]
+            bench_apply(), bench_calibrate_norm(), bench_calibrate_norm(10_000_000)]
     width = max(len(r[0]) for r in rows)
     print(f"medians of {REPEAT} runs on both sides; wall (CPU) seconds")
     print(f"{'figure'.ljust(width)}  {'time, s':>15}  {'baseline, s':>15}  {'speed-up':>9}  baseline")

@@ -161,7 +161,7 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
     if len(t) < MIN_SAMPLES:
         raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording")
     dt = _check_time(path, t, unit)
-    return Log(path, t - t[0], raw, step, note, dt)
+    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt)      # t is the reader's own array
 
 
 def quantum(log):
@@ -184,25 +184,33 @@ class Still:
     samples: int
 
 
-def _sums(x):
-    """Cumulative sums of x - x[0] and of its square, axis by axis ((3, N + 1), a zero column first):
-    any window's mean and variance in O(1) (the shift keeps the sums small, so the variance does not
-    cancel; each axis contiguous, so the window differences run at memory speed)."""
-    d = np.subtract(x.T, x[0][:, None], out=np.empty((3, len(x))))
-    c = np.empty((3, len(x) + 1))
-    c2 = np.empty((3, len(x) + 1))
-    c[:, 0] = c2[:, 0] = 0.0
-    np.cumsum(d, axis=1, out=c[:, 1:])
-    np.multiply(d, d, out=d)
-    np.cumsum(d, axis=1, out=c2[:, 1:])
-    return c, c2
+BLOCK = 1 << 20        # windows per block of the moving variance: memory stays near one block, not the log
 
 
-def moving_variance(x, n, sums=None):
-    """Sum over the axes of the variance of each window of n samples: (N - n + 1,)."""
-    c, c2 = sums or _sums(x)
-    s1 = c[:, n:] - c[:, :-n]
-    return (c2[:, n:] - c2[:, :-n]).sum(axis=0) / n - np.einsum("ij,ij->j", s1, s1) / (n * n)
+def moving_variance(x, n):
+    """Sum over the axes of the variance of each window of n samples: (N - n + 1,). Block by block:
+    cumulative sums of the block's samples less its first one (small sums, so the variance does not
+    cancel), each axis contiguous; any window's variance is then O(1)."""
+    out = np.empty(len(x) - n + 1)
+    for start in range(0, len(out), BLOCK):
+        stop = min(start + BLOCK, len(out))
+        seg = x[start:stop + n - 1]
+        d = np.subtract(seg.T, seg[0][:, None], out=np.empty((3, len(seg))))
+        c = np.zeros((3, len(seg) + 1))
+        np.cumsum(d, axis=1, out=c[:, 1:])
+        c2 = np.zeros(len(seg) + 1)
+        np.cumsum(np.einsum("ij,ij->j", d, d), out=c2[1:])
+        s1 = c[:, n:] - c[:, :-n]
+        out[start:stop] = (c2[n:] - c2[:-n]) / n - np.einsum("ij,ij->j", s1, s1) / (n * n)
+    return out
+
+
+def _segment(x):
+    """Mean and standard error of the mean of each axis of the samples x (k, 3)."""
+    mean = x.mean(axis=0)
+    d = x - mean
+    var = np.einsum("ij,ij->j", d, d) / (len(x) - 1)
+    return mean, np.sqrt(var / len(x))
 
 
 def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
@@ -212,9 +220,7 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     """
     dt = log.dt or float(np.median(np.diff(log.t)))
     n = max(int(round(window / dt)), 5)
-    sums = _sums(log.raw)
-    c, c2 = sums
-    var = moving_variance(log.raw, n, sums)
+    var = moving_variance(log.raw, n)
     first = var[: max(int(init / dt) - n, 1)]
     base = float(np.median(first))
     note = f"threshold {k:g} x the moving variance of the first {init:g} s"
@@ -229,9 +235,6 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     for i, j in zip(edges[::2], edges[1::2]):                  # runs [i, j) of still windows
         a, b = i + n // 2, j + n // 2                            # window centre indices
         if log.t[min(b, last)] - log.t[a] >= min_still:
-            k = b - a                                           # the segment's mean and std from the sums
-            s1, s2 = c[:, b] - c[:, a], c2[:, b] - c2[:, a]
-            var = np.maximum(s2 - s1 * s1 / k, 0.0) / (k - 1)
-            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), log.raw[0] + s1 / k,
-                             np.sqrt(var / k), int(k)))
+            mean, std_error = _segment(log.raw[a:b])
+            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), mean, std_error, int(b - a)))
     return out, note
