@@ -206,11 +206,12 @@ def moving_variance(x, n):
 
 
 def _segment(x):
-    """Mean and standard error of the mean of each axis of the samples x (k, 3)."""
-    mean = x.mean(axis=0)
-    d = x - mean
-    var = np.einsum("ij,ij->j", d, d) / (len(x) - 1)
-    return mean, np.sqrt(var / len(x))
+    """Mean and standard error of the mean of each axis of the samples x (k, 3), axis by axis."""
+    x = x.T.copy()
+    mean = x.mean(axis=1)
+    d = x - mean[:, None]
+    var = np.einsum("ij,ij->i", d, d) / (x.shape[1] - 1)
+    return mean, np.sqrt(var / x.shape[1])
 
 
 def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
