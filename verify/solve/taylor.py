@@ -224,7 +224,11 @@ class Interpolation:
     w(x - x_j) = (1 + 2 sum_{m <= d} cos(m (x - x_j))) / (2 d + 1). The enclosures [h_j] at the nodes
     (interval Taylor arithmetic, once per box) then enclose h(x) by sum_j w_j [h_j]: a proof at
     every position for the cost of a matrix product. WEIGHT_ERROR bounds the float error of each
-    computed w_j (|x| <= MAX_ANGLE, d <= 3, at most 3 angles) and is added, times sum_j |h_j|."""
+    computed w_j and is added, times sum_j |h_j|. With |x| <= MAX_ANGLE, d <= 3 and at most 3 angles:
+    x - x_j is within 1.2e-14 of its value, m (x - x_j) within 5e-14, each cosine (libm, under an
+    ulp) within 6e-14, one angle's weight within 1.5e-13, a product of three weights (each of size
+    <= 1) within 5e-13; the float nodes differ from 2 pi j / n by an ulp, which moves the Lagrange
+    weights by about 1e-14. 1e-11 covers all of it 20 times over."""
 
     WEIGHT_ERROR = 1e-11
     MAX_ANGLE = 100.0            # rad
