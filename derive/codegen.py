@@ -210,7 +210,7 @@ def norm_context(model):
         params=[(str(p), u, mng) for p, u, mng in zip(norm.PARAMS, norm.PARAM_UNITS, norm.PARAM_MEANINGS)],
         param_names=[str(p) for p in norm.PARAMS],
         H=[pycode(h) for h in Hg], F=[pycode(f) for f in norm.readings(model)],
-        H_exponents=[list(sp.Poly(h, *norm.n_sym).monoms()[0]) for h in norm.H(model)],
+        H_exponents=[_monomial(h, norm.n_sym) for h in norm.H(model)],
         q=[pycode(v) for v in norm.q_of_params()],
         bound=pycode(norm.remainder_bound().subs(bound_args)),
         published=pycode(norm.published_bound().subs(bound_args)),
@@ -219,6 +219,15 @@ def norm_context(model):
         duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
         estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
     )
+
+
+def _monomial(h, n):
+    """Exponents (a, b, c) of an entry of H that is exactly n1^a n2^b n3^c (what H_EXPONENTS claims,
+    and what a certificate of the norm model is checked against); anything else stops generation."""
+    poly = sp.Poly(h, *n)
+    if poly.terms() != [(poly.monoms()[0], 1)]:
+        raise ValueError(f"H entry {h} is not a single monomial with coefficient 1")
+    return list(poly.monoms()[0])
 
 
 def norm_report_context(model):

@@ -3,6 +3,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from garant.derive import codegen
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -43,3 +45,15 @@ def test_generated_imports_without_sympy():
 def test_python_m_derive_check_passes():
     out = subprocess.run([sys.executable, "-m", "derive", "--check"], cwd=ROOT, capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_norm_H_exponents_are_generated_only_for_pure_monomials():
+    # A norm certificate is checked against H rebuilt from H_EXPONENTS: an entry with a coefficient
+    # or a second term would be misread, so generation stops instead.
+    import sympy as sp
+    from garant.derive.codegen import _monomial
+    n = sp.symbols("n1:4", real=True)
+    assert _monomial(n[0] ** 2 * n[2], n) == [2, 0, 1]
+    for bad in (2 * n[0] ** 2, n[0] + n[1]):
+        with pytest.raises(ValueError, match="single monomial"):
+            _monomial(bad, n)
