@@ -9,7 +9,9 @@ box. With Taylor's theorem (Lagrange form), for every p of a box containing 0:
 
 a proof of the linearisation remainder of (1) -> (2) of 000, position by position. The generated
 function is evaluated unchanged: its `np` is replaced, for that call only, by a namespace whose
-sin, cos, array and asarray accept jets.
+sin, cos, array and asarray accept jets. For readings that are trigonometric polynomials in the
+angles (the module's TRIG_DEGREE), `Interpolation` gives the enclosure at any number of positions
+from the enclosures at a few nodes, exactly.
 """
 import functools
 import types
@@ -182,22 +184,6 @@ def midrad(lo, hi):
     """[lo, hi] as midpoint and radius, the radius rounded up: [lo, hi] lies in [mid - rad, mid + rad]."""
     mid = 0.5 * (lo + hi)
     return mid, np.maximum(hi - mid, mid - lo) * (1 + SUM_ERROR) + 1e-300
-
-
-def unpack(H):
-    """(..., P) packed upper triangles to full symmetric (..., nv, nv)."""
-    P = H.shape[-1]
-    nv = int(round((np.sqrt(8 * P + 1) - 1) / 2))
-    k, j = triangle(nv)
-    full = np.empty(H.shape[:-1] + (nv, nv))
-    full[..., k, j] = H
-    full[..., j, k] = H
-    return full
-
-
-def hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
-    """The enclosure of packed_hessian as full matrices: (lower, upper), each (N, 3, nv, nv)."""
-    return tuple(unpack(H) for H in packed_hessian(mod, angles, L, lo, hi, mounts, variables))
 
 
 def pair_weights(P_abs):
