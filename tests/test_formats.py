@@ -80,3 +80,26 @@ def test_a_large_numeric_positions_file_is_read_in_c_exactly_as_cell_by_cell(tmp
     path.write_text(path.read_text().replace(repr(float(rows[7, 3])), "nan", 1))
     with pytest.raises(DataError, match="line 9: column f2"):
         positions.read_positions(str(path))
+
+
+def test_a_plan_file_with_other_numeric_columns_is_read_in_c_and_a_text_column_falls_back(tmp_path, monkeypatch):
+    # A data file used as a plan: its angle columns, the same whether read in C or cell by cell; a text
+    # column sends it to the cell-by-cell reader (whose parse of quotes loadtxt does not share).
+    from garant.verify.io import positions
+    rng = np.random.default_rng(1)
+    rows = np.column_stack([rng.uniform(0, 360, (30, 2)), rng.normal(0, 9.81, (30, 3))])
+    path = tmp_path / "p.csv"
+    path.write_text("f1,alpha_deg,f2,beta_deg,f3\n" + "\n".join(
+        ",".join(repr(float(x)) for x in (r[2], r[0], r[3], r[1], r[4])) for r in rows) + "\n")
+    assert positions._numeric(str(path), ["alpha_deg", "beta_deg"], others=True) is not None
+    fast, _ = positions.read_plan(str(path), ("alpha", "beta"))
+    assert np.array_equal(fast, rows[:, :2])
+    monkeypatch.setattr(positions, "_numeric", lambda *a, **k: None)
+    slow, _ = positions.read_plan(str(path), ("alpha", "beta"))
+    assert np.array_equal(fast, slow)
+    monkeypatch.undo()
+    text = path.read_text().splitlines()
+    quoted = tmp_path / "q.csv"
+    quoted.write_text("\n".join([text[0] + ",note"] + [t + ',"a, b"' for t in text[1:]]) + "\n")
+    assert positions._numeric(str(quoted), ["alpha_deg", "beta_deg"], others=True) is None
+    assert np.array_equal(positions.read_plan(str(quoted), ("alpha", "beta"))[0], rows[:, :2])

@@ -101,13 +101,15 @@ def _check_degrees(path, angle_cols, pos):
                             "these look like radians; the column is in degrees")
 
 
-def _numeric(path, required):
-    """(header, data) when the file is exactly the required columns, all finite numbers, read in C
-    (a large file of positions); None otherwise: the reader below then finds and names any problem."""
+def _numeric(path, required, others=False):
+    """(header, data) when every cell of the file is a finite number, every row has every column, and
+    the columns are exactly the required ones (or, with `others`, include them): read in C (a large
+    file). None otherwise: the cell-by-cell reader then finds and names any problem."""
     try:
         with open(path, encoding="utf-8-sig") as fh:
             header = [h.strip() for h in fh.readline(1_000_000).split(",")]
-            if sorted(header) != sorted(required) or "mount" in header:
+            if "mount" in header or any(c not in header for c in required) or (
+                    not others and len(header) != len(required)):
                 return None
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)        # no data rows: said by the reader below
@@ -124,6 +126,10 @@ def read_plan(path, angles, mountings=None):
     mountings (the file `garant plan --csv` writes). Returns (angles_deg (N, n), mounts (N,) or None)."""
     multi = mountings is not None and len(mountings) > 1
     cols = [f"{a}_deg" for a in angles] + (["mount"] if multi else [])
+    fast = None if multi else _numeric(path, cols, others=True)
+    if fast is not None:
+        header, data = fast
+        return data[:, [header.index(c) for c in cols]], None
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = list(csv.reader(fh))
