@@ -217,3 +217,23 @@ def test_a_large_estimate_says_what_it_is_doing(tmp_path, monkeypatch, capsys):
     assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5"]) == 0
     err = capsys.readouterr().err
     assert "distinct positions: the optimal estimators" in err and "the proven remainder" in err
+
+
+def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_position_by_position(monkeypatch):
+    # Interpolated bounds are up to about twice as wide, but the guaranteed errors depend only on the
+    # estimator's own positions, which are always enclosed one by one: the errors are those of the
+    # position-by-position bound (or smaller), and only the verdict sees the wider bound elsewhere.
+    mod = models.load("two-axis")
+    pos = _random_positions(mod, 400, seed=3)
+    A = lp.measurement_matrix(mod, np.column_stack(pos.radians))
+    p = np.random.default_rng(3).uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    z = (mod.residual(*pos.radians, mod.readings(*pos.radians, p, G), G).T
+         + np.random.default_rng(4).uniform(-1e-5, 1e-5, (len(pos.f), 3))).reshape(-1)
+    W = lp.primal(A)[0].T
+    interpolated = guarantee.verdict(mod, pos, z, A, 1e-5, G, W=W)
+    assert guarantee.Remainder(mod, pos, A).interpolates()
+    monkeypatch.setattr(taylor.Interpolation, "usable", classmethod(lambda cls, *a: False))
+    direct = guarantee.verdict(mod, pos, z, A, 1e-5, G, W=W)
+    assert np.all(interpolated.guaranteed_error <= direct.guaranteed_error * (1 + 1e-12))
+    assert np.all(interpolated.guaranteed_error >= direct.guaranteed_error * (1 - 1e-3))
+    assert interpolated.consistent and direct.consistent
