@@ -221,8 +221,10 @@ def test_a_large_estimate_says_what_it_is_doing(tmp_path, monkeypatch, capsys):
 
 def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_position_by_position(monkeypatch):
     # Interpolated bounds are up to about twice as wide, but the guaranteed errors depend only on the
-    # estimator's own positions, which are always enclosed one by one: the errors are those of the
-    # position-by-position bound (or smaller), and only the verdict sees the wider bound elsewhere.
+    # estimator's own positions, which the last box always encloses one by one: the errors are those
+    # of the position-by-position bound, to the 1e-4 the interpolated intermediate boxes move them
+    # (without the one-by-one enclosure they were 1.2-1.7 % wider); only the verdict sees the wider
+    # bound elsewhere.
     mod = models.load("two-axis")
     pos = _random_positions(mod, 400, seed=3)
     A = lp.measurement_matrix(mod, np.column_stack(pos.radians))
@@ -234,6 +236,5 @@ def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_positio
     assert guarantee.Remainder(mod, pos, A).interpolates()
     monkeypatch.setattr(taylor.Interpolation, "usable", classmethod(lambda cls, *a: False))
     direct = guarantee.verdict(mod, pos, z, A, 1e-5, G, W=W)
-    assert np.all(interpolated.guaranteed_error <= direct.guaranteed_error * (1 + 1e-12))
-    assert np.all(interpolated.guaranteed_error >= direct.guaranteed_error * (1 - 1e-3))
+    assert np.all(np.abs(interpolated.guaranteed_error / direct.guaranteed_error - 1) <= 1e-3)
     assert interpolated.consistent and direct.consistent

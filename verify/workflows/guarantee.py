@@ -155,10 +155,11 @@ class Remainder:
         count = len(self.angles[0]) if rows is None else len(rows)
         return self.interp is not None and count > self.DIRECT_ROWS
 
-    def __call__(self, lo, hi, rows=None):
+    def __call__(self, lo, hi, rows=None, direct=None):
         """(bound of |R'| per residual component (3 per position of `rows`, default all), bound of
-        |C(p)| per q (m,)) over the box."""
-        direct = not self.interpolates(rows)
+        |C(p)| per q (m,)) over the box; position by position or interpolated as `interpolates` says,
+        unless `direct` says."""
+        direct = not self.interpolates(rows) if direct is None or self.interp is None else direct
         rows = np.arange(len(self.angles[0])) if rows is None else np.asarray(rows)
         w = taylor.pair_weights(np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0)))
         rb = np.empty((len(rows), 3))
@@ -218,18 +219,19 @@ def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2
         lo, hi = box(mod, prior)[1:]
         if W is None:
             return rem(lo, hi)
-        rb_s, cb = rem(lo, hi, support)
+        fast = not rem.interpolates()          # the intermediate boxes: as the last is made (they only
+        rb_s, cb = rem(lo, hi, support, fast)  # size the next box: interpolating them moves the errors < 1e-4)
         q = W @ z
         for step in range(steps):
             e = np.abs(W[:, cols]) @ (s + rb_s) + cb
             lo, hi = box(mod, prior, q, e)[1:]
             last = step == steps - 1
-            rb2, cb2 = rem(lo, hi, None if last else support)
+            rb2, cb2 = rem(lo, hi) if last else rem(lo, hi, support, fast)
             cb = np.minimum(cb, cb2)
             if last:
                 rb2[cols] = np.minimum(rb2[cols], rb_s)
                 if rem.interpolates():
-                    rb2[cols] = np.minimum(rb2[cols], rem(lo, hi, support)[0])
+                    rb2[cols] = np.minimum(rb2[cols], rem(lo, hi, support, direct=True)[0])
                 return rb2, cb
             rb_s = np.minimum(rb_s, rb2)
         return rem(lo, hi)[0], cb
