@@ -66,7 +66,7 @@ GENERATE_ABOVE = 900     # measurements: above this, an LP starts from a spread 
 TOLERANCE = 1e-9         # relative: a measurement violating by less is within the solver's own tolerance
 
 
-def _spread(K, size):
+def spread(K, size):
     """`size` indices spread evenly over range(K)."""
     return np.unique(np.linspace(0, K - 1, min(K, size)).round().astype(int))
 
@@ -75,14 +75,14 @@ def _generate(K, solve_on, violation, what, start=None):
     """An LP over K measurements solved on a subset S (spread over all, with `start` added), measurements
     that violate its optimum added (the worst first), until none does: then that optimum is the optimum
     over all K (the others' constraints hold at it). A subset too small to be feasible is doubled."""
-    S = _spread(K, GENERATE_ABOVE // 3) if start is None else np.union1d(_spread(K, GENERATE_ABOVE // 6), start)
+    S = spread(K, GENERATE_ABOVE // 3) if start is None else np.union1d(spread(K, GENERATE_ABOVE // 6), start)
     for _ in range(100):
         try:
             out = solve_on(S)
         except LPFailed:
             if len(S) == K:
                 raise
-            S = np.union1d(S, _spread(K, 2 * len(S)))
+            S = np.union1d(S, spread(K, 2 * len(S)))
             continue
         v = violation(out, S)
         v[S] = -np.inf

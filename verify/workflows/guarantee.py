@@ -112,7 +112,7 @@ class Remainder:
                        if taylor.Interpolation.usable(mod, self.angles, self.extra) else None)
         self._nodes = {}
         self.prepare([(np.zeros(nv), np.zeros(nv)), *boxes])
-        fit_rows = np.unique(np.linspace(0, n - 1, min(n, self.FIT_ROWS)).round().astype(int))
+        fit_rows = highs.spread(n, self.FIT_ROWS)
         mid, _ = self._enclosure(np.zeros(nv), np.zeros(nv), fit_rows, direct=self.interp is None)
         self.C = np.linalg.lstsq(A[:, _columns(fit_rows)].T, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
 
@@ -219,14 +219,16 @@ def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2
         lo, hi = box(mod, prior)[1:]
         if W is None:
             return rem(lo, hi)
-        fast = not rem.interpolates()          # the intermediate boxes: as the last is made (they only
-        rb_s, cb = rem(lo, hi, support, fast)  # size the next box: interpolating them moves the errors < 1e-4)
+        # The intermediate boxes are made as the last one is (one by one, or interpolated): they only
+        # size the next box, and interpolating them moves the guaranteed errors by less than 1e-4.
+        one_by_one = not rem.interpolates()
+        rb_s, cb = rem(lo, hi, support, one_by_one)
         q = W @ z
         for step in range(steps):
             e = np.abs(W[:, cols]) @ (s + rb_s) + cb
             lo, hi = box(mod, prior, q, e)[1:]
             last = step == steps - 1
-            rb2, cb2 = rem(lo, hi) if last else rem(lo, hi, support, fast)
+            rb2, cb2 = rem(lo, hi) if last else rem(lo, hi, support, one_by_one)
             cb = np.minimum(cb, cb2)
             if last:
                 rb2[cols] = np.minimum(rb2[cols], rb_s)
