@@ -31,7 +31,12 @@ def doc_text(text):
     return py_literal(text)[1:-1]
 
 
-ENV.filters.update(py=py_literal, doc=doc_text)
+def number_or_none(value):
+    """A float literal, or None: a bound from a description (a float the reader checked) as code."""
+    return "None" if value is None else repr(float(value))
+
+
+ENV.filters.update(py=py_literal, doc=doc_text, number=number_or_none)
 HEADER = {
     ".py": "# {line}\n",
     ".md": "<!-- {line} -->\n",
@@ -69,7 +74,7 @@ def model_context(d):
     names = list(d.names)
     return dict(
         title=m.stand.title, source=m.stand.source,
-        angles=[a.name for a in m.stand.angles], parameters=m.parameters,
+        angles=[a.name for a in m.stand.angles], parameters=m.parameters, kinds=m.parameter_kinds,
         signature=[a.name for a in m.stand.angles] + [f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
         variable_sig=[f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
         variables=[str(v) for v in m.variables],

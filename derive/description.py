@@ -21,7 +21,7 @@ AXES = {"x": 1, "y": 2, "z": 3}
 KEYS = {
     "stand": {"name", "title", "source"},
     "angle": {"name", "latex", "meaning", "range_deg", "detents_deg"},
-    "parameter": {"name", "latex", "unit", "meaning"},
+    "parameter": {"name", "latex", "unit", "meaning", "bound"},
     "link": {"axis", "angle", "offset", "harmonic", "error", "angle_deg"},
     "block": {"misalignment", "gravity_error", "mountings"},
     "estimation": {"preferred", "plan_deg", "remount"},
@@ -92,6 +92,16 @@ def _numbers(path, where, value, length=None, most=None):
     if most is not None and len(value) > most:
         _fail(path, where, f"at most {most} values")
     return value
+
+
+def _bound(path, where, value):
+    """An a-priori bound |parameter| <= bound (its unit): a finite number > 0 and < 1, or absent."""
+    if value is None:
+        return None
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+            or not 0 < value < 1:
+        _fail(path, where, f"{_short(value)} is not a bound: give a number > 0 and < 1 (rad, or dimensionless)")
+    return float(value)
 
 
 def _table_list(path, where, value, most):
@@ -186,7 +196,8 @@ def from_data(data, path="<description>"):
             _fail(path, f"{where}.name", f"{pname!r} is declared twice")
         params.append(Parameter(pname, _text(path, f"{where}.latex", p.get("latex"), pname),
                                 _text(path, f"{where}.unit", p.get("unit"), "rad"),
-                                _text(path, f"{where}.meaning", p.get("meaning"), pname)))
+                                _text(path, f"{where}.meaning", p.get("meaning"), pname),
+                                _bound(path, f"{where}.bound", p.get("bound"))))
     declared = {p.name for p in params}
     used = set()
 

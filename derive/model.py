@@ -99,6 +99,17 @@ class Model:
             p for name in self.effects for p in CATALOGUE[name].params)
 
     @property
+    def parameter_kinds(self):
+        """The kind of each parameter, in the order of `parameters`: stand (the stand's own errors),
+        mounting (the block on the stand, theta), gravity (Delta_g/g), block (Gamma), bias (enters the
+        readings linearly), effect (a catalogue effect)."""
+        st = self.stand
+        kinds = ["mounting" if p.name in st.theta else "gravity" if p.name == st.gravity_error else "stand"
+                 for p in st.parameters]
+        kinds += ["bias" if p.name.startswith("bias") else "block" for p in self.block.parameters]
+        return tuple(kinds) + tuple("effect" for name in self.effects for _ in CATALOGUE[name].params)
+
+    @property
     def variables(self):
         """Row variables besides the angles that the model depends on (time, temperature)."""
         names = set()

@@ -6,12 +6,14 @@ import sympy as sp
 
 @dataclass(frozen=True)
 class Parameter:
-    """One physical error parameter: its symbol name, LaTeX, unit and meaning."""
+    """One physical error parameter: its symbol name, LaTeX, unit, meaning and, where the description
+    states one, its a-priori bound (|value| <= bound, in its unit): the premise of a guaranteed bound."""
 
     name: str
     latex: str
     unit: str
     meaning: str
+    bound: float | None = None
 
     @property
     def symbol(self):

@@ -44,6 +44,12 @@ PARAMETERS = (
     ("bias3", "1", "bias of accelerometer 3 over g"),
 )
 PARAMETER_NAMES = tuple(p[0] for p in PARAMETERS)
+#: Kind of each parameter: stand (the stand's own errors), mounting (the block on the stand), gravity
+#: (Delta_g/g), block (scale factors, misalignments), bias (enters the readings linearly), effect.
+PARAMETER_KINDS = ("stand", "stand", "stand", "stand", "stand", "mounting", "mounting", "mounting", "gravity", "block", "block", "block", "block", "block", "block", "block", "block", "block", "bias", "bias", "bias")
+#: A-priori bound of each parameter as the description states it (|value| <= bound, its unit; None:
+#: not stated, and verify/workflows/premises.py says what is assumed instead).
+PARAMETER_BOUNDS = (0.0001, 0.0001, 0.0001, 0.0001, 0.0001, 0.005, 0.005, 0.005, None, None, None, None, None, None, None, None, None, None, None, None, None)
 
 #: Identifiable combinations q ((4) of 000): names and definitions in physical parameters.
 Q_NAMES = ("q1", "q2", "q3", "q4", "q5", "q6", "q7", "q8", "q9", "q10", "q11", "q12", "q13", "q14", "q15")

@@ -84,7 +84,7 @@ def test_stand_estimate_applied_at_new_positions(tmp_path, capsys):
     P = np.array([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], float)
     f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (len(P), 3))
     data, cal = write_csv(tmp_path / "d.csv", P, f), tmp_path / "c.json"
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--save", str(cal)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--prior", "1e-3", "--save", str(cal)]) == 0
     clean = np.array([0.0 if n.startswith(("Gamma", "bias")) else v for n, v in zip(mod.PARAMETER_NAMES, p)])
     alpha, beta = rng.uniform(0, 2 * np.pi, (2, 500))                     # new positions
     a, bound = calibration.apply(calibration.read(cal), mod.readings(alpha, beta, p, 9.81).T)

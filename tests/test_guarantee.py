@@ -12,8 +12,26 @@ from garant.verify.cli import main
 from garant.verify.io.positions import Positions
 from garant.verify.solve import lp, taylor, worst
 from garant.verify.workflows import guarantee
+from garant.verify.workflows.premises import premises
 
 G = 9.81
+
+
+def at_zero(mod, pos, prior, z=None):
+    """The linear model (2) of 000 at zero errors with every a-priori bound `prior`: (L of the remainder's
+    coordinates v, the a-priori box lo, hi, the Linearisation, its Remainder)."""
+    A = lp.measurement_matrix(mod, np.column_stack(pos.radians), pos.mounts)
+    prem = premises(mod, 1e-5, G, prior=prior, g_uncertainty=prior)
+    lin = guarantee.linearise(mod, pos, np.zeros(A.shape[1]) if z is None else z, A, prem, at_zero=True)
+    rem = guarantee.Remainder(lin)
+    return (rem.Lv, *guarantee.box(lin), lin, rem)
+
+
+def relinearised(mod, pos, z, prior=1e-3):
+    """The model linearised at its exact fit to z, every a-priori bound `prior`, and its LP estimator."""
+    A = lp.measurement_matrix(mod, np.column_stack(pos.radians), pos.mounts)
+    lin = guarantee.linearise(mod, pos, z, A, premises(mod, 1e-5, G, prior=prior, g_uncertainty=prior))
+    return lin, lp.primal(lin.A)[0].T
 
 
 def grid_positions(mod, step):
@@ -44,7 +62,7 @@ def exact_remainder(mod, pos, L, V):
 def test_remainder_bound_is_sound_and_sharp(name, step, prior):
     mod = models.load(name)
     pos = grid_positions(mod, step)
-    L, lo, hi = guarantee.box(mod, prior)
+    L, lo, hi, _, _ = at_zero(mod, pos, prior)
     rb = taylor.remainder_bound(mod, pos.radians, L, lo, hi, pos.mounts).reshape(-1)
     # Worst cases live at vertices of the box: sign flips from random vertices, the worst position.
     found = worst.vertex_search(lambda X, V: exact_remainder(mod, pos, L, V).max(axis=1), np.zeros((1, 8)),
@@ -98,14 +116,14 @@ def test_bounds_hold_with_errors_as_large_as_the_prior(tmp_path, capsys, seed):
     p = rng.uniform(-1e-3, 1e-3, len(mod.PARAMETER_NAMES))
     path = simulate_file(tmp_path, mod, p, 1e-6, seed=seed)
     out = tmp_path / "e.json"
-    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-6", "--json", str(out)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-6", "--prior", "1e-3",
+                 "--g-uncertainty", "1e-3", "--json", str(out)]) == 0
     d = json.loads(out.read_text())
     q_hat = np.array([d["q"][n] for n in mod.Q_NAMES])
     bound = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
-    linear = np.array([d["guaranteed_error_linear"][n] for n in mod.Q_NAMES])
     err = np.abs(q_hat - mod.PHYSICAL_TO_Q @ p)
     assert d["consistent"] and np.all(err <= bound)
-    assert np.any(err > linear)                 # the linear part alone would have been violated
+    assert d["premises"]["a_priori"]["kappa"] == {"kind": "stand", "bound": 1e-3, "source": "--prior"}
 
 
 def test_no_false_alarms_on_clean_data():
@@ -113,15 +131,14 @@ def test_no_false_alarms_on_clean_data():
     mod = models.load("two-axis")
     rng = np.random.default_rng(7)
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
-    A = lp.measurement_matrix(mod.H, np.deg2rad(P))
-    W = lp.primal(A)[0].T
     for k in range(12):
         sigma = 10 ** rng.uniform(-6, -4)
         p = rng.uniform(-1e-3, 1e-3, len(mod.PARAMETER_NAMES))
         f = mod.readings(*np.deg2rad(P).T, p, G).T + G * rng.choice([-1, 1], (len(P), 3)) * sigma
         pos = Positions("clean", P, f)
         z = (f / G - mod.up_nominal(*pos.radians).T).reshape(-1)
-        assert guarantee.verdict(mod, pos, z, A, sigma, G, W=W).consistent, (k, sigma)
+        lin, W = relinearised(mod, pos, z)
+        assert guarantee.verdict(lin, z, sigma, W).consistent, (k, sigma)
 
 
 @pytest.mark.parametrize("name, step", [("two-axis", 45), ("single-axis", 45)])
@@ -130,9 +147,8 @@ def test_absorbed_curvature_decomposition_is_sound(name, step):
     # vertices (where worst cases live) and inside it; and R' is far below R for the prior box.
     mod = models.load(name)
     pos = grid_positions(mod, step)
-    A = lp.measurement_matrix(mod, np.column_stack(pos.radians), pos.mounts)
-    L, lo, hi = guarantee.box(mod, 1e-3)
-    rem = guarantee.Remainder(mod, pos, A)
+    L, lo, hi, lin, rem = at_zero(mod, pos, 1e-3)
+    A = lin.A
     rb, cb = rem(lo, hi)
     kw = {"mount": pos.mounts} if pos.mounts is not None else {}
     rng = np.random.default_rng(1)
@@ -162,7 +178,7 @@ def test_interpolated_hessian_encloses_the_one_at_each_position(name):
     # holds the Hessian enclosed position by position (zero box: a point), and is nearly as tight.
     mod = models.load(name)
     pos = _random_positions(mod, 40)
-    L, lo, hi = guarantee.box(mod, 1e-3)
+    L, lo, hi, _, _ = at_zero(mod, pos, 1e-3)
     interp = taylor.Interpolation(mod.TRIG_DEGREE)
     W = interp.weights(pos.radians)
     for box_lo, box_hi in ((np.zeros_like(lo), np.zeros_like(hi)), (lo, hi)):
@@ -181,7 +197,7 @@ def test_a_wrong_trigonometric_degree_is_caught_by_the_enclosure_check():
     # Hessian at the positions, and the check above turns red.
     mod = models.load("two-axis")
     pos = _random_positions(mod, 40)
-    L, lo, hi = guarantee.box(mod, 1e-3)
+    L, lo, hi, _, _ = at_zero(mod, pos, 1e-3)
     interp = taylor.Interpolation((0, 0))
     mid, rad = interp.enclose(interp.weights(pos.radians), *interp.at_nodes(mod, L, [(lo, hi)])[0])
     d_lo, d_hi = taylor.packed_hessian(mod, pos.radians, L, lo, hi)
@@ -194,9 +210,7 @@ def test_remainder_with_many_positions_equals_the_remainder_position_by_position
     # at every position, against the bound over the same box evaluated position by position.
     mod = models.load("two-axis")
     pos = _random_positions(mod, 400, seed=2)
-    A = lp.measurement_matrix(mod, np.column_stack(pos.radians))
-    L, lo, hi = guarantee.box(mod, 1e-4)
-    rem = guarantee.Remainder(mod, pos, A)
+    L, lo, hi, _, rem = at_zero(mod, pos, 1e-4)
     assert rem.interp is not None
     rb, _ = rem(lo, hi)
     direct = guarantee.Remainder.__new__(guarantee.Remainder)
@@ -216,7 +230,8 @@ def test_a_large_estimate_says_what_it_is_doing(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(workflow, "PROGRESS_ABOVE", 10)
     assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5"]) == 0
     err = capsys.readouterr().err
-    assert "distinct positions: the optimal estimators" in err and "the proven remainder" in err
+    assert "distinct positions: the exact-model fit" in err and "the optimal estimators" in err
+    assert "the proven remainder" in err
 
 
 def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_position_by_position(monkeypatch):
@@ -231,10 +246,10 @@ def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_positio
     p = np.random.default_rng(3).uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
     z = (mod.residual(*pos.radians, mod.readings(*pos.radians, p, G), G).T
          + np.random.default_rng(4).uniform(-1e-5, 1e-5, (len(pos.f), 3))).reshape(-1)
-    W = lp.primal(A)[0].T
-    interpolated = guarantee.verdict(mod, pos, z, A, 1e-5, G, W=W)
-    assert guarantee.Remainder(mod, pos, A).interpolates()
+    lin, W = relinearised(mod, pos, z)
+    interpolated = guarantee.verdict(lin, z, 1e-5, W)
+    assert guarantee.Remainder(lin).interpolates()
     monkeypatch.setattr(taylor.Interpolation, "usable", classmethod(lambda cls, *a: False))
-    direct = guarantee.verdict(mod, pos, z, A, 1e-5, G, W=W)
+    direct = guarantee.verdict(lin, z, 1e-5, W)
     assert np.all(np.abs(interpolated.guaranteed_error / direct.guaranteed_error - 1) <= 1e-3)
     assert interpolated.consistent and direct.consistent

@@ -6,7 +6,6 @@ import numpy as np
 
 from . import models
 from .cli.args import G_DEFAULT
-from .workflows.guarantee import PRIOR_DEFAULT
 
 
 def plan(model):
@@ -22,15 +21,22 @@ def plan(model):
             "plan_mountings": [mounts[k] for k in r.mounts[best]] if len(mounts) > 1 else None}
 
 
-def estimate(model, data, sigma, g=G_DEFAULT, prior=PRIOR_DEFAULT, mount=None, gamma="lower"):
-    """The verdict, q and guaranteed errors from a positions CSV (as `garant estimate --json`)."""
+def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower"):
+    """The verdict, q and guaranteed errors from a positions CSV (as `garant estimate --json`).
+
+    g: local gravity in m/s^2 (None: 9.81, with the uncertainty of an assumed g); g_uncertainty: the
+    bound on Delta_g/g; prior: one a-priori bound for every stand, mounting and block error (an
+    override of the description's bounds). The result's "premises" says what the bounds assume."""
     from .io.positions import read_positions
     from .workflows.estimate import estimate as run
+    from .workflows.premises import premises
     mod = models.load(model)
     names, mounts = models.layout(mod)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
-    return run(mod, read_positions(data, names, mounts), sigma, g, remount=remount, mount=mount, gamma=gamma,
-               prior=prior)
+    prem = premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
+                    g_uncertainty=g_uncertainty, prior=prior)
+    return run(mod, read_positions(data, names, mounts), sigma, prem.g, remount=remount, mount=mount, gamma=gamma,
+               premises=prem)
 
 
 def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta_sigma=None):
@@ -47,7 +53,7 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta
     return res
 
 
-def diagnose(model, data, sigma, g=G_DEFAULT, prior=PRIOR_DEFAULT):
+def diagnose(model, data, sigma, g=G_DEFAULT, prior=None):
     """The missing-effect workflow (as `garant diagnose --json`)."""
     from .io.positions import read_positions
     from .workflows import diagnose as dg

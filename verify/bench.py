@@ -169,6 +169,7 @@ def bench_guarantee(mod):
 
     from .io.positions import read_positions
     from .workflows import estimate, guarantee, simulate
+    from .workflows.premises import premises
     from garant.derive.builtin import TWO_AXIS_MODEL
     P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:36x36", [], 1e-5, 0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -176,8 +177,12 @@ def bench_guarantee(mod):
         pos = read_positions(f"{tmp}/d.csv")
     z = estimate.residuals_table_axes(mod, pos, 9.81, np.eye(3)).reshape(-1)
     A = lp.measurement_matrix(mod.H, np.column_stack(pos.radians))
-    W = lp.primal(A)[0].T
-    t_run, v = timed(lambda: guarantee.verdict(mod, pos, z, A, 1e-5, 9.81, W=W))
+    prem = premises(mod, 1e-5, 9.81, prior=1e-3, g_uncertainty=1e-3)
+
+    def run():
+        lin = guarantee.linearise(mod, pos, z, A, prem)
+        return guarantee.verdict(lin, z, 1e-5, lp.primal(lin.A)[0].T)
+    t_run, v = timed(run)
     assert v.consistent and len(P) == 100
     rng = np.random.default_rng(0)
     Hs = mod.H(*pos.radians)

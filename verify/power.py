@@ -61,11 +61,11 @@ def clean_verdicts(n, seed=0):
     from .io.positions import Positions
     from .solve import lp
     from .workflows import guarantee
+    from .workflows.premises import premises
     mod = models.load("two-axis")
     rng = np.random.default_rng(seed)
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
     A = lp.measurement_matrix(mod.H, np.deg2rad(P))
-    W = lp.primal(A)[0].T
     alarms = 0
     for _ in range(n):
         sigma = 10 ** rng.uniform(-6, -4)
@@ -73,7 +73,8 @@ def clean_verdicts(n, seed=0):
         f = mod.readings(*np.deg2rad(P).T, p, G).T + G * rng.choice([-1.0, 1.0], (len(P), 3)) * sigma
         pos = Positions("clean", P, f)
         z = (f / G - mod.up_nominal(*pos.radians).T).reshape(-1)
-        alarms += not guarantee.verdict(mod, pos, z, A, sigma, G, W=W).consistent
+        lin = guarantee.linearise(mod, pos, z, A, premises(mod, sigma, G, prior=1e-3, g_uncertainty=1e-3))
+        alarms += not guarantee.verdict(lin, z, sigma, lp.primal(lin.A)[0].T).consistent
     return alarms
 
 

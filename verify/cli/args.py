@@ -30,15 +30,29 @@ def sigma(p, help_="bound on each residual component, dimensionless (units of g)
     p.add_argument("--sigma", type=positive, required=True, help=help_)
 
 
-def g(p, help_="model gravity, m/s^2 (default 9.81)"):
-    p.add_argument("--g", type=positive, default=G_DEFAULT, help=help_)
+def g(p, help_="model gravity, m/s^2 (default 9.81)", default=G_DEFAULT):
+    """--g; with default None the command knows whether g was given (its uncertainty depends on it)."""
+    p.add_argument("--g", type=positive, default=default, help=help_)
 
 
 def json(p):
     p.add_argument("--json", metavar="FILE", help="also write the result as JSON")
 
 
-def prior(p, default=1e-3):
-    p.add_argument("--prior", type=positive, default=default,
-                   help=f"size of every stand and block error (rad, or dimensionless for Gamma and Delta_g), "
-                        f"for the proven linearisation remainder (default {default:g})")
+def premises(p):
+    """The a-priori bounds a guaranteed bound assumes (verify/workflows/premises.py)."""
+    p.add_argument("--g-uncertainty", type=positive, metavar="REL",
+                   help="relative uncertainty of g, the bound on Delta_g/g (default 1e-5 with a local --g, "
+                        "5e-3 without: 9.81 m/s^2 is off by up to 3e-3 at sea level)")
+    p.add_argument("--prior", type=positive,
+                   help="override: one a-priori bound for every stand, mounting and block error (rad, or "
+                        "dimensionless); default: each parameter's bound from the stand description, else "
+                        "the default of its kind (stand 1e-3, mounting 1e-2, block 0.1)")
+
+
+def premises_of(args, mod):
+    """The Premises of a command's bounds from its arguments (--sigma, --g given or not, --g-uncertainty,
+    --prior)."""
+    from ..workflows.premises import premises as make
+    return make(mod, args.sigma, args.g if args.g is not None else G_DEFAULT, g_given=args.g is not None,
+                g_uncertainty=args.g_uncertainty, prior=args.prior)

@@ -11,7 +11,7 @@ def add(sub):
     a.model(p)
     a.sigma(p, "noise bound, units of g")
     a.g(p)
-    a.prior(p)
+    a.premises(p)
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png")
     p.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
@@ -28,7 +28,7 @@ def run(args):
     names, mounts = models.layout(mod)
     pos = read_positions(args.data, names, mounts)
     t0 = time.perf_counter()
-    res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior)
+    res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior, args.g_uncertainty)
     study = res.pop("_study")
     print(f"current model: minimax residual less the proven linearisation remainder (<= "
           f"{res['remainder_bound'] / args.sigma:.2f} sigma) is {res['max_residual_before'] / args.sigma:.2f} sigma: "

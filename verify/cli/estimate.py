@@ -14,14 +14,14 @@ def add(sub):
                    "two-axis stand), f1,f2,f3 in m/s^2, and mount when the stand uses several mountings")
     a.model(p)
     a.sigma(p)
-    a.g(p)
+    a.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a means file with an imu column")
     p.add_argument("--run", dest="which_run", metavar="R", help="run R of a means file with a run column (exp or run)")
     p.add_argument("--mount", metavar="Q", help="mounting of the block, e.g. +y+z+x (block axis 1 along "
                    "table +y, ...): also report the block's physical errors, (28)-(29) of 000")
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
-    a.prior(p)
+    a.premises(p)
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
@@ -40,8 +40,9 @@ def run(args):
         raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {args.mount!r}")
     names, mounts = models.layout(mod)
-    res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, args.g,
-                   remount=remount, mount=args.mount, gamma=args.gamma, prior=args.prior,
+    prem = a.premises_of(args, mod)
+    res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, prem.g,
+                   remount=remount, mount=args.mount, gamma=args.gamma, premises=prem,
                    progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     if args.json:
         report.write_json(args.json, res)
@@ -92,11 +93,12 @@ def _plots(res, mod, args):
                                  args.sigma, path, title)
     if args.report:
         verdict = (f"**consistent** with sigma = {args.sigma:g}: minimax residual of the exact model "
-                   f"{res['minimax_residual']:.3e}, proven remainder <= {res['remainder_bound']:.2e}"
+                   f"{res['minimax_residual']:.3e}, proven remainder left after absorption into q <= "
+                   f"{res['remainder_left_bound']:.2e}"
                    if res["consistent"] else
                    f"**INCONSISTENT**: the data refute sigma = {args.sigma:g}; they support sigma >= "
                    f"{res['sigma_min_supported']:.3g}. No bound is given.")
-        sections = [("Verdict", verdict)]
+        sections = [("Verdict", verdict), ("Premises", res["premises"]["statement"])]
         if res["consistent"]:
             sections.append(("Estimates (guaranteed error = linear + remainder)", report.markdown_table(
                 ("q", "definition", "estimate", "guaranteed error", "linear", "remainder", "unit"),
@@ -105,7 +107,7 @@ def _plots(res, mod, args):
                   res["units"][q]) for q in mod.Q_NAMES])))
         sections.append(("Residuals against each stand angle", "![residuals](residuals.png)"))
         command = "garant " + " ".join(a for a in sys.argv[1:]) if sys.argv[1:2] == ["estimate"] else \
-            f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} --g {args.g:g} --prior {args.prior:g}"
+            f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} --g {res['g']:g}"
         page = report.write_page(args.report, f"Estimate: {args.data}", command, sections)
         print(f"wrote {page}")
 
@@ -113,9 +115,11 @@ def _plots(res, mod, args):
 def print_verdict(res, mod, path):
     """The data refute sigma: one clear line, the smallest sigma they support, where they disagree."""
     s = res["sigma"]
-    print(f"INCONSISTENT: the data refute sigma = {s:g}: no q fits every reading within sigma plus the proven "
-          f"remainder ({res['remainder_bound']:.2e}); the data support sigma >= {res['sigma_min_supported']:.3g}. "
+    print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): no q fits every reading within sigma plus the "
+          f"proven remainder left after absorption into q ({res['remainder_left_bound']:.2e}); the data support "
+          f"sigma >= {res['sigma_min_supported']:.3g} (to {res['sigma_min_tolerance']:.0%}). "
           "No bound is given. Look for the missing effect with `garant diagnose`.")
+    print(f"premises: {res['premises']['statement']}")
     d = res["disagreements"]
     names = list(mod.ANGLES)
     print(f"{len(d)} residual components disagree, e.g. " + "; ".join(
@@ -127,14 +131,23 @@ def print_verdict(res, mod, path):
 def print_estimate(res, mod, args):
     from ..io import report
     print(f"consistent: the minimax residual of the exact model is {res['minimax_residual']:.3e} "
-          f"({res['minimax_residual'] / args.sigma:.2f} sigma); proven linearisation remainder <= "
-          f"{res['remainder_bound']:.2e} (prior {res['prior']:g})")
+          f"({res['minimax_residual'] / args.sigma:.2f} sigma); linearised at that fit, the proven remainder left "
+          f"after absorption into q is <= {res['remainder_left_bound']:.2e} per reading")
+    print(f"premises: {res['premises']['statement']}")
     print(f"method: {res['method']}")
+    parts = res["remainder_parts"]
+    worst = max(parts, key=lambda k: max(parts[k].values()))
+    print(f"remainder part of the errors, largest term: {worst.replace('_', ' ')} "
+          f"(<= {max(parts[worst].values()):.1e})" + (
+              ": the a-priori bounds of the parameters no plan separates (premises) set it; tighter bounds "
+              "tighten it" if worst in ("unseparable", "absorbed_into_q") else ""))
     report.table(("q", "definition", "estimate", "guaranteed error", "= linear", "+ remainder", "unit"),
                  [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
                    f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
                    res["units"][q]) for q in mod.Q_NAMES])
-    print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {args.g} m/s^2, "
+    for line in res["warnings"]:
+        print(f"note: {line}")
+    print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {res['g']:g} m/s^2, "
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
     if args.mount:
         print_physical(res)

@@ -53,15 +53,16 @@ def from_norm(res, axes):
 def from_stand(res):
     """The calibration dictionary of a consistent stand estimate with the block's physical errors
     ((28)-(29) of 000): a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2. Delta_g, which the stand
-    cannot separate from the scale factors, is bounded by the prior on the diagonal of the bound."""
+    cannot separate from the scale factors, is bounded by the uncertainty of g (a premise) on the diagonal
+    of the bound; the premises travel with the file."""
     G, eG = np.array(res["physical"]["Gamma"]), np.array(res["physical_bound"]["Gamma"])
-    B = np.abs(eG) + res["prior"] * np.eye(3)
+    B = np.abs(eG) + res["premises"]["g_uncertainty"] * np.eye(3)
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
             "M": np.linalg.inv(np.eye(3) + G).tolist(), "b": list(res["physical"]["bias"]), "bound_matrix": B.tolist(),
             "bound_bias": list(res["physical_bound"]["bias"]), "bound_delta": [0.0, 0.0, 0.0],
             "pendulosity_axes": [2, 3, 1], "g": res["g"], "source": f"{res['model']} estimate, mounting {res['mount']}",
             "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B holds the bounds of Gamma and, on its "
-                    "diagonal, the prior on Delta_g"}
+                    "diagonal, the uncertainty of g (Delta_g/g)", "premises": res["premises"]["statement"]}
 
 
 def write(path, cal):

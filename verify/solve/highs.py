@@ -103,7 +103,9 @@ def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
     m, K = A.shape
     w = np.ones(K) if weights is None else np.asarray(weights, float)
     s = np.zeros(K) if slack is None else np.asarray(slack, float)
-    c = max(np.abs(z).max(), np.abs(s).max(), 1e-300)   # HiGHS's tolerances are absolute: solve with data of size 1
+    c = max(np.abs(z).max(), np.abs(s).max())   # HiGHS's tolerances are absolute: solve with data of size 1
+    if c == 0.0:                                  # z = 0 and no slack: q = 0 fits exactly
+        return np.zeros(m), 0.0, np.zeros(K)
     if c != 1.0:
         q, t, _ = chebyshev_fit(A, z / c, w, s / c if slack is not None else None, what)
         return q * c, t * c, z - A.T @ (q * c)
@@ -176,6 +178,12 @@ def _l1(A, T):
             h.changeRowsBounds(m, idx, T[:, k], T[:, k])
         h.run()
         status = h.getModelStatus()
+        if status != highspy.HighsModelStatus.kOptimal:     # a warm start that stalls: once more from scratch
+            h.clearSolver()
+            h.setOptionValue("presolve", "on")
+            h.run()
+            h.setOptionValue("presolve", "off")
+            status = h.getModelStatus()
         if status != highspy.HighsModelStatus.kOptimal:
             raise LPFailed(f"primal (7)-(8), target {k + 1}: {h.modelStatusToString(status)}")
         sol = h.getSolution()

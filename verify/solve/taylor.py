@@ -150,13 +150,16 @@ def with_jets(fn):
 SUM_ERROR = 1e-12     # relative: covers the float rounding of a sum or product of a few hundred terms
 
 
-def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=()):
+def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=(), centre=None):
     """Enclosure of the Hessian of z_exact(L v) with respect to v over the hull of the box [lo, hi]
-    and 0, at every position, upper triangles packed (`triangle`): (lower, upper), each (N, 3, P).
-    The physical parameters are p = L v (L: n x nv), coordinates in which the directions no data
-    can see are variables of their own, so that their exact invariances cost nothing. lo and hi are
-    (nv,), one box for all positions, or (nv, N), a box per position."""
-    lo, hi = np.minimum(lo, 0.0), np.maximum(hi, 0.0)
+    and the centre of the expansion (default 0), at every position, upper triangles packed
+    (`triangle`): (lower, upper), each (N, 3, P). The physical parameters are p = L v (L: n x nv),
+    coordinates in which the directions no data can see are variables of their own, so that their
+    exact invariances cost nothing. lo and hi are (nv,), one box for all positions, or (nv, N), a box
+    per position."""
+    c = np.zeros(np.shape(lo)[:1]) if centre is None else np.asarray(centre, float)
+    c = c.reshape((-1,) + (1,) * (np.ndim(lo) - 1))
+    lo, hi = np.minimum(lo, c), np.maximum(hi, c)
     per_position = np.ndim(lo) == 2
     L = np.asarray(L, float)
     angles = [np.atleast_1d(np.asarray(a, float)) for a in angles]
@@ -245,14 +248,14 @@ class Interpolation:
             W = (W[:, :, None] * w[:, None, :]).reshape(len(x), -1)
         return W
 
-    def at_nodes(self, mod, L, boxes, mount=None):
+    def at_nodes(self, mod, L, boxes, mount=None, centre=None):
         """For each box (lo, hi): (midpoints, radii) of the node enclosures, (nodes, 3 P) each, and
         sum_j |h_j| (3 P,). The boxes share one evaluation: the nodes repeated box by box."""
         M, B = len(self.nodes[0]), len(boxes)
         lo = np.repeat(np.stack([b[0] for b in boxes], axis=1), M, axis=1)
         hi = np.repeat(np.stack([b[1] for b in boxes], axis=1), M, axis=1)
         H_lo, H_hi = packed_hessian(mod, [np.tile(x, B) for x in self.nodes], L, lo, hi,
-                                    None if mount is None else np.full(M * B, mount))
+                                    None if mount is None else np.full(M * B, mount), centre=centre)
         mid, rad = midrad(H_lo, H_hi)
         mid, rad = mid.reshape(B, M, -1), rad.reshape(B, M, -1)
         return [(m, r, (np.abs(m) + r).sum(axis=0)) for m, r in zip(mid, rad)]
@@ -278,3 +281,43 @@ def _linear_jets(L, lo, hi):
     zero_h = Iv(np.zeros((nv * (nv + 1) // 2, 1)))
     return [Jet2(Iv((c - r).reshape(shape), (c + r).reshape(shape)), Iv(row[:, None].copy()), zero_h)
             if row.any() else 0.0 for row, c, r in zip(L, centre, radius)]
+
+
+STEP = 1e-30          # the complex step: Im f(p + i h d) / h is f'(p) d to rounding (h^2 terms are below it)
+
+
+def _complex_namespace():
+    ns = types.SimpleNamespace(**{k: getattr(np, k) for k in ("broadcast_arrays", "zeros_like", "ones_like", "pi",
+                                                               "sin", "cos", "sqrt")})
+    ns.asarray = lambda x, dtype=None: np.asarray(x, complex if dtype is float else dtype)
+    ns.array = lambda rows: np.array(np.broadcast_arrays(*rows))
+    return ns
+
+
+COMPLEX_NUMPY = _complex_namespace()
+BLOCK = 2048          # positions per evaluation of the Jacobian: (3, nv, BLOCK) complex arrays stay small
+
+
+def jacobian(mod, angles, L, p0, mounts=None, variables=()):
+    """The exact readings over g at p0, and their derivatives along the columns of L (p = p0 + L v),
+    at every position: (value (N, 3), J (N, 3, nv)). By the complex step: the generated function is
+    evaluated once per block of positions at p0 + i h L_k for every k at once (its np replaced by a
+    namespace that keeps complex numbers), and J = Im / h, exact to rounding since nothing is
+    subtracted; a relative error of SUM_ERROR covers it (the generated readings are analytic)."""
+    L = np.asarray(L, float)
+    angles = [np.atleast_1d(np.asarray(a, float)) for a in angles]
+    N, nv = len(angles[0]), L.shape[1]
+    physical = (np.asarray(p0, float)[:, None] + 1j * STEP * L)[:, :, None]       # (n, nv, 1)
+    value, J = np.empty((N, 3)), np.empty((N, 3, nv))
+    groups = [(None, np.arange(N))] if mounts is None else [(k, np.flatnonzero(mounts == k))
+                                                              for k in np.unique(mounts)]
+    for k, rows in groups:
+        fn = mod.readings if k is None else getattr(mod, f"_readings_{k}")
+        fn = types.FunctionType(fn.__code__, {**fn.__globals__, "np": COMPLEX_NUMPY}, fn.__name__, fn.__defaults__)
+        for b in range(0, len(rows), BLOCK):
+            sel = rows[b:b + BLOCK]
+            f = fn(*[a[sel] for a in angles], physical, 1.0, *[np.asarray(v, float)[sel] for v in variables])
+            f = np.broadcast_to(f, (3, nv, len(sel)))
+            value[sel] = f[:, 0, :].real.T
+            J[sel] = np.moveaxis(f.imag / STEP, 2, 0)
+    return value, J

@@ -17,6 +17,7 @@ from ..io.report import save_figure
 from ..models import reachable_grid
 from ..solve import highs, lp
 from . import guarantee
+from .premises import premises
 from .estimate import check_residual_size
 
 TIE = 0.02                    # scores within 2% (of sigma) count as equal
@@ -112,16 +113,19 @@ def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
              "predicted_difference": float(diff[k])} for k in best]
 
 
-def diagnose(base_model, mod, positions, sigma, g, prior=guarantee.PRIOR_DEFAULT):
+def diagnose(base_model, mod, positions, sigma, g, prior=None, g_uncertainty=None):
     """The discrepancy workflow: a fit is consistent when its minimax residual less the proven
-    linearisation remainder (a posteriori, workflows/guarantee.py) is at most sigma."""
+    linearisation remainder (a posteriori, workflows/guarantee.py; linear model (2) at zero errors,
+    a-priori bounds from the premises, `prior` overriding them) is at most sigma."""
     study = Study(base_model, mod, positions, g)
     check_residual_size(study.z.reshape(-1, 3), positions.path)
     A0 = study.A([])
     if rank(A0) < A0.shape[0]:
         raise DataError(f"{positions.path}: these positions cannot identify the current model; "
                         "see `garant identify --plan`")
-    rb = guarantee.verdict(mod, positions, study.z, A0, sigma, g, prior, lp.primal(A0)[0].T).remainder
+    lin = guarantee.linearise(mod, positions, study.z, A0, premises(mod, sigma, g, prior=prior, g_uncertainty=g_uncertainty),
+                               at_zero=True)
+    rb = guarantee.verdict(lin, study.z, sigma, lp.primal(A0)[0].T).remainder
     limit = sigma
     _, t0, r0 = chebyshev_fit(A0, study.z, rb)
     candidates, skipped = study.available()

@@ -5,6 +5,7 @@ from ..errors import DataError
 from ..io.positions import Positions
 from ..solve import lp
 from . import guarantee, mounting, nearby
+from .premises import NEAR_EDGE, premises as make_premises
 
 EXACT_DEG = 1e-6   # positions closer than this to the plan count as on it
 
@@ -74,18 +75,20 @@ def choose_estimator(mod, positions, A):
 PROGRESS_ABOVE = 100_000   # distinct positions: from here on each stage is announced (it takes seconds)
 
 
-def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", prior=guarantee.PRIOR_DEFAULT,
-             progress=None):
+def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", premises=None, progress=None):
     """The verdict (are the data consistent with sigma?), then q with guaranteed errors that include
     the proven linearisation remainder (workflows/guarantee.py), and the block's physical errors.
 
-    When the data refute sigma, `consistent` is False and no bound is given: its premise is false.
+    The model is linearised at its exact fit to these data; `premises` (premises.py; default: the
+    description's bounds and the defaults, g as given) are what the bounds assume, and the result
+    states them. When the data refute sigma, `consistent` is False and no bound is given.
     `progress(text)`, when given, hears of each stage of a large problem.
     """
-    if sigma <= 0:
-        raise DataError(f"--sigma must be positive (got {sigma:g})")
-    if g <= 0:
-        raise DataError(f"--g must be positive (got {g:g} m/s^2)")
+    if not (sigma > 0 and np.isfinite(sigma)):
+        raise DataError(f"sigma must be a finite number > 0 (got {sigma:g})")
+    if not (g > 0 and np.isfinite(g)):
+        raise DataError(f"g must be a finite number > 0 m/s^2 (got {g:g})")
+    premises = premises or make_premises(mod, sigma, g)
     Q = remount.MOUNTS[mount] if mount else np.eye(3)
     rows, all_rows = len(positions.f), positions
     positions = distinct_positions(positions)
@@ -98,15 +101,20 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
                         f"{describe(mod, missing)}; add positions (see `garant plan`)")
     check_residual_size(residuals_table_axes(mod, all_rows, g, Q), positions.path)
     say = progress if progress is not None and distinct >= PROGRESS_ABOVE else (lambda text: None)
-    say(f"{rows} rows, {distinct} distinct positions: the optimal estimators (LP (7)-(8))")
-    W, method = choose_estimator(mod, positions, A)
+    say(f"{rows} rows, {distinct} distinct positions: the exact-model fit and the linearisation there")
+    lin = guarantee.linearise(mod, positions, z.reshape(-1), A, premises)
+    say("the optimal estimators (LP (7)-(8)) at the linearisation")
+    W, method = choose_estimator(mod, positions, lin.A)
     say("the verdict and the proven remainder")
-    v = guarantee.verdict(mod, positions, z.reshape(-1), A, sigma, g, prior, W)
+    v = guarantee.verdict(lin, z.reshape(-1), sigma, W)
     out = {                                    # arrays stay arrays until a JSON file is written
-        "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma, "prior": prior,
+        "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma,
+        "premises": premises.to_dict(),
         "positions": rows, "distinct_positions": distinct, "consistent": v.consistent,
-        "sigma_min_supported": v.sigma_min_supported, "remainder_bound": float(v.remainder.max()),
+        "sigma_min_supported": v.sigma_min_supported, "sigma_min_tolerance": guarantee.SIGMA_TOLERANCE,
+        "remainder_left_bound": float(v.remainder.max()),
         "minimax_residual": v.minimax_exact, "minimax_residual_linear": v.minimax_linear,
+        "linearised_at": dict(zip(mod.Q_NAMES, lin.q0.tolist())),
         "definitions": dict(zip(mod.Q_NAMES, mod.Q_DEFINITIONS)), "units": dict(zip(mod.Q_NAMES, mod.Q_UNITS)),
         "positions_deg": positions.angles_deg,
         "residual_minimax": v.residual.reshape(-1, 3),
@@ -118,14 +126,18 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
                                              for i, a in enumerate(names)}, "component": int(k % 3) + 1}
             for k in v.disagree]
         return out
-    q = W @ z.reshape(-1)
+    y = z.reshape(-1) - lin.z0
+    q = lin.q0 + W @ y
+    e = v.guaranteed_error
     out.update({
         "method": method,
         "q": dict(zip(mod.Q_NAMES, q.tolist())),
-        "guaranteed_error": dict(zip(mod.Q_NAMES, v.guaranteed_error.tolist())),
+        "guaranteed_error": dict(zip(mod.Q_NAMES, e.tolist())),
         "guaranteed_error_linear": dict(zip(mod.Q_NAMES, v.error_linear.tolist())),
         "guaranteed_error_remainder": dict(zip(mod.Q_NAMES, v.error_remainder.tolist())),
-        "residual": z - (A.T @ q).reshape(-1, 3),
+        "remainder_parts": {k: dict(zip(mod.Q_NAMES, x.tolist())) for k, x in v.parts.items()},
+        "residual": (y - lin.A.T @ (W @ y)).reshape(-1, 3),
+        "warnings": near_prior(lin, q, e) + unrefutable(lin.A, W, mod),
     })
     if remount is not None:
         phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, q, W, sigma + v.remainder, g,
@@ -133,3 +145,33 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         out.update(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound,
                    physical_note=note)
     return out
+
+
+def near_prior(lin, q, e):
+    """Lines for every q whose estimate plus its bound comes within NEAR_EDGE of what the a-priori
+    bounds allow: the premise may not hold; say which parameters and what to raise."""
+    mod, prem = lin.mod, lin.premises
+    allowed = lin.q_prior
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    out = []
+    biases = np.asarray(mod.PHYSICAL_TO_Q, float)[:, guarantee.linear_parameters(mod)].any(axis=1)
+    for nu in np.flatnonzero((np.abs(q) + e > NEAR_EDGE * allowed) & ~biases):
+        names = [prem.names[k] for k in np.flatnonzero(R[nu]) if np.isfinite(prem.bounds[k])]
+        out.append(f"{mod.Q_NAMES[nu]} = {q[nu]:+.3e} +- {e[nu]:.1e} is beyond {NEAR_EDGE:g} of what the a-priori "
+                   f"bounds allow ({allowed[nu]:.2e}, from {', '.join(names)}): if the unit may be larger, raise "
+                   "their bounds (the description's `bound`, --prior, or --g-uncertainty for Delta_g)")
+    return out
+
+
+def unrefutable(A, W, mod, fraction=0.999):
+    """Lines for every q whose estimator lies (almost) wholly in the span of the model's own columns:
+    noise along those weights is absorbed by the fit, so no verdict can refute an understated sigma
+    there (a minimal plan); the bound then rests on sigma alone."""
+    Qa = np.linalg.qr(A.T)[0]
+    inside = np.linalg.norm(W @ Qa, axis=1) ** 2 / np.maximum(np.linalg.norm(W, axis=1) ** 2, 1e-300)
+    names = [mod.Q_NAMES[nu] for nu in np.flatnonzero(inside >= fraction)]
+    if not names:
+        return []
+    return [f"the readings {', '.join(names)} use carry no redundancy: noise along their estimators is fitted, "
+            "not seen, so these data cannot refute an understated sigma there (a minimal plan); their bounds "
+            "rest on sigma being right"]

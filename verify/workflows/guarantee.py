@@ -1,120 +1,190 @@
 """What makes a bound guaranteed: the data consistent with sigma, and the linearisation remainder in it.
 
-The linear model (2) of 000 is z = H^T q + rho + R(p), with |rho| <= sigma (5) and R the remainder
-of (1) -> (2). garant bounds R by a proof (solve/taylor.py: interval Taylor arithmetic on the exact
-readings of the generated module) over the parameters the premises allow:
+The readings are linearised where the unit is, not at zero errors: at the exact-model fit p0 (a MEMS
+unit's scale errors of 2e-2 would otherwise put H off by 2 % and q by 2e-3). In coordinates
+v = (q, t), p = L v, with q the identifiable combinations (4) of 000 and t the parameters with the
+smallest a-priori bounds that complete them (the directions no plan separates, `coordinates`):
 
-1. a priori: every stand and block error within --prior (biases enter linearly and need no bound);
-2. a posteriori: the identifiable combinations within their guaranteed bounds around the estimate,
-   the unseparable directions (UNSEPARABLE) within what the prior allows, intersected with 1.
-   Each step only shrinks the bound, and each is valid whenever the premises hold.
+    z(p) = z(p0) + A^T dq + J_t t + R,     dq = q - q0, t within its a-priori bounds,
 
-The part of the curvature that a column of H carries is absorbed by a shift C(p) of q (Remainder):
-R = H^T C(p) + R', with both |C(p)| and |R'| proven. The verdict: if the premises hold, q + C(p)
-satisfies |z_k - a_k^T (q + C)| <= sigma + R'_k for every k, so min over q' of
-max_k (|z_k - a_k^T q'| - R'_k) <= sigma. When that minimax exceeds sigma, the data refute sigma (or
-the prior, or the model): a proof. Otherwise each q is bounded by sum_k |W_k| (sigma + R'_k) + |C(p)|:
-a linear part sigma sum |W| and a remainder part. The exact-model minimax fit (unseparable
-directions at 0, the stated representative) is reported as the fit quality.
+R the second-order remainder around the centre, proven by interval Taylor arithmetic
+(solve/taylor.py) over a box of v. The box is the a-priori one first (`premises.py`: the stand's
+errors from its description, Delta_g/g from the uncertainty of g, wide defaults for the block), then
+a posteriori: dq within the guaranteed errors of the estimate, each box valid whenever the premises
+hold, each inside the last; the block's errors only start this iteration.
+
+What moves the readings along a column of A is absorbed by q: the first-order t term as G t
+(J_t = A^T G + its residual) and the curvature as C(dv) = 1/2 dv^T C dv, so
+    z - z(p0) = A^T (dq + G t + C(dv)) + rho + r,   |r_k| <= R'_k + |J_t - A^T G|_k t_max,
+both parts proven. The verdict: if the premises hold, some q' fits every reading within sigma + |r_k|;
+when none does (a minimax LP), the data refute sigma, or a premise: a proof. Otherwise each q is
+bounded by a linear part sigma sum |W| and a remainder part: what is left after absorption (per
+reading, or for the functional W_nu r directly, whichever is smaller), the absorbed curvature |C|, and
+the unseparable part |W A^T G| t_max: q's definition is linear, the unit's invariance is not, so a q
+is known only up to the a-priori bounds of t times the size of the errors.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..solve import highs, taylor
+from .premises import Premises
 
-PRIOR_DEFAULT = 1e-3       # rad and dimensionless: the size of every stand and block error
-
-
-@dataclass
-class Verdict:
-    consistent: bool
-    sigma: float
-    sigma_min_supported: float       # smallest sigma the data support (sigma itself when consistent)
-    minimax_less_remainder: float    # min_q max_k |z_k - a_k^T q| - R_k
-    minimax_linear: float            # min_q max_k |z_k - a_k^T q|
-    exact_fit: np.ndarray            # q of the exact-model minimax fit
-    minimax_exact: float             # its residual: the fit quality
-    remainder: np.ndarray            # R_k, proven, per residual component (N*3,)
-    disagree: np.ndarray             # indices k where |z_k - a_k^T q*| - R_k > sigma
-    residual: np.ndarray             # z - A^T q* at that minimax fit (N*3,)
-    error_linear: np.ndarray = None  # sigma sum |W| per q
-    error_remainder: np.ndarray = None   # sum |W_k| R'_k + |C(p)| per q
-    q_shift: np.ndarray = None           # the bound of |C(p)|: curvature absorbed by q
-
-    @property
-    def guaranteed_error(self):
-        return self.error_linear + self.error_remainder
+PRIOR_DEFAULT = None       # --prior is an override of every a-priori bound (premises.py); none by default
+ROUNDING = 1e-13           # absolute, on z of size 1: the float value and Jacobian of the exact model at p0
 
 
 def linear_parameters(mod):
     """Parameters that enter the readings affinely with a constant coefficient: the biases."""
+    kinds = getattr(mod, "PARAMETER_KINDS", None)
+    if kinds:
+        return np.array([k == "bias" for k in kinds])
     return np.array([n.startswith("bias") for n in mod.PARAMETER_NAMES])
 
 
-def coordinates(mod):
-    """p = L v with v = (q, t): q the identifiable combinations (p = R+ q), t the coordinates along
-    orthonormal unseparable directions N. Combinations that are biases (entering linearly) are left
-    out: they do not enter the remainder. Returns (L, index of each q in v or -1, N)."""
+def coordinates(mod, bounds):
+    """p = L v with v = (q, t): q = PHYSICAL_TO_Q p, and t the physical parameters (indices T) with the
+    smallest a-priori bounds that make the map invertible, so that the directions no data can see are
+    bounded by the premises. Also `keep`: the q that are not biases (the others do not enter the
+    remainder). Returns (L, keep, T)."""
     R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    m, n = R.shape
     lin = linear_parameters(mod)
-    Rp = np.linalg.pinv(R)
-    keep = [nu for nu in range(R.shape[0]) if np.abs(R[nu, ~lin]).max() > 0]
-    U = np.asarray(mod.UNSEPARABLE, float)
-    N = np.linalg.qr(U.T)[0].T if U.size else np.zeros((0, R.shape[1]))
-    L = np.hstack([Rp[:, keep], N.T])
-    L[lin] = 0.0
-    return L, keep, N
+    rows, T = R, []
+    for k in np.argsort(np.where(lin, np.inf, bounds), kind="stable"):
+        if len(T) == n - m:
+            break
+        trial = np.vstack([rows, np.eye(n)[k]])
+        if np.linalg.matrix_rank(trial) > len(rows):
+            rows, T = trial, T + [int(k)]
+    L = np.linalg.inv(rows)
+    keep = [nu for nu in range(m) if np.abs(R[nu, ~lin]).max() > 0]
+    return L, keep, T
 
 
-def box(mod, prior, q=None, e=None):
-    """Bounds of v = (q, t): q within [q - e, q + e] (or what the prior allows when no estimate is
-    given), t within what |p_k| <= prior allows; every bound also within what the prior allows."""
-    R = np.asarray(mod.PHYSICAL_TO_Q, float)
-    lin = linear_parameters(mod)
-    L, keep, N = coordinates(mod)
-    q_prior = np.abs(R[keep][:, ~lin]).sum(axis=1) * prior
-    t_prior = np.abs(N[:, ~lin]).sum(axis=1) * prior
-    lo, hi = -q_prior, q_prior
+@dataclass
+class Linearisation:
+    """The exact model linearised at its minimax fit (the centre: q0, t = 0)."""
+
+    mod: object
+    positions: object
+    premises: Premises
+    L: np.ndarray          # p = L v, v = (q, t): n x n
+    keep: list             # q that are not biases
+    T: list                # indices of the physical parameters t
+    q0: np.ndarray         # the centre
+    z0: np.ndarray         # z_exact at the centre (3N,)
+    A: np.ndarray          # dz/dq at the centre: the relinearised H, m x 3N
+    Jt: np.ndarray         # dz/dt at the centre, 3N x len(T)
+    minimax_exact: float   # the exact model's minimax residual at the centre: the fit quality
+
+    @property
+    def t_bound(self):
+        return self.premises.bounds[self.T]
+
+    @property
+    def q_prior(self):
+        """What the a-priori bounds of the parameters that enter nonlinearly allow for each q (a bias, which
+        needs no bound, counts 0; a q of biases alone is not in the remainder's box)."""
+        R = np.abs(np.asarray(self.mod.PHYSICAL_TO_Q, float))
+        return R @ np.where(linear_parameters(self.mod), 0.0, self.premises.bounds)
+
+
+def _extra(mod, positions):
+    return [np.asarray(positions.extra[str(v)], float) for v in getattr(mod, "VARIABLES", ())]
+
+
+def _z_exact(mod, positions, p, g):
+    kw = {"mount": positions.mounts} if positions.mounts is not None else {}
+    f = mod.readings(*positions.radians, p, g, *_extra(mod, positions), **kw)
+    return mod.residual(*positions.radians, f, g, **kw).T.reshape(-1)
+
+
+def exact_fit(mod, positions, z, A, g, Lq, iterations=8):
+    """Minimax fit of the exact model with t = 0 (p = Lq q): successive Chebyshev fits of the exact
+    residual with the linear A, a contraction when the errors are small. (q, its minimax residual)."""
+    q, best, _ = highs.chebyshev_fit(A, z)
+    for _ in range(iterations):
+        dq, t, _ = highs.chebyshev_fit(A, z - _z_exact(mod, positions, Lq @ q, g))
+        if t >= best * (1 - 1e-9):
+            break
+        q, best = q + dq, t
+    return q, float(np.abs(z - _z_exact(mod, positions, Lq @ q, g)).max())
+
+
+def linearise(mod, positions, z, A, premises, at_zero=False):
+    """The Linearisation of the model at the exact-model fit of the residuals z (A: H at zero errors),
+    or, `at_zero`, at zero errors (the linear model (2) of 000 itself: z0 = 0 and A)."""
+    L, keep, T = coordinates(mod, premises.bounds)
+    m = A.shape[0]
+    if at_zero:
+        q0, fit = np.zeros(m), float(np.abs(z - highs.chebyshev_fit(A, z)[2]).max())
+    else:
+        q0, fit = exact_fit(mod, positions, z, A, premises.g, L[:, :m])
+    value, J = taylor.jacobian(mod, positions.radians, L, L[:, :m] @ q0, positions.mounts, _extra(mod, positions))
+    kw = {"mount": positions.mounts} if positions.mounts is not None else {}
+    z0 = (value - mod.up_nominal(*positions.radians, **kw).T).reshape(-1)
+    K = J.shape[0] * 3
+    return Linearisation(mod, positions, premises, L, keep, T, q0, z0, J[:, :, :m].reshape(K, m).T,
+                         J[:, :, m:].reshape(K, -1), fit)
+
+
+def box(lin, q=None, e=None):
+    """Bounds (lo, hi) of v = (q kept, t): q within what the premises allow, and within [q - e, q + e]
+    when an estimate is given; t within its a-priori bounds."""
+    qp = lin.q_prior[lin.keep]
+    lo, hi = -qp, qp
     if q is not None:
-        lo, hi = np.maximum(lo, q[keep] - e[keep]), np.minimum(hi, q[keep] + e[keep])
+        lo, hi = np.maximum(lo, q[lin.keep] - e[lin.keep]), np.minimum(hi, q[lin.keep] + e[lin.keep])
         lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
-    return L, np.r_[lo, -t_prior], np.r_[hi, t_prior]
+    return np.r_[lo, -lin.t_bound], np.r_[hi, lin.t_bound]
+
+
+def _columns(rows):
+    """Columns of A (and components of z) of the given positions: 3 per position."""
+    return (3 * np.asarray(rows)[:, None] + np.arange(3)).reshape(-1)
 
 
 class Remainder:
-    """The proven remainder at a set of positions, with the curvature the combinations absorb.
+    """The proven remainder around the centre at a set of positions, with what q absorbs.
 
-    Part of the second-order term is a function of the parameters times a column of H (e.g. along the
-    unseparable direction Gamma_ii = Delta_g the readings move by Gamma_ii Delta_g u_i, which is q's own
-    column): a q shifted by C(p) = 1/2 v^T C v absorbs it exactly. C is fitted once, by least squares
-    over (at most FIT_ROWS of) the positions, to the Hessian at 0 (any C is valid: it only moves
-    curvature between the two bounds); then for every v in a box
-        z_exact = H^T (q + C(p)) + R',  |R'_k| <= 1/2 sum |v_k| |v_j| sup |Hess_kj - (H^T C)_kj|,
-    |C(p)_nu| <= 1/2 sum |C_nu,kj| |v_k| |v_j|: both proven (the Hessian enclosed by interval Taylor
-    arithmetic, at every position or, for readings that are trigonometric polynomials in the angles,
-    interpolated exactly from nodes (taylor.Interpolation); float rounding covered by margins).
-    Hessians are symmetric: they are held as packed upper triangles."""
+    C (curvature) and G (the first-order t term) are fitted once, by least squares over (at most
+    FIT_ROWS of) the positions, at the centre (any C and G are valid: they only move terms between the
+    bounds); then for every v in a box containing the centre c,
+        |R_k - (A^T C(v - c))_k| <= 1/2 sum |dv_i| |dv_j| sup |Hess_k,ij - (A^T C)_k,ij|,
+    |C(dv)_nu| <= 1/2 sum |C_nu,ij| |dv_i| |dv_j|, the Hessian enclosed by interval Taylor arithmetic
+    at every position or, for readings that are trigonometric polynomials in the angles, interpolated
+    exactly from nodes (taylor.Interpolation); float rounding covered by margins."""
 
     FIT_ROWS = 256
     BLOCK = 2048             # positions per block of the bound: memory stays linear and small
     DIRECT_ROWS = 256        # up to this many positions, each is enclosed on its own: the tightest bound
 
-    def __init__(self, mod, positions, A, boxes=()):
-        self.mod, self.A = mod, A
-        self.angles = [np.atleast_1d(np.asarray(a, float)) for a in positions.radians]
-        self.mounts = positions.mounts
-        self.extra = [np.asarray(positions.extra[str(v)], float) for v in getattr(mod, "VARIABLES", ())]
-        self.L = coordinates(mod)[0]
-        n, nv = len(self.angles[0]), self.L.shape[1]
+    def __init__(self, lin, boxes=()):
+        self.lin, self.mod, self.A = lin, lin.mod, lin.A
+        pos = lin.positions
+        self.angles = [np.atleast_1d(np.asarray(a, float)) for a in pos.radians]
+        self.mounts = pos.mounts
+        self.extra = _extra(lin.mod, pos)
+        m = lin.A.shape[0]
+        cols = list(lin.keep) + list(range(m, lin.L.shape[1]))
+        self.Lv = lin.L[:, cols].copy()
+        self.Lv[linear_parameters(lin.mod)] = 0.0
+        self.centre = np.r_[lin.q0[lin.keep], np.zeros(len(lin.T))]
+        n, nv = len(self.angles[0]), len(cols)
         self.P = nv * (nv + 1) // 2
-        self.interp = (taylor.Interpolation(mod.TRIG_DEGREE)
-                       if taylor.Interpolation.usable(mod, self.angles, self.extra) else None)
+        self.interp = (taylor.Interpolation(self.mod.TRIG_DEGREE)
+                       if taylor.Interpolation.usable(self.mod, self.angles, self.extra) else None)
         self._nodes = {}
-        self.prepare([(np.zeros(nv), np.zeros(nv)), *boxes])
+        self.prepare([(self.centre, self.centre), *boxes])
         fit_rows = highs.spread(n, self.FIT_ROWS)
-        mid, _ = self._enclosure(np.zeros(nv), np.zeros(nv), fit_rows, direct=self.interp is None)
-        self.C = np.linalg.lstsq(A[:, _columns(fit_rows)].T, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
+        mid, _ = self._enclosure(self.centre, self.centre, fit_rows, direct=self.interp is None)
+        At = lin.A[:, _columns(fit_rows)].T
+        self.C = np.linalg.lstsq(At, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
+        self.G = np.linalg.lstsq(At, lin.Jt[_columns(fit_rows)], rcond=None)[0] if len(lin.T) else np.zeros((m, 0))
+        t_res = np.abs(lin.Jt - lin.A.T @ self.G)
+        t_res += taylor.SUM_ERROR * (np.abs(lin.Jt) + np.abs(lin.A.T) @ np.abs(self.G))
+        self.t_residual = t_res @ lin.t_bound + ROUNDING     # |J_t - A^T G| t_max, per reading
 
     def prepare(self, boxes):
         """Enclose the Hessian at the nodes for several boxes (lo, hi) in one evaluation (interpolation
@@ -123,7 +193,7 @@ class Remainder:
             return
         for k in ([None] if self.mounts is None else np.unique(self.mounts)):
             todo = [b for b in boxes if ((tuple(b[0]), tuple(b[1])), k) not in self._nodes]
-            for b, nodes in zip(todo, self.interp.at_nodes(self.mod, self.L, todo, k) if todo else ()):
+            for b, nodes in zip(todo, self.interp.at_nodes(self.mod, self.Lv, todo, k, self.centre) if todo else ()):
                 self._nodes[(tuple(b[0]), tuple(b[1])), k] = nodes
 
     def _enclosure(self, lo, hi, rows, direct):
@@ -131,23 +201,23 @@ class Remainder:
         position by position (`direct`) or interpolated from the nodes."""
         mounts = None if self.mounts is None else self.mounts[rows]
         if direct:
-            H_lo, H_hi = taylor.packed_hessian(self.mod, [a[rows] for a in self.angles], self.L, lo, hi, mounts,
-                                               [v[rows] for v in self.extra])
+            H_lo, H_hi = taylor.packed_hessian(self.mod, [a[rows] for a in self.angles], self.Lv, lo, hi, mounts,
+                                               [v[rows] for v in self.extra], centre=self.centre)
             return taylor.midrad(H_lo, H_hi)
         W = self.interp.weights([a[rows] for a in self.angles])
         key = (tuple(lo), tuple(hi))
         mid, rad = np.empty((len(rows), 3 * self.P)), np.empty((len(rows), 3 * self.P))
         for k in ([None] if mounts is None else np.unique(mounts)):
             if (key, k) not in self._nodes:
-                self._nodes[key, k] = self.interp.at_nodes(self.mod, self.L, [(lo, hi)], k)[0]
+                self._nodes[key, k] = self.interp.at_nodes(self.mod, self.Lv, [(lo, hi)], k, self.centre)[0]
             sel = slice(None) if k is None else mounts == k
             mid[sel], rad[sel] = self.interp.enclose(W[sel], *self._nodes[key, k])
         return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1)
 
-    def shift(self, v):
-        """C(p) = 1/2 v^T C_nu v for each q_nu (C held packed)."""
-        k, j = taylor.triangle(len(v))
-        return self.C @ (np.where(k == j, 0.5, 1.0) * v[k] * v[j])
+    def shift(self, dv):
+        """C(dv) = 1/2 dv^T C_nu dv for each q_nu (C held packed): the curvature q absorbs."""
+        k, j = taylor.triangle(len(dv))
+        return self.C @ (np.where(k == j, 0.5, 1.0) * dv[k] * dv[j])
 
     def interpolates(self, rows=None):
         """Whether the bound at these positions (default all) is interpolated rather than made position
@@ -155,13 +225,17 @@ class Remainder:
         count = len(self.angles[0]) if rows is None else len(rows)
         return self.interp is not None and count > self.DIRECT_ROWS
 
+    def _weights(self, lo, hi):
+        return taylor.pair_weights(np.maximum(self.centre - np.minimum(lo, self.centre),
+                                              np.maximum(hi, self.centre) - self.centre))
+
     def __call__(self, lo, hi, rows=None, direct=None):
         """(bound of |R'| per residual component (3 per position of `rows`, default all), bound of
-        |C(p)| per q (m,)) over the box; position by position or interpolated as `interpolates` says,
+        |C(dv)| per kept q) over the box; position by position or interpolated as `interpolates` says,
         unless `direct` says."""
         direct = not self.interpolates(rows) if direct is None or self.interp is None else direct
         rows = np.arange(len(self.angles[0])) if rows is None else np.asarray(rows)
-        w = taylor.pair_weights(np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0)))
+        w = self._weights(lo, hi)
         rb = np.empty((len(rows), 3))
         for b in range(0, len(rows), self.BLOCK):
             block = rows[b:b + self.BLOCK]
@@ -172,10 +246,17 @@ class Remainder:
         cb = np.abs(self.C) @ w
         return rb.reshape(-1) * (1 + taylor.SUM_ERROR), cb * (1 + taylor.SUM_ERROR)
 
-
-def _columns(rows):
-    """Columns of A (and components of z) of the given positions: 3 per position."""
-    return (3 * np.asarray(rows)[:, None] + np.arange(3)).reshape(-1)
+    def functional(self, W, lo, hi, rows):
+        """Bound of |W_nu R'| for each estimator row, the functional at once (the curvature of a sum
+        cancels where the per-reading bounds add): positions `rows` hold W's support."""
+        mid, rad = self._enclosure(lo, hi, rows, direct=True)
+        cols = _columns(rows)
+        fit = (self.A[:, cols].T @ self.C).reshape(mid.shape)
+        D = (mid - fit).reshape(len(cols), -1)
+        margin = taylor.SUM_ERROR * (1 + np.abs(fit) + np.abs(mid)).reshape(len(cols), -1)
+        Wc = W[:, cols]
+        return ((np.abs(Wc @ D) + np.abs(Wc) @ (rad.reshape(len(cols), -1) + margin)) @ self._weights(lo, hi)
+                ) * (1 + taylor.SUM_ERROR)
 
 
 def _weighted_minimax(A, z, rb):
@@ -184,83 +265,106 @@ def _weighted_minimax(A, z, rb):
     return t, q, r
 
 
-def exact_fit(mod, positions, z, A, g, iterations=6):
-    """Minimax fit of the exact model, unseparable directions at 0 (p = R+ q): successive Chebyshev fits
-    of the exact residual with the linear H, a contraction when the remainder is small."""
-    Rp = np.linalg.pinv(np.asarray(mod.PHYSICAL_TO_Q, float))
-    kw = {"mount": positions.mounts} if positions.mounts is not None else {}
-    extra = [positions.extra[str(v)] for v in getattr(mod, "VARIABLES", ())]
+@dataclass
+class Verdict:
+    consistent: bool
+    sigma: float
+    sigma_min_supported: float       # smallest sigma the data support, to SIGMA_TOLERANCE (sigma when consistent)
+    minimax_less_remainder: float    # min_q max_k |y_k - a_k^T q| - r_k
+    minimax_linear: float            # min_q max_k |y_k - a_k^T q| (relinearised)
+    minimax_exact: float             # the exact model's minimax residual at the centre: the fit quality
+    remainder: np.ndarray            # |r_k|, proven, per residual component (N*3,): left after absorption
+    disagree: np.ndarray             # indices k where |y_k - a_k^T q*| - r_k > sigma
+    residual: np.ndarray             # y - A^T q* at that minimax fit (N*3,)
+    error_linear: np.ndarray = None      # sigma sum |W| per q
+    error_remainder: np.ndarray = None   # the rest: left after absorption, absorbed, unseparable, rounding
+    parts: dict = field(default_factory=dict)   # the remainder part's terms, per q
+    q_shift: np.ndarray = None           # per q: the part not carried by W's readings (absorbed, unseparable)
 
-    def model(q):
-        f = mod.readings(*positions.radians, Rp @ q, g, *extra, **kw)
-        return mod.residual(*positions.radians, f, g, **kw).T.reshape(-1)
-    q, best, _ = highs.chebyshev_fit(A, z)
-    for _ in range(iterations):
-        dq, t, _ = highs.chebyshev_fit(A, z - model(q))
-        if t >= best * (1 - 1e-9):
-            break
-        q, best = q + dq, t
-    return q, float(np.abs(z - model(q)).max())
+    @property
+    def guaranteed_error(self):
+        return self.error_linear + self.error_remainder
 
 
-def verdict(mod, positions, z, A, sigma, g, prior=PRIOR_DEFAULT, W=None, steps=2):
-    """The consistency verdict and, with an estimator W (m x K), the guaranteed errors with remainder."""
-    rem = Remainder(mod, positions, A, boxes=[box(mod, prior)[1:]])
+SIGMA_TOLERANCE = 0.01     # relative: the smallest supported sigma is bracketed this closely
+
+
+def verdict(lin, z, sigma, W=None, steps=8):
+    """The consistency verdict on the residuals z and, with an estimator W (m x 3N, q = q0 + W (z - z0)),
+    the guaranteed errors with the proven remainder."""
+    rem = Remainder(lin, boxes=[box(lin)])
+    y = z - lin.z0
+    m = lin.A.shape[0]
     if W is not None:
-        support = np.flatnonzero(np.abs(W).reshape(len(W), -1, 3).max(axis=(0, 2)) > 0)
+        support = np.flatnonzero(np.abs(W).reshape(m, -1, 3).max(axis=(0, 2)) > 0)
         cols = _columns(support)
+        WA = W @ lin.A.T
+        E = np.abs(WA - np.eye(m)) + taylor.SUM_ERROR * (np.abs(W) @ np.abs(lin.A.T))
+        unseparable = np.abs(WA @ rem.G) @ lin.t_bound * (1 + taylor.SUM_ERROR)
+        dq = W @ y
+
+    def errors(s, rb, cb, functional):
+        """Per q: (linear part, remainder part, its terms, the part beyond W's readings)."""
+        left = np.minimum(np.abs(W) @ rb, functional) if functional is not None else np.abs(W) @ rb
+        absorbed = np.abs(WA) @ cb
+        beyond = absorbed + unseparable
+        r = s * np.abs(W).sum(axis=1) + left + beyond
+        # W A^T = I only to rounding: |(W A^T - I) dq_true| with |dq_true| <= |dq| + e, e <= r + E (|dq| + e)
+        norm = E.sum(axis=1).max()
+        e_max = (r.max() + (E @ np.abs(dq)).max()) / max(1 - norm, 1e-3)
+        rounding = E @ (np.abs(dq) + e_max)
+        parts = {"left_after_absorption": left, "absorbed_into_q": absorbed, "unseparable": unseparable,
+                 "rounding": rounding}
+        return s * np.abs(W).sum(axis=1), left + beyond + rounding, parts, beyond + rounding
 
     def proven(s):
-        """(R' per residual component, C) bounds when the noise bound is s: over the prior box; with an
-        estimator, then over a posteriori boxes (each valid if the premises hold, each inside the last),
-        the intermediate ones at the estimator's positions only, the last at every position (and, when
-        that one is interpolated, at the estimator's positions on their own too: the guaranteed errors
-        depend on those alone, so they keep the tightest bound)."""
-        lo, hi = box(mod, prior)[1:]
+        """(r per reading, C bound, the errors) when the noise bound is s: over the a-priori box; with an
+        estimator, then over a posteriori boxes (each valid if the premises hold, each inside the
+        last), the intermediate ones at the estimator's positions only, the last at every position."""
+        lo, hi = box(lin)
         if W is None:
-            return rem(lo, hi)
-        # The intermediate boxes are made as the last one is (one by one, or interpolated): they only
-        # size the next box, and interpolating them moves the guaranteed errors by less than 1e-4.
+            rb, cb = rem(lo, hi)
+            return rb + rem.t_residual, cb, None
         one_by_one = not rem.interpolates()
-        rb_s, cb = rem(lo, hi, support, one_by_one)
-        q = W @ z
-        for step in range(steps):
-            e = np.abs(W[:, cols]) @ (s + rb_s) + cb
-            lo, hi = box(mod, prior, q, e)[1:]
-            last = step == steps - 1
-            rb2, cb2 = rem(lo, hi) if last else rem(lo, hi, support, one_by_one)
-            cb = np.minimum(cb, cb2)
-            if last:
-                rb2[cols] = np.minimum(rb2[cols], rb_s)
-                if rem.interpolates():
-                    rb2[cols] = np.minimum(rb2[cols], rem(lo, hi, support, direct=True)[0])
-                return rb2, cb
-            rb_s = np.minimum(rb_s, rb2)
-        return rem(lo, hi)[0], cb
-    rb, cb = proven(sigma)
-    t, _, r = _weighted_minimax(A, z, rb)
-    t_lin = highs.chebyshev_fit(A, z)[1]
-    q_exact, t_exact = exact_fit(mod, positions, z, A, g)
+        rb = np.zeros(len(y))
+        rb[cols], cb = rem(lo, hi, support, one_by_one)
+        for _ in range(steps):
+            lin_e, rem_e, _, _ = errors(s, rb + rem.t_residual, cb, None)
+            lo2, hi2 = box(lin, lin.q0 + dq, lin_e + rem_e)
+            lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
+            shrink = np.max((hi2 - lo2) / np.maximum(hi - lo, 1e-300))
+            lo, hi = lo2, hi2
+            rb_s, cb_s = rem(lo, hi, support, one_by_one)
+            rb[cols], cb = np.minimum(rb[cols], rb_s), np.minimum(cb, cb_s)
+            if shrink > 0.9:
+                break
+        rb_all, cb_all = rem(lo, hi)
+        rb_all[cols] = np.minimum(rb_all[cols], rb[cols])
+        if rem.interpolates():
+            rb_all[cols] = np.minimum(rb_all[cols], rem(lo, hi, support, direct=True)[0])
+        cb = np.minimum(cb, cb_all)
+        functional = rem.functional(W, lo, hi, support) if len(support) <= rem.DIRECT_ROWS else None
+        return rb_all + rem.t_residual, cb, errors(s, rb_all + rem.t_residual, cb, functional)
+    rb, cb, errs = proven(sigma)
+    t, _, r = _weighted_minimax(lin.A, y, rb)
+    t_lin = highs.chebyshev_fit(lin.A, y)[1]
     consistent = bool(t <= sigma)
-    supported = sigma if consistent else _smallest_sigma(A, z, sigma, t_lin, lambda s: proven(s)[0])
+    supported = sigma if consistent else _smallest_sigma(lin.A, y, sigma, t_lin, lambda s: proven(s)[0])
     v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
-                minimax_less_remainder=float(t), minimax_linear=t_lin, exact_fit=q_exact,
-                minimax_exact=t_exact, remainder=rb,
-                disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
+                minimax_less_remainder=float(t), minimax_linear=t_lin, minimax_exact=lin.minimax_exact,
+                remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
     if W is not None:
-        v.error_linear = sigma * np.abs(W).sum(axis=1)
-        v.error_remainder = np.abs(W) @ rb + cb
-        v.q_shift = cb
+        v.error_linear, v.error_remainder, v.parts, v.q_shift = errs
     return v
 
 
-def _smallest_sigma(A, z, refuted, supported, proven, steps=4):
+def _smallest_sigma(A, y, refuted, supported, proven):
     """Bisection (in log) between a refuted sigma and one the data support (the linear minimax
-    residual always is): the smallest supported sigma found, to within the last bracket."""
+    residual always is), until the bracket is within SIGMA_TOLERANCE: its upper end."""
     lo, hi = refuted, supported
-    for _ in range(steps):
+    while hi > lo * (1 + SIGMA_TOLERANCE):
         mid = np.sqrt(lo * hi)
-        if _weighted_minimax(A, z, proven(mid))[0] <= mid:
+        if _weighted_minimax(A, y, proven(mid))[0] <= mid:
             hi = mid
         else:
             lo = mid
