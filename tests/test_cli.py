@@ -48,7 +48,7 @@ def test_estimate_recovers_q_within_bound(tmp_path, capsys, mod, positions, seed
     linear = np.array([d["guaranteed_error_linear"][n] for n in mod.Q_NAMES])
     # The guaranteed bound includes the proven linearisation remainder: no allowance added here.
     assert d["consistent"] and np.all(np.abs(q_hat - q_true) <= bound)
-    assert np.all(bound >= linear) and d["remainder_bound"] > 0
+    assert np.all(bound >= linear) and d["remainder_left_bound"] > 0
     if positions == PLAN10:
         np.testing.assert_allclose(linear, SIGMA, rtol=1e-6)      # 000, section 4: sigma for every q
     assert 0 <= d["minimax_residual"] <= SIGMA

@@ -146,7 +146,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     rule = noise_rule(stills, res["M"], res["n"], g, quantum)
     dsig = float(rule.max()) if delta_sigma is None else delta_sigma
     source = ("--delta-sigma" if delta_sigma is not None else
-              f"noise rule: {K_SE:g} standard errors of each interval's mean"
+              f"noise rule (statistical, not guaranteed: {K_SE:g} standard errors of each interval's mean, "
+              "white noise assumed; --delta-sigma states a guaranteed one)"
               + (f" plus half a count ({quantum:g} raw units)" if quantum else ""))
     noise = np.minimum(rule, dsig) if delta_sigma is None else np.full(len(stills), dsig)
     err, missing = guaranteed(mod, res["n"], params, noise)
@@ -288,7 +289,8 @@ def diagnose_norm(mod, stills, res, g, params, quantum=0.0):
             tied.append([best] + ties)
         chosen.append(best)
         score = scores[best]
-    return {"noise_bound": f"the noise rule: {K_SE:g} standard errors of each interval's mean"
+    return {"noise_bound": f"the noise rule (statistical, white noise assumed): {K_SE:g} standard errors of each "
+                           "interval's mean"
                            + (" plus half a count" if quantum else ""),
             "indistinguishable": tied,
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0, "effects": chosen,

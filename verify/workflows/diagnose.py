@@ -113,10 +113,16 @@ def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
              "predicted_difference": float(diff[k])} for k in best]
 
 
+PRIOR = 1e-3   # diagnose linearises at zero errors: one a-priori bound for every error, by default this
+
+
 def diagnose(base_model, mod, positions, sigma, g, prior=None, g_uncertainty=None):
     """The discrepancy workflow: a fit is consistent when its minimax residual less the proven
-    linearisation remainder (a posteriori, workflows/guarantee.py; linear model (2) at zero errors,
-    a-priori bounds from the premises, `prior` overriding them) is at most sigma."""
+    linearisation remainder (a posteriori, workflows/guarantee.py; the linear model (2) at zero errors,
+    so every error within `prior`, default PRIOR, and Delta_g/g within g_uncertainty, default the
+    same) is at most sigma."""
+    prior = PRIOR if prior is None else prior
+    g_uncertainty = prior if g_uncertainty is None else g_uncertainty
     study = Study(base_model, mod, positions, g)
     check_residual_size(study.z.reshape(-1, 3), positions.path)
     A0 = study.A([])
