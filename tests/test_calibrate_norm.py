@@ -136,3 +136,56 @@ def test_parameter_bounds_carry_the_q_box_exactly():
         worst = np.maximum(worst, np.abs(cn.parameters(M2, b2, 9.81) - base))
     assert np.all(worst <= bound * (1 + 1e-12)) and np.allclose(worst, bound, rtol=1e-9)   # equal: linear
     assert not np.allclose(bound, e, rtol=1e-3)          # the old bound (e itself) is not this one
+
+
+SPLIT_LOGS = ([("imu_tk_xsens_acc.txt", None, None)] + [(f"repeat_session{i}_acc.txt", None, None) for i in (1, 2, 3, 4)]
+              + [("openaxes_imu9.csv", "openaxes", None)]
+              + [(f"mimu4444bt/raw/exp_{e}/data.bin", "mimu", k) for e in (1, 2) for k in range(1, 9)])
+
+
+def split_half_exceedances(rule):
+    """Per real log: (interval-axes whose two halves' means differ by more than the noise rule allows,
+    when it holds for both halves: sqrt(b1^2 + b2^2); interval-axes)."""
+    out = {}
+    for name, fmt, imu in SPLIT_LOGS:
+        log = recordings.read_log(str(REAL / name), fmt, imu=imu)
+        q = recordings.quantum(log)
+        stills, _ = recordings.still_intervals(log)
+        bad = 0
+        for st in stills:
+            a = np.searchsorted(log.t, st.start)
+            x = log.raw[a:a + st.samples]
+            h = len(x) // 2
+            (m1, *se1), (m2, *se2) = recordings._segment(x[:h]), recordings._segment(x[h:2 * h])
+            b1, b2 = rule(*se1) + q / 2, rule(*se2) + q / 2
+            bad += int(np.count_nonzero(np.abs(m1 - m2) > np.hypot(b1, b2)))
+        out[f"{name} {imu or ''}"] = (bad, 3 * len(stills))
+    return out
+
+
+@needs_real
+def test_noise_rule_holds_on_split_halves_of_every_real_log():
+    # Issue 23, item 4: the noise rule must hold for correlated noise. Split each still interval of every
+    # real log in two: if the rule bounds the error of each half's mean, the two means differ by no more
+    # than the rules combined. The batch-means rule (K_BATCH standard errors from 8 batch means, plus half
+    # a count) is exceeded on at most 1 % of interval-axes; the white-noise rule (3 std / sqrt(n) plus
+    # half a count) on more: the wrong rule turns this red.
+    from garant.verify.workflows.calibrate_norm import K_BATCH, K_SE
+    batch = split_half_exceedances(lambda white, batch: K_BATCH * batch)
+    bad, total = map(sum, zip(*batch.values()))
+    assert total > 1000 and bad <= 0.01 * total, batch
+    white = split_half_exceedances(lambda white, batch: K_SE * white)
+    bad_w, _ = map(sum, zip(*white.values()))
+    assert bad_w > 0.01 * total, white
+
+
+def test_k_batch_is_the_student_t_point():
+    # K_BATCH: the two-sided 99.73 % point (that of 3 sigma for a normal law) of Student's t with
+    # BATCHES - 1 = 7 degrees of freedom, by quadrature of its density.
+    import mpmath as mp
+    from garant.verify.io.recordings import BATCHES
+    from garant.verify.workflows.calibrate_norm import K_BATCH
+    nu = BATCHES - 1
+    pdf = lambda t: mp.gamma((nu + 1) / 2) / (mp.sqrt(nu * mp.pi) * mp.gamma(nu / 2)) * (1 + t ** 2 / nu) ** (-(nu + 1) / 2)
+    point = mp.findroot(lambda x: mp.quad(pdf, [-mp.inf, x]) - (1 + mp.erf(3 / mp.sqrt(2))) / 2, 4.5)
+    assert abs(K_BATCH - point) < 0.005

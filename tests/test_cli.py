@@ -50,7 +50,9 @@ def test_estimate_recovers_q_within_bound(tmp_path, capsys, mod, positions, seed
     assert d["consistent"] and np.all(np.abs(q_hat - q_true) <= bound)
     assert np.all(bound >= linear) and d["remainder_left_bound"] > 0
     if positions == PLAN10:
-        np.testing.assert_allclose(linear, SIGMA, rtol=1e-6)      # 000, section 4: sigma for every q
+        # 000, section 4: sigma for every q, for H of (3); the estimate linearises at the exact fit, where
+        # H differs from (3) by the size of the errors (1e-4 here), and the optimum by as much.
+        np.testing.assert_allclose(linear, SIGMA, rtol=1e-3)
     assert 0 <= d["minimax_residual"] <= SIGMA
 
 

@@ -180,8 +180,13 @@ class Still:
     start: float           # s
     stop: float            # s
     mean: np.ndarray       # (3,) raw units
-    std_error: np.ndarray  # (3,) standard error of the mean, raw units
+    std_error: np.ndarray  # (3,) standard error of the mean if the noise were white: std / sqrt(n), raw units
     samples: int
+    batch_error: np.ndarray = None   # (3,) standard error of the mean by BATCHES batch means (any correlation
+                                     # shorter than a batch), raw units; None where no samples were read
+
+
+BATCHES = 8            # batch means per still interval: the standard error of its mean under correlated noise
 
 
 BLOCK = 1 << 20        # windows per block of the moving variance: memory stays near one block, not the log
@@ -206,12 +211,21 @@ def moving_variance(x, n):
 
 
 def _segment(x):
-    """Mean and standard error of the mean of each axis of the samples x (k, 3), axis by axis."""
+    """Mean, white-noise standard error and batch-means standard error of the mean of each axis of the
+    samples x (k, 3), axis by axis. Batch means: the interval cut into BATCHES equal runs (the last
+    k mod BATCHES samples left out of the batches only); their scatter / sqrt(BATCHES) is the standard
+    error of the mean whatever the noise's correlation, as long as it is shorter than a run."""
     x = x.T.copy()
+    k = x.shape[1]
     mean = x.mean(axis=1)
     d = x - mean[:, None]
-    var = np.einsum("ij,ij->i", d, d) / (x.shape[1] - 1)
-    return mean, np.sqrt(var / x.shape[1])
+    var = np.einsum("ij,ij->i", d, d) / (k - 1)
+    n = k // BATCHES
+    batch = None
+    if n >= 2:
+        b = x[:, :n * BATCHES].reshape(3, BATCHES, n).mean(axis=2)
+        batch = b.std(axis=1, ddof=1) / np.sqrt(BATCHES)
+    return mean, np.sqrt(var / k), batch
 
 
 def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
@@ -236,6 +250,6 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     for i, j in zip(edges[::2], edges[1::2]):                  # runs [i, j) of still windows
         a, b = i + n // 2, j + n // 2                            # window centre indices
         if log.t[min(b, last)] - log.t[a] >= min_still:
-            mean, std_error = _segment(log.raw[a:b])
-            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), mean, std_error, int(b - a)))
+            mean, std_error, batch = _segment(log.raw[a:b])
+            out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), mean, std_error, int(b - a), batch))
     return out, note

@@ -11,6 +11,7 @@ residual, which would make the bounds circular), plus the proven remainder (2.3)
 import numpy as np
 
 from ..errors import DataError
+from ..io.recordings import BATCHES
 from ..io.report import save_figure
 from ..solve import highs, lp
 
@@ -110,17 +111,35 @@ def parameters(M_total, b, g):
     return np.array([P[0, 0] - 1, P[1, 1] - 1, P[2, 2] - 1, P[1, 0], P[2, 0], P[2, 1], *(b / g)])
 
 
-K_SE = 3.0     # the noise rule: 3 standard errors of each interval's mean, plus half a count
+#: The noise rule's multiple of the standard error of an interval's mean: with BATCHES = 8 batch means,
+#: the two-sided 99.73 % point of Student's t with 7 degrees of freedom (tests/test_calibrate_norm.py
+#: computes it); with white-noise standard errors only (a means file: no samples), 3.
+K_BATCH = 4.53
+K_SE = 3.0
 
 
-def noise_rule(stills, M, n, g, quantum=0.0, k_se=K_SE):
-    """The bound of |delta_sigma| from the data themselves, per still interval (units of g):
-    k_se standard errors of its mean plus half the quantisation step (raw units), carried through the
-    calibration to the sensed direction n: |n^T M (k_se se + quantum/2)| / g, component-wise bounded.
-    A stated rule, not the fit's own residual."""
+def noise_rule(stills, M, n, g, quantum=0.0):
+    """The bound of |delta_sigma| from the data themselves, per still interval (units of g): K_BATCH
+    batch-means standard errors of its mean (K_SE white-noise ones where no samples were read) plus
+    half the quantisation step (raw units), carried through the calibration to the sensed direction n:
+    |n^T M (k se + quantum/2)| / g, component-wise bounded. A stated statistical rule (99.73 % per
+    interval and axis when the batch means are independent and normal), not the fit's own residual."""
     rows = np.abs(n.T @ M)                                    # (K, 3)
-    per = np.array([k_se * st.std_error + quantum / 2 for st in stills])
+    per = np.array([(K_BATCH * st.batch_error if st.batch_error is not None else K_SE * st.std_error)
+                    + quantum / 2 for st in stills])
     return (rows * per).sum(axis=1) / g
+
+
+def noise_rule_name(stills, quantum=0.0):
+    """What the noise rule is, in words, as printed beside every bound that rests on it."""
+    if all(st.batch_error is not None for st in stills):
+        text = (f"noise rule (statistical, 99.73 %, not guaranteed: {K_BATCH:g} standard errors of each interval's "
+                f"mean from {BATCHES} batch means, which allows correlated noise")
+    else:
+        text = (f"noise rule (statistical, not guaranteed: {K_SE:g} standard errors of each interval's mean, white "
+                "noise assumed: the means file has no samples")
+    return text + (f", plus half a count ({quantum:g} raw units)" if quantum else "") + \
+        "; --delta-sigma states a guaranteed one)"
 
 
 PARAM_LABELS = ("lambda1", "lambda2", "lambda3", "alpha", "beta", "gamma", "eps1/g", "eps2/g", "eps3/g",
@@ -145,10 +164,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     fit_residual = float(np.abs(res["sigma"]).max())
     rule = noise_rule(stills, res["M"], res["n"], g, quantum)
     dsig = float(rule.max()) if delta_sigma is None else delta_sigma
-    source = ("--delta-sigma" if delta_sigma is not None else
-              f"noise rule (statistical, not guaranteed: {K_SE:g} standard errors of each interval's mean, "
-              "white noise assumed; --delta-sigma states a guaranteed one)"
-              + (f" plus half a count ({quantum:g} raw units)" if quantum else ""))
+    source = "--delta-sigma" if delta_sigma is not None else noise_rule_name(stills, quantum)
     noise = np.minimum(rule, dsig) if delta_sigma is None else np.full(len(stills), dsig)
     err, missing = guaranteed(mod, res["n"], params, noise)
     if missing:
@@ -289,8 +305,7 @@ def diagnose_norm(mod, stills, res, g, params, quantum=0.0):
             tied.append([best] + ties)
         chosen.append(best)
         score = scores[best]
-    return {"noise_bound": f"the noise rule (statistical, white noise assumed): {K_SE:g} standard errors of each "
-                           "interval's mean"
+    return {"noise_bound": "the " + noise_rule_name(stills, quantum)
                            + (" plus half a count" if quantum else ""),
             "indistinguishable": tied,
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0, "effects": chosen,

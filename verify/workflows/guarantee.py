@@ -280,6 +280,7 @@ class Verdict:
     error_remainder: np.ndarray = None   # the rest: left after absorption, absorbed, unseparable, rounding
     parts: dict = field(default_factory=dict)   # the remainder part's terms, per q
     q_shift: np.ndarray = None           # per q: the part not carried by W's readings (absorbed, unseparable)
+    box: tuple = None                    # (lo, hi) of v = (kept q, t): the last box the truth is proven in
 
     @property
     def guaranteed_error(self):
@@ -344,8 +345,9 @@ def verdict(lin, z, sigma, W=None, steps=8):
             rb_all[cols] = np.minimum(rb_all[cols], rem(lo, hi, support, direct=True)[0])
         cb = np.minimum(cb, cb_all)
         functional = rem.functional(W, lo, hi, support) if len(support) <= rem.DIRECT_ROWS else None
-        return rb_all + rem.t_residual, cb, errors(s, rb_all + rem.t_residual, cb, functional)
-    rb, cb, errs = proven(sigma)
+        return rb_all + rem.t_residual, cb, (errors(s, rb_all + rem.t_residual, cb, functional), (lo, hi))
+    rb, cb, out = proven(sigma)
+    errs, last_box = out if out is not None else (None, None)
     t, _, r = _weighted_minimax(lin.A, y, rb)
     t_lin = highs.chebyshev_fit(lin.A, y)[1]
     consistent = bool(t <= sigma)
@@ -355,6 +357,7 @@ def verdict(lin, z, sigma, W=None, steps=8):
                 remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
     if W is not None:
         v.error_linear, v.error_remainder, v.parts, v.q_shift = errs
+        v.box = last_box
     return v
 
 
