@@ -57,7 +57,8 @@ def test_simulate_estimate_round_trip(name, tmp_path):
     q_hat = np.array([res["q"][q] for q in mod.Q_NAMES])
     bound = np.array([res["guaranteed_error"][q] for q in mod.Q_NAMES])
     linear = np.array([res["guaranteed_error_linear"][q] for q in mod.Q_NAMES])
-    np.testing.assert_allclose(linear, SIGMA * np.array(r.errors), rtol=1e-6)   # optimal on this plan
+    # optimal on this plan, for H at zero errors; linearised at the fit, H moves by the errors (1e-4)
+    np.testing.assert_allclose(linear, SIGMA * np.array(r.errors), rtol=1e-3)
     assert np.all(np.abs(q_hat - mod.PHYSICAL_TO_Q @ p) <= bound)             # remainder included
 
 
