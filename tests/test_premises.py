@@ -166,3 +166,45 @@ def test_relinearised_h_at_zero_errors_is_h_of_000():
     H = np.moveaxis(mod.H(*np.deg2rad(P).T), 2, 0)
     assert np.abs(J[:, :, :15] - H).max() <= 1e-15 and np.abs(J[:, :, 15:]).max() <= 1e-15
     assert np.array_equal(np.asarray(mod.PHYSICAL_TO_Q, float) @ L, np.eye(21)[:15])
+
+
+PLAN10 = np.array([[0, 0], [0, 180], [180, 90], [180, 270], [90, 90], [270, 90], [90, 270], [90, 180], [270, 180],
+                   [90, 0]], float)   # the starred rows of Table 2 of 000
+
+
+def test_a_minimal_plan_says_which_estimators_it_cannot_check(tmp_path, capsys):
+    # Item 6 of issue 23: on the 10-position plan of 000, offsets of 10 sigma shaped like q3's estimator are
+    # fitted exactly, so the verdict passes and q3 misses its bound: the output must say that
+    # those bounds rest on sigma. The 96-position grid has redundancy along every estimator: no such line.
+    mod = models.load("two-axis")
+    rng = np.random.default_rng(5)
+    p = truth(mod, rng, {"scale": 1e-4, "misalignment": 1e-4, "bias": 1e-4})
+    sigma = 1e-6
+    z0 = readings(mod, PLAN10, None, p, 0.0)
+    W = _weights(mod, PLAN10, None, z0, 2)
+    offset = 10 * sigma * W.reshape(-1, 3) / np.abs(W).max()
+    data = write_csv(tmp_path / "d.csv", PLAN10, z0 + G * offset)
+    out = tmp_path / "e.json"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--json", str(out)]) == 0
+    d = json.loads(out.read_text())
+    assert abs(d["q"]["q3"] - (mod.PHYSICAL_TO_Q @ p)[2]) > 1.5 * d["guaranteed_error"]["q3"]   # missed
+    assert any("estimators of q3" in w and "rest on sigma" in w for w in d["warnings"])
+    assert "note: noise shaped like the estimators of q3" in capsys.readouterr().out
+    P, _ = grid(mod)
+    r = estimate(mod, Positions("grid", P, readings(mod, P, None, p, 0.0)), sigma, G)
+    assert not any("rest on sigma" in w for w in r["warnings"])
+
+
+def test_smallest_supported_sigma_to_its_stated_tolerance(tmp_path):
+    # Item 6: the data refute sigma = 1e-6 (noise 1e-5); the smallest sigma they support is found to the
+    # stated relative tolerance: the data support it, and refute it less the tolerance.
+    mod = models.load("two-axis")
+    P, _ = grid(mod)
+    rng = np.random.default_rng(8)
+    p = truth(mod, rng, {"scale": 1e-4, "misalignment": 1e-4, "bias": 1e-4})
+    f = readings(mod, P, None, p, rng.uniform(-1e-5, 1e-5, (len(P), 3)))
+    r = estimate(mod, Positions("n", P, f), 1e-6, G)
+    s, tol = r["sigma_min_supported"], r["sigma_min_tolerance"]
+    assert not r["consistent"] and 1e-6 < s <= 1.1e-5 and tol == 0.01
+    assert estimate(mod, Positions("n", P, f), s, G)["consistent"]
+    assert not estimate(mod, Positions("n", P, f), s / (1 + tol) ** 2, G)["consistent"]

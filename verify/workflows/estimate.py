@@ -164,14 +164,15 @@ def near_prior(lin, q, e):
 
 
 def unrefutable(A, W, mod, fraction=0.999):
-    """Lines for every q whose estimator lies (almost) wholly in the span of the model's own columns:
-    noise along those weights is absorbed by the fit, so no verdict can refute an understated sigma
-    there (a minimal plan); the bound then rests on sigma alone."""
+    """Lines for every q whose estimator's weights lie (almost) wholly in the span of the model's own
+    columns: noise shaped like those weights is fitted, not seen, so no verdict can refute an
+    understated sigma along it (a minimal plan: offsets of 10 sigma so shaped move that q by 10 sigma
+    and leave the fit exact); the bound then rests on sigma alone."""
     Qa = np.linalg.qr(A.T)[0]
     inside = np.linalg.norm(W @ Qa, axis=1) ** 2 / np.maximum(np.linalg.norm(W, axis=1) ** 2, 1e-300)
     names = [mod.Q_NAMES[nu] for nu in np.flatnonzero(inside >= fraction)]
     if not names:
         return []
-    return [f"the readings {', '.join(names)} use carry no redundancy: noise along their estimators is fitted, "
-            "not seen, so these data cannot refute an understated sigma there (a minimal plan); their bounds "
+    return [f"noise shaped like the estimators of {', '.join(names)} is fitted, not seen: these readings have no "
+            "redundancy along them, so they cannot refute an understated sigma there (a minimal plan); those bounds "
             "rest on sigma being right"]

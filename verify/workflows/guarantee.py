@@ -333,11 +333,12 @@ def verdict(lin, z, sigma, W=None, steps=8):
             lin_e, rem_e, _, _ = errors(s, rb + rem.t_residual, cb, None)
             lo2, hi2 = box(lin, lin.q0 + dq, lin_e + rem_e)
             lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
-            shrink = np.max((hi2 - lo2) / np.maximum(hi - lo, 1e-300))
+            nq = len(lin.keep)                      # t keeps its a-priori bounds: only q's boxes shrink
+            shrink = np.min((hi2 - lo2)[:nq] / np.maximum(hi - lo, 1e-300)[:nq], initial=1.0)
             lo, hi = lo2, hi2
             rb_s, cb_s = rem(lo, hi, support, one_by_one)
             rb[cols], cb = np.minimum(rb[cols], rb_s), np.minimum(cb, cb_s)
-            if shrink > 0.9:
+            if shrink > 0.9:                         # no box shrank by a tenth: the next would gain little
                 break
         rb_all, cb_all = rem(lo, hi)
         rb_all[cols] = np.minimum(rb_all[cols], rb[cols])
