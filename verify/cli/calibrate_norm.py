@@ -90,6 +90,7 @@ def _run(args, into=None):
     dsig = res["delta_sigma_max"]
     print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * args.g:.3e} m/s^2), from the "
           f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
+    print(f"premises: {res['premises']}")
     print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
           + ("consistent" if res["consistent"] else
              f"INCONSISTENT: the data refute this noise bound (they support delta_sigma >= "
@@ -183,7 +184,7 @@ def _report(res, args):
     verdict = ("**consistent**" if res["consistent"] else "**INCONSISTENT**: the data refute the noise bound; no bound is given") \
         + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} ({res['delta_sigma_source']}), " \
         + f"proven remainder {res['remainder_bound']:.1e} (units of g)"
-    sections = [("Verdict", verdict),
+    sections = [("Verdict", verdict), ("Premises", res["premises"]),
                 ("Calibration a = M (raw - b)", report.markdown_table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
                  [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
     if res["consistent"]:

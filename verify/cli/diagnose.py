@@ -33,6 +33,7 @@ def run(args):
     print(f"current model: minimax residual less the proven linearisation remainder (<= "
           f"{res['remainder_bound'] / args.sigma:.2f} sigma) is {res['max_residual_before'] / args.sigma:.2f} sigma: "
           + ("consistent" if res["consistent_before"] else "INCONSISTENT"))
+    print(f"premises: {res['premises']['statement']}")
     if res["disagreements"]:
         worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:8]
         report.table(("position", *(f"{a}_deg" for a in names), "component", "residual/sigma"),

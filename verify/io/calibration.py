@@ -47,7 +47,8 @@ def from_norm(res, axes):
             "M": res["matrix"], "b": res["bias"], "bound_matrix": B,
             "bound_bias": [res["g"] * e[f"eps{i}/g"] for i in (1, 2, 3)], "bound_delta": delta,
             "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
-            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|"}
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",
+            "premises": res["premises"]}
 
 
 def from_stand(res):

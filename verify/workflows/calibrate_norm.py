@@ -179,6 +179,10 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
         "consistent": bool(consistent), "minimax_residual": fit_residual, "delta_sigma_max": dsig,
         "delta_sigma_source": source, "remainder_bound": rb,
+        "premises": (f"the bounds hold if each still interval's mean is within delta_sigma_max = {dsig:.3e} "
+                     f"(units of g) of the truth along its direction ({source}); the gravity is g = {g:g} m/s^2 "
+                     "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
+                     "of (2.3) takes g and delta_f as exact); the orientations are still"),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "residual_before_ms2": float(g * sb),

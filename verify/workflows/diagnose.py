@@ -129,8 +129,8 @@ def diagnose(base_model, mod, positions, sigma, g, prior=None, g_uncertainty=Non
     if rank(A0) < A0.shape[0]:
         raise DataError(f"{positions.path}: these positions cannot identify the current model; "
                         "see `garant identify --plan`")
-    lin = guarantee.linearise(mod, positions, study.z, A0, premises(mod, sigma, g, prior=prior, g_uncertainty=g_uncertainty),
-                               at_zero=True)
+    prem = premises(mod, sigma, g, prior=prior, g_uncertainty=g_uncertainty)
+    lin = guarantee.linearise(mod, positions, study.z, A0, prem, at_zero=True)
     rb = guarantee.verdict(lin, study.z, sigma, lp.primal(A0)[0].T).remainder
     limit = sigma
     _, t0, r0 = chebyshev_fit(A0, study.z, rb)
@@ -163,7 +163,7 @@ def diagnose(base_model, mod, positions, sigma, g, prior=None, g_uncertainty=Non
                "excess_over_sigma": float(abs(r0[k]) - rb[k] - sigma)}
               for k in np.flatnonzero(np.abs(r0) - rb > sigma)]
     return {
-        "sigma": sigma, "prior": prior, "remainder_bound": float(rb.max()), "consistent_before": bool(t0 <= limit),
+        "sigma": sigma, "prior": prior, "premises": prem.to_dict(), "remainder_bound": float(rb.max()), "consistent_before": bool(t0 <= limit),
         "max_residual_before": t0, "disagreements": excess, "effects": chosen,
         "indistinguishable": indistinguishable, "separating_positions": separate,
         "consistent_after": bool(t1 <= limit), "max_residual_after": t1, "estimates": estimates,
