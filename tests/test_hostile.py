@@ -213,3 +213,50 @@ def test_non_finite_log_options_refused(option, capsys):
 def test_no_stray_files(tmp_path):
     # Nothing above wrote beside the test's own folders (atomic writes leave no .part files).
     assert not [p for p in Path(os.getcwd()).glob(".*.part")]
+
+
+def _good_rows(n):
+    """n copies of the clean reading at (0, 0) with zero errors, m/s^2 (the exact model of 000)."""
+    f = two_axis.readings(0.0, 0.0, np.zeros(len(two_axis.PARAMETER_NAMES)), 9.81)
+    return np.tile(f, (n, 1))
+
+
+def _plan_rows():
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
+    return P, two_axis.readings(*np.deg2rad(P).T, np.zeros(len(two_axis.PARAMETER_NAMES)), 9.81).T
+
+
+@pytest.mark.parametrize("case", ["two rows 1000 sigma apart", "one outlier among 100,000 copies"])
+def test_repeated_readings_that_disagree_refute_sigma(tmp_path, capsys, case):
+    # Issue 30: two rows at (0, 0) with f3 of +0.1 and -0.1 m/s^2 (1000 sigma each), or one 0.05 g
+    # outlier among 100,000 copies of a good row, were averaged away ("consistent ... 0.96 sigma", exit 0).
+    # Readings at one position are each within sigma of the same value: they may differ by 2 sigma at most.
+    P, f = _plan_rows()
+    if case.startswith("two"):
+        extra_f = _good_rows(2) + np.array([[0, 0, 0.1], [0, 0, -0.1]])
+    else:
+        extra_f = _good_rows(100_000)
+        extra_f[500, 0] += 0.05 * 9.81
+    angles = np.vstack([P, np.zeros((len(extra_f), 2))])
+    path = tmp_path / "d.csv"
+    rows = np.column_stack([angles, np.vstack([f, extra_f])])
+    np.savetxt(path, rows, delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="")
+    out = tmp_path / "e.json"
+    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5", "--json", str(out)]) == 3
+    text = capsys.readouterr().out
+    assert text.startswith("INCONSISTENT: readings repeated at one position disagree") and "position 1 (0, 0)" in text
+    d = json.loads(out.read_text())
+    worst = d["repeated_disagree"][0]
+    assert d["consistent"] is False and "guaranteed_error" not in d
+    assert worst["position"] == 1 and worst["component"] == (3 if case.startswith("two") else 1)
+    assert worst["spread"] == pytest.approx(0.2 / 9.81 if case.startswith("two") else 0.05, rel=1e-6)
+
+
+def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
+    # The other side of the check: repeats that differ by 1.9 sigma are consistent with sigma.
+    P, f = _plan_rows()
+    extra_f = _good_rows(2) + np.array([[0, 0, 0.95e-5 * 9.81], [0, 0, -0.95e-5 * 9.81]])
+    path = tmp_path / "d.csv"
+    np.savetxt(path, np.column_stack([np.vstack([P, np.zeros((2, 2))]), np.vstack([f, extra_f])]), delimiter=",",
+               header="alpha_deg,beta_deg,f1,f2,f3", comments="")
+    assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5"]) == 0

@@ -46,7 +46,7 @@ def run(args):
                    progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     if args.json:
         report.write_json(args.json, res)
-    if args.plot or args.report:
+    if (args.plot or args.report) and "residual_minimax" in res:
         _plots(res, mod, args)
     return print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
 
@@ -115,13 +115,22 @@ def _plots(res, mod, args):
 def print_verdict(res, mod, path):
     """The data refute sigma: one clear line, the smallest sigma they support, where they disagree."""
     s = res["sigma"]
+    names = list(mod.ANGLES)
+    if "repeated_disagree" in res:
+        d = res["repeated_disagree"]
+        print(f"INCONSISTENT: readings repeated at one position disagree by more than 2 sigma = {2 * s:g}: the data "
+              f"refute sigma = {s:g} (they need sigma >= {res['sigma_min_supported']:.3g}); no bound is given. "
+              f"{len(d)} position component(s), largest first: " + "; ".join(
+                  f"position {x['position']} (" + ", ".join(f"{x[a + '_deg']:g}" for a in names)
+                  + f") f{x['component']} spread {x['spread']:.3g}" for x in d[:5]))
+        print(f"premises: {res['premises']['statement']}")
+        return EXIT_INCONSISTENT
     print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): no q fits every reading within sigma plus the "
           f"proven remainder left after absorption into q ({res['remainder_left_bound']:.2e}); the data support "
           f"sigma >= {res['sigma_min_supported']:.3g} (to {res['sigma_min_tolerance']:.0%}). "
           "No bound is given. Look for the missing effect with `garant diagnose`.")
     print(f"premises: {res['premises']['statement']}")
     d = res["disagreements"]
-    names = list(mod.ANGLES)
     print(f"{len(d)} residual components disagree, e.g. " + "; ".join(
         f"position {x['position']} (" + ", ".join(f"{x[a + '_deg']:g}" for a in names) + f") f{x['component']}"
         for x in d[:5]))

@@ -25,24 +25,40 @@ def residuals_table_axes(mod, positions, g, Q):
 
 
 def distinct_positions(positions, decimals=6):
-    """Rows at the same position (angles equal to 1e-6 degree, same mounting) averaged into one.
+    """Rows at the same position (angles equal to 1e-6 degree, same mounting) averaged into one, and the
+    spread (largest less smallest reading, m/s^2, per component) of the rows averaged: (positions, spread).
 
     The average of readings whose noise is within +-sigma is within +-sigma too: the bound (5) holds
     for each averaged residual (worst case; no independence of the noise is assumed), and the LP and
-    the remainder are then solved once per distinct position. Other columns are dropped."""
+    the remainder are then solved once per distinct position. Averaging is sound only for readings
+    that agree: `repeated_disagree` checks the spread first. Other columns are dropped."""
     key = np.round(positions.angles_deg, decimals)
     if positions.mounts is not None:
         key = np.column_stack([key, positions.mounts])
     uniq, inverse = np.unique(key, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
     if len(uniq) == len(key):
-        return positions
+        return positions, np.zeros((len(key), 3))
     counts = np.bincount(inverse)
     f = np.column_stack([np.bincount(inverse, weights=positions.f[:, i]) for i in range(3)]) / counts[:, None]
     angles = np.column_stack([np.bincount(inverse, weights=positions.angles_deg[:, i])
                               for i in range(positions.angles_deg.shape[1])]) / counts[:, None]
+    order = np.argsort(inverse, kind="stable")
+    starts = np.r_[0, np.cumsum(counts)[:-1]]
+    spread = np.empty((len(uniq), 3))
+    for i in range(3):
+        column = positions.f[order, i]
+        spread[:, i] = np.maximum.reduceat(column, starts) - np.minimum.reduceat(column, starts)
     mounts = None if positions.mounts is None else uniq[:, -1].astype(int)
-    return Positions(positions.path, angles, f, mounts)
+    return Positions(positions.path, angles, f, mounts), spread
+
+
+def repeated_disagree(positions, spread, sigma, g, decimals=6):
+    """Indices (position, component) where readings repeated at one position differ by more than 2 sigma
+    (each is within sigma of the same true value) plus what the 1e-6 degree the rows may differ by can
+    move a reading (at most 2 g per radian of each angle): such readings refute sigma themselves."""
+    slack = 2 * np.deg2rad(0.5 * 10.0 ** -decimals) * positions.angles_deg.shape[1]
+    return np.argwhere(spread / g > 2 * sigma * (1 + 1e-9) + slack)
 
 
 def check_residual_size(z, path, limit=0.5):
@@ -91,8 +107,11 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     premises = premises or make_premises(mod, sigma, g)
     Q = remount.MOUNTS[mount] if mount else np.eye(3)
     rows, all_rows = len(positions.f), positions
-    positions = distinct_positions(positions)
+    positions, spread = distinct_positions(positions)
     distinct = len(positions.f)
+    bad = repeated_disagree(positions, spread, sigma, g)
+    if len(bad):
+        return refuted_by_repeats(mod, positions, spread, bad, sigma, g, premises, rows)
     z = residuals_table_axes(mod, positions, g, Q)
     A = lp.measurement_matrix(mod, np.column_stack(positions.radians), positions.mounts)
     missing = lp.unidentifiable(A)
@@ -145,6 +164,22 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         out.update(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound,
                    physical_note=note)
     return out
+
+
+def refuted_by_repeats(mod, positions, spread, bad, sigma, g, premises, rows):
+    """The result when readings repeated at a position disagree by more than 2 sigma: no bound, the
+    positions and spreads named, and the smallest sigma they allow (half the largest spread)."""
+    names = list(mod.ANGLES)
+    worst = bad[np.argsort(-spread[bad[:, 0], bad[:, 1]])]
+    return {
+        "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma, "premises": premises.to_dict(),
+        "positions": rows, "distinct_positions": len(positions.f), "consistent": False,
+        "sigma_min_supported": float(spread.max() / g / 2), "sigma_min_tolerance": 0.0,
+        "definitions": dict(zip(mod.Q_NAMES, mod.Q_DEFINITIONS)), "units": dict(zip(mod.Q_NAMES, mod.Q_UNITS)),
+        "positions_deg": positions.angles_deg,
+        "repeated_disagree": [
+            {"position": int(k) + 1, **{f"{a}_deg": float(positions.angles_deg[k, i]) for i, a in enumerate(names)},
+             "component": int(c) + 1, "spread": float(spread[k, c] / g)} for k, c in worst]}
 
 
 def near_prior(lin, q, e):
