@@ -5,38 +5,67 @@ Each returns plain Python objects (dicts, lists, numpy arrays); errors are raise
 import numpy as np
 
 from . import models
+from .errors import DataError
 from .cli.args import G_DEFAULT
 
 
-def plan(model):
-    """Optimal guaranteed errors (units of sigma) and a minimal optimal plan of a stand."""
-    from .solve import plans
+def plan(model, grid=None, count_seconds=5.0):
+    """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
+    as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001."""
+    from .workflows.plan import norm_plan, plan as search_plan
     mod = models.load(model)
-    names, mounts = models.layout(mod)
-    r = plans.search(mod)
-    best = list(r.optimal_plans[0])
-    return {"model": model, "angles": names, "q_names": list(mod.Q_NAMES), "definitions": list(mod.Q_DEFINITIONS),
-            "guaranteed_errors": [float(e) for e in r.errors], "min_positions": r.min_positions,
-            "plan_deg": r.angles_deg[best].tolist(),
-            "plan_mountings": [mounts[k] for k in r.mounts[best]] if len(mounts) > 1 else None}
+    if model == "norm":
+        return norm_plan(mod)
+    return search_plan(mod, model, grid, count_seconds).to_dict()
+
+
+def positions(model_module, data):
+    """Positions from a CSV path, a pandas DataFrame (columns as in the CSV) or an array (N, angles + 3):
+    the stand's angles in degrees, then f1, f2, f3 in m/s^2 (and, for a stand with several mountings,
+    a last column with the mounting's index)."""
+    from .io.positions import Positions, read_positions
+    names, mounts = models.layout(model_module)
+    if isinstance(data, (str, bytes)) or hasattr(data, "__fspath__"):
+        return read_positions(data, names, mounts)
+    cols = [f"{a}_deg" for a in names] + ["f1", "f2", "f3"]
+    multi = len(mounts) > 1
+    if hasattr(data, "columns"):                       # a pandas DataFrame, read by column name
+        missing = [c for c in cols + (["mount"] * multi) if c not in data.columns]
+        if missing:
+            raise DataError(f"data: missing column(s) {', '.join(missing)}")
+        values = np.column_stack([np.asarray(data[c], float) for c in cols])
+        m = None if not multi else np.array([mounts.index(v) if v in mounts else -1 for v in data["mount"]])
+    else:
+        try:
+            arr = np.asarray(data, float)
+        except (TypeError, ValueError):
+            raise DataError("data: expected a CSV path, a DataFrame or an array of numbers") from None
+        width = len(cols) + multi
+        if arr.ndim != 2 or arr.shape[1] != width:
+            raise DataError(f"data: expected an array of shape (N, {width}): {', '.join(cols)}"
+                            + (", mounting index" if multi else "") + f"; got shape {arr.shape}")
+        values, m = arr[:, :len(cols)], (arr[:, -1].astype(int) if multi else None)
+    if not np.all(np.isfinite(values)):
+        raise DataError("data: every angle and reading must be a finite number")
+    if m is not None and (np.any(m < 0) or np.any(m >= len(mounts))):
+        raise DataError(f"data: a mounting is not one of the stand's ({', '.join(mounts)})")
+    return Positions("data", values[:, :len(names)], values[:, len(names):], m)
 
 
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower"):
-    """The verdict, q and guaranteed errors from a positions CSV (as `garant estimate --json`).
+    """The verdict, q and guaranteed errors from positions (a CSV path, a DataFrame or an array: see
+    `positions`), as `garant estimate --json`.
 
     g: local gravity in m/s^2 (None: 9.81, with the uncertainty of an assumed g); g_uncertainty: the
     bound on Delta_g/g; prior: one a-priori bound for every stand, mounting and block error (an
     override of the description's bounds). The result's "premises" says what the bounds assume."""
-    from .io.positions import read_positions
     from .workflows.estimate import estimate as run
     from .workflows.premises import premises
     mod = models.load(model)
-    names, mounts = models.layout(mod)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     prem = premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                     g_uncertainty=g_uncertainty, prior=prior)
-    return run(mod, read_positions(data, names, mounts), sigma, prem.g, remount=remount, mount=mount, gamma=gamma,
-               premises=prem)
+    return run(mod, positions(mod, data), sigma, prem.g, remount=remount, mount=mount, gamma=gamma, premises=prem)
 
 
 def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta_sigma=None):
@@ -53,13 +82,12 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta
     return res
 
 
-def diagnose(model, data, sigma, g=G_DEFAULT, prior=None):
-    """The missing-effect workflow (as `garant diagnose --json`)."""
-    from .io.positions import read_positions
+def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
+    """The missing-effect workflow on positions (a CSV path, a DataFrame or an array: see `positions`),
+    as `garant diagnose --json`."""
     from .workflows import diagnose as dg
     mod = models.load(model)
-    names, mounts = models.layout(mod)
-    res = dg.diagnose(models.stand_model(model), mod, read_positions(data, names, mounts), sigma, g, prior)
+    res = dg.diagnose(models.stand_model(model), mod, positions(mod, data), sigma, g, prior, g_uncertainty)
     res.pop("_study")
     return res
 

@@ -1,0 +1,141 @@
+"""Optimal guaranteed errors and a minimal optimal plan of a stand ((7)-(12) of 000; section 4 of 001):
+the one computation `garant plan` prints and `garant.plan` returns."""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DataError
+
+
+@dataclass
+class Plan:
+    """The plan search of a stand: `search` (solve/plans.PlanSearch) on the candidates, the continuum
+    optimum where an angle is continuous, and the preferred minimal plan (indices into the candidates)."""
+
+    model: str
+    mod: object
+    search: object
+    plan: list
+    continuum: list | None        # the exchange method's optimum on the continuum, per q (None: detents)
+    added: int                    # exchange positions added to the candidates
+    grid_step: float | None       # degrees (None: detents or quarter turns)
+
+    @property
+    def finite(self):
+        return self.continuum is None
+
+    @property
+    def multi(self):
+        return len(getattr(self.mod, "MOUNTINGS", ("+x+y+z",))) > 1
+
+    def position(self, s):
+        """Candidate s as angles in degrees, and its mounting when the stand has several."""
+        from ..models import layout
+        mounts = layout(self.mod)[1]
+        r = self.search
+        return [*(float(v) for v in r.angles_deg[s]), *([mounts[r.mounts[s]]] if self.multi else [])]
+
+    def to_dict(self):
+        from ..models import layout
+        names, mounts = layout(self.mod)
+        r = self.search
+        on_quarter = all(np.all(np.isclose(r.angles_deg[list(p)] % 90, 0)) for p in r.optimal_plans)
+        return {
+            "model": self.model, "angles": names, "mountings": mounts, "q_names": list(self.mod.Q_NAMES),
+            "definitions": list(self.mod.Q_DEFINITIONS), "guaranteed_errors": list(r.errors),
+            "proven_on_continuum": list(r.proven),
+            "continuum_errors": None if self.continuum is None else [float(c) for c in self.continuum],
+            "reachable_set": "detents" if self.finite else "continuum", "exchange_candidates_added": self.added,
+            "guaranteed_errors_exact": r.exact_errors(), "grid_step_deg": self.grid_step, "count_method": r.method,
+            "min_positions": r.min_positions,
+            "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
+            "optimal_plans_on_quarter_turns": bool(on_quarter),
+            "plan": [self.position(s) for s in self.plan],
+            "optimal_plans": [[self.position(s) for s in pl] for pl in r.optimal_plans]}
+
+
+def plan(mod, model, grid=None, count_seconds=5.0):
+    """The Plan of a stand model: candidates every `grid` degrees (default: detents or quarter turns), and
+    on a stand with a continuous angle the exchange method's positions added when the candidates miss
+    the continuum optimum."""
+    from ..models import layout
+    from ..proof import build
+    from ..solve import continuum, plans
+    names, mounts = layout(mod)
+    if grid is not None and 360 % grid:
+        raise DataError(f"grid step {grid:g}: give a step that divides 360 degrees")
+    P, M = _grid(mod, grid) if grid else plans.grid(mod)
+    r = plans.search(mod, P, M, count_seconds=count_seconds)
+    n = len(names)
+    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
+    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
+    cont, added = None, 0
+    if not all(len(d) for d in detents):    # the continuum of reachable angles: the exchange method there
+        sol = continuum.solve(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
+        cont = sol.values
+        if any(e > c + 1e-7 for e, c in zip(r.errors, cont)):   # the exchange positions become candidates
+            r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), count_seconds)
+    return Plan(model, mod, r, _preferred_plan(mod, r), None if cont is None else list(cont), added, grid)
+
+
+def _with_exchange(mod, r, P, M, sol, ranges, detents, k, count_seconds):
+    """The search again with the exchange method's positions as candidates: exact ones (multiples of 15
+    degrees) first, then all, until the candidates reach the continuum optimum. (search, added)."""
+    from ..solve import plans
+    X = _snap(np.rad2deg(sol.positions), ranges, detents)
+    base = P[M == 0]
+    new_all = [x for x in X if not np.any(np.all(np.isclose(base, x), axis=1))]
+    exact = [x for x in new_all if np.all(x % 15 == 0)]
+    added = 0
+    for new in ([exact, new_all] if exact and len(exact) < len(new_all) else [new_all]):
+        if not new:
+            continue
+        P2 = np.vstack([base, np.array(new)])
+        r, added = plans.search(mod, np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2)),
+                                count_seconds=count_seconds), len(new)
+        if all(e <= c + 1e-7 for e, c in zip(r.errors, sol.values)):
+            break
+    return r, added
+
+
+def _snap(X, ranges, detents, step=15.0, tol=1e-6):
+    """Exchange positions (degrees): onto multiples of 15 degrees where within tol (then exact), within
+    the range of each angle; positions a stand cannot take are dropped."""
+    from ..models import unreachable
+    k = np.round(X / step) * step
+    X = np.where(np.abs(X - k) < tol, k, X) % 360
+    return [x for x in X if unreachable(ranges, detents, x[None]) is None]
+
+
+def _grid(mod, step):
+    """Positions every `step` degrees that the stand can take, in every mounting."""
+    from ..models import layout, reachable_grid
+    n = len(mod.ANGLES)
+    P = reachable_grid(getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n),
+                       getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n), step)
+    k = len(layout(mod)[1])
+    return np.tile(P, (k, 1)), np.repeat(np.arange(k), len(P))
+
+
+def _preferred_plan(mod, r):
+    """The model's own plan (PLAN_DEG) when it is among the optimal ones, else the first found."""
+    own = getattr(mod, "PLAN_DEG", np.zeros((0, 0)))
+    if len(own):
+        idx = tuple(sorted(int(np.flatnonzero(np.all(r.angles_deg == p, axis=1))[0]) for p in own))
+        if idx in r.optimal_plans:
+            return [int(np.flatnonzero(np.all(r.angles_deg == p, axis=1))[0]) for p in own]
+    return list(r.optimal_plans[0])
+
+
+def norm_plan(mod):
+    """The coarse stand of 001: optimal errors on the sphere (units of delta_sigma_max) and the fewest
+    orientations optimal for the 9 linear parameters and for all 12 (unit vectors, -gravity in sensor
+    axes), as a dictionary (the JSON of `garant plan norm`)."""
+    from ..papers import norm_001
+    from ..solve import lp
+    _, errors = lp.primal(mod.H(mod.PLAN.T))
+    plans = {k: norm_001.minimal_plan(mod, range(k)) for k in (9, 12)}
+    return {"model": "norm", "q_names": list(mod.Q_NAMES), "guaranteed_errors": [float(e) for e in errors],
+            "min_positions": {"9": len(plans[9]), "12": len(plans[12])},
+            "directions": {str(k): [mod.PLAN[i].tolist() for i in idx] for k, idx in plans.items()},
+            "directions_exact": {str(k): [mod.PLAN_EXACT[i] for i in idx] for k, idx in plans.items()}}
