@@ -189,3 +189,17 @@ def test_k_batch_is_the_student_t_point():
     pdf = lambda t: mp.gamma((nu + 1) / 2) / (mp.sqrt(nu * mp.pi) * mp.gamma(nu / 2)) * (1 + t ** 2 / nu) ** (-(nu + 1) / 2)
     point = mp.findroot(lambda x: mp.quad(pdf, [-mp.inf, x]) - (1 + mp.erf(3 / mp.sqrt(2))) / 2, 4.5)
     assert abs(K_BATCH - point) < 0.005
+
+
+def test_orientations_are_suggested_only_when_they_shrink_a_bound(tmp_path):
+    # Issue 25: a log already on the optimal plan of 001 (18 directions) was still told to "add"
+    # orientations. Now: on the optimal plan, nothing to add (no bound shrinks); on 12 of its directions
+    # plus 3 more, the 6 missing ones are suggested with the factor they shrink the worst-served bound by.
+    truth = np.zeros(16)
+    rng = np.random.default_rng(3)
+    for dirs, expect in ((list(N.PLAN[:18]), False), (list(N.PLAN[:12]) + list(rng.normal(size=(3, 3))), True)):
+        path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
+        stills, _ = recordings.still_intervals(recordings.read_log(str(path), "imu_tk"))
+        res = calibrate_norm.run(N, stills, G, 9, str(path), delta_sigma=1e-4)
+        gain = res["directions_gain"]
+        assert bool(res["directions_to_add"]) is expect and (gain["factor"] >= 1.25) is expect, gain

@@ -117,3 +117,45 @@ def test_kalibr_export(tmp_path, capsys):
                   if ": " in line.split("#")[0])
     assert 1e-4 < float(fields["accelerometer_noise_density"]) < 1e-1
     assert float(fields["update_rate"]) == pytest.approx(100, rel=0.01)           # the log is about 100 Hz
+
+
+def test_outputs_honour_the_umask(tmp_path):
+    # Issue 25: every output was created 0600 whatever the umask (colleagues could not read a calibration
+    # in a shared folder). Under umask 022 a written file is 0644, as open() would make it; under 077, 0600.
+    import os
+    import stat
+    from garant.verify.io.report import write_json, write_text
+    old = os.umask(0o022)
+    try:
+        write_json(tmp_path / "a.json", {"x": 1})
+        write_text(tmp_path / "b.png", b"\x89PNG", "wb")
+        os.umask(0o077)
+        write_text(tmp_path / "c.csv", "x\n")
+    finally:
+        os.umask(old)
+    mode = lambda name: stat.S_IMODE((tmp_path / name).stat().st_mode)
+    assert mode("a.json") == mode("b.png") == 0o644 and mode("c.csv") == 0o600
+
+
+def test_a_known_g_keeps_the_scale_factor_bounds_of_the_estimate(tmp_path, capsys):
+    # Issue 25: Delta_g cannot be separated from the scale factors, so a stand calibration's diagonal bound
+    # carries Delta_g's a-priori bound; it came from --prior (1e-3) while the estimate said 1.3e-5. With
+    # --g-uncertainty 1e-6 the saved bounds are within 10 % of the estimate's own; with an assumed g
+    # (no --g), its uncertainty (5e-3) is what the file must say.
+    from conftest import write_csv
+    from garant.generated import two_axis as mod
+    P = np.array([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], float)
+    rng = np.random.default_rng(2)
+    p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (len(P), 3))
+    data = write_csv(tmp_path / "d.csv", P, f)
+    for extra, diagonal in ((["--g", "9.81", "--g-uncertainty", "1e-6"], None), ([], 5e-3)):
+        cal, out = tmp_path / "c.json", tmp_path / "e.json"
+        assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--mount", "+x+y+z", *extra,
+                     "--save", str(cal), "--json", str(out)]) == 0
+        saved = np.diag(calibration.read(cal)["bound_matrix"])
+        own = np.diag(np.array(json.loads(out.read_text())["physical_bound"]["Gamma"]))
+        if diagonal is None:
+            assert np.all(saved <= 1.1 * own) and np.all(saved >= own)
+        else:
+            assert np.all(saved >= diagonal)

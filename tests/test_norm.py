@@ -6,6 +6,7 @@ import sympy as sp
 from garant.generated import norm as N
 from garant.derive import norm
 from garant.verify.papers import norm_001
+from garant.verify.solve import sphere
 
 
 @pytest.mark.parametrize("axes", [(2, 3, 1), (3, 1, 2), (2, 1, 1)])
@@ -81,8 +82,8 @@ def test_norm_checks_pass(group):
 
 def test_sphere_plans():
     # 001: 18 tests for the 9 linear parameters; for all 12 we find 30 (< the source's 42).
-    assert len(norm_001.minimal_plan(N, range(9))) == 18
-    assert len(norm_001.minimal_plan(N, range(12))) == 30
+    assert len(sphere.minimal_plan(N, range(9))) == 18
+    assert len(sphere.minimal_plan(N, range(12))) == 30
 
 
 def test_wrong_dual_is_rejected():

@@ -189,3 +189,16 @@ def test_the_published_repeatability_tables_are_what_the_command_writes(tmp_path
     args[args.index("--markdown") + 1] = str(out)
     assert main(args) == 0
     assert out.read_text().replace(str(out), "docs/repeatability_mimu4444bt.md") == doc.read_text()
+
+
+@needs_real
+def test_apply_reads_one_imu_of_a_mimu_stream(tmp_path, capsys):
+    # Issue 25: `garant apply cal.json data.bin --format mimu --imu 3 -o x.csv` said "unrecognized arguments".
+    # The calibration of IMU 3 applied to IMU 3's samples: every sample corrected, |a| near g when still.
+    log, cal, out = MIMU / "raw" / "exp_1" / "data.bin", tmp_path / "c.json", tmp_path / "x.csv"
+    assert main(["calibrate-norm", str(log), "--format", "mimu", "--imu", "3", "--save", str(cal)]) == 0
+    assert main(["apply", str(cal), str(log), "--format", "mimu", "--imu", "3", "-o", str(out)]) == 0
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert data.shape[1] == 7 and np.median(np.linalg.norm(data[:, 1:4], axis=1)) == pytest.approx(9.81, rel=0.01)
+    assert main(["apply", str(cal), str(log), "--format", "mimu", "-o", str(tmp_path / "y.csv")]) == 2
+    assert "choose one with --imu K" in capsys.readouterr().err

@@ -68,13 +68,13 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     return run(mod, positions(mod, data), sigma, prem.g, remount=remount, mount=mount, gamma=gamma, premises=prem)
 
 
-def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta_sigma=None):
+def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta_sigma=None, imu=None):
     """Calibrate a static log through the norm relation (as `garant calibrate-norm --json`); when the data
     are consistent the result holds "calibration", the dictionary `apply` takes."""
     from .io import calibration, recordings
     from .workflows import calibrate_norm as cn
     mod = models.load("norm")
-    data = recordings.read_log(log, fmt, sensor)
+    data = recordings.read_log(log, fmt, sensor, imu)
     stills, _ = recordings.still_intervals(data)
     res = cn.run(mod, stills, g, params, log, delta_sigma, recordings.quantum(data))
     if res["consistent"]:
@@ -92,7 +92,7 @@ def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
     return res
 
 
-def apply(calibration, log, fmt=None, sensor="adxl355"):
+def apply(calibration, log, fmt=None, sensor="adxl355", imu=None):
     """Correct a raw log: (time s, specific force (N, 3) m/s^2, worst-case error (N, 3) m/s^2).
     `calibration` is a garant-calibration-1 file or the dictionary `calibrate_norm` returns."""
     from .io import calibration as cal_io, recordings
@@ -100,6 +100,6 @@ def apply(calibration, log, fmt=None, sensor="adxl355"):
         cal = {k: np.asarray(v, float) if isinstance(v, list) else v for k, v in calibration.items()}
     else:
         cal = cal_io.read(calibration)
-    data = recordings.read_log(log, fmt, sensor)
+    data = recordings.read_log(log, fmt, sensor, imu)
     a, bound = cal_io.apply(cal, data.raw)
     return data.t, a, bound

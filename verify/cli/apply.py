@@ -9,6 +9,7 @@ def add(sub):
     p.add_argument("log", metavar="LOG")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
+    p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="CSV: time_s, ax, ay, az (m/s^2), bound_x, bound_y, bound_z (m/s^2, worst case)")
     return p
@@ -20,7 +21,7 @@ def run(args):
     from ..io import calibration, recordings
     from ..io.report import write_text
     cal = calibration.read(args.calibration)
-    log = recordings.read_log(args.log, args.format, args.sensor)
+    log = recordings.read_log(args.log, args.format, args.sensor, args.imu)
     a, bound = calibration.apply(cal, log.raw)
     lines = ["time_s,ax,ay,az,bound_x,bound_y,bound_z"]
     lines += [",".join(f"{v:.10g}" for v in row) for row in np.column_stack([log.t, a, bound])]

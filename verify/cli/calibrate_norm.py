@@ -158,11 +158,15 @@ def _print_bounds(res):
                    f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
                    next(u for p, u in units.items() if k.startswith(p)))
                   for k, v in res["guaranteed_error"].items()])
+    gain = res["directions_gain"]
     if res["directions_to_add"]:
-        print(f"\nto reach the optimal bounds, add {len(res['directions_to_add'])} orientation(s) "
-              "(unit vectors in sensor axes, -gravity direction):")
+        print(f"\nadding {len(res['directions_to_add'])} orientation(s) would shrink the bound of {gain['parameter']} "
+              f"{gain['factor']:.2f} times (the most of any parameter; unit vectors in sensor axes, -gravity direction):")
         for d in res["directions_to_add"]:
             print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+    elif gain["parameter"] is not None:
+        print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by {gain['threshold']:g} "
+              f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
 
 
 def _report(res, args):

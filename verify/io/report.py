@@ -36,11 +36,20 @@ def _plain(x):
     raise TypeError(f"{type(x).__name__} is not JSON serialisable")
 
 
+def _umask():
+    """The process's umask (read by setting it, then restoring it)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def write_text(path, text, mode="w"):
-    """Write a file atomically: a temporary file beside it, renamed over it when complete."""
+    """Write a file atomically: a temporary file beside it, renamed over it when complete. The file gets
+    the permissions open() would give it (0666 less the umask), not the temporary file's 0600."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".part")
     try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, mode) as fh:
             fh.write(text)
         os.replace(tmp, path)

@@ -1,6 +1,4 @@
 """Checks of the coarse-stand model of 001 (sections 2-6), for `garant verify`."""
-from itertools import combinations, product
-
 import numpy as np
 import sympy as sp
 
@@ -8,6 +6,7 @@ from garant.derive import published
 
 from ..errors import LPFailed
 from ..solve import lp, sphere, worst
+from ..solve.sphere import candidates, minimal_plan, minimal_sets
 from .row import Check
 
 ETA = 1e-9          # dual certificates are proven to |H^T lambda| <= 1 + ETA on the whole sphere
@@ -73,42 +72,6 @@ def grid_lp(mod, step=5):
         yield Check(f"{name} on a {step} deg sphere grid: primal = dual = 1/L", "001, (3.1)-(3.2), section 4",
                     " = ".join([str(want)] * 3), " = ".join(f"{v:.7f}" for v in vals),
                     bool(np.allclose(vals, want, atol=1e-6)))
-
-
-def minimal_sets(vectors, e, tol=1e-9):
-    """Minimal index sets whose vectors represent e with positive weights (sizes up to all)."""
-    found = []
-    for k in range(1, len(vectors) + 1):
-        for sub in combinations(range(len(vectors)), k):
-            if any(set(f) <= set(sub) for f in found):
-                continue
-            B = vectors[list(sub)].T
-            if np.linalg.matrix_rank(B, tol=1e-9) < k:
-                continue
-            x, *_ = np.linalg.lstsq(B, e, rcond=None)
-            if np.abs(B @ x - e).max() < tol and x.min() > tol:
-                found.append(sub)
-    return found
-
-
-def candidates(mod, nu):
-    """Plan directions where the certificate of q_nu touches +-1, with the sign there."""
-    p = mod.DUALS[nu] @ mod.H(mod.PLAN.T)
-    return [(k, int(np.sign(v))) for k, v in enumerate(p) if abs(abs(v) - 1) < 1e-12]
-
-
-def minimal_plan(mod, nus):
-    """Fewest directions optimal for all q in nus: each must contain a minimal set of every q."""
-    per = []
-    for nu in nus:
-        cand = candidates(mod, nu)
-        vecs = np.array([s * mod.H(mod.PLAN[k]) for k, s in cand])
-        e = np.eye(len(mod.Q_NAMES))[nu] * mod.DUALS[nu][nu]
-        per.append([frozenset(cand[i][0] for i in sub) for sub in minimal_sets(vecs, e)] if cand else [])
-    if not all(per):
-        return None                                   # some q has no optimal estimator on these directions
-    best = min((frozenset().union(*pick) for pick in product(*per)), key=len)
-    return sorted(best)
 
 
 def plans(mod):

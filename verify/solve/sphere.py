@@ -6,6 +6,8 @@ sum |x| = a^T lambda is optimal on the continuum. `prove_dual` checks |H^T lambd
 whole sphere by branch and bound over the six faces of the cube (n = v / |v|), with rigorous interval
 arithmetic in the mean-value form (`interval.py`).
 """
+from itertools import combinations, product
+
 import numpy as np
 
 from .interval import Grad, Iv, mean_value_enclosure, variables
@@ -128,3 +130,39 @@ def farthest_from(touching, candidates):
         near = min(np.arccos(np.clip(corners @ c, -1, 1)).max() for c in candidates)
         worst = max(worst, near)
     return worst
+
+
+def minimal_sets(vectors, e, tol=1e-9):
+    """Minimal index sets whose vectors represent e with positive weights (sizes up to all)."""
+    found = []
+    for k in range(1, len(vectors) + 1):
+        for sub in combinations(range(len(vectors)), k):
+            if any(set(f) <= set(sub) for f in found):
+                continue
+            B = vectors[list(sub)].T
+            if np.linalg.matrix_rank(B, tol=1e-9) < k:
+                continue
+            x, *_ = np.linalg.lstsq(B, e, rcond=None)
+            if np.abs(B @ x - e).max() < tol and x.min() > tol:
+                found.append(sub)
+    return found
+
+
+def candidates(mod, nu):
+    """Plan directions where the certificate of q_nu touches +-1, with the sign there."""
+    p = mod.DUALS[nu] @ mod.H(mod.PLAN.T)
+    return [(k, int(np.sign(v))) for k, v in enumerate(p) if abs(abs(v) - 1) < 1e-12]
+
+
+def minimal_plan(mod, nus):
+    """Fewest directions optimal for all q in nus: each must contain a minimal set of every q."""
+    per = []
+    for nu in nus:
+        cand = candidates(mod, nu)
+        vecs = np.array([s * mod.H(mod.PLAN[k]) for k, s in cand])
+        e = np.eye(len(mod.Q_NAMES))[nu] * mod.DUALS[nu][nu]
+        per.append([frozenset(cand[i][0] for i in sub) for sub in minimal_sets(vecs, e)] if cand else [])
+    if not all(per):
+        return None                                   # some q has no optimal estimator on these directions
+    best = min((frozenset().union(*pick) for pick in product(*per)), key=len)
+    return sorted(best)

@@ -98,11 +98,24 @@ def estimator(mod, n, params, noise):
     return Phi / w[:, None], err, []
 
 
-def directions_to_add(mod, n, params, within_deg=10.0):
-    """Optimal-plan directions farther than within_deg from every direction present."""
+GAIN = 1.25   # orientations are suggested only when they shrink some bound by at least this factor
+
+
+def directions_to_add(mod, n, params, noise, err, within_deg=10.0):
+    """Optimal-plan directions farther than within_deg from every direction present, when adding them
+    (each with the largest noise bound of the log) shrinks some bound by GAIN or more: (directions with
+    the angle to the nearest present one, the largest factor and the q it is for). Otherwise ([], factor, q)."""
     plan = mod.PLAN[:18] if params == 9 else mod.PLAN
     ang = np.degrees(np.arccos(np.clip(plan @ n, -1, 1))).min(axis=1)
-    return [(p.tolist(), float(a)) for p, a in zip(plan, ang) if a > within_deg]
+    far = [(p, float(a)) for p, a in zip(plan, ang) if a > within_deg]
+    if not far:
+        return [], 1.0, None
+    n_all = np.column_stack([n, np.array([p for p, _ in far]).T])
+    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), noise.max())])[0]
+    factor = err / err_all
+    k = int(np.argmax(factor))
+    found = [(p.tolist(), a) for p, a in far] if factor[k] >= GAIN else []
+    return found, float(factor[k]), PARAM_LABELS[k]
 
 
 def parameters(M_total, b, g):
@@ -211,9 +224,10 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], best * dsig) if si
                                                                  else best * dsig).tolist())),
         "guaranteed_error_q": dict(zip(PARAM_LABELS, bound.tolist())),
-        "directions_to_add": [{"n": d, "nearest_present_deg": a}
-                              for d, a in directions_to_add(mod, res["n"], params)],
     })
+    found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
+    out.update({"directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
+                "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN}})
     return out
 
 

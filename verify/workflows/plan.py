@@ -131,10 +131,10 @@ def norm_plan(mod):
     """The coarse stand of 001: optimal errors on the sphere (units of delta_sigma_max) and the fewest
     orientations optimal for the 9 linear parameters and for all 12 (unit vectors, -gravity in sensor
     axes), as a dictionary (the JSON of `garant plan norm`)."""
-    from ..papers import norm_001
     from ..solve import lp
+    from ..solve.sphere import minimal_plan
     _, errors = lp.primal(mod.H(mod.PLAN.T))
-    plans = {k: norm_001.minimal_plan(mod, range(k)) for k in (9, 12)}
+    plans = {k: minimal_plan(mod, range(k)) for k in (9, 12)}
     return {"model": "norm", "q_names": list(mod.Q_NAMES), "guaranteed_errors": [float(e) for e in errors],
             "min_positions": {"9": len(plans[9]), "12": len(plans[12])},
             "directions": {str(k): [mod.PLAN[i].tolist() for i in idx] for k, idx in plans.items()},
