@@ -202,3 +202,19 @@ def test_apply_reads_one_imu_of_a_mimu_stream(tmp_path, capsys):
     assert data.shape[1] == 7 and np.median(np.linalg.norm(data[:, 1:4], axis=1)) == pytest.approx(9.81, rel=0.01)
     assert main(["apply", str(cal), str(log), "--format", "mimu", "-o", str(tmp_path / "y.csv")]) == 2
     assert "choose one with --imu K" in capsys.readouterr().err
+
+
+@needs_real
+def test_a_refused_run_is_left_out_and_the_others_compared(tmp_path, capsys):
+    # Issue 25: one unusable log (session 1 has one still interval) aborted the whole comparison. Now it is
+    # said in one line and left out; sessions 2-4 are compared.
+    real = MIMU.parent
+    logs = [str(real / f"repeat_session{i}_acc.txt") for i in (1, 2, 3, 4)]
+    out = tmp_path / "r.json"
+    assert main(["repeatability", *logs, "--g", "9.81744", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert text.count("left out:") == 1 and "repeat_session1_acc.txt: found only 1 still interval" in text
+    res = json.loads(out.read_text())
+    assert [x["log"] for x in res["refused_runs"]] == [logs[0]] and len(res["runs"]) == 3 and "envelope" in res
+    assert main(["repeatability", logs[0], logs[1], "--g", "9.81744"]) == 2      # one usable run is not enough
+    assert "at least two usable runs" in capsys.readouterr().err

@@ -54,8 +54,12 @@ def _runs(args, fmt, imu):
         raise DataError("--count and --rate apply to a means file; a raw log states its own")
     out = []
     for path in args.logs:
-        log = recordings.read_log(path, fmt, args.sensor or "adxl355", imu)
-        stills, _ = recordings.still_intervals(log)
+        try:
+            log = recordings.read_log(path, fmt, args.sensor or "adxl355", imu)
+            stills, _ = recordings.still_intervals(log)
+        except DataError as e:                   # one unusable log is left out, said in one line
+            out.append(means.Run(path, [], refused=str(e)))
+            continue
         out.append(means.Run(path, stills, None, recordings.quantum(log)))
     return out
 
@@ -104,6 +108,8 @@ def _rows(res):
 def _print(label, res):
     from ..io import report
     print(f"\n{label}: {len(res['runs'])} runs, each calibrated by the norm relation with the noise rule")
+    for x in res.get("refused_runs", []):
+        print(f"  left out: {x['reason'] if x['reason'].startswith(x['log']) else x['log'] + ': ' + x['reason']}")
     if "inconsistent_runs" in res:
         print("  INCONSISTENT run(s), no comparison: " + ", ".join(res["inconsistent_runs"])
               + " (garant calibrate-norm --diagnose on each says why)")

@@ -23,6 +23,7 @@ class Run:
     stills: list                   # Still per position, mean in m/s^2
     nominal: np.ndarray = None     # (K, 3) nominal up-directions, when the file gives them
     quantum: float = 0.0           # quantisation step of the readings averaged (m/s^2), 0 when not stated
+    refused: str = None            # why the run could not be read (then it is left out of a comparison)
 
 
 def _rows(path):

@@ -103,15 +103,16 @@ GAIN = 1.25   # orientations are suggested only when they shrink some bound by a
 
 def directions_to_add(mod, n, params, noise, err, within_deg=10.0):
     """Optimal-plan directions farther than within_deg from every direction present, when adding them
-    (each with the largest noise bound of the log) shrinks some bound by GAIN or more: (directions with
-    the angle to the nearest present one, the largest factor and the q it is for). Otherwise ([], factor, q)."""
+    (each held as well as the log's typical interval: the median noise bound) shrinks some bound by GAIN
+    or more: (directions with the angle to the nearest present one, the largest factor and the q it is
+    for). Otherwise ([], factor, q)."""
     plan = mod.PLAN[:18] if params == 9 else mod.PLAN
     ang = np.degrees(np.arccos(np.clip(plan @ n, -1, 1))).min(axis=1)
     far = [(p, float(a)) for p, a in zip(plan, ang) if a > within_deg]
     if not far:
         return [], 1.0, None
     n_all = np.column_stack([n, np.array([p for p, _ in far]).T])
-    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), noise.max())])[0]
+    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), np.median(noise))])[0]
     factor = err / err_all
     k = int(np.argmax(factor))
     found = [(p.tolist(), a) for p, a in far] if factor[k] >= GAIN else []

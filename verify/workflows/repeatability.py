@@ -32,8 +32,16 @@ ENVELOPE_RULE = ("the hull of the per-run intervals [a_r - e_r, a_r + e_r], wide
 
 
 def calibrate_runs(mod, runs, g, params):
-    """calibrate_norm.run on each run: the list of results (each says whether it is consistent)."""
-    return [cn.run(mod, r.stills, g, params, r.name, quantum=r.quantum) for r in runs]
+    """calibrate_norm.run on each run: (the runs it calibrates, their results (each says whether it is
+    consistent), the runs it refuses as [{"log", "reason"}]: a refused run is left out, not fatal)."""
+    kept, results, refused = [], [], []
+    for r in runs:
+        try:
+            results.append(cn.run(mod, r.stills, g, params, r.name, quantum=r.quantum))
+            kept.append(r)
+        except DataError as e:
+            refused.append({"log": r.name, "reason": str(e)})
+    return kept, results, refused
 
 
 def compare(a, e, names):
@@ -124,16 +132,21 @@ def effect_test(mod, runs, ref, g, params):
 
 def run(mod, runs, g, params=9):
     """The whole repeatability study of one sensor's runs: the dictionary the CLI prints and writes."""
+    refused = [{"log": r.name, "reason": r.refused} for r in runs if getattr(r, "refused", None)]
+    runs = [r for r in runs if not getattr(r, "refused", None)]
+    runs, results, more = calibrate_runs(mod, runs, g, params)
+    refused += more
     if len(runs) < 2:
-        raise DataError("repeatability needs at least two runs (several logs, or a means file with a run column)")
-    results = calibrate_runs(mod, runs, g, params)
+        raise DataError("repeatability needs at least two usable runs (several logs, or a means file with a run "
+                        "column)" + (f"; left out: {'; '.join(x['log'] + ': ' + x['reason'] for x in refused)}"
+                                     if refused else ""))
     names = list(cn.PARAM_LABELS[:params])
     bad = [r.name for r, res in zip(runs, results) if not res["consistent"]]
     per_run = [{"run": k + 1, "log": r.name, "consistent": res["consistent"],
                 "delta_sigma_max": res["delta_sigma_max"], "minimax_residual": res["minimax_residual"],
                 "parameters": res.get("parameters"), "guaranteed_error": res.get("guaranteed_error")}
                for k, (r, res) in enumerate(zip(runs, results))]
-    out = {"runs": per_run, "parameters": names, "envelope_rule": ENVELOPE_RULE,
+    out = {"runs": per_run, "refused_runs": refused, "parameters": names, "envelope_rule": ENVELOPE_RULE,
            "comparison_rule": "runs i and j agree on a parameter when |a_i - a_j| <= e_i + e_j"}
     if bad:
         out["inconsistent_runs"] = bad
