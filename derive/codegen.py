@@ -1,6 +1,8 @@
 """Render derivations into committed files with jinja2; detect drift by rendering in memory."""
+import builtins
 import difflib
 import json
+import re
 from pathlib import Path
 
 import jinja2
@@ -68,17 +70,43 @@ def _array_code(expr):
     return pycode(expr)
 
 
+#: Names the generated functions use themselves: a user's angle or parameter of one of these names (or
+#: of a builtin, or t<k> like the common subexpressions) is written with "_" appended in the code.
+INTERNAL = {"np", "zero", "one", "physical", "g", "f", "mount", "_broadcast", "_by_mount", "H", "up_nominal",
+            "readings", "residual", "angles", "funcs", "args", "out", "idx", "time_s", "temp_c"}
+
+
+def code_symbols(model):
+    """{symbol: the symbol the generated code names it by} for the angles and parameters whose own name
+    the code uses itself; every other name is written as the user chose it."""
+    taken = INTERNAL | set(dir(builtins))
+    used = {a.name for a in model.stand.angles} | {p.name for p in model.parameters}
+    out = {}
+    for s in list(model.angle_symbols) + [p.symbol for p in model.parameters]:
+        if s.name in taken or re.fullmatch(r"t\d+", s.name):
+            new = s.name + "_"
+            while new in used or new in taken:
+                new += "_"
+            used.add(new)
+            out[s] = sp.Symbol(new, real=True)
+    return out
+
+
 def model_context(d):
     """Template context of the MODEL.py template for one derivation."""
     ident, m = d.ident, d.model
     names = list(d.names)
+    subs = code_symbols(m)
+    angle_args = [subs.get(a.symbol, a.symbol).name for a in m.stand.angles]
     return dict(
         title=m.stand.title, source=m.stand.source,
-        angles=[a.name for a in m.stand.angles], parameters=m.parameters, kinds=m.parameter_kinds,
-        signature=[a.name for a in m.stand.angles] + [f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
+        angles=[a.name for a in m.stand.angles], angle_args=angle_args,
+        parameters=m.parameters, kinds=m.parameter_kinds,
+        param_args=[subs.get(p.symbol, p.symbol).name for p in m.parameters],
+        signature=angle_args + [f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
         variable_sig=[f"{v}={VARIABLE_DEFAULTS[str(v)]!r}" for v in m.variables],
         variables=[str(v) for v in m.variables],
-        row_args=[a.name for a in m.stand.angles] + [str(v) for v in m.variables],
+        row_args=angle_args + [str(v) for v in m.variables],
         ranges=[[_num(v) for v in a.range_deg] for a in m.stand.angles],
         detents=[[_num(v) for v in a.detents_deg] for a in m.stand.angles],
         q_names=[f"q{i + 1}" for i in range(ident.R.rows)],
@@ -88,7 +116,7 @@ def model_context(d):
         R=[[pycode(v) for v in ident.R.row(i)] for i in range(ident.R.rows)],
         H_exact=[[sp.sstr(e) for e in ident.H.row(i)] for i in range(ident.H.rows)],
         null_space=[[pycode(v) for v in vec] for vec in ident.null_space],
-        mounts=[_mount_context(d, k, name) for k, name in enumerate(m.mountings)],
+        mounts=[_mount_context(d, k, name, subs) for k, name in enumerate(m.mountings)],
         H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) if not m.variables else "np.inf"
                 for nu in range(ident.H.cols)] for p in range(ident.H.rows)],
         plan_deg=[list(pos) for pos in m.plan_deg],
@@ -102,13 +130,14 @@ def _num(v):
     return str(int(v)) if float(v).is_integer() else repr(float(v))
 
 
-def _mount_context(d, k, name):
-    """H rows, nominal up-vector and exact readings (with CSE) of one mounting."""
-    H = d.ident.H
-    cse, forward = sp.cse(list(d.force_over_g[k]), symbols=sp.numbered_symbols("t"), optimizations="basic")
+def _mount_context(d, k, name, subs):
+    """H rows, nominal up-vector and exact readings (with CSE) of one mounting, in the code's names."""
+    H = d.ident.H.xreplace(subs)
+    cse, forward = sp.cse([v.xreplace(subs) for v in d.force_over_g[k]], symbols=sp.numbered_symbols("t"),
+                          optimizations="basic")
     return dict(name=name,
                 H=[[_array_code(H[3 * k + p, nu]) for nu in range(H.cols)] for p in range(3)],
-                up=[_array_code(v) for v in d.up_nominal[k]],
+                up=[_array_code(v.xreplace(subs)) for v in d.up_nominal[k]],
                 forward_cse=[(pycode(s), pycode(e)) for s, e in cse],
                 forward=[_array_code(v) for v in forward])
 

@@ -5,7 +5,6 @@ coordinate axis of the frame it carries (x, y, z, or -x, -y, -z): either a read 
 encoder offset (and optional once-per-turn harmonic), or a fixed small error. Errors raise
 DescriptionError with the file and the place in it.
 """
-import builtins
 import keyword
 import math
 import re
@@ -30,9 +29,10 @@ NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 #: Limits that keep a derivation to seconds: a larger stand is refused, not left to hang.
 LIMITS = {"angles": 4, "links": 12, "parameters": 40, "detents": 72, "plan positions": 200,
           "mountings": 24, "text": 300, "bytes": 1_000_000}
-#: Names the generated module uses itself (template locals, numpy, the block and the catalogue).
-RESERVED = (set(keyword.kwlist) | set(keyword.softkwlist) | set(dir(builtins))
-            | {"np", "zero", "one", "physical", "g", "f", "mount", "H", "up_nominal", "readings", "residual"}
+#: Names a description cannot give: Python's keywords, and the names of the block's and the catalogue's own
+#: parameters and row variables (they would be declared twice). Any other name works: the generated code
+#: keeps its own names apart (derive/codegen.py, code_symbols).
+RESERVED = (set(keyword.kwlist)
             | {f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)} | {f"bias{i}" for i in (1, 2, 3)}
             | {p.name for e in CATALOGUE.values() for p in e.params} | set(VARIABLE_DEFAULTS))
 
@@ -63,9 +63,9 @@ def _name(path, where, value):
 def _new_name(path, where, value):
     """A name the description introduces: valid, and not one the generated code or the block uses."""
     _name(path, where, value)
-    if value in RESERVED or value.isupper() or re.fullmatch(r"t\d+", value):
-        _fail(path, where, f"{value!r} is reserved (a Python word, a name the generated module uses, or "
-              "a block or effect parameter); choose another")
+    if value in RESERVED:
+        _fail(path, where, f"{value!r} is reserved (a Python keyword, or a block or effect parameter or row "
+              "variable of that name); choose another")
     return value
 
 

@@ -73,7 +73,7 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     ('title = "Single-axis indexing table, block in three mountings"', 'title = "two\\nlines"', "stand.title"),
     ('name = "phi"', 'name = "lambda"', "reserved"),
     ('name = "phi"', 'name = "None"', "reserved"),
-    ('name = "phi"', 'name = "np"', "reserved"),
+    ('name = "phi"', 'name = "time_s"', "reserved"),
     ('name = "kappa"', 'name = "Gamma11"', "reserved"),
     ('[[parameter]]\nname = "kappa"', '[[angle]]\nname = "phi"\n\n[[parameter]]\nname = "kappa"', "declared twice"),
     ('remount', 'remount', ""),

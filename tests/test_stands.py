@@ -131,3 +131,28 @@ def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
                  "--sigma", "1e-5", "-o", str(tmp_path / "x.csv")]) == 2
     err = capsys.readouterr().err
     assert "encoder of angle 'beta'" in err and "b_s" not in err
+
+
+def test_any_identifier_a_user_picks_works(tmp_path, capsys):
+    # Issue 25: t1 (tilt 1) and all-capital names (K, DG) were refused as "reserved" because the generated
+    # code used such names itself. Now the code keeps its own names apart: the single-axis description
+    # with its angle named g, its parameters named t1, DG, K and np, derives, plans, simulates and estimates.
+    import re
+    text = BASE
+    for old, new in (("phi", "g"), ("kappa", "t1"), ("Delta_phi", "DG"), ("theta1", "K"), ("Delta_g", "np")):
+        text = re.sub(rf"\b{old}\b", new, text)
+    stand = tmp_path / "odd.toml"
+    stand.write_text(text)
+    mod = models.load(str(stand))
+    assert mod.ANGLES == ("g",) and {"t1", "DG", "K", "np"} <= set(mod.PARAMETER_NAMES)
+    plan, data = tmp_path / "p.csv", tmp_path / "d.csv"
+    assert main(["plan", str(stand), "--csv", str(plan)]) == 0
+    assert main(["simulate", "--model", str(stand), "--plan", str(plan), "--sigma", "1e-5", "-o", str(data)]) == 0
+    assert main(["estimate", "--model", str(stand), str(data), "--sigma", "1e-5", "--json", str(tmp_path / "e.json")]) == 0
+    res, truth = json.loads((tmp_path / "e.json").read_text()), json.loads((tmp_path / "d.truth.json").read_text())
+    assert all(abs(res["q"][q] - truth["q"][q]) <= res["guaranteed_error"][q] for q in mod.Q_NAMES)
+    capsys.readouterr()
+    for bad in ("def", "Gamma11", "bias2"):
+        (tmp_path / "bad.toml").write_text(re.sub(r"\bkappa\b", bad, BASE))
+        assert main(["derive", str(tmp_path / "bad.toml"), "--out", str(tmp_path)]) == 2
+        assert "is reserved" in capsys.readouterr().err
