@@ -1,5 +1,11 @@
+import os
+import tempfile
+
 import numpy as np
 import pytest
+
+# Derived descriptions are cached (verify/models.py); the tests keep theirs apart from the user's.
+os.environ.setdefault("GARANT_CACHE", tempfile.mkdtemp(prefix="garant-test-cache-"))
 
 from garant.generated import two_axis as two_axis
 

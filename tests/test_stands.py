@@ -156,3 +156,29 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
         (tmp_path / "bad.toml").write_text(re.sub(r"\bkappa\b", bad, BASE))
         assert main(["derive", str(tmp_path / "bad.toml"), "--out", str(tmp_path)]) == 2
         assert "is reserved" in capsys.readouterr().err
+
+
+def test_a_description_is_derived_once_and_again_when_it_changes(tmp_path, monkeypatch, capsys):
+    # Issue 25: a TOML stand was re-derived by SymPy on every command (6-15 s for three angles). Its module
+    # is now cached by the SHA-256 of the description and of the generator: the second load derives nothing
+    # (derivation made to fail shows it), an edited description is derived again, and the module
+    # `garant derive --out` writes is accepted as --model.
+    from garant.derive import codegen
+    monkeypatch.setenv("GARANT_CACHE", str(tmp_path / "cache"))
+    stand = tmp_path / "s.toml"
+    stand.write_text(BASE)
+    first = models.load(str(stand))
+    real = codegen.model_files
+    monkeypatch.setattr(codegen, "model_files", lambda *a, **k: (_ for _ in ()).throw(AssertionError("derived")))
+    second = models.load(str(stand))
+    assert second.Q_DEFINITIONS == first.Q_DEFINITIONS and len(list((tmp_path / "cache").glob("*.py"))) == 1
+    stand.write_text(BASE + "\n# edited\n")
+    with pytest.raises(AssertionError, match="derived"):
+        models.load(str(stand))
+    monkeypatch.setattr(codegen, "model_files", real)
+    assert main(["derive", str(stand), "--out", str(tmp_path / "out")]) == 0
+    (module,) = (tmp_path / "out").glob("*.py")
+    assert models.load(str(module)).Q_DEFINITIONS == first.Q_DEFINITIONS
+    (tmp_path / "x.py").write_text("import os\n")
+    with pytest.raises(Exception, match="no garant header"):
+        models.load(str(tmp_path / "x.py"))
