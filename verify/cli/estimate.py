@@ -26,7 +26,7 @@ def add(sub):
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
     p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
-                   "`garant apply`: needs the remount formulas (two-axis)")
+                   "`garant apply`, from any stand")
     return p
 
 
@@ -44,6 +44,9 @@ def run(args):
     res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, prem.g,
                    remount=remount, mount=args.mount, gamma=args.gamma, premises=prem,
                    progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
+    if args.save and res["consistent"] and "physical" not in res and "block" not in res:
+        raise DataError(f"--save: {res.get('block_not_separated', 'this model has no block parameters')}; "
+                        "nothing written")
     if args.json:
         report.write_json(args.json, res)
     if (args.plot or args.report) and "residual_minimax" in res:
@@ -160,13 +163,28 @@ def print_estimate(res, mod, args):
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
     if args.mount:
         print_physical(res)
+    elif "block" in res:
+        print_block(res)
     if args.save:
         from ..io import calibration
-        if "physical" not in res:
-            raise DataError("--save needs the block's physical errors: a model with the remount formulas (two-axis)")
-        calibration.write(args.save, calibration.from_stand(res))
+        calibration.write(args.save, calibration.from_stand(res) if "physical" in res else calibration.from_block(res))
         print(f"wrote {args.save}")
     return 0
+
+
+def print_block(res):
+    """The block's Gamma and biases with their bounds, and what each is confounded with."""
+    from ..io import report
+    blk, g = res["block"], res["g"]
+    rows = [(f"Gamma{i + 1}{j + 1}", f"{blk['Gamma'][i][j]:+.6e}", f"{blk['Gamma_bound'][i][j]:.3e}", "1")
+            for i in range(3) for j in range(3)]
+    rows += [(f"bias{i + 1}", f"{g * blk['bias'][i]:+.6e}", f"{g * blk['bias_bound'][i]:.3e}", "m/s^2") for i in range(3)]
+    print("\nthe block's errors in its own axes, a = (E + Gamma)^-1 (f - bias):")
+    report.table(("parameter", "estimate", "guaranteed error", "unit"), rows)
+    with_ = {k: v for k, v in blk["confounded"].items() if v}
+    if with_:
+        print("confounded, so each bound holds that a-priori bound: " + "; ".join(
+            f"{k} with " + ", ".join(f"{n} (<= {b:g}, {src})" for n, b, src in v) for k, v in with_.items()))
 
 
 def print_physical(res):

@@ -66,6 +66,22 @@ def from_stand(res):
                     "diagonal, the uncertainty of g (Delta_g/g)", "premises": res["premises"]["statement"]}
 
 
+def from_block(res):
+    """The calibration dictionary of a consistent estimate on any stand: the block's Gamma and biases from
+    the q's and the premises (workflows/block.py); a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2.
+    Each bound already holds the a-priori bounds of what the parameter is confounded with (Delta_g on the
+    diagonal)."""
+    blk = res["block"]
+    G, g = np.asarray(blk["Gamma"]), res["g"]
+    return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
+            "M": np.linalg.inv(np.eye(3) + G).tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
+            "bound_matrix": np.asarray(blk["Gamma_bound"]).tolist(),
+            "bound_bias": (g * np.asarray(blk["bias_bound"])).tolist(), "bound_delta": [0.0, 0.0, 0.0],
+            "pendulosity_axes": [2, 3, 1], "g": g, "source": f"{res['model']} estimate",
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B holds the bounds of Gamma, each with the "
+                    "a-priori bounds of what it is confounded with", "premises": res["premises"]["statement"]}
+
+
 def write(path, cal):
     write_json(path, cal)
 

@@ -4,7 +4,7 @@ import numpy as np
 from ..errors import DataError
 from ..io.positions import Positions
 from ..solve import lp
-from . import guarantee, mounting, nearby
+from . import block, guarantee, mounting, nearby
 from .premises import NEAR_EDGE, premises as make_premises
 
 EXACT_DEG = 1e-6   # positions closer than this to the plan count as on it
@@ -163,6 +163,11 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
                                              v.q_shift)
         out.update(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound,
                    physical_note=note)
+    elif all(n in mod.PARAMETER_NAMES for n in block.BLOCK):
+        try:
+            out["block"] = block.calibration(mod, q, e, premises)
+        except DataError as err:                 # the estimate stands; only a calibration of the block cannot
+            out["block_not_separated"] = str(err)
     return out
 
 
