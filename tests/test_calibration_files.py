@@ -28,7 +28,13 @@ def test_round_trip_norm_calibration(tmp_path, name):
     calibration.write_imu_tk(tmp_path / "c.calib", cal)
     back = calibration.read(tmp_path / "c.json")
     M, b = calibration.read_imu_tk(tmp_path / "c.calib")
-    np.testing.assert_allclose(M, back["M"], rtol=1e-14)                    # imu_tk: T K (X - B) = M (X - b)
+    # imu_tk's convention (issue 25): T upper-triangular with a unit diagonal written as 1; the frame of a
+    # norm calibration is free, so imu_tk's T K (X - B) has the norm of M (X - b) for every X.
+    T = np.array((tmp_path / "c.calib").read_text().split()[:9], float).reshape(3, 3)
+    assert np.all(np.diag(T) == 1.0) and np.all(np.tril(T, -1) == 0.0)
+    X = np.random.default_rng(0).normal(size=(3, 50)) * 1e3
+    np.testing.assert_allclose(np.linalg.norm(M @ X, axis=0), np.linalg.norm(np.asarray(back["M"]) @ X, axis=0),
+                               rtol=1e-13)
     np.testing.assert_allclose(b, back["b"], rtol=1e-14)
     a, bound = calibration.apply(back, np.array([s.mean for s in stills]))
     noise = np.array([r["noise_rule"] for r in res["per_interval"]]) * G

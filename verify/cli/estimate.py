@@ -27,6 +27,8 @@ def add(sub):
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
     p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
                    "`garant apply`, from any stand")
+    p.add_argument("--export-imu-tk", metavar="FILE", help="also write the block's calibration in imu_tk's form "
+                   "(T, K, B), the stand's frame")
     return p
 
 
@@ -44,9 +46,10 @@ def run(args):
     res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, prem.g,
                    remount=remount, mount=args.mount, gamma=args.gamma, premises=prem,
                    progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
-    if args.save and res["consistent"] and "physical" not in res and "block" not in res:
-        raise DataError(f"--save: {res.get('block_not_separated', 'this model has no block parameters')}; "
-                        "nothing written")
+    wanted = args.save or args.export_imu_tk
+    if wanted and res["consistent"] and "physical" not in res and "block" not in res:
+        why = res.get("block_not_separated", "this model has no block parameters")
+        raise DataError(f"--save/--export-imu-tk: {why}; nothing written")
     if args.json:
         report.write_json(args.json, res)
     if (args.plot or args.report) and "residual_minimax" in res:
@@ -165,10 +168,13 @@ def print_estimate(res, mod, args):
         print_physical(res)
     elif "block" in res:
         print_block(res)
-    if args.save:
+    if args.save or args.export_imu_tk:
         from ..io import calibration
-        calibration.write(args.save, calibration.from_stand(res) if "physical" in res else calibration.from_block(res))
-        print(f"wrote {args.save}")
+        cal = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
+        for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):
+            if path:
+                write(path, cal)
+                print(f"wrote {path}")
     return 0
 
 

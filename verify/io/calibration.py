@@ -130,10 +130,19 @@ def apply(cal, raw):
 
 
 def imu_tk_text(cal):
-    """The calibration in imu_tk's CalibratedTriad file form (T, K, B)."""
+    """The calibration in imu_tk's CalibratedTriad file form (T, K, B), X' = T K (X - B), its unit
+    diagonal written as exactly 1. A norm calibration's frame is free (the norm relation sees |a| only):
+    it is turned, M -> Q^T M by the QR decomposition M = Q U, into imu_tk's own convention for
+    accelerometers, T upper-triangular, with the same |a| for every reading. A stand calibration's frame
+    is the stand's and is written as it is (imu_tk reads a general T)."""
     M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
+    if cal.get("kind") == "norm":
+        Q, U = np.linalg.qr(M)
+        S = np.diag(np.sign(np.diag(U)))          # positive scale factors: U -> S U, Q -> Q S
+        M = np.triu(S @ U)
     K = np.diag(np.diag(M))
     T = M @ np.linalg.inv(K)
+    np.fill_diagonal(T, 1.0)
 
     def block(X):
         return "\n".join(" ".join(f"{v:.17g}" for v in row) for row in X)
