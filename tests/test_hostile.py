@@ -263,3 +263,31 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
     np.savetxt(path, np.column_stack([np.vstack([P, np.zeros((2, 2))]), np.vstack([f, extra_f])]), delimiter=",",
                header="alpha_deg,beta_deg,f1,f2,f3", comments="")
     assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5"]) == 0
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["simulate", "--model", "two-axis", "--plan", "quarter", "--effect", "bias_drift=inf,0,0", "--sigma", "1e-5",
+      "-o", "{tmp}/d.csv"], "must be finite numbers"),
+    (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--prior", "2", "--save", "{tmp}/c.json"],
+      "must be < 1"),
+    (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--g-uncertainty", "1", "--json",
+      "{tmp}/r.json"], "must be < 1"),
+    (["diagnose", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--report", "{tmp}/afile/y"],
+      "is not a writable folder"),
+])
+def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
+    # Issue 30: simulate with an infinite effect said "nothing written" and left d.csv full of inf; --prior 2
+    # wrote a calibration apply refuses; diagnose --report under a file ran the whole diagnosis first.
+    P, f = _plan_rows()
+    data = tmp_path / "in" / "d.csv"
+    data.parent.mkdir()
+    np.savetxt(data, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="")
+    (tmp_path / "afile").write_text("a file, not a folder\n")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    try:
+        code = main([a.format(tmp=tmp_path, data=data) for a in argv])
+    except SystemExit as e:                            # argparse refuses an option's value: exit 2
+        code = e.code
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == before

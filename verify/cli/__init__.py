@@ -85,6 +85,12 @@ def _check_outputs(args):
             check_writable(path, what)
         elif os.path.exists(path) and not os.path.isdir(path):
             raise DataError(f"{path}: {what} exists and is not a folder")
+        else:                                   # the first ancestor that exists must be a writable folder
+            up = os.path.dirname(os.path.abspath(path))
+            while not os.path.exists(up):
+                up = os.path.dirname(up)
+            if not os.path.isdir(up) or not os.access(up, os.W_OK):
+                raise DataError(f"{path}: {what} cannot be made: {up} is not a writable folder")
 
 
 if __name__ == "__main__":

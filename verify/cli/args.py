@@ -39,12 +39,21 @@ def json(p):
     p.add_argument("--json", metavar="FILE", help="also write the result as JSON")
 
 
+def small(text):
+    """An argparse type: an a-priori bound, a finite number > 0 and < 1 (rad, or dimensionless): the
+    premises are of small errors, and a bound of 1 or more is no premise the model can use."""
+    value = positive(text)
+    if value >= 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be < 1 (an a-priori bound of a small error)")
+    return value
+
+
 def premises(p):
     """The a-priori bounds a guaranteed bound assumes (verify/workflows/premises.py)."""
-    p.add_argument("--g-uncertainty", type=positive, metavar="REL",
+    p.add_argument("--g-uncertainty", type=small, metavar="REL",
                    help="relative uncertainty of g, the bound on Delta_g/g (default 1e-5 with a local --g, "
                         "5e-3 without: 9.81 m/s^2 is off by up to 3e-3 at sea level)")
-    p.add_argument("--prior", type=positive,
+    p.add_argument("--prior", type=small,
                    help="override: one a-priori bound for every stand, mounting and block error (rad, or "
                         "dimensionless); default: each parameter's bound from the stand description, else "
                         "the default of its kind (stand 1e-3, mounting 1e-2, block 0.1)")

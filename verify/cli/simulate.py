@@ -18,9 +18,12 @@ def add(sub):
 
 
 def run(args):
+    import numpy as np
+
     from garant.derive.effects import CATALOGUE
 
     from .. import models
+    from ..errors import DataError
     from ..io import report
     from ..workflows import simulate
     base = models.stand_model(args.model)
@@ -29,11 +32,14 @@ def run(args):
     P, f, t, T, values, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
                                                    args.size)
     names, mount_names = models.layout(mod)
+    if not np.all(np.isfinite(f)):
+        raise DataError("the simulated readings are not finite (an effect or option too large); nothing written")
+    truth = truth_path(args.output)
+    units = {p.name: p.unit for p in base.parameters}
+    report.check_writable(truth, "the truth file")
     simulate.write(args.output, P, f, t, T, names, mounts, mount_names)
     hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects) or "none"
     print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}")
-    truth = truth_path(args.output)
-    units = {p.name: p.unit for p in base.parameters}
     report.write_json(truth, {"model": args.model, "plan": args.plan, "sigma": args.sigma, "g": args.g,
                               "seed": args.seed, "effects": {n: list(v) for n, v in effects},
                               "parameters": {n: float(v) for n, v in values.items()},

@@ -1,4 +1,5 @@
 """`garant simulate`: readings from the exact nonlinear model, with hidden effects, for testing."""
+import math
 import re
 import types
 
@@ -65,6 +66,8 @@ def parse_effect(text, catalogue, base_angles=None):
         values = [float(v) for v in vals.split(",")] if vals else []
     except ValueError:
         raise DataError(f"--effect {text}: values must be numbers") from None
+    if not all(math.isfinite(v) for v in values):
+        raise DataError(f"--effect {text}: values must be finite numbers (not inf or nan)")
     n = len(catalogue[name].params)
     if catalogue[name].angle is not None and base_angles is not None and catalogue[name].angle not in base_angles:
         raise DataError(f"--effect {name} is an error of the encoder of angle {catalogue[name].angle!r}; this stand's "
