@@ -2,6 +2,7 @@
 import hashlib
 import importlib
 import os
+import tempfile
 import types
 from pathlib import Path
 
@@ -67,13 +68,21 @@ def from_description(path):
         except description.DescriptionError as e:
             raise DataError(str(e)) from None
         name, text = model.stand.name, files[f"generated/{model.stand.name}.py"]
-        try:
-            from .io.report import write_text
-            cache_dir().mkdir(parents=True, exist_ok=True)
-            write_text(cache_dir() / f"{key}-{name}.py", text)
-        except OSError:
-            pass                                 # no cache: the next command derives again
+        _keep(cache_dir(), f"{key}-{name}.py", text)
     return _execute(text, name, Path(path).resolve())
+
+
+def _keep(folder, name, text):
+    """Write a cache entry atomically (a reader sees all of it or none), or nothing if it cannot be
+    written: without a cache the next command derives again."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".", suffix=".part")
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, folder / name)
+    except OSError:
+        pass
 
 
 def from_generated_file(path):
