@@ -52,6 +52,12 @@ class Identification:
     free: tuple[str, ...]            # parameters that appear only inside combinations
 
 
+def _radical(x):
+    """An algebraic number in its plain form: denominators rationalised, expanded ((2 - sqrt(3))/(sqrt(3) - 1)
+    is (sqrt(3) - 1)/2). Without it, H of a stand with 120-degree detents grows integers of 650,000 digits."""
+    return sp.expand(sp.radsimp(x))
+
+
 def identify(J, names, preferred, angles, others=(), positions=None):
     """Rank analysis of J (3 x n, trig entries): combinations q, linearised H, null space.
 
@@ -74,6 +80,8 @@ def identify(J, names, preferred, angles, others=(), positions=None):
     rref, pivots = M.rref()
     rank = len(pivots)
     R_pref = rref[:rank, :]
+    if positions is not None:        # detents such as 120 degrees: radicals, denominators rationalised
+        R_pref = R_pref.applyfunc(_radical)
     if positions is None:
         B = M.extract(list(range(M.rows)), list(pivots))
         H = sp.zeros(J.rows, rank)
@@ -82,7 +90,7 @@ def identify(J, names, preferred, angles, others=(), positions=None):
                 H[p, nu] += row[nu] * term
     else:
         Rp = R_pref.extract(list(range(rank)), [index.index(k) for k in range(len(names))])
-        H = (J * Rp.T * (Rp * Rp.T).inv()).applyfunc(sp.expand)
+        H = (J * Rp.T * (Rp * Rp.T).inv().applyfunc(_radical)).applyfunc(sp.expand)
     back = [index.index(k) for k in range(len(names))]
     R = R_pref.extract(list(range(rank)), back)
     free = [k for k in range(len(preferred)) if k not in pivots]

@@ -33,7 +33,8 @@ def linear_text(coeffs, names):
     for c, n in zip(coeffs, names):
         if c == 0:
             continue
-        mag = "" if abs(c) == 1 else f"{abs(c)}*"
+        size = abs(c)
+        mag = "" if size == 1 else f"({size})*" if isinstance(size, sp.Add) else f"{size}*"
         sign = "-" if c < 0 else "+"
         out += (f"{'-' if c < 0 else ''}{mag}{n}" if not out else f" {sign} {mag}{n}")
     return out or "0"

@@ -291,3 +291,18 @@ def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
     err = capsys.readouterr().err
     assert code == 2 and words in err and err.count("\n") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_a_table_with_120_degree_detents_derives_plans_and_certifies(tmp_path, capsys):
+    # Issue 30: detents [0, 120] stopped code generation with "Exceeds the limit (4300 digits) for integer
+    # string conversion": H on the reachable set grew integers of 650,000 digits from unsimplified radicals.
+    text = (STANDS_DIR / "single_axis.toml").read_text().replace("detents_deg = [0, 90, 180, 270]",
+                                                                  "detents_deg = [0, 120]")
+    stand = tmp_path / "table120.toml"
+    stand.write_text(text)
+    assert main(["plan", str(stand), "--certificates", str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert "(0, +x+y+z), (120, +x+y+z)" in out
+    certs = sorted((tmp_path / "c").glob("*.json"))
+    assert len(certs) == 14 and main(["check-certificate", *map(str, certs)]) == 0
+    assert "14 of 14 certificates hold" in capsys.readouterr().out
