@@ -83,6 +83,18 @@ def _text(path, where, value, default):
     return value
 
 
+DECIMALS = 6        # an angle of a description is given to at most a micro-degree (no encoder resolves more)
+
+
+def _degrees(path, where, v):
+    """An angle in degrees as written: at most DECIMALS decimals and within +-3600 (a detent at 1e-300
+    degree made certificates of 303-digit integers)."""
+    r = round(v, DECIMALS)
+    if abs(v) > 3600 or abs(v - r) > 1e-9 * max(1.0, abs(v)) or (v != 0 and r == 0):
+        _fail(path, where, f"{_short(v)} degrees: give angles within one turn and to at most {DECIMALS} decimals")
+    return r if isinstance(v, float) else v
+
+
 def _numbers(path, where, value, length=None, most=None):
     if not isinstance(value, list) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                               and math.isfinite(v) for v in value):
@@ -141,10 +153,12 @@ def _axis(path, where, value):
 def _angle(path, where, a):
     _keys(path, where, a, KEYS["angle"])
     name = _new_name(path, f"{where}.name", a.get("name"))
-    lo, hi = _numbers(path, f"{where}.range_deg", a.get("range_deg", [0, 360]), length=2)
+    lo, hi = (_degrees(path, f"{where}.range_deg", v)
+              for v in _numbers(path, f"{where}.range_deg", a.get("range_deg", [0, 360]), length=2))
     if not (lo < hi and hi - lo <= 360):
         _fail(path, f"{where}.range_deg", f"[{lo}, {hi}] is not a range of at most one turn")
-    detents = _numbers(path, f"{where}.detents_deg", a.get("detents_deg", []), most=LIMITS["detents"])
+    detents = [_degrees(path, f"{where}.detents_deg", v)
+               for v in _numbers(path, f"{where}.detents_deg", a.get("detents_deg", []), most=LIMITS["detents"])]
     for d in detents:
         if not lo <= d <= hi:
             _fail(path, f"{where}.detents_deg", f"{d} is outside the range [{lo}, {hi}]")
@@ -231,7 +245,7 @@ def from_data(data, path="<description>"):
                 if not isinstance(fixed, (int, float)) or isinstance(fixed, bool) or not math.isfinite(fixed) \
                         or not -360 <= fixed <= 360:
                     _fail(path, f"{where}.angle_deg", f"{_short(fixed)} is not an angle in degrees within one turn")
-                fixed = _exact(fixed)
+                fixed = _exact(_degrees(path, f"{where}.angle_deg", fixed))
             links.append(Link(axis, None, ref(f"{where}.error", l["error"]) if "error" in l else None, sign,
                               fixed_deg=fixed))
         else:

@@ -75,6 +75,8 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     ('name = "phi"', 'name = "None"', "reserved"),
     ('name = "phi"', 'name = "time_s"', "reserved"),
     ('name = "kappa"', 'name = "Gamma11"', "reserved"),
+    ('detents_deg = [0, 90, 180, 270]', 'detents_deg = [1e-300, 90, 180, 270]', "to at most 6 decimals"),
+    ('detents_deg = [0, 90, 180, 270]', 'detents_deg = [0, 90.0000001, 180, 270]', "to at most 6 decimals"),
     ('[[parameter]]\nname = "kappa"', '[[angle]]\nname = "phi"\n\n[[parameter]]\nname = "kappa"', "declared twice"),
     ('remount', 'remount', ""),
 ])
