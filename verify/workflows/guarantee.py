@@ -345,7 +345,11 @@ def verdict(lin, z, sigma, W=None, steps=8):
         if rem.interpolates():
             rb_all[cols] = np.minimum(rb_all[cols], rem(lo, hi, support, direct=True)[0])
         cb = np.minimum(cb, cb_all)
-        functional = rem.functional(W, lo, hi, support) if len(support) <= rem.DIRECT_ROWS else None
+        functional = None
+        if len(support) <= rem.DIRECT_ROWS:         # the functional W_nu r at once: R' and the t residual
+            t_res = np.abs(W @ (lin.Jt - lin.A.T @ rem.G)) @ lin.t_bound
+            t_res += taylor.SUM_ERROR * (np.abs(W) @ (np.abs(lin.Jt) + np.abs(lin.A.T) @ np.abs(rem.G))) @ lin.t_bound
+            functional = rem.functional(W, lo, hi, support) + t_res + np.abs(W).sum(axis=1) * ROUNDING
         return rb_all + rem.t_residual, cb, (errors(s, rb_all + rem.t_residual, cb, functional), (lo, hi))
     rb, cb, out = proven(sigma)
     errs, last_box = out if out is not None else (None, None)
