@@ -35,21 +35,22 @@ def distinct_positions(positions, decimals=6):
     key = np.round(positions.angles_deg, decimals)
     if positions.mounts is not None:
         key = np.column_stack([key, positions.mounts])
-    uniq, inverse = np.unique(key, axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
-    if len(uniq) == len(key):
+    order = np.lexsort(key.T[::-1])                       # rows sorted by position: groups are runs
+    new = np.r_[True, np.any(key[order[1:]] != key[order[:-1]], axis=1)]
+    if new.all():
         return positions, np.zeros((len(key), 3))
-    counts = np.bincount(inverse)
+    starts = np.flatnonzero(new)
+    counts = np.diff(np.r_[starts, len(key)])
+    inverse = np.empty(len(key), int)
+    inverse[order] = np.cumsum(new) - 1
     f = np.column_stack([np.bincount(inverse, weights=positions.f[:, i]) for i in range(3)]) / counts[:, None]
     angles = np.column_stack([np.bincount(inverse, weights=positions.angles_deg[:, i])
                               for i in range(positions.angles_deg.shape[1])]) / counts[:, None]
-    order = np.argsort(inverse, kind="stable")
-    starts = np.r_[0, np.cumsum(counts)[:-1]]
-    spread = np.empty((len(uniq), 3))
+    spread = np.empty((len(starts), 3))
     for i in range(3):
         column = positions.f[order, i]
         spread[:, i] = np.maximum.reduceat(column, starts) - np.minimum.reduceat(column, starts)
-    mounts = None if positions.mounts is None else uniq[:, -1].astype(int)
+    mounts = None if positions.mounts is None else key[order[starts], -1].astype(int)
     return Positions(positions.path, angles, f, mounts), spread
 
 
