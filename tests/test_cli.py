@@ -99,3 +99,18 @@ def test_garant_verify_console_script(tmp_path):
     d = json.loads((tmp_path / "v.json").read_text())
     assert d["checks"] and all(set(c) == {"name", "source", "expected", "got", "passed"} for c in d["checks"])
     assert all(c["passed"] for c in d["checks"])
+
+
+def test_tables_state_their_model_and_human_units(tmp_path, capsys, mod):
+    # Issue 25: every printed table states its model equation and units; --units human adds ppm, urad/mrad
+    # and mg/ug beside SI. 2e-4 as a scale error is +200 ppm; 1e-4 rad is +100 urad; a bias of 1e-3 g is 1 mg.
+    from garant.verify.io.report import human
+    assert human(2e-4, "1") == "+200 ppm" and human(1e-4, "rad") == "+100 urad" and human(2e-3, "rad") == "+2 mrad"
+    assert human(1e-3, "1", bias=True) == "+1 mg" and human(9.80665e-6, "m/s^2", bias=True) == "+1 ug"
+    p = truth(4)
+    f = simulate(mod, PLAN10, p, SIGMA, seed=4)
+    path = write_csv(tmp_path / "d.csv", PLAN10, f)
+    rc, out, err = run(["estimate", "--model", "two-axis", str(path), "--sigma", str(SIGMA), "--units", "human"], capsys)
+    assert rc == 0, err
+    assert "model: z = f/g - u(angles) = H^T q + rho, (1)-(3) of 000" in out
+    assert " urad " in out and " ppm " in out and (" ug " in out or " mg " in out)

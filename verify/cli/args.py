@@ -48,6 +48,12 @@ def small(text):
     return value
 
 
+def units(p):
+    p.add_argument("--units", choices=("si", "human"), default="si",
+                   help="human: also print scale factors and misalignments in ppm, angles in mrad or urad, biases "
+                        "in mg or ug (beside SI)")
+
+
 def premises(p):
     """The a-priori bounds a guaranteed bound assumes (verify/workflows/premises.py)."""
     p.add_argument("--g-uncertainty", type=small, metavar="REL",

@@ -25,6 +25,7 @@ def add(sub):
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
                    help="test the model against each interval's noise and try the effect catalogue")
+    a.units(p)
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: verdict, tables, plots, the command")
@@ -97,7 +98,7 @@ def _run(args, into=None):
              f"{res['sigma_min_supported']:.3e}); no bound is given. Intervals that disagree: "
              + ", ".join(map(str, res["disagreements"][:12])) + ". Try --diagnose, or give --delta-sigma."))
     if res["consistent"]:
-        _print_bounds(res)
+        _print_bounds(res, args)
     if args.diagnose:
         raw = np.array([st.mean for st in stills])
         fit = calibrate_norm.fit(mod, raw, args.g, args.params)
@@ -146,17 +147,30 @@ def _save(res, mod, args):
             print(f"wrote {path}")
 
 
-def _print_bounds(res):
+def _print_bounds(res, args=None):
     from ..io import report
     pars = res["parameters"]
     if pars is None:
         print("parameters of (1.3): the log is in raw units, so only M and b above are estimated; the "
               "guaranteed errors below are those of (1.3)'s parameters of the calibrated block")
     units = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
-    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan", "unit"),
+    print("model of 001, (1.1)-(1.3): f = (E + A) w + eps + B(w) w, A = [[lambda1, 0, 0], [alpha, lambda2, 0], "
+          "[beta, gamma, lambda3]], w the specific force in block axes; the calibration inverts it, a = M (raw - b) "
+          "with M ~ E - A: lambda1 > 0 means accelerometer 1 reads high, and M11 < 1")
+    human = getattr(args, "units", "si") == "human"
+
+    def unit(k):
+        return next(u for p, u in units.items() if k.startswith(p))
+
+    def side(k, x):
+        u = unit(k)
+        return report.human(x, "1" if k.startswith(("lambda", "eps")) else u, bias=k.startswith("eps")) \
+            if not k.startswith("delta") else f"{x:+.4g} {u}"
+    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan", "unit")
+                 + (("estimate", "guaranteed error") if human else ()),
                  [(k, f"{pars[k]:+.4e}" if pars else "(raw units)", f"{v:.3e}",
-                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
-                   next(u for p, u in units.items() if k.startswith(p)))
+                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}", unit(k))
+                  + ((side(k, pars[k]) if pars else "", side(k, v).lstrip("+")) if human else ())
                   for k, v in res["guaranteed_error"].items()])
     gain = res["directions_gain"]
     if res["directions_to_add"]:

@@ -22,6 +22,7 @@ def add(sub):
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
     a.premises(p)
+    a.units(p)
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
@@ -156,10 +157,17 @@ def print_estimate(res, mod, args):
           f"(<= {max(parts[worst].values()):.1e})" + (
               ": the a-priori bounds of the parameters no plan separates (premises) set it; tighter bounds "
               "tighten it" if worst in ("unseparable", "absorbed_into_q") else ""))
-    report.table(("q", "definition", "estimate", "guaranteed error", "= linear", "+ remainder", "unit"),
+    print("model: z = f/g - u(angles) = H^T q + rho, (1)-(3) of 000; q in the unit shown (1: dimensionless; a "
+          "bias q is over g)")
+    human = args.units == "human"
+    bias = {q: d.split()[0].startswith("bias") for q, d in res["definitions"].items()}
+    report.table(("q", "definition", "estimate", "guaranteed error", "= linear", "+ remainder", "unit")
+                 + (("estimate", "guaranteed error") if human else ()),
                  [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
                    f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
-                   res["units"][q]) for q in mod.Q_NAMES])
+                   res["units"][q]) + ((report.human(res["q"][q], res["units"][q], bias[q]),
+                                        report.human(res["guaranteed_error"][q], res["units"][q], bias[q]).lstrip("+"))
+                                       if human else ()) for q in mod.Q_NAMES])
     for line in res["warnings"]:
         print(f"note: {line}")
     print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {res['g']:g} m/s^2, "
@@ -167,7 +175,7 @@ def print_estimate(res, mod, args):
     if args.mount:
         print_physical(res)
     elif "block" in res:
-        print_block(res)
+        print_block(res, args.units == "human")
     if args.save or args.export_imu_tk:
         from ..io import calibration
         cal = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
@@ -178,15 +186,18 @@ def print_estimate(res, mod, args):
     return 0
 
 
-def print_block(res):
+def print_block(res, human=False):
     """The block's Gamma and biases with their bounds, and what each is confounded with."""
     from ..io import report
     blk, g = res["block"], res["g"]
-    rows = [(f"Gamma{i + 1}{j + 1}", f"{blk['Gamma'][i][j]:+.6e}", f"{blk['Gamma_bound'][i][j]:.3e}", "1")
+    rows = [(f"Gamma{i + 1}{j + 1}", blk['Gamma'][i][j], blk['Gamma_bound'][i][j], "1", False)
             for i in range(3) for j in range(3)]
-    rows += [(f"bias{i + 1}", f"{g * blk['bias'][i]:+.6e}", f"{g * blk['bias_bound'][i]:.3e}", "m/s^2") for i in range(3)]
-    print("\nthe block's errors in its own axes, a = (E + Gamma)^-1 (f - bias):")
-    report.table(("parameter", "estimate", "guaranteed error", "unit"), rows)
+    rows += [(f"bias{i + 1}", g * blk['bias'][i], g * blk['bias_bound'][i], "m/s^2", True) for i in range(3)]
+    print("\nthe block's errors in its own axes: f = (E + Gamma) a + bias, so a = (E + Gamma)^-1 (f - bias), "
+          "f the readings and a the specific force (m/s^2); Gamma11 > 0: accelerometer 1 reads high")
+    report.table(("parameter", "estimate", "guaranteed error", "unit") + (("estimate", "guaranteed error") if human else ()),
+                 [(n, f"{v:+.6e}", f"{e:.3e}", u) + ((report.human(v, u, b), report.human(e, u, b).lstrip("+"))
+                                                    if human else ()) for n, v, e, u, b in rows])
     with_ = {k: v for k, v in blk["confounded"].items() if v}
     if with_:
         print("confounded, so each bound holds that a-priori bound: " + "; ".join(

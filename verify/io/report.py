@@ -20,6 +20,19 @@ def table(headers, rows, out=None):
         print("  ".join(c.ljust(w) for c, w in zip(r, widths)), file=out)
 
 
+def human(value, unit, bias=False):
+    """A value in the unit an engineer reads at a glance, beside SI: a dimensionless scale factor or
+    misalignment in ppm, an angle in mrad or urad, a bias (over g, or in m/s^2) in mg or ug."""
+    if bias:
+        mg = value * 1e3 if unit == "1" else value / 9.80665 * 1e3
+        return f"{mg:+.4g} mg" if abs(mg) >= 1 else f"{mg * 1e3:+.4g} ug"
+    if unit == "rad":
+        return f"{value * 1e3:+.4g} mrad" if abs(value) >= 1e-3 else f"{value * 1e6:+.4g} urad"
+    if unit == "1":
+        return f"{value * 1e6:+.4g} ppm"
+    return f"{value:+.4g} {unit}"
+
+
 def write_json(path, obj):
     """Strict JSON (no NaN or Infinity), written atomically."""
     try:
