@@ -196,7 +196,15 @@ def test_apply_reads_one_imu_of_a_mimu_stream(tmp_path, capsys):
     # Issue 25: `garant apply cal.json data.bin --format mimu --imu 3 -o x.csv` said "unrecognized arguments".
     # The calibration of IMU 3 applied to IMU 3's samples: every sample corrected, |a| near g when still.
     log, cal, out = MIMU / "raw" / "exp_1" / "data.bin", tmp_path / "c.json", tmp_path / "x.csv"
-    assert main(["calibrate-norm", str(log), "--format", "mimu", "--imu", "3", "--save", str(cal)]) == 0
+    tk, kalibr = tmp_path / "c.calib", tmp_path / "imu.yaml"
+    assert main(["calibrate-norm", str(log), "--format", "mimu", "--imu", "3", "--save", str(cal),
+                 "--export-imu-tk", str(tk), "--export-kalibr", str(kalibr)]) == 0
+    assert "accelerometer_noise_density" in kalibr.read_text()
+    from garant.verify.io import calibration
+    M, _ = calibration.read_imu_tk(tk)             # imu_tk's form of the same calibration: the same |a|
+    X = np.random.default_rng(1).normal(size=(3, 20)) * 2048
+    np.testing.assert_allclose(np.linalg.norm(M @ X, axis=0),
+                               np.linalg.norm(np.asarray(calibration.read(cal)["M"]) @ X, axis=0), rtol=1e-12)
     assert main(["apply", str(cal), str(log), "--format", "mimu", "--imu", "3", "-o", str(out)]) == 0
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     assert data.shape[1] == 7 and np.median(np.linalg.norm(data[:, 1:4], axis=1)) == pytest.approx(9.81, rel=0.01)
@@ -218,3 +226,21 @@ def test_a_refused_run_is_left_out_and_the_others_compared(tmp_path, capsys):
     assert [x["log"] for x in res["refused_runs"]] == [logs[0]] and len(res["runs"]) == 3 and "envelope" in res
     assert main(["repeatability", logs[0], logs[1], "--g", "9.81744"]) == 2      # one usable run is not enough
     assert "at least two usable runs" in capsys.readouterr().err
+
+
+@needs_real
+def test_the_fixture_ends_in_a_calibration_that_holds_on_another_run(tmp_path, capsys):
+    # Issue 25: the icosahedral fixture (a means file with known directions) could not save a calibration.
+    # Now run 1 of IMU 1 gives one (sigma 0.02, as above), exported to imu_tk too; applied to run 2's
+    # means, each corrected reading's norm is g within apply's bound (the per-sample bound plus the run's
+    # own noise, 0.02 g).
+    from garant.verify.io import calibration
+    cal, tk = tmp_path / "c.json", tmp_path / "c.calib"
+    assert main(["estimate", "--model", str(ROOT / "docs" / "stands" / "icosahedral_fixture.toml"),
+                 str(MIMU / "static_positions_runs1-5.csv"), "--imu", "1", "--run", "1", "--g", str(G),
+                 "--sigma", "0.02", "--save", str(cal), "--export-imu-tk", str(tk)]) == 0
+    run2 = means.read(str(MIMU / "static_positions_runs1-5.csv"), 1)[1]
+    a, bound = calibration.apply(calibration.read(cal), np.array([st.mean for st in run2.stills]))
+    assert np.all(np.abs(np.linalg.norm(a, axis=1) - G) <= np.linalg.norm(bound, axis=1) + 0.02 * G)
+    M, b = calibration.read_imu_tk(tk)
+    np.testing.assert_allclose(M, calibration.read(cal)["M"], rtol=1e-12)
