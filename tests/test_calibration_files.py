@@ -194,9 +194,14 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
     rows = [[*map(repr, map(float, P[k])), *map(repr, map(float, f[k])), *([mounts[M[k]]] if len(mounts) > 1 else [])]
             for k in range(len(P))]
     data.write_text(",".join(cols) + "\n" + "\n".join(",".join(r) for r in rows) + "\n")
-    cal = tmp_path / "c.json"
-    assert main(["estimate", "--model", name, str(data), "--sigma", "1e-5", "--g", "9.81", "--save", str(cal)]) == 0
+    cal, tk = tmp_path / "c.json", tmp_path / "c.calib"
+    assert main(["plan", name, "--json", str(tmp_path / "plan.json")]) == 0          # the stand's optimal plan
+    plan = json.loads((tmp_path / "plan.json").read_text())
+    assert plan["min_positions"] <= len(P)                # the readings below: the plan's whole candidate set
+    assert main(["estimate", "--model", name, str(data), "--sigma", "1e-5", "--g", "9.81", "--save", str(cal),
+                 "--export-imu-tk", str(tk)]) == 0
     assert "confounded" in capsys.readouterr().out
+    np.testing.assert_allclose(calibration.read_imu_tk(tk)[0], calibration.read(cal)["M"], rtol=1e-12)
     pick = rng.permutation(len(P))[:20]
     held = P[pick] + rng.uniform(-20, 20, (len(pick), P.shape[1])) * (
         np.array([len(d) == 0 for d in mod.ANGLE_DETENTS_DEG]))          # off the grid where an angle is continuous

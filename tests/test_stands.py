@@ -139,12 +139,13 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
     # with its angle named g, its parameters named t1, DG, K and np, derives, plans, simulates and estimates.
     import re
     text = BASE
-    for old, new in (("phi", "g"), ("kappa", "t1"), ("Delta_phi", "DG"), ("theta1", "K"), ("Delta_g", "np")):
+    for old, new in (("phi", "g"), ("kappa", "t1"), ("Delta_phi", "DG"), ("theta1", "K"), ("theta2", "t2"),
+                     ("Delta_g", "np")):
         text = re.sub(rf"\b{old}\b", new, text)
     stand = tmp_path / "odd.toml"
     stand.write_text(text)
     mod = models.load(str(stand))
-    assert mod.ANGLES == ("g",) and {"t1", "DG", "K", "np"} <= set(mod.PARAMETER_NAMES)
+    assert mod.ANGLES == ("g",) and {"t1", "t2", "DG", "K", "np"} <= set(mod.PARAMETER_NAMES)
     plan, data = tmp_path / "p.csv", tmp_path / "d.csv"
     assert main(["plan", str(stand), "--csv", str(plan)]) == 0
     assert main(["simulate", "--model", str(stand), "--plan", str(plan), "--sigma", "1e-5", "-o", str(data)]) == 0
