@@ -21,6 +21,10 @@ def add(sub):
 
 def run(args):
     if args.model == "norm":
+        given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates)) if v is not None]
+        if given:
+            raise DataError(f"{' and '.join(given)} apply to a stand with angles; `plan norm` gives the orientations "
+                            "of 001 on the sphere (their certificates: garant verify --certificates DIR)")
         return run_norm(args)
     from .. import models
     from ..io import report

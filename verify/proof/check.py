@@ -138,8 +138,10 @@ def tied_to_model(cert, c, base=None):
     except ValueError as e:
         return False, str(e)
     kind = cert["domain"]["kind"]
-    if [str(s) for s in c["syms"]] != dom_ref["names"] or (kind != dom_ref["kind"] and kind != "positions"):
-        return False, f"domain {cert['domain'].get('names')} is not that of {cert['model']} ({dom_ref['names']})"
+    if [str(s) for s in c["syms"]] != dom_ref["names"]:
+        return False, f"domain angles {cert['domain'].get('names')} are not those of {cert['model']} ({dom_ref['names']})"
+    if kind != dom_ref["kind"] and kind != "positions":
+        return False, f"domain kind {kind!r} is not that of {cert['model']} ({dom_ref['kind']!r})"
     if kind == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
         return False, "the domain is not the whole box of angles of the model"
     if kind == "positions":
