@@ -277,6 +277,7 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
     (["diagnose", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--report", "{tmp}/afile/y"],
       "is not a writable folder"),
     (["plan", "norm", "--certificates", "{tmp}/c", "--grid", "5"], "apply to a stand with angles"),
+    (["calibrate-norm", "{data}", "--delta-sigma", "1e308", "--json", "{tmp}/r.json"], "must be < 1"),
 ])
 def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
     # Issue 30: simulate with an infinite effect said "nothing written" and left d.csv full of inf; --prior 2

@@ -40,11 +40,11 @@ def json(p):
 
 
 def small(text):
-    """An argparse type: an a-priori bound, a finite number > 0 and < 1 (rad, or dimensionless): the
-    premises are of small errors, and a bound of 1 or more is no premise the model can use."""
+    """An argparse type: a bound of a small error, a finite number > 0 and < 1 (rad, dimensionless, units of
+    g, or m/s^2 for a count): a bound of 1 or more is no premise the linearised model can use."""
     value = positive(text)
     if value >= 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be < 1 (an a-priori bound of a small error)")
+        raise argparse.ArgumentTypeError(f"{text!r} must be < 1 (the bound of a small error)")
     return value
 
 

@@ -20,7 +20,7 @@ def add(sub):
     p.add_argument("--window", type=a.positive, default=1.0, help="moving-variance window, s")
     p.add_argument("--k", type=a.positive, default=10.0, help="still when the moving variance < k x the initial one")
     p.add_argument("--min-still", type=a.positive, default=2.0, help="shortest still interval kept, s")
-    p.add_argument("--delta-sigma", type=a.positive, metavar="D",
+    p.add_argument("--delta-sigma", type=a.small, metavar="D",
                    help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; default: the "
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",

@@ -17,9 +17,9 @@ def add(sub):
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
     a.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9, help="9 or 12 parameters (as calibrate-norm)")
-    p.add_argument("--count", type=a.positive, metavar="STEP",
-                   help="quantisation step of the readings a means file averaged, m/s^2 (the noise rule adds half of "
-                   "it; a raw log states its own)")
+    p.add_argument("--count", type=a.small, metavar="STEP",
+                   help="quantisation step of the readings a means file averaged, m/s^2, below 1 (the noise rule adds "
+                   "half of it; a raw log states its own)")
     p.add_argument("--rate", type=a.positive, metavar="HZ", help="sample rate of a means file's start_sample and "
                    "stop_sample columns (gives the runs a time, for the bias_drift effect)")
     a.json(p)
