@@ -129,3 +129,18 @@ def test_import_garant_is_light_and_gives_the_api():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/")
     assert out.returncode == 0, out.stderr
     assert "estimate" in out.stdout and out.stdout.strip().endswith("q1")
+
+
+def test_the_command_uses_one_blas_thread_unless_told_otherwise():
+    # Issue 27: the command's thin least-squares fits cost about twice the CPU with threaded BLAS. The
+    # command module sets one thread before numpy loads (numpy must not be loaded by then, or the setting
+    # is too late); a user's own setting wins.
+    import os
+    code = ("import sys, os, garant.verify.cli; assert 'numpy' not in sys.modules; "
+            "print(os.environ['OPENBLAS_NUM_THREADS'], os.environ['OMP_NUM_THREADS'])")
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/", env=env)
+    assert out.returncode == 0 and out.stdout.split() == ["1", "1"], out.stderr
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/",
+                         env={**env, "OPENBLAS_NUM_THREADS": "2"})
+    assert out.stdout.split() == ["2", "1"], out.stderr
