@@ -30,7 +30,6 @@ import numpy as np
 from ..solve import highs, taylor
 from .premises import Premises
 
-PRIOR_DEFAULT = None       # --prior is an override of every a-priori bound (premises.py); none by default
 ROUNDING = 1e-13           # absolute, on z of size 1: the float value and Jacobian of the exact model at p0
 
 
