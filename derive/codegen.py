@@ -159,7 +159,13 @@ def model_files(model, module_dir="generated", docs_dir="docs"):
         out[f"{docs_dir}/derivation_{key}.md"] = render("report/STAND.md.jinja", stand_report_context(d),
                                                         model.source_file, ".md")
     if model.remount:
-        ctx = remount_context(d)
+        try:
+            ctx = remount_context(d)
+        except ValueError as e:                     # (26) of 000 does not hold for this stand
+            from .description import DescriptionError
+            raise DescriptionError(f"{model.source_file}: remount = true, but {e}; the remount formulas (26)-(29) "
+                                   "of 000 need Gamma + hat(theta) to be G(q) up to unseparable terms, which "
+                                   "this stand does not give: set remount = false") from None
         source = f"derive/remount.py on {model.source_file}"
         out[f"{module_dir}/{key}_remount.py"] = render("remount/REMOUNT.py.jinja", ctx, source, ".py")
         out[f"{docs_dir}/remount_{key}.md"] = render("remount/REMOUNT.md.jinja", ctx, source, ".md")

@@ -54,7 +54,8 @@ def derive_remount(d):
     D = sp.expand(Gamma + theta - G.subs(dict(zip(q, q_of_p))))
     unseen = set(ident.free) - set(d.model.stand.theta)
     if not {x.name for x in D.free_symbols} <= unseen:
-        raise ValueError(f"Gamma + hat(theta) is not G(q) up to unseparable terms: {D}")
+        extra = sorted({x.name for x in D.free_symbols} - {str(u) for u in unseen})
+        raise ValueError(f"Gamma + hat(theta) - G(q) depends on {', '.join(extra)}")
     stand = {n: (lead[n], sum(c * x for c, x in zip(ident.R.row(lead[n]), syms)))
              for n in ident.leading if n in {p.name for p in d.model.stand.parameters}}
     return Remount(G=G, bias=tuple(lead[f"bias{i}"] for i in range(1, 4)), stand=stand, D=D, q=q)

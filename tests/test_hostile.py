@@ -278,6 +278,20 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
       "is not a writable folder"),
     (["plan", "norm", "--certificates", "{tmp}/c", "--grid", "5"], "apply to a stand with angles"),
     (["calibrate-norm", "{data}", "--delta-sigma", "1e308", "--json", "{tmp}/r.json"], "must be < 1"),
+    # Issue 30: each of these ended in a traceback or a message that named no cause.
+    (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--g", "5e-324", "--json", "{tmp}/r.json"],
+     "must be a gravity in m/s^2 between 0.1 and 100"),
+    (["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--seed", "-1", "-o", "{tmp}/d.csv"],
+     "--seed: '-1' must be a whole number >= 0"),
+    (["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--size", "1e308", "-o",
+      "{tmp}/d.csv"], "--size: '1e308' must be < 1"),
+    (["simulate", "--model", "two-axis", "--plan", "grid:0.0009765625", "--sigma", "1e-5", "-o", "{tmp}/d.csv"],
+     "--plan grid:0.0009765625 has 1.36e+11 positions, over the limit of 1,000,000"),
+    (["plan", "two-axis", "--grid", "0.0009765625", "--json", "{tmp}/p.json"],
+     "--grid 0.000976562 has 1.36e+11 positions, over the limit of 10,000: use a coarser step, or raise --max-candidates"),
+    (["plan", "two-axis", "--grid", "1", "--max-candidates", "129599", "--json", "{tmp}/p.json"],
+     "--grid 1 has 1.3e+05 positions, over the limit of 129,599"),
+    (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e308"], "--sigma: '1e308' must be < 1"),
 ])
 def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
     # Issue 30: simulate with an infinite effect said "nothing written" and left d.csv full of inf; --prior 2
@@ -310,3 +324,20 @@ def test_a_table_with_120_degree_detents_derives_plans_and_certifies(tmp_path, c
     certs = sorted((tmp_path / "c").glob("*.json"))
     assert len(certs) == 14 and main(["check-certificate", *map(str, certs)]) == 0
     assert "14 of 14 certificates hold" in capsys.readouterr().out
+
+
+def test_a_window_longer_than_the_log_is_refused_by_name(tmp_path, capsys):
+    # Issue 30: --window 1e308 ended in "OverflowError: cannot convert float infinity to integer".
+    path = _csv(tmp_path / "log.csv", "time_s,x,y,z", [_log()[0], *_log()[1].T])
+    refused(["calibrate-norm", path, "--window", "1e308", "--json", tmp_path / "r.json"], capsys,
+            "--window 1e+308 s: the moving-variance window must be under a quarter of the log's 19.99 s",
+            outputs=[tmp_path / "r.json"])
+
+
+def test_remount_on_a_stand_where_26_does_not_hold_names_the_cause(tmp_path, capsys):
+    # Issue 30: `remount = true` on the 90-degree wedge stopped in derive with the internal
+    # "Gamma + hat(theta) is not G(q) ..." and a matrix; it must say what to change in the file.
+    desc = tmp_path / "w.toml"
+    desc.write_text((Path(__file__).parent / "data/stands/wedge90.toml").read_text() + "\n[estimation]\nremount = true\n")
+    refused(["derive", desc, "--out", tmp_path / "out"], capsys, "w.toml: remount = true", "set remount = false",
+            outputs=[tmp_path / "out"])

@@ -1,6 +1,7 @@
 """The models the command line knows: built-in generated modules, or a stand description file."""
 import hashlib
 import importlib
+import math
 import os
 import tempfile
 import types
@@ -138,10 +139,16 @@ def load_remount(name):
         return None
 
 
-def reachable_grid(ranges, detents, step):
+def reachable_grid(ranges, detents, step, limit=1_000_000, what="the grid", raise_with=None):
     """Positions (degrees, (S, n)) a stand can take on a grid: each angle at its detents when it has
-    them, else at the multiples of `step` (one per angle, or one for all) inside its range."""
+    them, else at the multiples of `step` (one per angle, or one for all) inside its range. A grid of
+    more than `limit` positions is refused before it is built (`raise_with`: the option that raises it)."""
     steps = list(step) if np.ndim(step) else [step] * len(ranges)
+    size = math.prod(len(det) if len(det) else math.floor((min(hi - lo, 360) + 1e-9) / st) + 1
+                     for (lo, hi), det, st in zip(ranges, detents, steps))
+    if size > limit:
+        more = f", or raise {raise_with}" if raise_with else ""
+        raise DataError(f"{what} has {size:.3g} positions, over the limit of {limit:,}: use a coarser step{more}")
     values = []
     for (lo, hi), det, st in zip(ranges, detents, steps):
         values.append(np.asarray(det, float) if len(det) else

@@ -18,6 +18,30 @@ def positive(text):
     return value
 
 
+def positive_int(text):
+    """An argparse type: a whole number >= 1 written in decimal digits (at most 18 of them)."""
+    if not text.isdigit() or len(text) > 18 or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be a whole number >= 1 (at most 18 digits)")
+    return int(text)
+
+
+def seed(text):
+    """An argparse type: a random seed, a whole number >= 0 written in decimal digits (at most 18 of them)."""
+    if not text.isdigit() or len(text) > 18:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be a whole number >= 0 (at most 18 digits)")
+    return int(text)
+
+
+def gravity(text):
+    """An argparse type: gravity in m/s^2, between 0.1 and 100 (9.78-9.83 on the Earth's surface; 1 for
+    readings in units of g)."""
+    value = positive(text)
+    if not 0.1 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"{text!r} must be a gravity in m/s^2 between 0.1 and 100 (9.78 to 9.83 "
+                                         "on the Earth's surface; 1 for readings in units of g)")
+    return value
+
+
 def model(p, *, positional=False):
     help_ = f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml"
     if positional:
@@ -27,12 +51,12 @@ def model(p, *, positional=False):
 
 
 def sigma(p, help_="bound on each residual component, dimensionless (units of g), (5) of 000"):
-    p.add_argument("--sigma", type=positive, required=True, help=help_)
+    p.add_argument("--sigma", type=small, required=True, help=help_)
 
 
 def g(p, help_="model gravity, m/s^2 (default 9.81)", default=G_DEFAULT):
     """--g; with default None the command knows whether g was given (its uncertainty depends on it)."""
-    p.add_argument("--g", type=positive, default=default, help=help_)
+    p.add_argument("--g", type=gravity, default=default, help=help_)
 
 
 def json(p):

@@ -1,5 +1,6 @@
 """garant plan: optimal guaranteed errors and a minimal optimal plan of a stand."""
 from ..errors import DataError
+from ..workflows.plan import MAX_CANDIDATES
 from . import args as a
 
 
@@ -12,6 +13,9 @@ def add(sub):
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
     p.add_argument("--count-seconds", type=a.positive, default=5.0, metavar="S",
                    help="time allowed for counting the optimal plans on a large grid (default 5 s)")
+    p.add_argument("--max-candidates", type=a.positive_int, default=MAX_CANDIDATES, metavar="N",
+                   help=f"refuse a --grid of more than N candidate positions (times mountings; default {MAX_CANDIDATES:,}: "
+                        "a 3-degree grid on the two-axis stand takes about 30 s)")
     p.add_argument("--certificates", metavar="DIR", help="write a certificate of the plan's optimality for each "
                    "q (garant check-certificate re-checks it without any solver)")
     p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
@@ -33,7 +37,7 @@ def run(args):
     names, mounts = models.layout(mod)
     if args.grid is not None and 360 % args.grid:
         raise DataError(f"--grid {args.grid:g}: give a step that divides 360 degrees")
-    res = search_plan(mod, args.model, args.grid, args.count_seconds)
+    res = search_plan(mod, args.model, args.grid, args.count_seconds, args.max_candidates)
     r, cont, d = res.search, res.continuum, res.to_dict()
     report.table(("q", "definition", "optimal error on the candidates (sigma)",
                   "continuum optimum (exchange)", "candidates are"),

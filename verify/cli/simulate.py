@@ -10,9 +10,9 @@ def add(sub):
     p.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
                    help="a catalogue effect and its parameter values (repeatable)")
     a.sigma(p, "noise bound, units of g")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=a.seed, default=0, help="random seed, a whole number >= 0 (default 0)")
     a.g(p)
-    p.add_argument("--size", type=a.positive, default=1e-4, help="bound of the random stand and block errors")
+    p.add_argument("--size", type=a.small, default=1e-4, help="bound of the random stand and block errors")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
 

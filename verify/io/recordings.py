@@ -234,6 +234,10 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     Returns (intervals, note): the note says how the threshold was set.
     """
     dt = log.dt or float(np.median(np.diff(log.t)))
+    span = float(log.t[-1] - log.t[0])
+    if window >= span / 4:
+        raise DataError(f"--window {window:g} s: the moving-variance window must be under a quarter of the log's "
+                        f"{span:.4g} s")
     n = max(int(round(window / dt)), 5)
     var = moving_variance(log.raw, n)
     first = var[: max(int(init / dt) - n, 1)]

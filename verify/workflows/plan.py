@@ -54,17 +54,23 @@ class Plan:
             "optimal_plans": [[self.position(s) for s in pl] for pl in r.optimal_plans]}
 
 
-def plan(mod, model, grid=None, count_seconds=5.0):
+#: The most candidate positions (times mountings) a plan search takes unless told otherwise: a 3-degree
+#: grid on the two-axis stand (14,400) takes about 30 s on one core.
+MAX_CANDIDATES = 10_000
+
+
+def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES):
     """The Plan of a stand model: candidates every `grid` degrees (default: detents or quarter turns), and
     on a stand with a continuous angle the exchange method's positions added when the candidates miss
-    the continuum optimum."""
+    the continuum optimum. A grid of more than `max_candidates` positions (times mountings) is refused
+    before any work."""
     from ..models import layout
     from ..proof import build
     from ..solve import continuum, plans
     names, mounts = layout(mod)
     if grid is not None and 360 % grid:
         raise DataError(f"grid step {grid:g}: give a step that divides 360 degrees")
-    P, M = _grid(mod, grid) if grid else plans.grid(mod)
+    P, M = _grid(mod, grid, max_candidates) if grid else plans.grid(mod)
     r = plans.search(mod, P, M, count_seconds=count_seconds)
     n = len(names)
     ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
@@ -107,13 +113,15 @@ def _snap(X, ranges, detents, step=15.0, tol=1e-6):
     return [x for x in X if unreachable(ranges, detents, x[None]) is None]
 
 
-def _grid(mod, step):
-    """Positions every `step` degrees that the stand can take, in every mounting."""
+def _grid(mod, step, limit):
+    """Positions every `step` degrees that the stand can take, in every mounting (at most `limit` in all)."""
     from ..models import layout, reachable_grid
     n = len(mod.ANGLES)
-    P = reachable_grid(getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n),
-                       getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n), step)
     k = len(layout(mod)[1])
+    P = reachable_grid(getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n),
+                       getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n), step, limit=max(limit // k, 1),
+                       what=f"--grid {step:g}" + (f" (in each of {k} mountings)" if k > 1 else ""),
+                       raise_with="--max-candidates")
     return np.tile(P, (k, 1)), np.repeat(np.arange(k), len(P))
 
 

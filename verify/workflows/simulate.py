@@ -41,7 +41,7 @@ def plan_positions(mod, plan):
         steps = steps * n if len(steps) == 1 else steps
         if len(steps) != n or any(s <= 0 or 360 % s for s in steps):
             raise DataError(f"{plan}: give {n} step(s) that divide 360 degrees")
-        P = reachable_grid(ranges, detents, steps)
+        P = reachable_grid(ranges, detents, steps, what=f"--plan {plan}")
     mounts = getattr(mod, "MOUNTINGS", None)
     if mounts is None:
         return P, None
