@@ -59,12 +59,19 @@ def _umask():
 def write_text(path, text, mode="w"):
     """Write a file atomically: a temporary file beside it, renamed over it when complete. The file gets
     the permissions open() would give it (0666 less the umask), not the temporary file's 0600."""
+    write_chunks(path, [text], mode)
+
+
+def write_chunks(path, chunks, mode="wb"):
+    """Write the pieces `chunks` yields (text or bytes, as `mode` says) into one file, atomically as
+    write_text: a large output is made piece by piece, never whole in memory."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".part")
     try:
         os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, mode) as fh:
-            fh.write(text)
+            for chunk in chunks:
+                fh.write(chunk)
         os.replace(tmp, path)
     except BaseException:
         os.unlink(tmp)
