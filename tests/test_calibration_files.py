@@ -2,6 +2,7 @@
 and applied to the raw log with a worst-case error per sample that the corrected still intervals
 respect (|a| = g within the stated bound)."""
 import json
+import re
 
 import numpy as np
 import pytest
@@ -55,10 +56,10 @@ def test_apply_command_writes_corrected_log(tmp_path, capsys):
 
 @pytest.mark.parametrize("edit, words", [
     (lambda d: d.update(format="x"), "not a garant-calibration-1"),
-    (lambda d: d.update(M=[[1, 0], [0, 1]]), "'M'"),
-    (lambda d: d.update(b=["a", 0, 0]), "'b'"),
-    (lambda d: d.update(bound_matrix=[[2, 0, 0], [0, 0, 0], [0, 0, 0]]), "row sums"),
-    (lambda d: d.pop("g"), "'g'"),
+    (lambda d: d.update(M=[[1, 0], [0, 1]]), "M: [[1, 0], [0, 1]]: must have 3 items"),
+    (lambda d: d.update(b=["a", 0, 0]), "b[0]: 'a': must be of type number"),
+    (lambda d: d.update(bound_matrix=[[2, 0, 0], [0, 0, 0], [0, 0, 0]]), "bound_matrix[0][0]: 2: must be <= 1"),
+    (lambda d: d.pop("g"), "'g' is missing"),
 ])
 def test_bad_calibration_file_one_line(tmp_path, capsys, edit, words):
     good = {"format": "garant-calibration-1", "kind": "norm", "raw_unit": "m/s^2", "M": np.eye(3).tolist(),
@@ -67,7 +68,7 @@ def test_bad_calibration_file_one_line(tmp_path, capsys, edit, words):
     edit(good)
     path = tmp_path / "c.json"
     path.write_text(json.dumps(good))
-    with pytest.raises(DataError, match=words):
+    with pytest.raises(DataError, match=re.escape(words)):
         calibration.read(path)
     log = tmp_path / "l.txt"
     log.write_text("\n".join(f"{0.01 * k} 0 0 9.81" for k in range(200)))

@@ -341,3 +341,149 @@ def test_remount_on_a_stand_where_26_does_not_hold_names_the_cause(tmp_path, cap
     desc.write_text((Path(__file__).parent / "data/stands/wedge90.toml").read_text() + "\n[estimation]\nremount = true\n")
     refused(["derive", desc, "--out", tmp_path / "out"], capsys, "w.toml: remount = true", "set remount = false",
             outputs=[tmp_path / "out"])
+
+
+# ---------------------------------------------------------------- issue 26: calibration files, inputs and outputs
+
+def _calibration(tmp_path):
+    """A real calibration (calibrate-norm --save on the simulated log of _log's shape is too still: a
+    hand-made norm calibration of the identity, every field as calibrate-norm writes it)."""
+    cal = {"format": "garant-calibration-1", "kind": "norm", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
+           "M": [[1.001, 0, 0], [1e-4, 0.999, 0], [-2e-4, 3e-4, 1.0]], "b": [0.01, -0.02, 0.03],
+           "bound_matrix": [[1e-3, 0, 0], [1e-3, 1e-3, 0], [1e-3, 1e-3, 1e-3]], "bound_bias": [1e-3] * 3,
+           "bound_delta": [0.0] * 3, "pendulosity_axes": [2, 3, 1], "g": 9.81, "source": "test", "note": "",
+           "premises": "the bounds hold if ..."}
+    return cal
+
+
+def _log_file(tmp_path, scale=1.0):
+    t, raw = _log()
+    raw = raw + np.random.default_rng(0).normal(0, 1e-3, raw.shape)
+    return _csv(tmp_path / "log.csv", "time_s,x,y,z", [t, *(scale * raw).T])
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"kind": "banana"}, "kind: 'banana': must be one of ['norm', 'stand']"),
+    ({"g": True}, "g: True: must be of type number"),
+    ({"M": [[0] * 3] * 3}, "M is singular or ill-conditioned (condition number inf"),
+    ({"M": [[1e308, 0, 0], [0, 1e308, 0], [0, 0, 1e308]]}, "M[0][0]: 1e+308: must be <= 1e+12"),
+    ({"M": [[1, 0, 0], [0, 1, 0], [0, 0, 1e-6]]}, "condition number 1e+06"),
+    ({"b": ["a", "b", "c"]}, "b[0]: 'a': must be of type number"),
+    ({"M": [[True] * 3] * 3}, "M[0][0]: True: must be of type number"),
+    ({"bound_bias": [-1, -1, -1]}, "bound_bias[0]: -1: must be >= 0"),
+    ({"bound_delta": [-1e-3, 0, 0]}, "bound_delta[0]: -0.001: must be >= 0"),
+    ({"pendulosity_axes": [0, 0, 0]}, "pendulosity_axes[0]: 0: must be >= 1"),
+    ({"pendulosity_axes": [1.7, 2.2, 3.9]}, "pendulosity_axes[0]: 1.7: must be of type integer"),
+    ({"pendulosity_axes": [4, 4, 4]}, "pendulosity_axes[0]: 4: must be <= 3"),
+    ({"pendulosity_axes": [-100, 1, 2]}, "pendulosity_axes[0]: -100: must be >= 1"),
+    ({"kind": "\x1b[31mred\n"}, "kind: '\\x1b[31mred\\n': must be one of"),
+    ({"source": "fake\nPASS"}, "source: 'fake\\nPASS' holds control characters"),
+    ({"extra": 1}, "unknown field(s): 'extra'"),
+    ({"bound_matrix": [[0.6, 0.5, 0], [0, 0, 0], [0, 0, 0]]}, "each row of bound_matrix must sum below 1"),
+    ("g-400-digits", "g: inf: must be <= 100"),
+    ("M-entry-400-digits", "M[0][0]: inf: must be <= 1e+12"),
+    ("g-5000-digits", "g: inf: must be <= 100"),
+    ("NaN", "not a JSON calibration file (NaN is not a number JSON allows)"),
+])
+def test_a_calibration_file_is_checked_against_its_schema(tmp_path, capsys, change, words):
+    # Issue 26: apply accepted kind "banana", g true, a singular or 1e308 M, strings and booleans, negative
+    # bounds, pendulosity axes that wrap or truncate, and printed ANSI escapes; 400-digit integers ended in
+    # tracebacks. Each is one line naming the field (schema docs/schemas/calibration.schema.json).
+    cal = _calibration(tmp_path)
+    if isinstance(change, dict):
+        cal.update(change)
+        text = json.dumps(cal)
+    else:
+        text = json.dumps(cal)
+        big = "1" * (5000 if "5000" in change else 401)
+        text = {"g-400-digits": text.replace('"g": 9.81', f'"g": {big}'),
+                "g-5000-digits": text.replace('"g": 9.81', f'"g": {big}'),
+                "M-entry-400-digits": text.replace('"M": [[1.001', f'"M": [[{big}'),
+                "NaN": text.replace('"g": 9.81', '"g": NaN')}[change]
+    path = tmp_path / "c.json"
+    path.write_text(text)
+    log = _log_file(tmp_path)
+    before = log.read_bytes()
+    refused(["apply", path, log, "-o", tmp_path / "o.csv"], capsys, "c.json", words, outputs=[tmp_path / "o.csv"])
+    assert log.read_bytes() == before
+
+
+def test_the_calibration_schema_passes_what_garant_writes(tmp_path):
+    # The other side: the hand-made file above, and the calibrations garant itself writes, pass.
+    from garant.verify.io import calibration, schemas
+    schemas.validate(_calibration(tmp_path), "calibration", "c.json")
+    path = tmp_path / "c.json"
+    path.write_text(json.dumps(_calibration(tmp_path)))
+    assert calibration.read(path)["kind"] == "norm"
+
+
+@pytest.mark.parametrize("scale, unit, looks", [(1000.0, "m/s^2", "raw counts"), (1.0, "count", "m/s^2")])
+def test_apply_refuses_a_log_of_another_unit_unless_told(tmp_path, capsys, scale, unit, looks):
+    # Issue 26: a calibration made in m/s^2 applied to a raw-count log (and the reverse), silently.
+    cal = _calibration(tmp_path)
+    cal["raw_unit"] = unit
+    path = tmp_path / "c.json"
+    path.write_text(json.dumps(cal))
+    log = _log_file(tmp_path, scale)
+    refused(["apply", path, log, "-o", tmp_path / "o.csv"], capsys, f"look like {looks}", "--trust-units",
+            outputs=[tmp_path / "o.csv"])
+    assert main(["apply", str(path), str(log), "-o", str(tmp_path / "o.csv"), "--trust-units"]) == 0
+
+
+def _positions(tmp_path):
+    P, f = _plan_rows()
+    data = tmp_path / "d.csv"
+    np.savetxt(data, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="")
+    return data
+
+
+@pytest.mark.parametrize("make_argv, words", [
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--json", d], "over an input"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--json", t / "link.csv"], "over an input"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--plot", d], "over an input"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--save", t / "c.json",
+                   "--export-imu-tk", t / "c.json"], "name the same file"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--json", t / "r.json",
+                   "--plot", t / "r.json"], "name the same file"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--json", f"{t}/out.json/"],
+     "remove the trailing slash"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--json", t / "fifo"], "over a FIFO"),
+    (lambda d, t: ["estimate", "--model", "two-axis", d, "--sigma", "1e-5", "--json", "/proc/self/fd/1"],
+     "/proc/self/fd/1"),
+    (lambda d, t: ["estimate", "--model", "two-axis", t / "fifo", "--sigma", "1e-5"], "not a FIFO"),
+    (lambda d, t: ["estimate", "--model", "two-axis", "/dev/zero", "--sigma", "1e-5"], "not a character device"),
+    (lambda d, t: ["calibrate-norm", "/dev/zero"], "not a character device"),
+    (lambda d, t: ["plan", "two-axis", "--csv", t / "fifo"], "over a FIFO"),
+    (lambda d, t: ["simulate", "--model", t / "s.toml", "--plan", "quarter", "--sigma", "1e-5", "-o", t / "s.toml"],
+     "over an input"),
+    (lambda d, t: ["plan", t / "s.toml", "--csv", t / "s.toml"], "over an input"),
+])
+def test_no_output_ever_replaces_an_input_or_a_special_file(tmp_path, capsys, make_argv, words):
+    # Issue 26: every command wrote over its own input when an output option named it (also through a
+    # symlink), onto a FIFO or /proc/self/fd/1; two outputs to one path kept one silently; a FIFO input
+    # hung forever and /dev/zero never ended.
+    import os
+    data = _positions(tmp_path)
+    (tmp_path / "link.csv").symlink_to(data)
+    os.mkfifo(tmp_path / "fifo")
+    (tmp_path / "s.toml").write_text(BASE)
+    inputs = {p: p.read_bytes() for p in (data, tmp_path / "s.toml")}
+    names = sorted(p.name for p in tmp_path.iterdir())
+    refused(make_argv(data, tmp_path), capsys, words)
+    assert {p: p.read_bytes() for p in inputs} == inputs
+    assert sorted(p.name for p in tmp_path.iterdir()) == names
+
+
+def test_a_means_file_is_refused_by_size_and_by_rows_before_it_is_read_whole(tmp_path, capsys, monkeypatch):
+    # Issue 30: a 60 MB means file of 30 M short lines needed 4.9 GB before the row limit refused it. The
+    # same file made small: the limits lowered 30,000 times; a sparse file stands for the large one.
+    from garant.verify.io import means
+    monkeypatch.setattr(means, "MAX_ROWS", 1000)
+    monkeypatch.setattr(means, "MAX_BYTES", 200_000)
+    short = tmp_path / "short.csv"
+    short.write_text("f_x,f_y,f_z,std_x,std_y,std_z,n_samples\n" + "1\n" * 5000)
+    refused(["repeatability", "--format", "means", short], capsys, "short.csv: more than 1,000 rows (line 1002)")
+    sparse = tmp_path / "sparse.csv"
+    with open(sparse, "wb") as fh:
+        fh.truncate(300_000)
+    refused(["repeatability", "--format", "means", sparse], capsys, "the means file is 0.3 MB, over the limit of 0.2 MB")

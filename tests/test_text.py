@@ -1,7 +1,7 @@
 """The fast CSV number formatter of `garant apply` (verify/io/text.py): every value read back is the value
 rounded to the stated digits, and a column rounded up never prints below the value (checked exactly with
-rational arithmetic). Dropping the widening before the directed rounding, or rounding bounds to nearest,
-turns the exact checks red."""
+rational arithmetic). Deciding the values next to a whole number without exact arithmetic, or rounding
+bounds to nearest, turns the exact checks red."""
 from fractions import Fraction
 
 import numpy as np
@@ -28,7 +28,7 @@ def test_up_never_below_and_nearest_within_half_a_unit(values, digits):
         assert up >= exact                                          # a bound is never printed lower
         if exact:
             unit = Fraction(10) ** (_exponent(exact) - digits + 1)   # one unit in the last printed digit
-            assert up - exact <= unit and abs(near - exact) <= unit / 2 * (1 + Fraction(1, 10**6))
+            assert up - exact < unit and abs(near - exact) <= unit / 2 * (1 + Fraction(1, 10**6))
         else:
             assert near == up == 0
 

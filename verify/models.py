@@ -53,6 +53,8 @@ def from_description(path):
     bytes by this very generator (keyed by SHA-256 of both; a stale entry is never used), else derived
     (SymPy), kept in the cache (best effort), and executed. No file beside the description is written."""
     try:
+        if os.path.exists(path) and not os.path.isfile(path):    # a FIFO would block, a device never end
+            raise DataError(f"{path}: the stand description must be a regular file")
         with open(path, "rb") as fh:
             raw = fh.read(1_000_001)
     except OSError as e:

@@ -52,7 +52,7 @@ def main(argv=None):
     args = parser(argv[0] if argv else None).parse_args(argv)
     warnings.simplefilter("ignore", RuntimeWarning)     # inputs are checked; a failure is one line
     try:
-        _check_outputs(args)
+        _check_paths(args)
         return args.run(args)
     except LPFailed as e:
         print(f"garant: error: {_plain(e)}", file=sys.stderr)
@@ -66,6 +66,9 @@ def main(argv=None):
     except OSError as e:
         print(f"garant: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
         return 2
+    finally:
+        from ..io import files
+        files.check_inputs([])                         # the API after a command protects nothing stale
 
 
 def _plain(e):
@@ -80,23 +83,21 @@ def _plain(e):
            "check the positions and the noise bound for extreme values"
 
 
-def _check_outputs(args):
-    """Every output path is checked before any work, so a command that fails writes nothing."""
-    from ..io.report import check_writable
-    for attr, what, kind in OUTPUTS:
-        path = getattr(args, attr, None)
-        if path is None:
+def _check_paths(args):
+    """Every input and output path before any work (io/files.py): inputs are regular files, outputs
+    never replace an input or each other, so a command that fails writes nothing."""
+    from ..io import files
+    out_attrs = {attr for attr, _, _ in OUTPUTS}
+    inputs = []
+    for attr, value in vars(args).items():
+        if attr in out_attrs:
             continue
-        if kind == "file":
-            check_writable(path, what)
-        elif os.path.exists(path) and not os.path.isdir(path):
-            raise DataError(f"{path}: {what} exists and is not a folder")
-        else:                                   # the first ancestor that exists must be a writable folder
-            up = os.path.dirname(os.path.abspath(path))
-            while not os.path.exists(up):
-                up = os.path.dirname(up)
-            if not os.path.isdir(up) or not os.access(up, os.W_OK):
-                raise DataError(f"{path}: {what} cannot be made: {up} is not a writable folder")
+        for v in (value if isinstance(value, list) else [value]):
+            if isinstance(v, str) and v != "-":
+                inputs.append(v)
+    files.check_inputs(inputs)
+    files.check_outputs([(getattr(args, attr), what, kind) for attr, what, kind in OUTPUTS
+                         if getattr(args, attr, None) is not None])
 
 
 if __name__ == "__main__":

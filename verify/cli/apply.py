@@ -10,6 +10,8 @@ def add(sub):
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
+    p.add_argument("--trust-units", action="store_true",
+                   help="apply even when the log's scale does not look like the calibration's raw unit (m/s^2 or counts)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="CSV: time_s (12 digits), ax, ay, az (m/s^2, 8 significant digits), bound_x, bound_y, "
                         "bound_z (m/s^2, worst case, 4 digits rounded up)")
@@ -28,6 +30,8 @@ def run(args):
     from ..io.text import csv_bytes
     cal = calibration.read(args.calibration)
     log = recordings.read_log(args.log, args.format, args.sensor, args.imu)
+    if not args.trust_units:
+        calibration.check_units(cal, args.log, log.raw[:100_000], args.calibration)
     n = len(log.t)
     worst, total = np.zeros(3), 0.0
 

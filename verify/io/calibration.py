@@ -25,16 +25,17 @@ X' = T K (X - B). garant writes T = M diag(M)^-1 (unit diagonal, the general for
 K = diag(M), B = b, so X' = M (X - b) exactly.
 """
 import json
-import math
 
 import numpy as np
 
 from ..errors import DataError
+from . import files, schemas
 from .report import write_json, write_text
 
 FORMAT = "garant-calibration-1"
-FIELDS = {"format": str, "kind": str, "M": list, "b": list, "bound_matrix": list, "bound_bias": list,
-          "bound_delta": list, "pendulosity_axes": list, "g": float, "raw_unit": str}
+MAX_BYTES = 1_000_000
+#: The largest condition number of M a calibration may have (an accelerometer's M is near a scaled rotation).
+MAX_CONDITION = 1e3
 
 
 def from_norm(res, axes):
@@ -87,34 +88,56 @@ def write(path, cal):
 
 
 def read(path):
-    """A garant calibration file, checked field by field; DataError with the field on any problem."""
+    """A garant calibration file: checked against its published schema (docs/schemas/calibration.schema.json)
+    and then for what a schema cannot state (M non-singular and well-conditioned, bound rows below 1);
+    DataError naming the file and the field on any problem."""
+    files.regular(path, "the calibration file", MAX_BYTES)
     try:
         with open(path, "rb") as fh:
-            data = json.loads(fh.read(1_000_000).decode("utf-8"))
+            data = json.loads(fh.read(MAX_BYTES).decode("utf-8"), parse_int=_int, parse_constant=_constant)
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as e:
-        raise DataError(f"{path}: not a JSON calibration file ({type(e).__name__})") from None
+    except (UnicodeDecodeError, ValueError, RecursionError) as e:
+        raise DataError(f"{path}: not a JSON calibration file ({_short(e)})") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise DataError(f"{path}: not a {FORMAT} file")
-    for key, kind in FIELDS.items():
-        if not isinstance(data.get(key), (int, float) if kind is float else kind):
-            raise DataError(f"{path}: field {key!r} is missing or not a {kind.__name__}")
+        raise DataError(f"{path}: not a {FORMAT} file (its \"format\" must be \"{FORMAT}\")")
+    schemas.validate(data, "calibration", path)
     out = dict(data)
-    for key, shape in (("M", (3, 3)), ("b", (3,)), ("bound_matrix", (3, 3)), ("bound_bias", (3,)),
-                       ("bound_delta", (3,)), ("pendulosity_axes", (3,))):
-        try:
-            arr = np.array(data[key], dtype=float)
-        except (TypeError, ValueError):
-            raise DataError(f"{path}: field {key!r} must hold numbers") from None
-        if arr.shape != shape or not np.all(np.isfinite(arr)):
-            raise DataError(f"{path}: field {key!r} must be {' x '.join(map(str, shape))} finite numbers")
-        out[key] = arr
-    if np.any(out["bound_matrix"] < 0) or np.abs(out["bound_matrix"]).sum(axis=1).max() >= 1:
-        raise DataError(f"{path}: bound_matrix must be nonnegative with row sums below 1")
-    if not math.isfinite(data["g"]) or data["g"] <= 0:
-        raise DataError(f"{path}: g must be a positive number (m/s^2)")
+    for key in ("M", "b", "bound_matrix", "bound_bias", "bound_delta", "pendulosity_axes"):
+        out[key] = np.array(data[key], dtype=float)
+    cond = np.linalg.cond(out["M"])
+    if not np.isfinite(cond) or cond > MAX_CONDITION:
+        raise DataError(f"{path}: M is singular or ill-conditioned (condition number {cond:.3g}, at most "
+                        f"{MAX_CONDITION:g}); a calibration's M is close to a scaled rotation")
+    if out["bound_matrix"].sum(axis=1).max() >= 1:
+        raise DataError(f"{path}: each row of bound_matrix must sum below 1 (the bound (I - B)^-1 needs it)")
     return out
+
+
+def _int(text):
+    """JSON integers: exact up to 18 digits, else a float (inf beyond 1e308; the schema refuses both)."""
+    return int(text) if len(text.lstrip("-")) <= 18 else float(text)
+
+
+def _constant(name):
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _short(e):
+    return str(e).splitlines()[0][:120]
+
+
+def check_units(cal, log_path, raw, cal_path):
+    """Refuse a log whose scale does not match the calibration's raw unit (a raw-count log corrected by a
+    calibration made in m/s^2, or the reverse): the median norm of the readings is within 20 % of g for a
+    log in m/s^2 (as calibrate-norm decides it)."""
+    norm = float(np.median(np.linalg.norm(raw, axis=1))) if len(raw) else 0.0
+    looks = "m/s^2" if abs(norm / cal["g"] - 1) < 0.2 else "count"
+    if looks != cal["raw_unit"]:
+        say = {"m/s^2": "m/s^2", "count": "raw counts"}
+        raise DataError(f"{log_path}: its readings (median norm {norm:.4g}) look like {say[looks]}, but {cal_path} was "
+                        f"made from a log in {say[cal['raw_unit']]}; correct a log of the same unit, or pass "
+                        "--trust-units if the scale is right")
 
 
 def apply(cal, raw):
@@ -155,8 +178,10 @@ def write_imu_tk(path, cal):
 
 def read_imu_tk(path):
     """(M, b) from an imu_tk calibration file: M = T K."""
+    files.regular(path, "the imu_tk calibration file", MAX_BYTES)
     try:
-        vals = np.array(open(path).read().split(), dtype=float)
+        with open(path) as fh:
+            vals = np.array(fh.read(MAX_BYTES).split(), dtype=float)
     except (OSError, ValueError) as e:
         raise DataError(f"{path}: not an imu_tk calibration file ({e})") from None
     if vals.size != 21:

@@ -10,11 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError
+from . import files
 from .positions import _number
 from .recordings import Still
 
 REQUIRED = ("f_x", "f_y", "f_z", "std_x", "std_y", "std_z", "n_samples")
 MAX_ROWS = 1_000_000
+#: The largest means file read: 200 bytes per row on average, refused by size before it is read.
+MAX_BYTES = 200 * MAX_ROWS
 
 
 @dataclass
@@ -27,17 +30,23 @@ class Run:
 
 
 def _rows(path):
+    files.regular(path, "the means file", MAX_BYTES)
+    lines = []
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
-            lines = [(k, l) for k, l in enumerate(fh, 1) if l.strip() and not l.lstrip().startswith("#")]
+            for k, line in enumerate(fh, 1):          # streamed: refused at the first row over the limit
+                if line.strip() and not line.lstrip().startswith("#"):
+                    lines.append((k, line))
+                    if len(lines) > MAX_ROWS + 1:
+                        raise DataError(f"{path}: more than {MAX_ROWS:,} rows (line {k})")
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     except UnicodeDecodeError:
         raise DataError(f"{path}: not a UTF-8 text CSV file") from None
     if not lines:
         raise DataError(f"{path}: empty file; expected a header with {', '.join(REQUIRED)}")
-    if len(lines) > MAX_ROWS:
-        raise DataError(f"{path}: more than {MAX_ROWS} rows")
+    if len(lines) > MAX_ROWS + 1:                     # the header and MAX_ROWS rows
+        raise DataError(f"{path}: more than {MAX_ROWS:,} rows")
     try:
         table = list(csv.reader(l for _, l in lines))
     except csv.Error as e:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import DataError
+from . import files
 
 
 @dataclass
@@ -43,9 +44,14 @@ def _number(text, path, line, col):
     return v
 
 
+#: The largest positions or plan file read (1e7 rows of five numbers are about 600 MB).
+MAX_BYTES = 2_000_000_000
+
+
 def read_positions(path, angles=("alpha", "beta"), mountings=None):
     """Read a CSV with columns <angle>_deg for each angle, f1, f2, f3 (m/s^2), and `mount` (a name
     such as +y+z+x) when the stand uses several mountings; other columns are kept."""
+    files.regular(path, "the positions file", MAX_BYTES)
     angle_cols = [f"{a}_deg" for a in angles]
     required = angle_cols + ["f1", "f2", "f3"] + (["mount"] if mountings and len(mountings) > 1 else [])
     fast = _numeric(path, required)
@@ -124,6 +130,7 @@ def _numeric(path, required, others=False):
 def read_plan(path, angles, mountings=None):
     """A plan file: columns <angle>_deg for each angle (degrees), and `mount` when the stand uses several
     mountings (the file `garant plan --csv` writes). Returns (angles_deg (N, n), mounts (N,) or None)."""
+    files.regular(path, "the plan file", MAX_BYTES)
     multi = mountings is not None and len(mountings) > 1
     cols = [f"{a}_deg" for a in angles] + (["mount"] if multi else [])
     fast = None if multi else _numeric(path, cols, others=True)

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError
-from . import mimu
+from . import files, mimu
 
 FORMATS = ("imu_tk", "csv", "openaxes", "mimu")
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
@@ -28,6 +28,8 @@ TIME_COLUMNS = {"time_s": 1.0, "t_s": 1.0, "time": 1.0, "t": 1.0, "timestamp": 1
 ACCEL_COLUMNS = (("x", "y", "z"), ("ax", "ay", "az"), ("acc_x", "acc_y", "acc_z"), ("accel_x", "accel_y", "accel_z"),
                  ("f1", "f2", "f3"))
 MIN_SAMPLES = 100
+#: The largest log read (1e7 samples of four numbers are about 650 MB as text).
+MAX_LOG_BYTES = 4_000_000_000
 
 
 def guess_format(path):
@@ -125,6 +127,7 @@ def _check_time(path, t, named_unit):
 def read_log(path, fmt=None, sensor="adxl355", imu=None):
     """Time (s) and three accelerometer columns of a log; one clear line on any problem. `imu` picks
     one IMU of a multi-IMU stream (mimu: 1-8)."""
+    files.regular(path, "the log", MAX_LOG_BYTES)
     step, note = None, ""
     try:
         fmt = fmt or guess_format(path)

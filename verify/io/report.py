@@ -6,6 +6,7 @@ import tempfile
 from pathlib import Path
 
 from ..errors import DataError
+from . import files
 
 
 def table(headers, rows, out=None):
@@ -72,6 +73,7 @@ def write_chunks(path, chunks, mode="wb"):
         with os.fdopen(fd, mode) as fh:
             for chunk in chunks:
                 fh.write(chunk)
+        files.refuse_input(path)
         os.replace(tmp, path)
     except BaseException:
         os.unlink(tmp)
@@ -87,16 +89,9 @@ def save_figure(fig, path):
 
 
 def check_writable(path, what):
-    """Refuse an output path before any work: its folder must exist and be writable, and it must not
-    be a folder itself."""
-    path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise DataError(f"{path}: {what} is a folder, not a file")
-    if not parent.is_dir():
-        raise DataError(f"{path}: the folder {parent} for {what} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise DataError(f"{path}: the folder {parent} for {what} is not writable")
+    """Refuse an output path before any work (io/files.py: not an input, a folder, a device or a FIFO; its
+    folder exists and is writable)."""
+    files.check_outputs([(path, what, "file")])
 
 
 def markdown_table(headers, rows):

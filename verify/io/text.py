@@ -27,9 +27,15 @@ def _decimal(a, mode, digits):
         if not fix.any():
             break
         e += fix
-    # the scaling is correct to a few units in the last place: directed rounding first widens by 1e-15
-    m = np.rint(scaled) if mode == "nearest" else np.ceil(scaled * (1 + 1e-15)) if mode == "up" else \
-        np.floor(scaled * (1 - 1e-15))
+    # the scaling is correct to a few units in the last place: a directed rounding that the widening by
+    # 1e-15 could change is decided exactly (rational arithmetic, the few values next to a whole number)
+    if mode == "nearest":
+        m = np.rint(scaled)
+    else:
+        r = np.ceil if mode == "up" else np.floor
+        m, other = r(scaled * (1 - 1e-15)), r(scaled * (1 + 1e-15))
+        for i in np.flatnonzero((m != other) & ~zero):
+            m[i] = _directed(a[i], int(digits - 1 - e[i]), mode)
     over = m >= 10 ** digits                    # 9.9999999996 rounded: one digit more
     if over.any():
         m[over] = {"up": np.ceil, "down": np.floor, "nearest": np.rint}[mode](m[over] / 10)
@@ -39,6 +45,14 @@ def _decimal(a, mode, digits):
         m[under], e[under] = 10 ** digits - 1, e[under] - 1
     m[zero] = 0
     return m.astype(np.int64), e
+
+
+def _directed(a, shift, mode):
+    """a * 10**shift rounded up or down, exactly."""
+    import math
+    from fractions import Fraction
+    v = Fraction(a) * Fraction(10) ** shift
+    return float(math.ceil(v) if mode == "up" else math.floor(v))
 
 
 def _exact(x, up, digits):
