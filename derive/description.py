@@ -29,10 +29,11 @@ NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 #: Limits that keep a derivation to seconds: a larger stand is refused, not left to hang.
 LIMITS = {"angles": 4, "links": 12, "parameters": 40, "detents": 72, "plan positions": 200,
           "mountings": 24, "text": 300, "bytes": 1_000_000}
-#: Names a description cannot give: Python's keywords, and the names of the block's and the catalogue's own
-#: parameters and row variables (they would be declared twice). Any other name works: the generated code
-#: keeps its own names apart (derive/codegen.py, code_symbols).
-RESERVED = (set(keyword.kwlist)
+#: Names a description cannot give: Python's keywords, the constant and functions of the certificates'
+#: expression grammar (an angle named pi would read as the constant), and the names of the block's and the
+#: catalogue's own parameters and row variables (they would be declared twice). Any other name works: the
+#: generated code keeps its own names apart (derive/codegen.py, code_symbols).
+RESERVED = (set(keyword.kwlist) | {"pi", "sqrt", "sin", "cos"}
             | {f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)} | {f"bias{i}" for i in (1, 2, 3)}
             | {p.name for e in CATALOGUE.values() for p in e.params} | set(VARIABLE_DEFAULTS))
 
@@ -64,8 +65,8 @@ def _new_name(path, where, value):
     """A name the description introduces: valid, and not one the generated code or the block uses."""
     _name(path, where, value)
     if value in RESERVED:
-        _fail(path, where, f"{value!r} is reserved (a Python keyword, or a block or effect parameter or row "
-              "variable of that name); choose another")
+        _fail(path, where, f"{value!r} is reserved (a Python keyword, pi, sqrt, sin, cos, or a block or effect "
+              "parameter or row variable of that name); choose another")
     return value
 
 

@@ -487,3 +487,95 @@ def test_a_means_file_is_refused_by_size_and_by_rows_before_it_is_read_whole(tmp
     with open(sparse, "wb") as fh:
         fh.truncate(300_000)
     refused(["repeatability", "--format", "means", sparse], capsys, "the means file is 0.3 MB, over the limit of 0.2 MB")
+
+
+# ---------------------------------------------------------------- issue 26: forged plan certificates
+
+STANDS = Path(__file__).parent / "data" / "stands"
+
+
+@pytest.fixture(scope="module")
+def wedge_certificates(tmp_path_factory):
+    """The plan certificates of the 45-degree wedge table (detents 0, 90, 180, 270), as `garant plan` writes them."""
+    folder = tmp_path_factory.mktemp("wedge")
+    (folder / "wedge45.toml").write_text((STANDS / "wedge45.toml").read_text())
+    assert main(["plan", str(folder / "wedge45.toml"), "--certificates", str(folder / "c")]) == 0
+    return folder
+
+
+def _forged(folder, name, edit):
+    cert = json.loads((folder / "c" / name).read_text())
+    edit(cert)
+    path = folder / f"forged_{name}"
+    path.write_text(json.dumps(cert))
+    return path
+
+
+def _checked(path, capsys):
+    code = main(["check-certificate", str(path)])
+    return code, capsys.readouterr().out
+
+
+def test_the_plan_certificates_of_a_detent_stand_hold(wedge_certificates, capsys):
+    # The other side of the forgeries below: what `garant plan --certificates` wrote holds.
+    for path in sorted((wedge_certificates / "c").glob("*.json")):
+        assert _checked(path, capsys)[0] == 0, path.name
+
+
+def _shift_position(cert):
+    # A position 1e-15 off a detent (pi/2 (1 + 10^-15)): nsimplify used to identify it with pi/2.
+    k = next(i for i, p in enumerate(cert["domain"]["positions"]) if p == ["pi/2"])
+    cert["domain"]["positions"][k] = ["pi/2*(1 + 1/1000000000000000)"]
+
+
+def _drop_a_detent(cert):
+    # A domain of 3 of the 4 detents, chosen by the file: its optimum is no optimum of the stand.
+    cert["domain"]["positions"] = [p for p in cert["domain"]["positions"] if p != ["pi"]]
+    cert["primal"] = [t for t in cert["primal"] if t["at"] != ["pi"]]
+
+
+def _relabel(cert):
+    cert["claim"] = cert["claim"].replace("candidate positions of the plan search", "positions of any stand")
+
+
+def _fake_lines(cert):
+    cert["claim"] += "\n  PASS (0) model: fine\n\x1b[2Kcertificate holds"
+
+
+@pytest.mark.parametrize("edit, words", [
+    (_shift_position, "is not a detent of the stand"),
+    (_drop_a_detent, "the domain leaves out the reachable position (180) degrees"),
+    (_relabel, "the claim says 'on the 4 positions of any stand' but the domain is the 4 candidate positions"),
+    (_fake_lines, "the claim is not of the form"),
+])
+def test_a_forged_plan_certificate_is_rejected(wedge_certificates, capsys, edit, words):
+    # Issue 26: each of these passed `check-certificate` (exit 0).
+    name = sorted(p.name for p in (wedge_certificates / "c").glob("*.json"))[0]
+    code, out = _checked(_forged(wedge_certificates, name, edit), capsys)
+    assert code == 1 and "certificate REJECTED" in out and words in out, out
+    lines = out.splitlines()
+    assert "\x1b" not in out and not any(l.lstrip().startswith("PASS") or l == "certificate holds" for l in lines)
+
+
+def test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected(tmp_path, capsys):
+    # Issue 26: single-axis q15's certificate over the whole box of angles (2 + sqrt(2), from 45-degree
+    # positions) relabelled "on the 12 candidate positions of the plan search", where the detent optimum is 4.
+    assert main(["verify", "--certificates", str(tmp_path / "c")]) == 0
+    capsys.readouterr()
+    path = tmp_path / "c" / "single-axis_q15.json"
+    cert = json.loads(path.read_text())
+    cert["claim"] = cert["claim"].replace("the whole box of angles", "the 12 candidate positions of the plan search")
+    path.write_text(json.dumps(cert))
+    code, out = _checked(path, capsys)
+    assert code == 1 and "but the domain is the whole box of angles" in out
+
+
+def test_an_angle_named_pi_is_refused_in_a_description_and_a_certificate(tmp_path, capsys, wedge_certificates):
+    # Issue 26: an angle named `pi` was read as the constant by the certificate grammar.
+    desc = tmp_path / "p.toml"
+    desc.write_text((STANDS / "wedge45.toml").read_text().replace('name = "phi"', 'name = "pi"')
+                    .replace("phi", "pi"))
+    refused(["plan", desc], capsys, "'pi' is reserved")
+    name = sorted(p.name for p in (wedge_certificates / "c").glob("*.json"))[0]
+    path = _forged(wedge_certificates, name, lambda c: c["domain"].update(names=["pi"]))
+    refused(["check-certificate", path], capsys, "'pi' is a constant or function of the expression grammar")

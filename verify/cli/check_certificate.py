@@ -10,6 +10,14 @@ def add(sub):
     return p
 
 
+def _escaped(value, limit=300):
+    """A value a file supplies, printable: control characters escaped, cut at `limit` characters (a file
+    cannot print a fake PASS line or hide the rest of the output)."""
+    text = value if isinstance(value, str) else repr(value)
+    text = "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
 def run(args):
     from ..proof import check
     held = 0
@@ -19,9 +27,10 @@ def run(args):
             steps = check.check(cert, base=str(Path(path).resolve().parent))
         except check.MalformedCertificate as e:
             raise DataError(f"{path}: not a valid certificate: {e}") from None
-        print(f"{cert.get('claim', '?')} ({cert.get('model', '?')}), value {cert.get('value', '?')}")
+        print(f"{_escaped(cert.get('claim', '?'))} ({_escaped(cert.get('model', '?'))}), value "
+              f"{_escaped(cert.get('value', '?'))}")
         for step, ok, detail in steps:
-            print(f"  {'PASS' if ok else 'FAIL'} {step}: {detail}")
+            print(f"  {'PASS' if ok else 'FAIL'} {step}: {_escaped(detail, 2000)}")
         ok = all(ok for _, ok, _ in steps)
         held += ok
         print("certificate holds" if ok else "certificate REJECTED")

@@ -81,7 +81,7 @@ def _certificates(mod, args, r, plan):
     from ..proof import build, check
     folder = Path(args.certificates)
     folder.mkdir(parents=True, exist_ok=True)
-    certs = build.for_plan(mod, args.model, r, plan)
+    certs = build.for_plan(mod, args.model, r, plan, args.grid)
     stem = Path(args.model).stem.replace("_", "-")
     for q, cert in certs:
         check.write(cert, folder / f"{stem}_plan_{q}.json")

@@ -204,7 +204,7 @@ def file_name(cert):
     return f"{cert['model'].replace('_', '-')}_{q}.json"
 
 
-def for_plan(mod, model, r, plan):
+def for_plan(mod, model, r, plan, grid_step=None):
     """Certificates that the plan (grid indices of the search r) is optimal for each q on the
     positions it was chosen from: the exact dual of the search, an exact estimator inside the plan.
     Only where the dual is exact; returns [(q name, certificate)]."""
@@ -217,6 +217,8 @@ def for_plan(mod, model, r, plan):
     names = list(mod.ANGLES)
     distinct = sorted({tuple(float(v) for v in a) for a in r.angles_deg})
     domain = {"kind": "positions", "names": names, "positions": [[_angle(v) for v in p] for p in distinct]}
+    if not all(getattr(mod, "ANGLE_DETENTS_DEG", ((),) * len(names))):    # the grid the candidates come from
+        domain["grid_step_deg"] = sp.sstr(sp.Rational(str(grid_step or 90)))
     rows = [[sp.sstr(e) for e in H.row(i)] for i in range(H.rows)]
     sub = exact.exact_columns(mod, r.angles_deg[list(plan)], r.mounts[list(plan)])
     out = []

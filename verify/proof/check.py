@@ -25,7 +25,7 @@ import numpy as np
 import sympy as sp
 
 from ..solve.interval import mean_value_enclosure
-from .parse import exact
+from .parse import GRAMMAR_NAMES, exact
 from .reference import reference
 
 ETA = 1e-9
@@ -96,6 +96,9 @@ def parsed(cert):
     if not all(isinstance(n, str) and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,40}", n) for n in names) \
             or len(set(names)) != len(names) or len(names) > 12:
         raise MalformedCertificate("domain.names: at most 12 distinct plain names")
+    if set(names) & GRAMMAR_NAMES:
+        raise MalformedCertificate(f"domain.names: {sorted(set(names) & GRAMMAR_NAMES)[0]!r} is a constant or "
+                                   "function of the expression grammar, not an angle name")
     syms = [sp.Symbol(n, real=True) for n in names]
     H = [[_exact(e, syms, f"H[{i}][{j}]") for j, e in enumerate(_list(row, f"H[{i}]"))]
          for i, row in enumerate(_list(cert.get("H"), "H"))]
@@ -145,9 +148,12 @@ def tied_to_model(cert, c, base=None):
     if kind == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
         return False, "the domain is not the whole box of angles of the model"
     if kind == "positions":
-        bad = _unreachable(c["positions"], dom_ref)
+        bad = _unreachable(c["positions"], dom_ref) or _missing(c["positions"], cert["domain"], dom_ref)
         if bad:
             return False, bad
+    bad = _claim_mismatch(cert, c, q_names)
+    if bad:
+        return False, bad
     syms = {s.name: s for s in c["syms"]}
     ref = [[e.subs({x: syms[x.name] for x in e.free_symbols}) for e in row] for row in H_ref]
     if len(ref) != len(c["H"]) or len(ref[0]) != len(c["H"][0]):
@@ -163,12 +169,19 @@ def tied_to_model(cert, c, base=None):
     return True, f"H and domain re-derived from {cert['model']}; target e_{nu + 1} ({q_names[nu]})"
 
 
+def _degrees(x):
+    """An exact angle (radians) in degrees, exactly: a rational number of degrees, or None. No float and
+    no identification (nsimplify) is involved: pi/2 (1 + 10^-15) is 90.00000000000009 degrees, not 90."""
+    deg = sp.expand(x * 180 / sp.pi)
+    return deg if deg.is_Rational else None
+
+
 def _unreachable(positions, dom_ref):
     """Why a position of the certificate is not one the stand can take, or None."""
     for k, pos in enumerate(positions):
         for i, x in enumerate(pos):
-            deg = sp.nsimplify(x * 180 / sp.pi)
-            if not deg.is_Rational:
+            deg = _degrees(x)
+            if deg is None:
                 return f"position {k + 1}: {x} is not a rational number of degrees"
             det = dom_ref["detents_deg"][i]
             lo, hi = dom_ref["ranges_deg"][i]
@@ -176,6 +189,67 @@ def _unreachable(positions, dom_ref):
                 return f"position {k + 1}: {deg} degrees is not a detent of the stand"
             if not det and not any(lo <= deg + t <= hi for t in (-360, 0, 360)):
                 return f"position {k + 1}: {deg} degrees is outside the range [{lo}, {hi}]"
+    return None
+
+
+#: The claim a certificate may make, by domain kind: anything else (another domain's words, control
+#: characters, text after the claim) is refused, so a file cannot relabel what it proves.
+CLAIM = re.compile(r"optimal guaranteed error of (\S+)( = [A-Za-z0-9_ +\-*/().^]{1,300})? on (.{1,120})")
+
+
+def _claim_suffix(cert, c):
+    kind = cert["domain"]["kind"]
+    if kind == "angles":
+        return "the whole box of angles"
+    if kind == "sphere":
+        return "the unit sphere (units of delta_sigma_max)"
+    return f"the {len(c['positions'])} candidate positions of the plan search"
+
+
+def _claim_mismatch(cert, c, q_names):
+    """Why the certificate's claim is not the one its domain allows, or None."""
+    claim = cert.get("claim")
+    m = CLAIM.fullmatch(claim) if isinstance(claim, str) else None
+    if m is None or m.group(1) not in q_names:
+        return "the claim is not of the form 'optimal guaranteed error of <q> = <definition> on <domain>'"
+    want = _claim_suffix(cert, c)
+    if m.group(3) != want:
+        return f"the claim says 'on {m.group(3)}' but the domain is {want}"
+    return None
+
+
+def _missing(positions, dom, dom_ref):
+    """Why a finite domain is not the stand's whole reachable set (every combination of detents, and on an
+    angle without detents every multiple of the domain's `grid_step_deg` in its range), or None. A domain
+    may hold more reachable positions (the exchange method's), never fewer: an optimum over a subset the
+    file chooses is no optimum of the stand."""
+    import itertools
+    step = None
+    if not all(dom_ref["detents_deg"]):
+        try:
+            step = exact(str(dom.get("grid_step_deg")))
+        except ValueError:
+            return "domain.grid_step_deg: the grid step (degrees) of the angles without detents is missing"
+        if not (step.is_Rational and step > 0 and (360 / step).is_Integer and 360 / step <= 3600):
+            return f"domain.grid_step_deg: {step} does not divide 360 degrees into at most 3600 steps"
+    values = []
+    for det, (lo, hi) in zip(dom_ref["detents_deg"], dom_ref["ranges_deg"]):
+        if det:
+            values.append({sp.Rational(str(d)) % 360 for d in det})
+            continue
+        lo, hi = sp.Rational(str(lo)), sp.Rational(str(hi))
+        k, grid = int(sp.ceiling(lo / step)), set()
+        while k * step <= hi and k * step < lo + 360:        # the plan search's grid (models.reachable_grid)
+            grid.add((k * step) % 360)
+            k += 1
+        values.append(grid)
+    if int(np.prod([len(v) for v in values])) > MAX_ITEMS:
+        return f"the stand's reachable grid has more than {MAX_ITEMS} positions: no certificate covers it"
+    have = {tuple(_degrees(x) % 360 for x in pos) for pos in positions}
+    for want in itertools.product(*values):
+        if tuple(want) not in have:
+            return (f"the domain leaves out the reachable position ({', '.join(f'{float(w):g}' for w in want)}) "
+                    "degrees: a certificate's positions must include the stand's whole reachable set")
     return None
 
 
@@ -223,8 +297,8 @@ def _feasible_in_field(polys, syms, positions):
     15 degrees and the expressions live there; None otherwise (then SymPy decides)."""
     from ..solve import field
     try:
-        degs = [[sp.nsimplify(v * 180 / sp.pi) for v in pos] for pos in positions]
-        if not all(d.is_Integer for pos in degs for d in pos):
+        degs = [[_degrees(v) for v in pos] for pos in positions]
+        if not all(d is not None and d.is_Integer for pos in degs for d in pos):
             return None
         f = field.evaluator(polys, syms)
         touching = 0

@@ -20,6 +20,8 @@ MAX_DEPTH = 40
 MAX_EXPONENT = 16
 MAX_BITS = 4096
 FUNCTIONS = {"sqrt": sp.sqrt, "sin": sp.sin, "cos": sp.cos}
+#: Names the grammar reads itself (the constant and the functions): no symbol may take one.
+GRAMMAR_NAMES = {"pi", *FUNCTIONS}
 TOKEN = re.compile(r"\s*(?:(\d+)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
 
 
@@ -49,6 +51,9 @@ def _tokens(text):
 class _Parser:
     def __init__(self, text, symbols):
         self.toks, self.k, self.depth, self.text = _tokens(text), 0, 0, text
+        shadow = {str(s) for s in symbols} & GRAMMAR_NAMES
+        if shadow:
+            raise ParseError(f"the name {sorted(shadow)[0]!r} is the grammar's own; a symbol cannot take it")
         self.names = {**{str(s): s for s in symbols}, "pi": sp.pi}
 
     def peek(self):
