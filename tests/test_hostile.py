@@ -188,6 +188,9 @@ def _csv(path, header, cols):
     ("csv", lambda p: _csv(p, "time_s,x,x,z", [_log()[0], *_log()[1].T]), ("duplicate",)),
     ("imu_tk", lambda p: p.write_bytes(b"0 1 2 \xff\n" * 200), ("not a number",)),
     ("imu_tk", lambda p: p.write_text("0 1 2 3\n" * 50), ("only 50 samples",)),
+    # issue 30: a 1e308 reading ended in "found only 0 still interval(s)", which named no cause
+    ("imu_tk", lambda p: p.write_text("".join(f"{k} 0 0 9.81\n" for k in range(300)) + "300 1e308 0 0\n"),
+     ("line 301: 1e+308 is beyond any reading",)),
 ])
 def test_bad_log(tmp_path, capsys, fmt, make, words):
     path = tmp_path / "log.txt"
@@ -579,3 +582,10 @@ def test_an_angle_named_pi_is_refused_in_a_description_and_a_certificate(tmp_pat
     name = sorted(p.name for p in (wedge_certificates / "c").glob("*.json"))[0]
     path = _forged(wedge_certificates, name, lambda c: c["domain"].update(names=["pi"]))
     refused(["check-certificate", path], capsys, "'pi' is a constant or function of the expression grammar")
+
+
+def test_a_certificate_with_a_5000_digit_integer_is_one_line(tmp_path, capsys):
+    # Issue 30: "Exceeds the limit (4300 digits) for integer string conversion" named no file.
+    path = tmp_path / "c.json"
+    path.write_text('{"format": "garant-certificate-1", "junk": ' + "1" * 5000 + "}")
+    refused(["check-certificate", path], capsys, "c.json: not a valid certificate: an integer of 5000 digits")

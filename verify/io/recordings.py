@@ -28,6 +28,8 @@ TIME_COLUMNS = {"time_s": 1.0, "t_s": 1.0, "time": 1.0, "t": 1.0, "timestamp": 1
 ACCEL_COLUMNS = (("x", "y", "z"), ("ax", "ay", "az"), ("acc_x", "acc_y", "acc_z"), ("accel_x", "accel_y", "accel_z"),
                  ("f1", "f2", "f3"))
 MIN_SAMPLES = 100
+#: The largest magnitude of a reading or time stamp (microseconds since 1970 are 1.7e15).
+MAX_VALUE = 1e17
 #: The largest log read (1e7 samples of four numbers are about 650 MB as text).
 MAX_LOG_BYTES = 4_000_000_000
 
@@ -67,6 +69,11 @@ def _load(path, delimiter, usecols, skip):
         bad = np.flatnonzero(~np.isfinite(data).all(axis=1))             # an overflow: then no row is bad)
         if bad.size:
             raise DataError(f"{path} line {int(bad[0]) + skip + 1}: NaN or infinite value")
+    big = np.abs(data) > MAX_VALUE
+    if big.any():
+        row, col = (int(v[0]) for v in np.nonzero(big))
+        raise DataError(f"{path} line {row + skip + 1}: {data[row, col]:g} is beyond any reading or time stamp "
+                        f"(|value| > {MAX_VALUE:g})")
     return data
 
 

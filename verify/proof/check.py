@@ -456,6 +456,13 @@ def write(cert, path):
     write_text(path, json.dumps(cert, indent=1) + "\n")
 
 
+def _json_int(text):
+    """A JSON integer of at most 40 digits (exact numbers are strings of the grammar; row indices small)."""
+    if len(text.lstrip("-")) > 40:
+        raise ValueError(f"an integer of {len(text.lstrip('-'))} digits (at most 40)")
+    return int(text)
+
+
 def read(path):
     """The JSON of a certificate file; MalformedCertificate if it is not JSON or is too large or deep."""
     import os
@@ -473,8 +480,10 @@ def read(path):
     if len(data) > MAX_BYTES:
         raise MalformedCertificate(f"larger than {MAX_BYTES} bytes")
     try:
-        return json.loads(data.decode("utf-8"))
+        return json.loads(data.decode("utf-8"), parse_int=_json_int)
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MalformedCertificate(f"not JSON ({e})") from None
+    except ValueError as e:
+        raise MalformedCertificate(str(e)) from None
     except RecursionError:
         raise MalformedCertificate("JSON nested too deep") from None
