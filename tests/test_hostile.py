@@ -295,6 +295,7 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
     (["plan", "two-axis", "--grid", "1", "--max-candidates", "129599", "--json", "{tmp}/p.json"],
      "--grid 1 has 1.3e+05 positions, over the limit of 129,599"),
     (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e308"], "--sigma: '1e308' must be < 1"),
+    (["repeatability", "--format", "means", "{data}", "--rate", "1e-300"], "must be a sample rate in Hz"),
 ])
 def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
     # Issue 30: simulate with an infinite effect said "nothing written" and left d.csv full of inf; --prior 2

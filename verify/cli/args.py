@@ -42,6 +42,14 @@ def gravity(text):
     return value
 
 
+def rate(text):
+    """An argparse type: a sample rate in Hz, between 0.01 and 1e6."""
+    value = positive(text)
+    if not 0.01 <= value <= 1e6:
+        raise argparse.ArgumentTypeError(f"{text!r} must be a sample rate in Hz between 0.01 and 1e6")
+    return value
+
+
 def model(p, *, positional=False):
     help_ = f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml"
     if positional:

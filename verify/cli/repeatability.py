@@ -20,7 +20,7 @@ def add(sub):
     p.add_argument("--count", type=a.small, metavar="STEP",
                    help="quantisation step of the readings a means file averaged, m/s^2, below 1 (the noise rule adds "
                    "half of it; a raw log states its own)")
-    p.add_argument("--rate", type=a.positive, metavar="HZ", help="sample rate of a means file's start_sample and "
+    p.add_argument("--rate", type=a.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
                    "stop_sample columns (gives the runs a time, for the bias_drift effect)")
     a.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
