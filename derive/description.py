@@ -96,9 +96,15 @@ def _degrees(path, where, v):
     return r if isinstance(v, float) else v
 
 
+def _is_number(v, limit=1e15):
+    """A finite TOML number of magnitude below `limit` (an integer of 400 digits is refused, not converted:
+    math.isfinite of it raised OverflowError)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and (
+        abs(v) < limit if isinstance(v, int) else math.isfinite(v) and abs(v) < limit)
+
+
 def _numbers(path, where, value, length=None, most=None):
-    if not isinstance(value, list) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                              and math.isfinite(v) for v in value):
+    if not isinstance(value, list) or not all(_is_number(v) for v in value):
         _fail(path, where, f"{_short(value)} is not a list of numbers")
     if length is not None and len(value) != length:
         _fail(path, where, f"expected {length} numbers, found {len(value)}")
@@ -111,8 +117,7 @@ def _bound(path, where, value):
     """An a-priori bound |parameter| <= bound (its unit): a finite number > 0 and < 1, or absent."""
     if value is None:
         return None
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
-            or not 0 < value < 1:
+    if not _is_number(value) or not 0 < value < 1:
         _fail(path, where, f"{_short(value)} is not a bound: give a number > 0 and < 1 (rad, or dimensionless)")
     return float(value)
 
@@ -135,8 +140,7 @@ def _axis(path, where, value):
     """(axis, sign): a coordinate axis (1, 2, 3) and its sign, or an exact unit vector (a tilted axis,
     the vector written normalised exactly) and +1."""
     if isinstance(value, list):
-        if len(value) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                      and math.isfinite(v) and abs(v) < 1e6 for v in value):
+        if len(value) != 3 or not all(_is_number(v, 1e6) for v in value):
             _fail(path, where, "an axis vector needs three finite numbers")
         if not any(value):
             _fail(path, where, "an axis of zero length")
@@ -243,8 +247,7 @@ def from_data(data, path="<description>"):
                 _fail(path, where, "a fixed link takes 'angle_deg' and 'error' only")
             fixed = l.get("angle_deg")
             if fixed is not None:
-                if not isinstance(fixed, (int, float)) or isinstance(fixed, bool) or not math.isfinite(fixed) \
-                        or not -360 <= fixed <= 360:
+                if not _is_number(fixed) or not -360 <= fixed <= 360:
                     _fail(path, f"{where}.angle_deg", f"{_short(fixed)} is not an angle in degrees within one turn")
                 fixed = _exact(_degrees(path, f"{where}.angle_deg", fixed))
             links.append(Link(axis, None, ref(f"{where}.error", l["error"]) if "error" in l else None, sign,
@@ -288,7 +291,8 @@ def from_data(data, path="<description>"):
     plan = est.get("plan_deg", [])
     if not isinstance(plan, list) or len(plan) > LIMITS["plan positions"]:
         _fail(path, "estimation.plan_deg", f"give a list of at most {LIMITS['plan positions']} positions")
-    plan = tuple(tuple(_numbers(path, f"estimation.plan_deg[{i}]", p, length=len(angles)))
+    plan = tuple(tuple(_degrees(path, f"estimation.plan_deg[{i}]", v)
+                       for v in _numbers(path, f"estimation.plan_deg[{i}]", p, length=len(angles)))
                  for i, p in enumerate(plan, 1))
     remount = est.get("remount", False)
     if not isinstance(remount, bool):
