@@ -45,13 +45,30 @@ def test_mimu_stream_checksum_axis_map_and_time(tmp_path):
     data = b"\x01\xaa\x02" + packets[0] + packets[1] + bytes(bad) + packets[3] + packets[4]
     path = tmp_path / "data.bin"
     path.write_bytes(data)
-    t, f, step, skipped = mimu.read(str(path), 1)
-    assert skipped == 3 + mimu.PACKET
+    t, f, step, skipped, jumps = mimu.read(str(path), 1)
+    assert skipped == 3 + mimu.PACKET and jumps == 0                    # a wrap and a gap are no jump
     assert np.allclose(t, [0, 1 / 62.5, 3 / 62.5, 4 / 62.5])           # time across the wrap, the gap kept
     assert np.allclose(f / step, acc[0] + np.array([0, 1, 3, 4])[:, None])
-    _, f2, _, _ = mimu.read(str(path), 2)                              # a bottom IMU: x' = -y, y' = -x, z' = -z
+    _, f2, _, _, _ = mimu.read(str(path), 2)                              # a bottom IMU: x' = -y, y' = -x, z' = -z
     raw = acc[1] + np.array([0, 1, 3, 4])[:, None]
     assert np.allclose(f2 / step, np.column_stack([-raw[:, 1], -raw[:, 0], -raw[:, 2]]))
+
+
+def test_mimu_time_stamps_that_reset_or_go_back_are_counted_and_said(tmp_path, capsys):
+    # Issue 26: stamps going back every packet, or reset to 0 mid-stream, were accepted without a word.
+    acc = np.arange(24).reshape(8, 3) * 7 - 80
+    for stamps, want in (([5_000_000 + k * 1_024_000 for k in range(3)] + [k * 1_024_000 for k in range(3)], 1),
+                         ([9_000_000 - (k % 2) * 1_024_000 for k in range(6)], 3)):
+        path = tmp_path / "data.bin"
+        path.write_bytes(b"".join(_packet(256 * k, s, acc) for k, s in enumerate(stamps)))
+        t, _, _, _, jumps = mimu.read(str(path), 1)
+        assert jumps == want and np.allclose(t, np.arange(6) / mimu.RATE_HZ)
+    from garant.verify.io import recordings
+    path.write_bytes(b"".join(_packet(256 * k, (k % 60) * 1_024_000, acc) for k in range(120)))   # a reset
+    assert "1 time stamp(s) repeat, go back or jump (a reset?)" in recordings.read_log(str(path), "mimu", imu=1).note
+    path.write_bytes(b"".join(_packet(256 * k, 9_000_000 - k * 1_024_000, acc) for k in range(6)))
+    with pytest.raises(DataError, match="the time stamps do not advance"):      # back at every packet
+        mimu.read(str(path), 1)
 
 
 def test_mimu_stream_errors(tmp_path):
@@ -124,7 +141,8 @@ def test_means_file_errors(tmp_path):
 @needs_real
 def test_raw_stream_agrees_with_the_published_means():
     """The reader against the means extracted independently (the data's README): run 1 is exp_1."""
-    t, f, step, _ = mimu.read(str(MIMU / "raw" / "exp_1" / "data.bin"), 3)
+    t, f, step, _, jumps = mimu.read(str(MIMU / "raw" / "exp_1" / "data.bin"), 3)
+    assert jumps == 0                                  # the real stream's stamps advance
     assert abs(step - COUNT) < 1e-12 and 590 < t[-1] < 610
     rows = [l.split(",") for l in open(MIMU / "static_positions_runs1-5.csv") if l.startswith("1,")]
     for r in [r for r in rows if r[10] == "3"][:5]:

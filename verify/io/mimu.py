@@ -54,17 +54,24 @@ def packets(path):
 
 def read(path, imu):
     """Time (s, from the unwrapped time stamps) and the accelerometer of IMU `imu` (1-8) in the array
-    frame, m/s^2 (COUNTS_PER_G counts per G_DATASHEET); the quantisation step (one count, m/s^2); and
-    the number of bytes skipped (outside packets that pass their checksum)."""
+    frame, m/s^2 (COUNTS_PER_G counts per G_DATASHEET); the quantisation step (one count, m/s^2); the
+    number of bytes skipped (outside packets that pass their checksum); and the number of time stamps
+    that repeat, go back or jump by over 100 steps (a reset): when there are any, time is taken from the
+    packet count at the median step, and the caller says so."""
     if not 1 <= imu <= IMUS:
         raise DataError(f"--imu {imu}: the MIMU4444BT stream holds IMUs 1 to {IMUS}")
     pk, skipped = packets(path)
     ts = pk[:, 4:8].astype(np.int64) @ np.array([1 << 24, 1 << 16, 1 << 8, 1])
     ticks = np.diff(ts) % (1 << 32)                                  # the 32-bit stamp wraps
-    step = float(np.median(ticks))
-    if step <= 0:
+    forward = (ticks > 0) & (ticks < 1 << 31)                        # back: over half the range modulo 2^32
+    if not forward.any():
         raise DataError(f"{path}: the time stamps do not advance")
-    t = np.concatenate([[0.0], np.cumsum(ticks)]) / (step * RATE_HZ)
+    step = float(np.median(ticks[forward]))
+    jumps = int(np.count_nonzero(~forward | (ticks > 100 * step)))
+    if jumps:
+        t = np.arange(len(ts)) / RATE_HZ
+    else:
+        t = np.concatenate([[0.0], np.cumsum(ticks)]) / (step * RATE_HZ)
     off = 8 + (imu - 1) * 12
     raw = pk[:, off: off + 6].astype(np.int64)
     counts = raw[:, 0::2] * 256 + raw[:, 1::2]
@@ -72,4 +79,4 @@ def read(path, imu):
     if imu % 2 == 0:
         counts = counts @ C_BOTTOM.T
     unit = G_DATASHEET / COUNTS_PER_G
-    return t, counts * unit, unit, skipped
+    return t, counts * unit, unit, skipped, jumps

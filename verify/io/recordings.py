@@ -143,11 +143,13 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
         if fmt == "mimu":
             if imu is None:
                 raise DataError(f"{path}: a MIMU4444BT stream holds {mimu.IMUS} IMUs; choose one with --imu K")
-            t, raw, step, skipped = mimu.read(path, imu)
+            t, raw, step, skipped, jumps = mimu.read(path, imu)
             unit = True
             note = (f"MIMU4444BT IMU {imu}, array frame, {mimu.COUNTS_PER_G} counts per g = "
                     f"{mimu.G_DATASHEET} m/s^2; {len(t)} packets" + (f", {skipped} bytes outside valid packets "
-                                                                     "skipped" if skipped else ""))
+                                                                     "skipped" if skipped else "")
+                    + (f"; {jumps} time stamp(s) repeat, go back or jump (a reset?): time taken from the packet "
+                       f"count at {mimu.RATE_HZ:g} Hz" if jumps else ""))
         elif fmt == "openaxes":
             header = _header(path, ";")
             cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
