@@ -50,3 +50,16 @@ def test_known_texts():
     assert text == ["+9.8100000e+000,+9.811e+000", "-1.8965461e-003,-1.896e-003", "+0.0000000e+000,+0.000e+000",
                     "+1.0000000e+001,+1.000e+001", "+4.9406565e-324,+4.941e-324"]
     assert csv_bytes([np.array([9.81])]).decode() == "+9.8100000e+00\n"   # two exponent digits when they suffice
+
+
+def test_next_to_every_power_of_ten():
+    # Where log10 is one off and the scaled value lands on 10**digits (1e-12 at 12 digits printed 1e-13
+    # before the fix): every power of ten from 1e-300 to 1e299 and its two float neighbours.
+    vals = [f(10.0 ** k) for k in range(-300, 300) for f in (lambda v: v, lambda v: np.nextafter(v, 0),
+                                                             lambda v: np.nextafter(v, np.inf))]
+    x = np.array(vals)
+    for digits in (4, 8, 12):
+        for v, (near, up) in zip(vals, _read(csv_bytes([x, x], up=(1,), digits=digits), 2)):
+            exact = Fraction(v)
+            unit = Fraction(10) ** (_exponent(exact) - digits + 1)
+            assert up >= exact and up - exact < unit and abs(near - exact) <= unit / 2 * (1 + Fraction(1, 10**6)), v

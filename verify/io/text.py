@@ -21,12 +21,11 @@ def _decimal(a, mode, digits):
     zero = a == 0
     a = np.where(zero, 1.0, a)
     e = np.floor(np.log10(a)).astype(np.int64)
-    for _ in range(3):                          # log10 can be one off next to a power of ten
+    scaled = a * 10.0 ** (digits - 1 - e)
+    fix = (scaled >= 10 ** digits).astype(np.int64) - (scaled < 10 ** (digits - 1))
+    if fix.any():                               # log10 can be one off next to a power of ten: one step
+        e += fix                                # (a value that rounds to 10**digits is handled below)
         scaled = a * 10.0 ** (digits - 1 - e)
-        fix = (scaled >= 10 ** digits).astype(np.int64) - (scaled < 10 ** (digits - 1))
-        if not fix.any():
-            break
-        e += fix
     # the scaling is correct to a few units in the last place: a directed rounding that the widening by
     # 1e-15 could change is decided exactly (rational arithmetic, the few values next to a whole number)
     if mode == "nearest":
