@@ -357,8 +357,8 @@ def test_remount_on_a_stand_where_26_does_not_hold_names_the_cause(tmp_path, cap
 # ---------------------------------------------------------------- issue 26: calibration files, inputs and outputs
 
 def _calibration(tmp_path):
-    """A real calibration (calibrate-norm --save on the simulated log of _log's shape is too still: a
-    hand-made norm calibration of the identity, every field as calibrate-norm writes it)."""
+    """A good norm calibration near the identity, every field as calibrate-norm writes it (the files
+    calibrate-norm and estimate write themselves pass through the same reader in test_calibration_files)."""
     cal = {"format": "garant-calibration-1", "kind": "norm", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
            "M": [[1.001, 0, 0], [1e-4, 0.999, 0], [-2e-4, 3e-4, 1.0]], "b": [0.01, -0.02, 0.03],
            "bound_matrix": [[1e-3, 0, 0], [1e-3, 1e-3, 0], [1e-3, 1e-3, 1e-3]], "bound_bias": [1e-3] * 3,
@@ -419,13 +419,20 @@ def test_a_calibration_file_is_checked_against_its_schema(tmp_path, capsys, chan
     assert log.read_bytes() == before
 
 
-def test_the_calibration_schema_passes_what_garant_writes(tmp_path):
-    # The other side: the hand-made file above, and the calibrations garant itself writes, pass.
+def test_the_calibration_schema_passes_a_good_file_and_the_api_checks_a_dictionary_alike(tmp_path):
+    # The other side: the good file above passes; the API's dictionary goes through the same checks (a
+    # singular M given as a dictionary used to be applied).
     from garant.verify.io import calibration, schemas
     schemas.validate(_calibration(tmp_path), "calibration", "c.json")
     path = tmp_path / "c.json"
     path.write_text(json.dumps(_calibration(tmp_path)))
     assert calibration.read(path)["kind"] == "norm"
+    import garant
+    bad = {**_calibration(tmp_path), "M": np.zeros((3, 3))}
+    with pytest.raises(garant.DataError, match="M is singular or ill-conditioned"):
+        garant.apply(bad, str(_log_file(tmp_path)))
+    t, a, bound = garant.apply({**_calibration(tmp_path), "M": np.eye(3)}, str(_log_file(tmp_path)))
+    assert a.shape == bound.shape == (len(t), 3)
 
 
 @pytest.mark.parametrize("scale, unit, looks", [(1000.0, "m/s^2", "raw counts"), (1.0, "count", "m/s^2")])

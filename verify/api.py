@@ -92,14 +92,15 @@ def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
     return res
 
 
-def apply(calibration, log, fmt=None, sensor="adxl355", imu=None):
+def apply(calibration, log, fmt=None, sensor="adxl355", imu=None, trust_units=False):
     """Correct a raw log: (time s, specific force (N, 3) m/s^2, worst-case error (N, 3) m/s^2).
-    `calibration` is a garant-calibration-1 file or the dictionary `calibrate_norm` returns."""
+    `calibration` is a garant-calibration-1 file or the dictionary `calibrate_norm` returns; either is
+    checked as `garant apply` checks it (schema, a well-conditioned M, the log's unit unless
+    `trust_units`)."""
     from .io import calibration as cal_io, recordings
-    if isinstance(calibration, dict):
-        cal = {k: np.asarray(v, float) if isinstance(v, list) else v for k, v in calibration.items()}
-    else:
-        cal = cal_io.read(calibration)
+    cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
     data = recordings.read_log(log, fmt, sensor, imu)
+    if not trust_units:
+        cal_io.check_units(cal, log, data.raw[:100_000], "the calibration")
     a, bound = cal_io.apply(cal, data.raw)
     return data.t, a, bound

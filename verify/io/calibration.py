@@ -29,8 +29,8 @@ import json
 import numpy as np
 
 from ..errors import DataError
-from . import files, schemas
-from .report import write_json, write_text
+from . import files, recordings, schemas
+from .report import json_value, write_json, write_text
 
 FORMAT = "garant-calibration-1"
 MAX_BYTES = 1_000_000
@@ -43,8 +43,7 @@ def from_norm(res, axes):
     e = res["guaranteed_error_q"]                 # bounds of the correction (I + A) of the calibrated block
     B = [[e["lambda1"], 0.0, 0.0], [e["alpha"], e["lambda2"], 0.0], [e["beta"], e["gamma"], e["lambda3"]]]
     delta = [e.get(f"delta{i}*g", 0.0) for i in (1, 2, 3)]
-    raw_unit = "m/s^2" if res["start"].startswith("log in m/s^2") else "count"
-    return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": raw_unit,
+    return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": res["raw_unit"],
             "M": res["matrix"], "b": res["bias"], "bound_matrix": B,
             "bound_bias": [res["g"] * e[f"eps{i}/g"] for i in (1, 2, 3)], "bound_delta": delta,
             "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
@@ -99,8 +98,15 @@ def read(path):
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     except (UnicodeDecodeError, ValueError, RecursionError) as e:
         raise DataError(f"{path}: not a JSON calibration file ({_short(e)})") from None
+    return checked(data, path)
+
+
+def checked(data, path="calibration"):
+    """A calibration dictionary (read from a file, or the one `calibrate_norm` returns) checked against the
+    schema and for what it cannot state; numbers as numpy arrays. `path` names it in errors."""
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise DataError(f"{path}: not a {FORMAT} file (its \"format\" must be \"{FORMAT}\")")
+    data = json.loads(json.dumps(data, default=json_value))      # numpy arrays and numbers as JSON has them
     schemas.validate(data, "calibration", path)
     out = dict(data)
     for key in ("M", "b", "bound_matrix", "bound_bias", "bound_delta", "pendulosity_axes"):
@@ -131,9 +137,9 @@ def check_units(cal, log_path, raw, cal_path):
     """Refuse a log whose scale does not match the calibration's raw unit (a raw-count log corrected by a
     calibration made in m/s^2, or the reverse): the median norm of the readings is within 20 % of g for a
     log in m/s^2 (as calibrate-norm decides it)."""
-    norm = float(np.median(np.linalg.norm(raw, axis=1))) if len(raw) else 0.0
-    looks = "m/s^2" if abs(norm / cal["g"] - 1) < 0.2 else "count"
+    looks = recordings.raw_unit(raw, cal["g"])
     if looks != cal["raw_unit"]:
+        norm = float(np.median(np.linalg.norm(raw, axis=1)))
         say = {"m/s^2": "m/s^2", "count": "raw counts"}
         raise DataError(f"{log_path}: its readings (median norm {norm:.4g}) look like {say[looks]}, but {cal_path} was "
                         f"made from a log in {say[cal['raw_unit']]}; correct a log of the same unit, or pass "

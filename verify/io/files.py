@@ -19,17 +19,25 @@ def _kind(mode):
     return "not a regular file"
 
 
-def regular(path, what="the file", max_bytes=None):
-    """`path` if it is a regular file (symlinks followed) of at most `max_bytes`; else DataError naming the
-    file, what it is and the limit. Never opens the file (a FIFO would block)."""
+def problem(path, what="the file", max_bytes=None):
+    """Why `path` cannot be read as an input (not a regular file, symlinks followed, or over `max_bytes`),
+    or None. Never opens the file (a FIFO would block)."""
     try:
         st = os.stat(path)
     except OSError as e:
-        raise DataError(f"{path}: cannot read {what} ({e.strerror})") from None
+        return f"cannot read {what} ({e.strerror})"
     if not stat.S_ISREG(st.st_mode):
-        raise DataError(f"{path}: {what} must be a regular file, not {_kind(st.st_mode)}")
+        return f"{what} must be a regular file, not {_kind(st.st_mode)}"
     if max_bytes is not None and st.st_size > max_bytes:
-        raise DataError(f"{path}: {what} is {st.st_size / 1e6:.4g} MB, over the limit of {max_bytes / 1e6:g} MB")
+        return f"{what} is {st.st_size / 1e6:.4g} MB, over the limit of {max_bytes / 1e6:g} MB"
+    return None
+
+
+def regular(path, what="the file", max_bytes=None):
+    """`path` if it can be read as an input (see `problem`); else DataError naming the file."""
+    why = problem(path, what, max_bytes)
+    if why:
+        raise DataError(f"{path}: {why}")
     return path
 
 

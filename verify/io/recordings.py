@@ -198,6 +198,13 @@ class Still:
                                      # shorter than a batch), raw units; None where no samples were read
 
 
+def raw_unit(raw, g):
+    """What readings (N, 3) are measured in: "m/s^2" when their median norm is within 20 % of g, else
+    "count" (a raw-count log). calibrate-norm starts from it and records it; apply checks a log against it."""
+    norm = float(np.median(np.linalg.norm(raw, axis=1))) if len(raw) else 0.0
+    return "m/s^2" if abs(norm / g - 1) < 0.2 else "count"
+
+
 BATCHES = 8            # batch means per still interval: the standard error of its mean under correlated noise
 
 

@@ -37,13 +37,13 @@ def human(value, unit, bias=False):
 def write_json(path, obj):
     """Strict JSON (no NaN or Infinity), written atomically."""
     try:
-        text = json.dumps(obj, indent=2, allow_nan=False, default=_plain) + "\n"
+        text = json.dumps(obj, indent=2, allow_nan=False, default=json_value) + "\n"
     except ValueError:
         raise DataError(f"{path}: a result is not finite (NaN or infinity); nothing written") from None
     write_text(path, text)
 
 
-def _plain(x):
+def json_value(x):
     """numpy arrays and numbers in a result become JSON lists and numbers (converted only when written)."""
     if hasattr(x, "tolist"):
         return x.tolist()

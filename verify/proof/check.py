@@ -465,16 +465,10 @@ def _json_int(text):
 
 def read(path):
     """The JSON of a certificate file; MalformedCertificate if it is not JSON or is too large or deep."""
-    import os
-    import stat
-    try:
-        st = os.stat(path)
-    except OSError as e:
-        raise MalformedCertificate(f"cannot read ({e.strerror})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise MalformedCertificate("not a regular file")
-    if st.st_size > MAX_BYTES:
-        raise MalformedCertificate(f"{st.st_size / 1e6:.4g} MB, larger than the limit of {MAX_BYTES / 1e6:g} MB")
+    from ..io import files
+    why = files.problem(path, "the certificate", MAX_BYTES)
+    if why:
+        raise MalformedCertificate(why)
     with open(path, "rb") as fh:
         data = fh.read(MAX_BYTES + 1)
     if len(data) > MAX_BYTES:

@@ -11,7 +11,7 @@ residual, which would make the bounds circular), plus the proven remainder (2.3)
 import numpy as np
 
 from ..errors import DataError
-from ..io.recordings import BATCHES
+from ..io.recordings import BATCHES, raw_unit
 from ..io.report import save_figure
 from ..solve import highs, lp
 
@@ -26,8 +26,7 @@ def chebyshev_fit(Hk, s):
 
 def initial_map(raw, g):
     """Identity for logs already near g in m/s^2; else an axis-aligned ellipsoid fit."""
-    norms = np.linalg.norm(raw, axis=1)
-    if abs(np.median(norms) / g - 1) < 0.2:
+    if raw_unit(raw, g) == "m/s^2":
         return np.eye(3), np.zeros(3), "log in m/s^2: starting from the identity"
     mu, scale = raw.mean(axis=0), raw.std(axis=0).max()
     x = (raw - mu) / scale                                   # centred and scaled for conditioning
@@ -189,7 +188,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
     out = {
         "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
-        "start": res["note"], "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
+        "start": res["note"], "raw_unit": raw_unit(raw, g), "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
         "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
         "consistent": bool(consistent), "minimax_residual": fit_residual, "delta_sigma_max": dsig,
         "delta_sigma_source": source, "remainder_bound": rb,
