@@ -11,7 +11,7 @@ import sympy as sp
 from .derivation import derive
 from .effects import VARIABLE_DEFAULTS
 from .estimators import sup_bound
-from .model import trig_degrees
+from .model import absorbed, trig_degrees
 from .printer import linear_text, pycode
 from .report import report_context, stand_report_context
 from .builtin import MODELS
@@ -117,6 +117,7 @@ def model_context(d):
         H_exact=[[sp.sstr(e) for e in ident.H.row(i)] for i in range(ident.H.rows)],
         null_space=[[pycode(v) for v in vec] for vec in ident.null_space],
         mounts=[_mount_context(d, k, name, subs) for k, name in enumerate(m.mountings)],
+        **_absorbed_context(m, names, subs),
         H_sup=[[pycode(sup_bound(ident.H[p, nu], d.angles)) if not m.variables else "np.inf"
                 for nu in range(ident.H.cols)] for p in range(ident.H.rows)],
         plan_deg=[list(pos) for pos in m.plan_deg],
@@ -124,6 +125,19 @@ def model_context(d):
         estimator_terms=[[(s, p, w.p, w.q) for (s, p), w in sorted(psi.items())]
                          for psi in d.estimators],
     )
+
+
+def _absorbed_context(m, names, subs):
+    """ABSORBED and the code of `equivalent`: (index, code) of each Gamma' entry, the indices set to 0."""
+    gone, Gp = absorbed(m)
+    if not gone:
+        return dict(absorbed=[], equivalent=[], absorbed_idx=[], absorbed_formula="Gamma (none absorbed)")
+    dg, theta = m.stand.gravity_error, ", ".join(m.stand.theta)
+    formula = f"(1 - {dg})(E + Gamma) Q C({theta}) Q^T - E" if len(gone) > 1 else f"(1 - {dg})(E + Gamma) - E"
+    entries = [(names.index(f"Gamma{i + 1}{j + 1}"), pycode(Gp[i, j].xreplace(subs)))
+               for i in range(3) for j in range(3)]
+    return dict(absorbed=list(gone), equivalent=entries, absorbed_idx=[names.index(n) for n in gone],
+                absorbed_formula=formula)
 
 
 def _num(v):

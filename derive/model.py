@@ -207,6 +207,33 @@ def _force_factors(model, Q=None):
             *chain_factors(model.stand, s, angles), sp.Matrix([0, 0, 1])]
 
 
+def absorbed(model):
+    """(names, Gamma') of the parameters the block absorbs exactly, else ((), None).
+
+    Without sensor effects the readings depend on Gamma and Delta_g only through (1 - Delta_g)(E + Gamma),
+    and with one mounting Q also theta only through (1 - Delta_g)(E + Gamma) Q C(theta) = (E + Gamma') Q,
+    Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta) Q^T - E: a unit and the one with Gamma' and these at 0
+    read the same at every position, so data tell only Gamma' (the q of (4) of 000 taken literally,
+    Gamma13 - theta2, are known only to about |Gamma| |theta| whatever the plan). Checked here, not
+    assumed: the identity exactly, and the absorbed parameters nowhere else in the readings."""
+    st = model.stand
+    if model.effects:
+        return (), None
+    s = model.symbols
+    EG, _ = block_matrices(model)
+    dg = s[st.gravity_error]
+    names, Gp, same = (st.gravity_error,), (1 - dg) * EG - sp.eye(3), True
+    if len(model.mountings) == 1:
+        Q = mount_matrices(model)[0]
+        turn = small_turn([s[n] for n in st.theta])
+        names, Gp = (*st.theta, st.gravity_error), (1 - dg) * EG * Q * turn * Q.T - sp.eye(3)
+        same = sp.expand((sp.eye(3) + Gp) * Q - (1 - dg) * EG * Q * turn) == sp.zeros(3, 3)
+    rest = set().union(*(f.free_symbols for f in chain_factors(st, s, {a.name: a.symbol for a in st.angles})))
+    if not same or rest & {s[n] for n in names}:
+        return (), None
+    return names, Gp
+
+
 def up_true(model):
     """True up-vector in table axes, exact rotations for every stand error."""
     return _product(_force_factors(model)[2:])

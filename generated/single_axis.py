@@ -109,6 +109,30 @@ UNSEPARABLE = np.array([
     [0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0],
 ])
 
+#: Parameters the block absorbs exactly: the readings depend on them and Gamma only through
+#: Gamma' = (1 - Delta_g)(E + Gamma) - E (derive/model.py, `absorbed`).
+ABSORBED = ("Delta_g",)
+
+
+def equivalent(physical):
+    """The unit that reads the same at every position with ABSORBED at 0 and Gamma' for Gamma.
+    Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
+    out = np.array(physical, dtype=float)
+    (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
+    out[[6, 7, 8, 9, 10, 11, 12, 13, 14]] = [
+        (1 - Delta_g)*(Gamma11 + 1) - 1,
+        Gamma12*(1 - Delta_g),
+        Gamma13*(1 - Delta_g),
+        Gamma21*(1 - Delta_g),
+        (1 - Delta_g)*(Gamma22 + 1) - 1,
+        Gamma23*(1 - Delta_g),
+        Gamma31*(1 - Delta_g),
+        Gamma32*(1 - Delta_g),
+        (1 - Delta_g)*(Gamma33 + 1) - 1,
+    ]
+    out[[5]] = 0.0
+    return out
+
 
 def _broadcast(*angles):
     angles = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in angles))

@@ -113,6 +113,30 @@ UNSEPARABLE = np.array([
     [0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0],
 ])
 
+#: Parameters the block absorbs exactly: the readings depend on them and Gamma only through
+#: Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta1, theta2, theta3) Q^T - E (derive/model.py, `absorbed`).
+ABSORBED = ("theta1", "theta2", "theta3", "Delta_g")
+
+
+def equivalent(physical):
+    """The unit that reads the same at every position with ABSORBED at 0 and Gamma' for Gamma.
+    Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
+    out = np.array(physical, dtype=float)
+    (tilt_x, tilt_y, eps_om, Delta_theta, eps_mi, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
+    out[[10, 11, 12, 13, 14, 15, 16, 17, 18]] = [
+        -Gamma12*(1 - Delta_g)*np.sin(theta3)*np.cos(theta2) + Gamma13*(1 - Delta_g)*np.sin(theta2) + (1 - Delta_g)*(Gamma11 + 1)*np.cos(theta2)*np.cos(theta3) - 1,
+        Gamma12*(1 - Delta_g)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - Gamma13*(1 - Delta_g)*np.sin(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma11 + 1)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)),
+        Gamma12*(1 - Delta_g)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)) + Gamma13*(1 - Delta_g)*np.cos(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma11 + 1)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)),
+        Gamma21*(1 - Delta_g)*np.cos(theta2)*np.cos(theta3) + Gamma23*(1 - Delta_g)*np.sin(theta2) - (1 - Delta_g)*(Gamma22 + 1)*np.sin(theta3)*np.cos(theta2),
+        Gamma21*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)) - Gamma23*(1 - Delta_g)*np.sin(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma22 + 1)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - 1,
+        Gamma21*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)) + Gamma23*(1 - Delta_g)*np.cos(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma22 + 1)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)),
+        Gamma31*(1 - Delta_g)*np.cos(theta2)*np.cos(theta3) - Gamma32*(1 - Delta_g)*np.sin(theta3)*np.cos(theta2) + (1 - Delta_g)*(Gamma33 + 1)*np.sin(theta2),
+        Gamma31*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)) + Gamma32*(1 - Delta_g)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - (1 - Delta_g)*(Gamma33 + 1)*np.sin(theta1)*np.cos(theta2),
+        Gamma31*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)) + Gamma32*(1 - Delta_g)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)) + (1 - Delta_g)*(Gamma33 + 1)*np.cos(theta1)*np.cos(theta2) - 1,
+    ]
+    out[[6, 7, 8, 9]] = 0.0
+    return out
+
 
 def _broadcast(*angles):
     angles = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in angles))

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import simulate, write_csv
+from garant.verify import models
 from garant.verify.cli import main
 
 SIGMA = 1e-5
@@ -42,7 +43,7 @@ def test_estimate_recovers_q_within_bound(tmp_path, capsys, mod, positions, seed
                         "--json", str(tmp_path / "e.json")], capsys)
     assert rc == 0, err
     d = json.loads((tmp_path / "e.json").read_text())
-    q_true = mod.PHYSICAL_TO_Q @ p
+    q_true = models.q_of(mod, p)
     q_hat = np.array([d["q"][n] for n in mod.Q_NAMES])
     bound = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
     linear = np.array([d["guaranteed_error_linear"][n] for n in mod.Q_NAMES])

@@ -89,7 +89,7 @@ def test_derive_plan_simulate_estimate_diagnose(stand, tmp_path, capsys):
     out = tmp_path / "est.json"
     assert main(["estimate", "--model", toml, str(data), "--sigma", str(SIGMA), "--json", str(out)]) == 0
     res = json.loads(out.read_text())
-    truth = mod.PHYSICAL_TO_Q @ np.array([e[n] for n in mod.PARAMETER_NAMES])
+    truth = models.q_of(mod, [e[n] for n in mod.PARAMETER_NAMES])
     for k, q in enumerate(mod.Q_NAMES):
         assert abs(res["q"][q] - truth[k]) <= res["guaranteed_error"][q], q
     capsys.readouterr()

@@ -59,7 +59,7 @@ def test_simulate_estimate_round_trip(name, tmp_path):
     linear = np.array([res["guaranteed_error_linear"][q] for q in mod.Q_NAMES])
     # optimal on this plan, for H at zero errors; linearised at the fit, H moves by the errors (1e-4)
     np.testing.assert_allclose(linear, SIGMA * np.array(r.errors), rtol=1e-3)
-    assert np.all(np.abs(q_hat - mod.PHYSICAL_TO_Q @ p) <= bound)             # remainder included
+    assert np.all(np.abs(q_hat - models.q_of(mod, p)) <= bound)             # remainder included
 
 
 def test_description_file_as_model(tmp_path, capsys):

@@ -186,3 +186,11 @@ def H_at(mod, angles_rad, mounts=None):
     if hasattr(mod, "MOUNTINGS"):
         return mod.H(*cols, mount=np.zeros(len(angles_rad), int) if mounts is None else np.asarray(mounts))
     return mod.H(*cols)
+
+
+def q_of(mod, physical):
+    """The q (4) of 000 an estimate bounds for a unit with these physical errors: those of the unit that
+    reads the same with the model's ABSORBED parameters at 0 (`equivalent`; the unit itself when none)."""
+    physical = np.asarray(physical, float)
+    same = mod.equivalent(physical) if hasattr(mod, "equivalent") else physical
+    return np.asarray(mod.PHYSICAL_TO_Q, float) @ same

@@ -105,7 +105,8 @@ def _plots(res, mod, args):
                    if res["consistent"] else
                    f"**INCONSISTENT**: the data refute sigma = {args.sigma:g}; they support sigma >= "
                    f"{res['sigma_min_supported']:.3g}. No bound is given.")
-        sections = [("Verdict", verdict), ("Premises", res["premises"]["statement"])]
+        sections = [("Verdict", verdict), ("Premises", " ".join(filter(None, (res["premises"]["statement"] + ".",
+                                                                    res["premises"]["meaning"]))))]
         if res["consistent"]:
             sections.append(("Estimates (guaranteed error = linear + remainder)", report.markdown_table(
                 ("q", "definition", "estimate", "guaranteed error", "linear", "remainder", "unit"),
@@ -150,6 +151,8 @@ def print_estimate(res, mod, args):
           f"({res['minimax_residual'] / args.sigma:.2f} sigma); linearised at that fit, the proven remainder left "
           f"after absorption into q is <= {res['remainder_left_bound']:.2e} per reading")
     print(f"premises: {res['premises']['statement']}")
+    if res["premises"]["meaning"]:
+        print(f"q: {res['premises']['meaning']}")
     print(f"method: {res['method']}")
     parts = res["remainder_parts"]
     worst = max(parts, key=lambda k: max(parts[k].values()))

@@ -44,8 +44,9 @@ def run(args):
                               "seed": args.seed, "effects": {n: list(v) for n, v in effects},
                               "parameters": {n: float(v) for n, v in values.items()},
                               "units": {n: units.get(n, "see the effect catalogue") for n in values},
-                              "q": dict(zip(mod.Q_NAMES, (mod.PHYSICAL_TO_Q @ [values.get(n, 0.0) for n in
-                                                                                 mod.PARAMETER_NAMES]).tolist()))})
+                              "q": dict(zip(mod.Q_NAMES, models.q_of(mod, [values.get(n, 0.0) for n in
+                                                                             mod.PARAMETER_NAMES]).tolist())),
+                              "q_absorbs": list(getattr(mod, "ABSORBED", ()))})
     print(f"wrote {truth}: the hidden truth (parameters, q, effects)")
     return 0
 

@@ -70,16 +70,21 @@ def from_block(res):
     """The calibration dictionary of a consistent estimate on any stand: the block's Gamma and biases from
     the q's and the premises (workflows/block.py); a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2.
     Each bound already holds the a-priori bounds of what the parameter is confounded with (Delta_g on the
-    diagonal)."""
-    blk = res["block"]
+    diagonal); where the block absorbs Delta_g (its Gamma is relative to the g given) the uncertainty of g
+    is added to the diagonal, so the per-sample bound is one in m/s^2."""
+    blk, prem = res["block"], res["premises"]
     G, g = np.asarray(blk["Gamma"]), res["g"]
+    gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
+    B = np.asarray(blk["Gamma_bound"]) + (prem["g_uncertainty"] * np.eye(3) if gravity else 0.0)
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
             "M": np.linalg.inv(np.eye(3) + G).tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
-            "bound_matrix": np.asarray(blk["Gamma_bound"]).tolist(),
+            "bound_matrix": B.tolist(),
             "bound_bias": (g * np.asarray(blk["bias_bound"])).tolist(), "bound_delta": [0.0, 0.0, 0.0],
             "pendulosity_axes": [2, 3, 1], "g": g, "source": f"{res['model']} estimate",
             "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B holds the bounds of Gamma, each with the "
-                    "a-priori bounds of what it is confounded with", "premises": res["premises"]["statement"]}
+                    "a-priori bounds of what it is confounded with" + (" and, on its diagonal, the uncertainty of g"
+                                                                       if gravity else ""),
+            "premises": " ".join(filter(None, (prem["statement"] + ".", prem.get("meaning"))))}
 
 
 def write(path, cal):

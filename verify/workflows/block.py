@@ -47,7 +47,7 @@ def calibration(mod, q, e, premises):
     for name in BLOCK:
         k = names.index(name)
         partners = {j for nu in np.flatnonzero(M[:, k]) for j in np.flatnonzero(M[nu]) if bounded[j]}
-        confounded[name] = [(names[j], float(b[j]), premises.sources[j]) for j in sorted(partners)]
+        confounded[name] = [(names[j], float(b[j]), premises.sources[j]) for j in sorted(partners) if b[j] > 0]
     G = np.array([[value[f"Gamma{i}{j}"] for j in (1, 2, 3)] for i in (1, 2, 3)])
     GB = np.array([[half[f"Gamma{i}{j}"] for j in (1, 2, 3)] for i in (1, 2, 3)])
     return {"Gamma": G, "Gamma_bound": GB, "bias": np.array([value[f"bias{i}"] for i in (1, 2, 3)]),

@@ -197,7 +197,7 @@ def near_prior(lin, q, e):
     out = []
     biases = np.asarray(mod.PHYSICAL_TO_Q, float)[:, guarantee.linear_parameters(mod)].any(axis=1)
     for nu in np.flatnonzero((np.abs(q) + e > NEAR_EDGE * allowed) & ~biases):
-        names = [prem.names[k] for k in np.flatnonzero(R[nu]) if np.isfinite(prem.bounds[k])]
+        names = [prem.names[k] for k in np.flatnonzero(R[nu]) if 0 < prem.bounds[k] < np.inf]
         out.append(f"{mod.Q_NAMES[nu]} = {q[nu]:+.3e} +- {e[nu]:.1e} is beyond {NEAR_EDGE:g} of what the a-priori "
                    f"bounds allow ({allowed[nu]:.2e}, from {', '.join(names)}): if the unit may be larger, raise "
                    "their bounds (the description's `bound`, --prior, or --g-uncertainty for Delta_g)")

@@ -35,21 +35,38 @@ class Premises:
     kinds: tuple
     bounds: np.ndarray
     sources: tuple
+    absorbed: tuple = ()     # parameters the block absorbs exactly (the model's ABSORBED): bound 0, no premise
 
     def statement(self):
         """One line: the bounds hold if ..."""
         groups = {}
         for name, kind, b, src in zip(self.names, self.kinds, self.bounds, self.sources):
-            if kind not in ("bias", "gravity"):
+            if kind not in ("bias", "gravity") and name not in self.absorbed:
                 groups.setdefault((float(b), src), []).append(name)
-        parts = [f"every residual component of (5) is within sigma = {self.sigma:g} ({self.sigma_source})",
-                 f"|Delta_g/g| <= {self.g_uncertainty:g}: the true g within that of g = {self.g:g} m/s^2 "
-                 f"({self.g_source})"]
+        parts = [f"every residual component of (5) is within sigma = {self.sigma:g} ({self.sigma_source})"]
+        if not any(k == "gravity" and n in self.absorbed for n, k in zip(self.names, self.kinds)):
+            parts.append(f"|Delta_g/g| <= {self.g_uncertainty:g}: the true g within that of g = {self.g:g} m/s^2 "
+                         f"({self.g_source})")
         parts += [f"|{', '.join(n)}| <= {b:g} ({src})" for (b, src), n in groups.items()]
         return "the bounds hold if " + "; ".join(parts)
 
+    def meaning(self):
+        """One line: what the bounded q are when the block absorbs parameters (empty when it absorbs none)."""
+        if not self.absorbed:
+            return ""
+        gravity = [n for n, k in zip(self.names, self.kinds) if k == "gravity" and n in self.absorbed]
+        out = (f"q are those of the unit that reads the same with {', '.join(self.absorbed)} = 0, absorbed into "
+               "Gamma exactly (no data tell the two apart)")
+        if gravity:
+            out += (f": scale factors relative to g = {self.g:g} m/s^2 (the true g within {self.g_uncertainty:g} of "
+                    f"it, {self.g_source})")
+        if len(self.absorbed) > len(gravity):
+            out += ", misalignments to the stand's axes (the mounting included)"
+        return out
+
     def to_dict(self):
-        return {"statement": self.statement(), "sigma": self.sigma, "sigma_source": self.sigma_source,
+        return {"statement": self.statement(), "meaning": self.meaning(), "absorbed": list(self.absorbed),
+                "sigma": self.sigma, "sigma_source": self.sigma_source,
                 "g": self.g, "g_uncertainty": self.g_uncertainty, "g_source": self.g_source,
                 "a_priori": {n: {"kind": k, "bound": (float(b) if np.isfinite(b) else None), "source": s}
                              for n, k, b, s in zip(self.names, self.kinds, self.bounds, self.sources)}}
@@ -69,9 +86,12 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
     else:
         g_unc, g_src = G_UNCERTAINTY_DEFAULT, "default: g = 9.81 assumed, not given"
     default = {"stand": STAND_BOUND, "mounting": MOUNTING_BOUND, "block": BLOCK_BOUND, "effect": BLOCK_BOUND}
+    absorbed = tuple(getattr(mod, "ABSORBED", ()))
     bounds, sources = [], []
-    for kind, b in zip(kinds, stated):
-        if kind == "bias":
+    for name, kind, b in zip(mod.PARAMETER_NAMES, kinds, stated):
+        if name in absorbed:
+            bounds.append(0.0), sources.append("absorbed into Gamma: no premise")
+        elif kind == "bias":
             bounds.append(np.inf), sources.append("none needed: enters linearly")
         elif kind == "gravity":
             bounds.append(g_unc), sources.append(g_src)
@@ -83,4 +103,4 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
             bounds.append(default[kind]), sources.append(f"default for a {kind} error")
     return Premises(sigma=sigma, sigma_source=sigma_source, g=g, g_uncertainty=g_unc, g_source=g_src,
                     names=tuple(mod.PARAMETER_NAMES), kinds=tuple(kinds), bounds=np.array(bounds, float),
-                    sources=tuple(sources))
+                    sources=tuple(sources), absorbed=absorbed)
