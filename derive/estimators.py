@@ -6,12 +6,12 @@ optimal estimator can only use measurements where |H^(p)_nu| reaches L_nu(0), wi
 H^(p)_nu there; any such solution of the unbiasedness equations (8) has sum |Psi| = 1/L_nu(0), so it
 is optimal. We take the one of smallest support, found in exact rational arithmetic.
 """
-from fractions import Fraction
 from itertools import combinations
 
 import sympy as sp
 
 from .combinations import trig_basis
+from .linear import solve_exact
 
 
 def sup_bound(expr, angles):
@@ -20,28 +20,6 @@ def sup_bound(expr, angles):
     Exact for the sums of products of sines and cosines met here: each monomial is at most 1.
     """
     return sum((abs(c) for c in trig_basis(expr, angles).values()), sp.Integer(0))
-
-
-def solve_exact(columns, b):
-    """Exact x with sum_k x_k columns[k] = b, or None if the columns are dependent or miss b."""
-    m, k = len(b), len(columns)
-    rows = [[Fraction(columns[j][i]) for j in range(k)] + [Fraction(b[i])] for i in range(m)]
-    pivots, r = [], 0
-    for c in range(k):
-        p = next((i for i in range(r, m) if rows[i][c] != 0), None)
-        if p is None:
-            return None
-        rows[r], rows[p] = rows[p], rows[r]
-        rows[r] = [v / rows[r][c] for v in rows[r]]
-        for i in range(m):
-            if i != r and rows[i][c] != 0:
-                f = rows[i][c]
-                rows[i] = [a - f * bb for a, bb in zip(rows[i], rows[r])]
-        pivots.append(c)
-        r += 1
-    if any(rows[i][k] != 0 for i in range(r, m)):
-        return None
-    return [rows[i][k] for i in range(k)]
 
 
 def plan_columns(H, angles, plan_deg):

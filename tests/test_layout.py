@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("derive", "generated", "verify")
 # Rank of each room of verify/: a module may import only from a room of lower rank (or its own room).
 RANK = {"errors": 0, "io": 1, "models": 1, "solve": 2, "proof": 3, "workflows": 4, "papers": 5, "cli": 6,
-        "api": 7, "bench": 7, "baseline": 2, "power": 7, "__main__": 7}
+        "api": 7, "bench": 7, "power": 7, "__main__": 7}
 
 
 def modules():
@@ -29,12 +29,24 @@ def modules():
     return out
 
 
-def imports(name, path, known):
-    """Modules of garant that `name` imports anywhere in its text (resolved to known module names)."""
+def _at_import_time(tree):
+    """The nodes that run when the module is imported: everything but the bodies of functions."""
+    todo = list(tree.body)
+    while todo:
+        node = todo.pop()
+        yield node
+        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            todo.extend(ast.iter_child_nodes(node))
+
+
+def imports(name, path, known, at_import=False):
+    """Modules of garant that `name` imports anywhere in its text (resolved to known module names), or,
+    `at_import`, only where they run when the module is imported (not inside a function)."""
     is_pkg = path.name == "__init__.py"
     here = name.split(".") if is_pkg else name.split(".")[:-1]
     found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    tree = ast.parse(path.read_text())
+    for node in (_at_import_time(tree) if at_import else ast.walk(tree)):
         if isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -96,6 +108,29 @@ def test_layers_run_one_way():
     assert not bad, f"imports against the arrows: {bad}"
 
 
+#: What verify may import from derive when a module is imported: the papers' published figures (plain
+#: data) and the (empty) package itself. Everything else of derive (SymPy) only inside the functions that
+#: re-derive a model.
+DERIVE_AT_IMPORT = {"garant.derive", "garant.derive.published"}
+
+
+def derive_at_import(known):
+    """(verify module, derive module) pairs imported at import time against DERIVE_AT_IMPORT."""
+    return sorted((n, d) for n, p in known.items() if n.startswith("garant.verify")
+                  for d in imports(n, p, known, at_import=True)
+                  if d.startswith("garant.derive") and d not in DERIVE_AT_IMPORT)
+
+
+def test_verify_reaches_derive_only_inside_functions(tmp_path):
+    """docs/architecture.md: `import garant.verify.X` never loads SymPy through derive."""
+    assert not derive_at_import(modules())
+    # It can fail: a planted module-level import of the generator is found; the same inside a function is not.
+    (tmp_path / "top.py").write_text("import numpy\nfrom garant.derive import codegen\n")
+    (tmp_path / "lazy.py").write_text("def f():\n    from garant.derive import codegen\n")
+    known = {**modules(), "garant.verify.top": tmp_path / "top.py", "garant.verify.lazy": tmp_path / "lazy.py"}
+    assert derive_at_import(known) == [("garant.verify.top", "garant.derive.codegen")]
+
+
 def test_largest_room_under_a_third_of_the_code():
     rooms = {}
     for name, path in modules().items():
@@ -124,6 +159,9 @@ def test_wheel_installs_only_the_garant_namespace(tmp_path):
     # the published file schemas are the one part of docs/ the readers use (verify/io/schemas.py)
     assert not any(n.startswith("garant/tests") or (n.startswith("garant/docs") and not n.startswith(
         "garant/docs/schemas/")) for n in names)
+    # developer tools run from a checkout (python -m verify.bench, python -m verify.power), not installed
+    assert not any(n.startswith(("garant/verify/bench", "garant/verify/power", "garant/verify/baseline"))
+                   for n in names), [n for n in names if "bench" in n or "power" in n]
 
 
 def test_import_garant_is_light_and_gives_the_api():
@@ -147,3 +185,11 @@ def test_the_command_uses_one_blas_thread_unless_told_otherwise():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/",
                          env={**env, "OPENBLAS_NUM_THREADS": "2"})
     assert out.stdout.split() == ["2", "1"], out.stderr
+
+
+def test_architecture_lists_every_module():
+    """docs/architecture.md names every module of the three packages (an empty __init__ aside)."""
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    missing = [str(p.relative_to(ROOT)) for p in modules().values()
+               if p.read_text().strip() and f"`{p.relative_to(ROOT)}`" not in text]
+    assert not missing, f"modules docs/architecture.md does not list: {missing}"

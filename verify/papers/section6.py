@@ -82,6 +82,7 @@ def brute_force(mod, stand_idx):
     """{q name: (optimal estimators, biased ones)} of the reduced model, counted a second way: every
     subset of the signed touching measurements of the q's own accelerometer on the quarter grid, in
     exact Fractions, kept when it represents e_nu with positive weights and no smaller subset does."""
+    from garant.derive.linear import solve_exact
     P = np.deg2rad(np.array(plans.QUARTER_DEG, float))
     Hq = mod.H(P[:, 0], P[:, 1])                                   # (3, m, 16)
     H = np.rint(Hq).astype(int)
@@ -98,31 +99,10 @@ def brute_force(mod, stand_idx):
                 for sub in combinations(range(len(touch)), size):
                     if any(set(f) <= set(sub) for f, _ in found):
                         continue
-                    w = _solve([vecs[i] for i in sub], target)
+                    w = solve_exact([vecs[i] for i in sub], target)
                     if w is not None and min(w) > 0:
                         found.append((sub, w))
             biased = sum(any(sum(wi * touch[i][1] * H[p - 1, k, touch[i][0]] for wi, i in zip(w, sub)) != 0
                              for k in stand_idx) for sub, w in found)
             out[mod.Q_NAMES[nu]] = (len(found), biased)
     return out
-
-
-def _solve(vectors, target):
-    """Weights w with sum w_i v_i = target when the v_i are independent and it has a solution, else None."""
-    n, k = len(target), len(vectors)
-    rows = [[vectors[j][i] for j in range(k)] + [target[i]] for i in range(n)]
-    pivots, r = [], 0
-    for c in range(k):
-        piv = next((i for i in range(r, n) if rows[i][c] != 0), None)
-        if piv is None:
-            return None                                            # dependent vectors
-        rows[r], rows[piv] = rows[piv], rows[r]
-        rows[r] = [x / rows[r][c] for x in rows[r]]
-        for i in range(n):
-            if i != r and rows[i][c] != 0:
-                rows[i] = [a - rows[i][c] * b for a, b in zip(rows[i], rows[r])]
-        pivots.append(c)
-        r += 1
-    if any(rows[i][k] != 0 for i in range(r, n)):
-        return None                                                # target outside the span
-    return [rows[i][k] for i in range(k)]

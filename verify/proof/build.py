@@ -153,7 +153,7 @@ def exact_primal(cols, nu, lam):
     measurements where the dual touches (any such w is optimal), made exact in rationals."""
     import cvxpy as cp
 
-    from garant.derive.estimators import solve_exact
+    from garant.derive.linear import solve_exact
 
     from ..errors import LPFailed
     from ..solve import lp

@@ -65,7 +65,9 @@ class QF:
     def inverse(self):
         if self.is_zero():
             raise ZeroDivisionError("division by an exact zero")
-        return QF(*_solve(self._matrix(), [Fraction(1), 0, 0, 0]))
+        from garant.derive.linear import solve_exact
+        A = self._matrix()
+        return QF(*solve_exact([[row[j] for row in A] for j in range(4)], [1, 0, 0, 0]))
 
     def __truediv__(self, o):
         return self * QF.of(o).inverse()
@@ -81,6 +83,9 @@ class QF:
 
     def is_zero(self):
         return not any(self.c)
+
+    def __bool__(self):
+        return any(self.c)
 
     def __eq__(self, o):
         return isinstance(o, (QF, int, Fraction)) and self.c == QF.of(o).c
@@ -135,42 +140,11 @@ class QF:
         return f"QF({', '.join(str(x) for x in self.c)})"
 
 
-def _solve(A, b):
-    """Exact solution of a square rational system (Gauss-Jordan in Fractions)."""
-    n = len(A)
-    M = [[Fraction(x) for x in row] + [Fraction(y)] for row, y in zip(A, b)]
-    for i in range(n):
-        p = next(r for r in range(i, n) if M[r][i] != 0)
-        M[i], M[p] = M[p], M[i]
-        M[i] = [x / M[i][i] for x in M[i]]
-        for r in range(n):
-            if r != i and M[r][i] != 0:
-                M[r] = [x - M[r][i] * y for x, y in zip(M[r], M[i])]
-    return [M[i][n] for i in range(n)]
-
-
 def solve(vectors, target):
     """Exact x with sum_k x_k vectors[k] = target in QF (vectors linearly independent), or None when
     target is not in their span."""
-    k, m = len(vectors), len(target)
-    rows = [[QF.of(vectors[j][i]) for j in range(k)] + [QF.of(target[i])] for i in range(m)]
-    piv, r = [], 0
-    for c in range(k):
-        p = next((i for i in range(r, m) if not rows[i][c].is_zero()), None)
-        if p is None:
-            return None
-        rows[r], rows[p] = rows[p], rows[r]
-        inv = rows[r][c].inverse()
-        rows[r] = [x * inv for x in rows[r]]
-        for i in range(m):
-            if i != r and not rows[i][c].is_zero():
-                f = rows[i][c]
-                rows[i] = [x - f * y for x, y in zip(rows[i], rows[r])]
-        piv.append(c)
-        r += 1
-    if any(not rows[i][k].is_zero() for i in range(r, m)):
-        return None
-    return [rows[i][k] for i in range(k)]
+    from garant.derive.linear import solve_exact
+    return solve_exact(vectors, target, QF.of)
 
 
 def from_sympy(expr):

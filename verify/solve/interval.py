@@ -3,6 +3,10 @@
 Every operation rounds outward (np.nextafter), so an enclosure computed here contains every value
 the real function takes on the box: a bound proven this way is a proof, not a sample. Used to show
 that a dual certificate |H^T lambda| <= 1 holds on a whole continuum (the sphere of 001).
+
+Hand-written rather than mpmath.iv: every operation here acts on whole numpy arrays (thousands of
+positions at once), where mpmath's intervals are scalar Python objects. tests/test_arithmetic.py
+checks each operation against mpmath at 60 digits.
 """
 import numpy as np
 
@@ -187,5 +191,5 @@ def mean_value_enclosure(f, *bounds):
     centre = f(*box_variables(c, c)).v
     mv = centre
     for d, a, b, ci in zip(box.d, lo, hi, c):
-        mv = mv + d * Iv(a - ci, b - ci)
+        mv = mv + d * Iv(*_out(a - ci, b - ci))          # the offsets rounded outward too
     return box.v.intersect(mv)

@@ -20,7 +20,6 @@ from math import comb
 
 import numpy as np
 
-from garant.derive.estimators import solve_exact
 
 from ..models import H_at, layout
 from . import field
@@ -240,6 +239,7 @@ def _minimal(cols, nu, lam, first=False):
                 if w is None or min(x.sign() for x in w) <= 0:
                     raise AssertionError("float and exact arithmetic disagree on a minimal set")
             elif exact:
+                from garant.derive.linear import solve_exact
                 w = solve_exact([vec[i] for i in row], e.astype(int))
                 if w is None or min(w) <= 0:
                     raise AssertionError("float and rational arithmetic disagree on a minimal set")

@@ -12,6 +12,9 @@ function is evaluated unchanged: its `np` is replaced, for that call only, by a 
 sin, cos, array and asarray accept jets. For readings that are trigonometric polynomials in the
 angles (the module's TRIG_DEGREE), `Interpolation` gives the enclosure at any number of positions
 from the enclosures at a few nodes, exactly.
+
+Hand-written for the same reason as interval.py: jets over all positions at once, as numpy arrays
+(tests/test_arithmetic.py checks them against exact derivatives in mpmath).
 """
 import functools
 import types

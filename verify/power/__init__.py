@@ -28,8 +28,8 @@ def _unit_values(name):
 
 def named_at(base, mod, plan, effect, a, seed=0):
     """Does diagnose name the effect hidden at signature a x sigma?"""
-    from .io.positions import read_positions
-    from .workflows import diagnose, simulate
+    from ..io.positions import read_positions
+    from ..workflows import diagnose, simulate
     unit = _unit_values(effect)
     P, f1, t, T, _, mounts = simulate.simulate(base, mod, plan, [(effect, unit)], SIGMA, seed, G)
     _, f0, *_ = simulate.simulate(base, mod, plan, [(effect, [0.0] * len(unit))], SIGMA, seed, G)
@@ -45,8 +45,8 @@ def named_at(base, mod, plan, effect, a, seed=0):
 
 
 def clean_alarm(base, mod, plan, seed):
-    from .io.positions import read_positions
-    from .workflows import diagnose, simulate
+    from ..io.positions import read_positions
+    from ..workflows import diagnose, simulate
     P, f, t, T, _, mounts = simulate.simulate(base, mod, plan, [], SIGMA, seed, G, size=1e-3)
     names, mount_names = (list(mod.ANGLES), list(getattr(mod, "MOUNTINGS", ("+x+y+z",))))
     with tempfile.TemporaryDirectory() as tmp:
@@ -59,11 +59,11 @@ def clean_verdicts(n, seed=0):
     """The estimate verdict on n clean simulated sets (two-axis, 64 positions, errors up to 1e-3 in
     every stand and block parameter, sigma log-uniform in [1e-6, 1e-4], noise at +-sigma): how many
     are called inconsistent (false alarms; the guarantee says 0)."""
-    from . import models
-    from .io.positions import Positions
-    from .solve import lp
-    from .workflows import guarantee
-    from .workflows.premises import premises
+    from .. import models
+    from ..io.positions import Positions
+    from ..solve import lp
+    from ..workflows import guarantee
+    from ..workflows.premises import premises
     mod = models.load("two-axis")
     rng = np.random.default_rng(seed)
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
@@ -86,9 +86,9 @@ def mems_sets(sets=10, mounting=5e-3, stand=2e-5):
     the 30 x 45 degree grid of the two-axis stand, stand errors to 2e-5 rad, g exact with a local --g, noise
     at +-sigma with random signs, the premises' defaults. q_true is that of the unit with the mounting and
     Delta_g absorbed into Gamma (models.q_of), the q an estimate bounds."""
-    from . import models
-    from .io.positions import Positions
-    from .workflows.estimate import estimate
+    from .. import models
+    from ..io.positions import Positions
+    from ..workflows.estimate import estimate
     mod = models.load("two-axis")
     P = np.array([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], float)
     size = {"block": lambda n: 2e-2 if n[-1] == n[-2] else 1e-2, "bias": lambda n: 0.1,
@@ -122,7 +122,7 @@ def main():
               f"1e-3, sigma in [1e-6, 1e-4], noise at +-sigma): {clean_verdicts(n)}")
         return 0
     from garant.derive import effects
-    from . import models
+    from .. import models
     print(f"smallest signature (x sigma) at which diagnose names the hidden effect; sigma = {SIGMA:g}, "
           f"amplitudes tried {AMPLITUDES}", flush=True)
     for model_name, plan in SETUPS:
@@ -134,7 +134,3 @@ def main():
                          None)
             print(f"  {e:24s} {found if found is not None else f'> {AMPLITUDES[-1]}'}", flush=True)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from .baseline import per_target_lp
-from .models import load
-from .papers import stand_000
-from .solve import lp, plans
+from ..models import load
+from ..papers import stand_000
+from ..solve import lp, plans
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -139,8 +139,8 @@ def bench_diagnose(mod):
     from garant.derive import codegen, derivation, effects
     from garant.derive.builtin import TWO_AXIS_MODEL
 
-    from .io.positions import read_positions
-    from .workflows import diagnose, simulate
+    from ..io.positions import read_positions
+    from ..workflows import diagnose, simulate
     P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:30x45", [("scale_quadratic", [1e-4, 0, 0])],
                                       1e-5, 0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -167,9 +167,9 @@ def bench_guarantee(mod):
     parameter vectors (what the allowance was before: no proof). Target < 2 s."""
     import tempfile
 
-    from .io.positions import read_positions
-    from .workflows import estimate, guarantee, simulate
-    from .workflows.premises import premises
+    from ..io.positions import read_positions
+    from ..workflows import estimate, guarantee, simulate
+    from ..workflows.premises import premises
     from garant.derive.builtin import TWO_AXIS_MODEL
     P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:36x36", [], 1e-5, 0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -202,7 +202,7 @@ def bench_guarantee(mod):
 def bench_continuum(mod):
     """Exchange method for the 15 two-axis optima vs per-target LPs on a 3-degree grid (all 15
     targets, 14,400 positions, actually run; a 1-degree grid would take minutes)."""
-    from .solve import continuum
+    from ..solve import continuum
     t, sol = timed(lambda: continuum.solve(mod.H, 2, np.eye(15)))
     assert np.allclose(sol.values, 1, atol=1e-7)
     g = np.deg2rad(np.arange(0, 360, 3))
@@ -214,7 +214,7 @@ def bench_continuum(mod):
 
 def bench_certificates():
     """Build and independently check the 15 two-axis certificates vs solving the 15 LPs on a 15 deg grid."""
-    from .proof import build, check
+    from ..proof import build, check
     mod = load("two-axis")
     t, ok = timed(lambda: [all(o for _, o, _ in check.check(c)) for c in build.for_model("two-axis")])
     assert all(ok)
@@ -270,7 +270,7 @@ def bench_estimate(ns=(10, 1_000, 10_000)):
             garant = [sys.executable, "-c", "import sys; from garant.verify.cli import main; sys.exit(main())",
                       "estimate", "--model", "two-axis", path, "--sigma", "1e-5"]
             t, _ = timed(lambda: subprocess.run(garant, check=True, capture_output=True))
-            baseline = [sys.executable, "-c", f"from garant.verify.baseline import per_target_estimate; "
+            baseline = [sys.executable, "-c", f"from garant.verify.bench.baseline import per_target_estimate; "
                         f"per_target_estimate({path!r})"]
             base, _ = timed(lambda: subprocess.run(baseline, check=True, capture_output=True))
             out.append((f"garant estimate, {n:,} distinct positions (verdict, proven remainder)", t,
@@ -283,7 +283,7 @@ def bench_startup(mod):
     `python -c pass` (the interpreter alone). Targets: --help < 0.3 s, estimate on 10 positions < 1 s."""
     import tempfile
 
-    from .workflows import simulate
+    from ..workflows import simulate
     from garant.derive.builtin import TWO_AXIS_MODEL
     out = []
     base, _ = timed(lambda: subprocess.run([sys.executable, "-c", "pass"], check=True))
@@ -304,12 +304,12 @@ def bench_apply():
     reading the same samples back from a CSV with numpy (what any user of the corrected log pays anyway)."""
     import tempfile
 
-    from .io import calibration
+    from ..io import calibration
     cal = {"M": np.eye(3) * 1.001, "b": np.array([0.01, -0.02, 0.03]), "bound_matrix": np.full((3, 3), 1e-4),
            "bound_bias": np.full(3, 1e-3), "bound_delta": np.zeros(3), "pendulosity_axes": np.array([2, 3, 1]),
            "g": 9.81}
     raw = np.random.default_rng(0).normal(size=(1_000_000, 3)) + [0, 0, 9.81]
-    from .io.text import csv_bytes
+    from ..io.text import csv_bytes
     t = np.arange(len(raw)) * 0.01
 
     def run():
@@ -350,8 +350,8 @@ def bench_calibrate_norm(samples=1_000_000):
     simulated log of `samples` rows against the imu_tk-style reference above, both from the same file."""
     import tempfile
 
-    from .io import recordings
-    from .workflows import calibrate_norm
+    from ..io import recordings
+    from ..workflows import calibrate_norm
     mod = load("norm")
     rng = np.random.default_rng(0)
     rows = []
@@ -383,7 +383,7 @@ def codegen_outputs():
 
 
 def main():
-    from .solve import highs
+    from ..solve import highs
     warnings.filterwarnings("ignore", category=RuntimeWarning)
     highs.new()                                   # HiGHS prints a banner on its first construction: not here
     mod = load("two-axis")
@@ -409,7 +409,3 @@ def main():
     print(f"{'command':10s} {'rows':>9s} {'time, s':>8s} {'peak MiB':>9s}")
     for cmd, n, t, mib in bench_scale():
         print(f"{cmd:10s} {n:9d} {t:8.2f} {mib:9.0f}")
-
-
-if __name__ == "__main__":
-    main()
