@@ -9,6 +9,10 @@ Linearised residual (2)-(3): z^(p) = H^(p)(angles)^T q + rho^(p), |rho^(p)| <= s
 """
 import numpy as np
 
+__all__ = ["ANGLES", "PARAMETERS", "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES",
+           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "equivalent", "H", "up_nominal",
+           "readings", "residual", "PLAN_DEG", "PSI", "estimate_on_plan", "MOUNTINGS"]
+
 #: Read stand angles, in the order H takes them (rad).
 ANGLES = ("phi",)
 #: Values each angle can take, degrees: a continuous range, or detents (empty: the whole range).
@@ -496,5 +500,11 @@ PSI = _psi()
 
 
 def estimate_on_plan(z):
-    """q from residuals z of shape (len(PLAN_DEG), 3) taken at PLAN_DEG; guaranteed error sigma each."""
-    return np.einsum("nsp,sp->n", PSI, np.asarray(z, dtype=float))
+    """q, shape (len(Q_NAMES),), from the residuals z at PLAN_DEG as `residual` returns them, shape
+    (3, len(PLAN_DEG)); guaranteed error sigma each. A model whose description gives no plan has none."""
+    z = np.asarray(z, dtype=float)
+    if not len(PLAN_DEG):
+        raise ValueError("this model has no plan (plan_deg in its description): use `garant estimate`")
+    if z.shape != (3, len(PLAN_DEG)):
+        raise ValueError(f"z must have shape (3, {len(PLAN_DEG)}) as residual() returns it at PLAN_DEG, not {z.shape}")
+    return np.einsum("nsp,ps->n", PSI, z)

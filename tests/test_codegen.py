@@ -59,3 +59,27 @@ def test_norm_H_exponents_are_generated_only_for_pure_monomials():
     for bad in (2 * n[0] ** 2, n[0] + n[1]):
         with pytest.raises(ValueError, match="single monomial"):
             _monomial(bad, n)
+
+
+@pytest.mark.parametrize("name", ["two_axis", "single_axis", "three_axis"])
+def test_every_generated_model_keeps_one_protocol(name):
+    # __all__ names what the module has; residual() returns what estimate_on_plan() takes, (3, S): on the
+    # plan of 000 (two-axis, Table 2) the chain recovers q of a precision unit to its nonlinearity (1e-12
+    # for errors of 1e-6); a model without a plan says so instead of returning zeros.
+    import importlib
+
+    import numpy as np
+    from garant.verify import models
+    m = importlib.import_module(f"garant.generated.{name}")
+    assert all(hasattr(m, n) for n in m.__all__)
+    if not len(m.PLAN_DEG):
+        with pytest.raises(ValueError, match="no plan"):
+            m.estimate_on_plan(np.zeros((3, 0)))
+        return
+    p = np.random.default_rng(0).uniform(-1e-6, 1e-6, len(m.PARAMETER_NAMES))
+    a = np.deg2rad(m.PLAN_DEG).T
+    z = m.residual(*a, m.readings(*a, p, 9.81), 9.81)
+    assert z.shape == (3, len(m.PLAN_DEG))
+    assert np.abs(m.estimate_on_plan(z) - models.q_of(m, p)).max() < 1e-11
+    with pytest.raises(ValueError, match="shape"):
+        m.estimate_on_plan(z.T)
