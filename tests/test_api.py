@@ -44,3 +44,30 @@ def test_estimate_takes_an_array_or_a_file_alike(tmp_path):
         garant.estimate("two-axis", np.zeros((4, 3)), 1e-5)
     with pytest.raises(garant.DataError, match="sigma must be a finite number > 0"):
         garant.estimate("two-axis", np.column_stack([P, f]), -1.0)
+
+
+def test_results_are_objects_with_the_documented_fields(tmp_path):
+    # Like scipy's OptimizeResult: fields as keys and attributes, arrays kept as arrays, to_dict() the
+    # command's JSON itself (the same code path), a short repr, an HTML table; docs/api.md lists every field
+    # each kind documents (dropping one from the docs, or a field from the result, turns this red).
+    from garant.generated import two_axis as mod
+    from garant.verify.io import results
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
+    f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
+    data = write_csv(tmp_path / "d.csv", P, f)
+    out = tmp_path / "e.json"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--json", str(out)]) == 0
+    res = garant.estimate("two-axis", str(data), 1e-5)
+    assert isinstance(res, results.Estimate) and res.q is res["q"] and isinstance(res.residual, np.ndarray)
+    assert res.to_dict() == json.loads(out.read_text())
+    assert json.loads(res.to_json()) == res.to_dict()
+    text = repr(res)
+    assert text.startswith("Estimate(\n  consistent: True") and len(text.splitlines()) < 60
+    assert "<table>" in res._repr_html_() and "guaranteed_error" in res._repr_html_()
+    with pytest.raises(AttributeError, match="no field 'nope'"):
+        res.nope
+    assert all(k in res for k in results.Estimate.FIELDS)
+    api = (ROOT / "docs" / "api.md").read_text()
+    for kind in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.Correction):
+        assert f"`{kind.__name__}`" in api
+        assert all(f"`{name}`" in api for name in kind.FIELDS), kind.__name__

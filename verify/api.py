@@ -1,12 +1,15 @@
 """The notebook API: a few functions with the same content as the commands' JSON (docs/api.md).
 
-Each returns plain Python objects (dicts, lists, numpy arrays); errors are raised as DataError.
+Each returns a result object (verify/io/results.py): a dict of the command's JSON fields, also reachable
+as attributes, with numpy arrays, `to_dict()`, `to_json()` and a short repr; errors are raised as
+DataError.
 """
 import numpy as np
 
 from . import models
 from .errors import DataError
 from .cli.args import G_DEFAULT
+from .io import results
 
 
 def plan(model, grid=None, count_seconds=5.0):
@@ -15,8 +18,8 @@ def plan(model, grid=None, count_seconds=5.0):
     from .workflows.plan import norm_plan, plan as search_plan
     mod = models.load(model)
     if model == "norm":
-        return norm_plan(mod)
-    return search_plan(mod, model, grid, count_seconds).to_dict()
+        return results.Plan(norm_plan(mod))
+    return results.Plan(search_plan(mod, model, grid, count_seconds).to_dict())
 
 
 def positions(model_module, data):
@@ -65,7 +68,8 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     prem = premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                     g_uncertainty=g_uncertainty, prior=prior)
-    return run(mod, positions(mod, data), sigma, prem.g, remount=remount, mount=mount, gamma=gamma, premises=prem)
+    return results.Estimate(run(mod, positions(mod, data), sigma, prem.g, remount=remount, mount=mount, gamma=gamma,
+                                premises=prem))
 
 
 def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta_sigma=None, imu=None):
@@ -79,7 +83,7 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta
     res = cn.run(mod, stills, g, params, log, delta_sigma, recordings.quantum(data))
     if res["consistent"]:
         res["calibration"] = calibration.from_norm(res, mod.AXES)
-    return res
+    return results.NormCalibration(res)
 
 
 def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
@@ -89,11 +93,12 @@ def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
     mod = models.load(model)
     res = dg.diagnose(models.stand_model(model), mod, positions(mod, data), sigma, g, prior, g_uncertainty)
     res.pop("_study")
-    return res
+    return results.Diagnosis(res)
 
 
 def apply(calibration, log, fmt=None, sensor="adxl355", imu=None, trust_units=False):
-    """Correct a raw log: (time s, specific force (N, 3) m/s^2, worst-case error (N, 3) m/s^2).
+    """Correct a raw log: a Correction with t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2, the worst-case
+    error of each component; it unpacks as (t, a, bound).
     `calibration` is a garant-calibration-1 file or the dictionary `calibrate_norm` returns; either is
     checked as `garant apply` checks it (schema, a well-conditioned M, the log's unit unless
     `trust_units`)."""
@@ -103,4 +108,4 @@ def apply(calibration, log, fmt=None, sensor="adxl355", imu=None, trust_units=Fa
     if not trust_units:
         cal_io.check_units(cal, log, data.raw[:100_000], "the calibration")
     a, bound = cal_io.apply(cal, data.raw)
-    return data.t, a, bound
+    return results.Correction(t=data.t, a=a, bound=bound)

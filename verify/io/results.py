@@ -1,0 +1,113 @@
+"""Results of the notebook API as objects: a dict whose keys are also attributes (like scipy's
+OptimizeResult), numpy arrays kept as arrays, `to_dict()` / `to_json()` for files, a short `repr` and an
+HTML table in notebooks. Each kind documents its fields in FIELDS (docs/api.md lists the same)."""
+import json
+
+import numpy as np
+
+from .report import json_value, write_text
+
+
+def _short(v, width=72):
+    """A one-line summary of a value: arrays by shape, long lists by length, numbers to 6 digits."""
+    if isinstance(v, np.ndarray):
+        return f"array{v.shape}" if v.size > 6 else np.array2string(v, precision=6, separator=", ")
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, dict):
+        text = "{" + ", ".join(f"{k}: {_short(x, 20)}" for k, x in v.items()) + "}"
+        return text if len(text) <= width else f"dict of {len(v)}: {', '.join(map(str, list(v)[:4]))}, ..."
+    if isinstance(v, (list, tuple)) and len(v) > 6:
+        return f"{type(v).__name__} of {len(v)}"
+    text = repr(v)
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+class Result(dict):
+    """A result: its keys are also attributes; FIELDS documents them (name: meaning and unit)."""
+
+    FIELDS = {}
+
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(f"{type(self).__name__} has no field {name!r}; it has {', '.join(self.keys())}") from None
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(self.keys()))
+
+    def to_dict(self):
+        """Plain JSON types only: arrays as lists (what the command's --json file holds)."""
+        return json.loads(json.dumps(self, default=json_value))
+
+    def to_json(self, path=None):
+        """The JSON text, or written to `path` (atomically) when given."""
+        text = json.dumps(self, default=json_value, indent=1) + "\n"
+        if path is None:
+            return text
+        write_text(path, text)
+        return None
+
+    def __repr__(self):
+        keys = [k for k in self.FIELDS if k in self] + [k for k in self.keys() if k not in self.FIELDS]
+        return f"{type(self).__name__}(\n" + "".join(f"  {k}: {_short(self[k])}\n" for k in keys) + ")"
+
+    def _repr_html_(self):
+        from html import escape
+        keys = [k for k in self.FIELDS if k in self] + [k for k in self.keys() if k not in self.FIELDS]
+        rows = "".join(f"<tr><td><code>{escape(k)}</code></td><td>{escape(_short(self[k]))}</td>"
+                       f"<td>{escape(self.FIELDS.get(k, ''))}</td></tr>" for k in keys)
+        return f"<table><caption>{type(self).__name__}</caption>{rows}</table>"
+
+
+class Plan(Result):
+    """`garant.plan`: the optimal guaranteed errors and a minimal optimal plan (`garant plan --json`)."""
+
+    FIELDS = {"guaranteed_errors": "optimal guaranteed error of each q, units of sigma",
+              "min_positions": "positions of a minimal optimal plan",
+              "plan": "the preferred minimal plan: stand angles in degrees (and the mounting)",
+              "optimal_plans": "the minimal optimal plans found"}
+
+
+class Estimate(Result):
+    """`garant.estimate`: the verdict, q and guaranteed errors (`garant estimate --json`)."""
+
+    FIELDS = {"consistent": "whether the data are consistent with sigma and the premises",
+              "premises": "what has to hold for the bounds to hold (statement, meaning, a-priori bounds)",
+              "sigma": "the noise bound, dimensionless (units of g)",
+              "sigma_min_supported": "the smallest sigma the data support",
+              "q": "estimate of each q, in its unit (`units`)",
+              "guaranteed_error": "guaranteed error of each q (linear + remainder part)",
+              "guaranteed_error_linear": "sigma sum |W| of each q",
+              "guaranteed_error_remainder": "the proven linearisation remainder part of each q",
+              "units": "unit of each q (1: dimensionless; a bias q is over g)",
+              "definitions": "each q in the physical parameters ((4) of 000)"}
+
+
+class NormCalibration(Result):
+    """`garant.calibrate_norm`: a log calibrated through the norm relation (2.2) of 001."""
+
+    FIELDS = {"consistent": "whether the still intervals are consistent with the noise bound",
+              "premises": "what has to hold for the bounds to hold",
+              "delta_sigma_source": "where the noise bound comes from (statistical rule or --delta-sigma)",
+              "matrix": "M of a = M (raw - b)", "bias": "b, in the log's raw unit",
+              "calibration": "the garant-calibration-1 dictionary `garant.apply` takes (when consistent)"}
+
+
+class Diagnosis(Result):
+    """`garant.diagnose`: where the model and the data disagree, and the effect that closes the gap."""
+
+    FIELDS = {"consistent_before": "whether the base model fits the data within sigma",
+              "effects": "the effects named", "estimates": "each named effect's parameters",
+              "blind_to": "effects these positions cannot see", "premises": "what the verdict assumes"}
+
+
+class Correction(Result):
+    """`garant.apply`: a corrected log. Unpacks as (t, a, bound) too."""
+
+    FIELDS = {"t": "time, s", "a": "corrected specific force (N, 3), m/s^2",
+              "bound": "worst-case error of each component (N, 3), m/s^2"}
+
+    def __iter__(self):
+        return iter((self["t"], self["a"], self["bound"]))
