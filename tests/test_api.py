@@ -71,3 +71,12 @@ def test_results_are_objects_with_the_documented_fields(tmp_path):
     for kind in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.Correction):
         assert f"`{kind.__name__}`" in api
         assert all(f"`{name}`" in api for name in kind.FIELDS), kind.__name__
+
+
+def test_api_errors_name_the_api_arguments(tmp_path):
+    # The readers say "--imu 9" to a command's user; the API's caller wrote imu=9 and reads that name.
+    log = tmp_path / "log.txt"
+    log.write_text("".join(f"{k * 0.01:.2f} 0 0 9.81\n" for k in range(100)))
+    with pytest.raises(garant.DataError) as err:
+        garant.calibrate_norm(str(log), imu=9)
+    assert "imu" in str(err.value) and "--imu" not in str(err.value)

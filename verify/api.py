@@ -12,6 +12,28 @@ from .cli.args import G_DEFAULT
 from .io import results
 
 
+#: The commands' options by the API's argument names: an error raised below names what the caller wrote.
+ARGUMENTS = {"--imu": "imu", "--format": "fmt", "--sigma": "sigma", "--g-uncertainty": "g_uncertainty",
+             "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
+             "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid"}
+
+
+def _api_names(fn):
+    """Re-raise a DataError with each command option in its text replaced by the API's argument name."""
+    import functools
+    import re
+
+    @functools.wraps(fn)
+    def call(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except DataError as e:
+            text = re.sub(r"--[a-z][a-z-]*", lambda m: ARGUMENTS.get(m.group(0), m.group(0)), str(e))
+            raise DataError(text) from None
+    return call
+
+
+@_api_names
 def plan(model, grid=None, count_seconds=5.0):
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
     as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001."""
@@ -22,6 +44,7 @@ def plan(model, grid=None, count_seconds=5.0):
     return results.Plan(search_plan(mod, model, grid, count_seconds).to_dict())
 
 
+@_api_names
 def positions(model_module, data):
     """Positions from a CSV path, a pandas DataFrame (columns as in the CSV) or an array (N, angles + 3):
     the stand's angles in degrees, then f1, f2, f3 in m/s^2 (and, for a stand with several mountings,
@@ -55,6 +78,7 @@ def positions(model_module, data):
     return Positions("data", values[:, :len(names)], values[:, len(names):], m)
 
 
+@_api_names
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower"):
     """The verdict, q and guaranteed errors from positions (a CSV path, a DataFrame or an array: see
     `positions`), as `garant estimate --json`.
@@ -72,6 +96,7 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
                                 premises=prem))
 
 
+@_api_names
 def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta_sigma=None, imu=None):
     """Calibrate a static log through the norm relation (as `garant calibrate-norm --json`); when the data
     are consistent the result holds "calibration", the dictionary `apply` takes."""
@@ -86,6 +111,7 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor="adxl355", delta
     return results.NormCalibration(res)
 
 
+@_api_names
 def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
     """The missing-effect workflow on positions (a CSV path, a DataFrame or an array: see `positions`),
     as `garant diagnose --json`."""
@@ -96,6 +122,7 @@ def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
     return results.Diagnosis(res)
 
 
+@_api_names
 def apply(calibration, log, fmt=None, sensor="adxl355", imu=None, trust_units=False):
     """Correct a raw log: a Correction with t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2, the worst-case
     error of each component; it unpacks as (t, a, bound).
