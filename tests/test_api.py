@@ -19,8 +19,8 @@ def test_plan_of_the_api_is_the_plan_of_the_command(tmp_path, capsys, model):
     # tilted_inner: the exchange positions are candidates there; garant.plan gave 8 positions with errors
     # 3.0, 1.414, ... where `garant plan` gave 10 with 2.414, 1.0, ... (the step lived in the command).
     out = tmp_path / "p.json"
-    assert main(["plan", model, "--json", str(out)]) == 0
-    assert _deterministic(garant.plan(model)) == _deterministic(json.loads(out.read_text()))
+    assert main(["plan", model, "--json", str(out), "--count-seconds", "0.2"]) == 0
+    assert _deterministic(garant.plan(model, count_seconds=0.2)) == _deterministic(json.loads(out.read_text()))
 
 
 def _deterministic(d):

@@ -10,8 +10,6 @@ from fractions import Fraction
 from functools import lru_cache
 from math import isqrt
 
-import numpy as np
-
 ROOTS = (2, 3, 6)
 
 
@@ -57,17 +55,14 @@ class QF:
 
     __rmul__ = __mul__
 
-    def _matrix(self):
-        """Multiplication by self as a 4 x 4 rational matrix on the basis (1, sqrt2, sqrt3, sqrt6)."""
-        cols = [(self * QF(*np.eye(4, dtype=int)[k].tolist())).c for k in range(4)]
-        return [[cols[j][i] for j in range(4)] for i in range(4)]
-
     def inverse(self):
         if self.is_zero():
             raise ZeroDivisionError("division by an exact zero")
-        from garant.derive.linear import solve_exact
-        A = self._matrix()
-        return QF(*solve_exact([[row[j] for row in A] for j in range(4)], [1, 0, 0, 0]))
+        # x sigma2(x) = u + v sqrt3 (sigma2: sqrt2 -> -sqrt2), and (u + v sqrt3)(u - v sqrt3) = u^2 - 3 v^2:
+        # 1/x = sigma2(x) (u - v sqrt3) / (u^2 - 3 v^2), all in rationals
+        a, b, c, d = self.c
+        u, v = a * a + 3 * c * c - 2 * b * b - 6 * d * d, 2 * a * c - 4 * b * d
+        return QF(a, -b, c, -d) * QF(u, 0, -v, 0) * (1 / (u * u - 3 * v * v))
 
     def __truediv__(self, o):
         return self * QF.of(o).inverse()
