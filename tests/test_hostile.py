@@ -214,6 +214,24 @@ def test_time_column_anywhere_and_in_milliseconds(tmp_path):
     np.testing.assert_allclose(log.raw, f)
 
 
+def test_repeated_time_stamps_are_counted(tmp_path, capsys):
+    # Every stamp written three times (median step 0): one line with the count, in csv and OpenAXES alike
+    # (it used to say "median step of 0 ... name the column time_ms"). A few repeats are kept and counted.
+    from garant.verify.io import recordings
+    t, f = _log(3000)
+    t3 = np.repeat(t[::3], 3)
+    refused(["calibrate-norm", _csv(tmp_path / "a.csv", "time_s,x,y,z", [t3, *f.T]), "--format", "csv"], capsys,
+            "2000 of 2999 time steps are 0")
+    rows = ["TIME;ACCEL_BMI160_0;ACCEL_BMI160_1;ACCEL_BMI160_2"] + [f"{int(u * 1e6)};0;0;16384" for u in t3]
+    (tmp_path / "b.csv").write_text("\n".join(rows) + "\n")
+    refused(["calibrate-norm", tmp_path / "b.csv", "--format", "openaxes", "--sensor", "bmi160"], capsys,
+            "time steps are 0")
+    t[100:150] = t[99]
+    t[150:] += 1e-3
+    log = recordings.read_log(_csv(tmp_path / "c.csv", "time_s,x,y,z", [t, *f.T]), "csv")
+    assert "50 time stamp(s) repeat the one before" in log.note
+
+
 @pytest.mark.parametrize("option", ["--delta-sigma", "--window", "--g"])
 def test_non_finite_log_options_refused(option, capsys):
     with pytest.raises(SystemExit) as e:

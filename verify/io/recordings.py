@@ -115,8 +115,8 @@ def _csv_columns(path, header):
 
 
 def _check_time(path, t, named_unit):
-    """Time must increase and be in seconds: a reset or a unit that is not seconds is refused. Returns
-    the median sample interval."""
+    """Time must increase and be in seconds: a reset or a unit that is not seconds is refused, and so is a
+    time column whose stamps mostly repeat. Returns (the median sample interval, how many steps are 0)."""
     dt = np.diff(t)
     if np.all(dt == 0):
         raise DataError(f"{path}: the time column is constant")
@@ -125,10 +125,14 @@ def _check_time(path, t, named_unit):
         raise DataError(f"{path}: time goes back at data row {int(back[0]) + 2} (a reset or a merged log); "
                         "split the log or fix the time column")
     step = float(np.median(dt))
+    repeats = int(np.count_nonzero(dt == 0))
+    if step == 0:
+        raise DataError(f"{path}: {repeats} of {dt.size} time steps are 0 (each time stamp repeated): the time "
+                        "column does not give the sample times; fix it or give one row per sample")
     if named_unit and not 1e-5 <= step <= 0.5:
         raise DataError(f"{path}: the time column has a median step of {step:g}, not a sample interval in "
                         "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds")
-    return step
+    return step, repeats
 
 
 def read_log(path, fmt=None, sensor="adxl355", imu=None):
@@ -172,7 +176,9 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     if len(t) < MIN_SAMPLES:
         raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording")
-    dt = _check_time(path, t, unit)
+    dt, repeats = _check_time(path, t, unit)
+    if repeats:
+        note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))
     return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt)      # t is the reader's own array
 
 
