@@ -152,7 +152,7 @@ def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path,
     data = write_csv(tmp_path / "d.csv", P, readings(mod, P, None, p, 0.0))
     out = tmp_path / "e.json"
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81", "--json", str(out)]) == 0
-    assert "q: q are those of the unit that reads the same with theta1, theta2, theta3, Delta_g = 0" in \
+    assert "The bounded q are those of the unit that reads the same with theta1, theta2, theta3, Delta_g = 0" in \
         capsys.readouterr().out
     d = json.loads(out.read_text())
     q = np.array([d["q"][n] for n in mod.Q_NAMES])

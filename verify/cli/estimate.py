@@ -152,7 +152,7 @@ def print_estimate(res, mod, args):
           f"after absorption into q is <= {res['remainder_left_bound']:.2e} per reading")
     print(f"premises: {res['premises']['statement']}")
     if res["premises"]["meaning"]:
-        print(f"q: {res['premises']['meaning']}")
+        print(res["premises"]["meaning"])
     print(f"method: {res['method']}")
     parts = res["remainder_parts"]
     worst = max(parts, key=lambda k: max(parts[k].values()))

@@ -55,8 +55,8 @@ class Premises:
         if not self.absorbed:
             return ""
         gravity = [n for n, k in zip(self.names, self.kinds) if k == "gravity" and n in self.absorbed]
-        out = (f"q are those of the unit that reads the same with {', '.join(self.absorbed)} = 0, absorbed into "
-               "Gamma exactly (no data tell the two apart)")
+        out = (f"The bounded q are those of the unit that reads the same with {', '.join(self.absorbed)} = 0, "
+               "absorbed into Gamma exactly (no data tell the two apart)")
         if gravity:
             out += (f": scale factors relative to g = {self.g:g} m/s^2 (the true g within {self.g_uncertainty:g} of "
                     f"it, {self.g_source})")
