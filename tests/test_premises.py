@@ -299,3 +299,34 @@ def test_the_equivalent_unit_reads_the_same_everywhere(name, absorbed):
         assert np.all(same[[mod.PARAMETER_NAMES.index(n) for n in absorbed]] == 0)
         assert np.abs(mod.readings(*P.T, p, G, **kw) - mod.readings(*P.T, same, G, **kw)).max() <= 1e-13
         assert np.abs(models.q_of(mod, p) - mod.PHYSICAL_TO_Q @ p).max() > 1e-3
+
+
+def test_the_gap_to_the_literal_q_is_bounded_at_the_vertices():
+    # mounting.literal_gap bounds |q - q_literal| (the absorbed q against (4) taken literally) from the bounds
+    # of theta and Delta_g/g and of Gamma': checked at the vertices of the box, where it is largest, and
+    # inside; MEMS-size Gamma. Dropping the bound's Delta_g term turns it red (its theta terms are looser
+    # than these vertices reach: dropping one of them alone does not).
+    import dataclasses
+
+    from garant.verify.workflows import mounting
+    mod = models.load("two-axis")
+    prem = premises(mod, SIGMA, G, g_given=False)          # theta <= 5e-3 (description), Delta_g/g <= 5e-3
+    rng = np.random.default_rng(7)
+    names = list(mod.PARAMETER_NAMES)
+    worst = 0.0
+    for k in range(200):
+        p = np.zeros(len(names))
+        for n in ("theta1", "theta2", "theta3", "Delta_g"):
+            b = prem.split[n][0]
+            p[names.index(n)] = b * (rng.choice([-1.0, 1.0]) if k % 2 else rng.uniform(-1, 1))
+        for i in (1, 2, 3):
+            for j in (1, 2, 3):
+                p[names.index(f"Gamma{i}{j}")] = rng.choice([-1.0, 1.0]) * (2e-2 if i == j else 1e-2)
+        same = mod.equivalent(p)
+        B = np.abs(np.array([[same[names.index(f"Gamma{i}{j}")] for j in (1, 2, 3)] for i in (1, 2, 3)]))
+        gap = mounting.literal_gap(mod, prem, B)
+        diff = np.abs(models.q_of(mod, p) - mod.PHYSICAL_TO_Q @ p)
+        assert np.all(diff <= gap), k
+        worst = max(worst, float((diff / np.maximum(gap, 1e-300)).max()))
+    assert worst > 0.1                                    # the bound is not vacuous either
+    assert dataclasses.asdict(prem)["split"]["theta2"] == (5e-3, "stand description")

@@ -113,3 +113,30 @@ def test_cli_estimate_with_mount_prints_block_errors(mod, tmp_path, capsys):
     assert main(["estimate", "--model", "two-axis", str(path), "--sigma", "1e-5", "--mount", "+y+z+x"]) == 0
     out = capsys.readouterr().out
     assert "block errors in block axes, mounting +y+z+x" in out and "theta_k3" in out
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_mems_size_block_errors_recovered_within_bounds(mod, tmp_path, seed):
+    # The block's physical errors (29) of 000 from the q of an estimate in which the block absorbs the
+    # mounting and Delta_g: their split into Gamma and theta_k is first order in the q of (4) taken
+    # literally, which differ from the absorbed ones by about |Gamma| |theta|. The bound must carry that
+    # (premised on the mounting's stated bound): MEMS-size Gamma (2e-2) and theta_k (5e-3, the two-axis
+    # description's bound), noise at +-sigma. Without that term the Gamma bounds miss by about 1e-4.
+    rng = np.random.default_rng(seed)
+    name, gamma = NAMES[rng.integers(24)], "lower"
+    sigma, g = 1e-5, 9.81
+    stand = dict(zip(STAND, rng.uniform(-1e-5, 1e-5, 6)))
+    Gamma = np.tril(rng.uniform(-2e-2, 2e-2, (3, 3)))
+    bias, theta_k = rng.uniform(-0.05, 0.05, 3), rng.choice([-5e-3, 5e-3], 3)
+    P = np.array([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], float)
+    f = independent_readings(P, stand, rm.MOUNTS[name], Gamma, bias, theta_k, g)
+    f += g * sigma * rng.choice([-1.0, 1.0], f.shape)
+    res = estimate(mod, read_positions(write_csv(tmp_path / "d.csv", P, f)), sigma, g,
+                   remount=rm, mount=name, gamma=gamma)
+    assert res["consistent"]
+    ph, bd = res["physical"], res["physical_bound"]
+    neg = dict(zip(rm.OUTPUTS, rm.neglected(name, stand["Delta_g"], stand["Delta_beta"], gamma)))
+    for i in range(3):
+        assert abs(ph["theta_k"][i] - theta_k[i] + neg[f"theta_k{i + 1}"]) <= bd["theta_k"][i]
+        for j in range(3):
+            assert abs(ph["Gamma"][i][j] - Gamma[i, j] + neg[f"Gamma{i + 1}{j + 1}"]) <= bd["Gamma"][i][j]

@@ -160,8 +160,15 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         "warnings": near_prior(lin, q, e) + unrefutable(lin.A, W, mod),
     })
     if remount is not None:
+        gap = 0.0
+        if premises.absorbed:                    # the split into Gamma and theta_k is linear in the literal q
+            cal = block.calibration(mod, q, e, premises)
+            gap = mounting.literal_gap(mod, premises, np.abs(cal["Gamma"]) + cal["Gamma_bound"])
         phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, q, W, sigma + v.remainder, g,
-                                             v.q_shift)
+                                             v.q_shift + gap)
+        if premises.absorbed:
+            note += "; the split of Gamma and theta_k assumes " + ", ".join(
+                f"|{n}| <= {b:g} ({src})" for n, (b, src) in premises.split.items())
         out.update(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound,
                    physical_note=note)
     elif all(n in mod.PARAMETER_NAMES for n in block.BLOCK):

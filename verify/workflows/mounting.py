@@ -50,3 +50,27 @@ def recover(remount, mount, gamma, q, weights, noise, g, q_shift=0.0):
     note = (f"neglected in (29): Delta_g/g on the diagonal of Gamma, and Delta_beta in theta_k{axis} "
             "(not identifiable on this stand)")
     return out, err, note
+
+
+def literal_gap(mod, premises, gamma_bound):
+    """Bound of |q - q_literal| for each q: q are those of the unit with the model's ABSORBED parameters
+    absorbed into Gamma, Gamma' = (1 - Delta_g)(E + Gamma) R - E with R = Q C(theta) Q^T; q_literal are the
+    combinations (4) of 000 of the unit itself, on which the split (28)-(29) into Gamma and theta_k is
+    linear. Their difference is PHYSICAL_TO_Q on the Gamma entries of the second-order part of Gamma',
+        D = Gamma (R - E) + (R - E - Theta) - Delta_g (A R - E),   A = E + Gamma, Theta: R's first order.
+    With s = 1 - Delta_g, A = (E + Gamma') R^T / s and s A R = E + Gamma' give
+        D = [(2E - R - R^T) + Delta_g (R - E) + Gamma' (E - R^T) - Delta_g (Gamma' + Delta_g E)] / s + (R - E - Theta),
+    and with t = |theta1| + |theta2| + |theta3| (R a product of three exponentials of skew generators of
+    norm 1) every entry of R - E is within e^t - 1, of R - E - Theta within e^t - 1 - t, of the symmetric
+    2E - R - R^T (twice R's second-order part, the first cancels) within 2 (e^t - 1 - t). The bounds of
+    theta and u = |Delta_g/g| are those `premises.split` holds: premises of the split alone. gamma_bound:
+    entrywise bound of Gamma' (3 x 3)."""
+    names, kinds = list(premises.names), dict(zip(premises.names, premises.kinds))
+    theta = max((premises.split[n][0] for n in premises.absorbed if kinds[n] == "mounting"), default=0.0)
+    u = max((premises.split[n][0] for n in premises.absorbed if kinds[n] == "gravity"), default=0.0)
+    t = 3 * theta
+    r1, r2 = np.expm1(t), np.expm1(t) - t
+    B = np.asarray(gamma_bound, float)
+    D = (2 * r2 + u * r1 + B.sum(axis=1, keepdims=True) * r1 + u * (B + u * np.eye(3))) / (1 - u) + r2
+    cols = [names.index(f"Gamma{i}{j}") for i in (1, 2, 3) for j in (1, 2, 3)]
+    return np.abs(np.asarray(mod.PHYSICAL_TO_Q, float)[:, cols]) @ D.reshape(-1) * (1 + 1e-12)

@@ -5,7 +5,7 @@ bound (5), a-priori bounds on the parameters the data cannot separate (and on th
 errors), and the gravity the residual (1) is normalised by. Each bound used here has a source: the
 stand description (`bound` of a [[parameter]]), a command-line option, or a stated default.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,6 +36,8 @@ class Premises:
     bounds: np.ndarray
     sources: tuple
     absorbed: tuple = ()     # parameters the block absorbs exactly (the model's ABSORBED): bound 0, no premise
+    split: dict = field(default_factory=dict)   # their bounds (value, source): a premise only of splitting them
+                                                # from Gamma again (the block's physical errors, (29) of 000)
 
     def statement(self):
         """One line: the bounds hold if ..."""
@@ -66,6 +68,7 @@ class Premises:
 
     def to_dict(self):
         return {"statement": self.statement(), "meaning": self.meaning(), "absorbed": list(self.absorbed),
+                "split": {n: {"bound": b, "source": src} for n, (b, src) in self.split.items()},
                 "sigma": self.sigma, "sigma_source": self.sigma_source,
                 "g": self.g, "g_uncertainty": self.g_uncertainty, "g_source": self.g_source,
                 "a_priori": {n: {"kind": k, "bound": (float(b) if np.isfinite(b) else None), "source": s}
@@ -87,20 +90,22 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
         g_unc, g_src = G_UNCERTAINTY_DEFAULT, "default: g = 9.81 assumed, not given"
     default = {"stand": STAND_BOUND, "mounting": MOUNTING_BOUND, "block": BLOCK_BOUND, "effect": BLOCK_BOUND}
     absorbed = tuple(getattr(mod, "ABSORBED", ()))
-    bounds, sources = [], []
+    bounds, sources, split = [], [], {}
     for name, kind, b in zip(mod.PARAMETER_NAMES, kinds, stated):
-        if name in absorbed:
-            bounds.append(0.0), sources.append("absorbed into Gamma: no premise")
-        elif kind == "bias":
-            bounds.append(np.inf), sources.append("none needed: enters linearly")
+        if kind == "bias":
+            bound, src = np.inf, "none needed: enters linearly"
         elif kind == "gravity":
-            bounds.append(g_unc), sources.append(g_src)
+            bound, src = g_unc, g_src
         elif prior is not None:
-            bounds.append(prior), sources.append("--prior")
+            bound, src = prior, "--prior"
         elif b is not None:
-            bounds.append(b), sources.append("stand description")
+            bound, src = b, "stand description"
         else:
-            bounds.append(default[kind]), sources.append(f"default for a {kind} error")
+            bound, src = default[kind], f"default for a {kind} error"
+        if name in absorbed:                      # no premise of q; only splitting Gamma from it needs one
+            split[name] = (float(bound), src)
+            bound, src = 0.0, "absorbed into Gamma: no premise"
+        bounds.append(bound), sources.append(src)
     return Premises(sigma=sigma, sigma_source=sigma_source, g=g, g_uncertainty=g_unc, g_source=g_src,
                     names=tuple(mod.PARAMETER_NAMES), kinds=tuple(kinds), bounds=np.array(bounds, float),
-                    sources=tuple(sources), absorbed=absorbed)
+                    sources=tuple(sources), absorbed=absorbed, split=split)
