@@ -131,13 +131,14 @@ def _absorbed_context(m, names, subs):
     """ABSORBED and the code of `equivalent`: (index, code) of each Gamma' entry, the indices set to 0."""
     gone, Gp = absorbed(m)
     if not gone:
-        return dict(absorbed=[], equivalent=[], absorbed_idx=[], absorbed_formula="Gamma (none absorbed)")
+        return dict(absorbed=[], equivalent=[], equivalent_cse=[], absorbed_idx=[],
+                    absorbed_formula="Gamma (none absorbed)")
     dg, theta = m.stand.gravity_error, ", ".join(m.stand.theta)
     formula = f"(1 - {dg})(E + Gamma) Q C({theta}) Q^T - E" if len(gone) > 1 else f"(1 - {dg})(E + Gamma) - E"
-    entries = [(names.index(f"Gamma{i + 1}{j + 1}"), pycode(Gp[i, j].xreplace(subs)))
-               for i in range(3) for j in range(3)]
-    return dict(absorbed=list(gone), equivalent=entries, absorbed_idx=[names.index(n) for n in gone],
-                absorbed_formula=formula)
+    code = _cse_code([Gp[i, j].xreplace(subs) for i in range(3) for j in range(3)])
+    entries = [(names.index(f"Gamma{i + 1}{j + 1}"), code["exprs"][3 * i + j]) for i in range(3) for j in range(3)]
+    return dict(absorbed=list(gone), equivalent=entries, equivalent_cse=code["cse"],
+                absorbed_idx=[names.index(n) for n in gone], absorbed_formula=formula)
 
 
 def _num(v):
@@ -147,13 +148,11 @@ def _num(v):
 def _mount_context(d, k, name, subs):
     """H rows, nominal up-vector and exact readings (with CSE) of one mounting, in the code's names."""
     H = d.ident.H.xreplace(subs)
-    cse, forward = sp.cse([v.xreplace(subs) for v in d.force_over_g[k]], symbols=sp.numbered_symbols("t"),
-                          optimizations="basic")
-    return dict(name=name,
-                H=[[_array_code(H[3 * k + p, nu]) for nu in range(H.cols)] for p in range(3)],
-                up=[_array_code(v.xreplace(subs)) for v in d.up_nominal[k]],
-                forward_cse=[(pycode(s), pycode(e)) for s, e in cse],
-                forward=[_array_code(v) for v in forward])
+    h = _cse_code([H[3 * k + p, nu] for p in range(3) for nu in range(H.cols)], array=True)
+    up = _cse_code([v.xreplace(subs) for v in d.up_nominal[k]], array=True)
+    forward = _cse_code([v.xreplace(subs) for v in d.force_over_g[k]], array=True)
+    return dict(name=name, H_cse=h["cse"], H=[h["exprs"][p * H.cols:(p + 1) * H.cols] for p in range(3)],
+                up_cse=up["cse"], up=up["exprs"], forward_cse=forward["cse"], forward=forward["exprs"])
 
 
 def _ordered(row, names, preferred):
@@ -253,9 +252,6 @@ def remount_context(d):
 def norm_context(model):
     """Template context of the coarse-stand module (001)."""
     from . import norm
-    ni, nj, nk = sp.symbols("n_i n_j n_k")
-    n1, n2, n3 = norm.n_sym
-    Hg = [n1**2, n2**2, n3**2, n1 * n2, n1 * n3, n2 * n3, n1, n2, n3, n1**2 * ni, n2**2 * nj, n3**2 * nk]
     bound_args = {norm.kmax: sp.Symbol("k_max"), norm.vmax: sp.Symbol("v_max")}
     est = norm.estimators(model)
     return dict(
@@ -263,16 +259,27 @@ def norm_context(model):
         q_units=["1"] * 3 + ["rad"] * 3 + ["1"] * 6,
         params=[(str(p), u, mng) for p, u, mng in zip(norm.PARAMS, norm.PARAM_UNITS, norm.PARAM_MEANINGS)],
         param_names=[str(p) for p in norm.PARAMS],
-        H=[pycode(h) for h in Hg], F=[pycode(f) for f in norm.readings(model)],
+        H=[pycode(h) for h in norm.H(model)], F=_cse_code(norm.readings(model)),
         H_exponents=[_monomial(h, norm.n_sym) for h in norm.H(model)],
         q=[pycode(v) for v in norm.q_of_params()],
-        bound=pycode(norm.remainder_bound().subs(bound_args)),
-        published=pycode(norm.published_bound().subs(bound_args)),
+        bound=_cse_code([norm.remainder_bound().subs(bound_args)]),
+        published=_cse_code([norm.published_bound().subs(bound_args)]),
         plan=[[pycode(sp.N(v, 17)) for v in d] for d in norm.plan(model)],
         plan_exact=[", ".join(str(v) for v in d) for d in norm.plan(model)],
         duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
         estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
     )
+
+
+def _cse_code(exprs, array=False):
+    """(assignments, expressions) of code for `exprs` with their common subexpressions named t0, t1, ...;
+    with `array`, constant expressions broadcast like the angles (`_array_code`)."""
+    cse, out = sp.cse(list(exprs), symbols=sp.numbered_symbols("t"), optimizations="basic")
+    code = [pycode(e) for e in out]
+    if array:          # an entry that is constant (also through a named subexpression) still broadcasts
+        code = [_array_code(e) if e.is_number else c + " * one" if x.is_number else c
+                for e, c, x in zip(out, code, exprs)]
+    return dict(cse=[(pycode(s), pycode(e)) for s, e in cse], exprs=code)
 
 
 def _monomial(h, n):

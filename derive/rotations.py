@@ -3,7 +3,7 @@ import sympy as sp
 
 
 def C(axis, x):
-    """Passive rotation by angle x about coordinate axis 1, 2 or 3 (C1, C2, C3 of SPEC.md), or about an
+    """Passive rotation by angle x about coordinate axis 1, 2 or 3 (C1, C2, C3 of section 2 of 000), or about an
     exact unit vector n: cos x E + (1 - cos x) n n^T - sin x [n x] (C1 when n = e1)."""
     c, s = sp.cos(x), sp.sin(x)
     if isinstance(axis, tuple):

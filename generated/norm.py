@@ -10,6 +10,10 @@ sigma(n) = H(n)^T q + delta_sigma(n), n = f/|f|, and |delta_sigma| <= delta_sigm
 """
 import numpy as np
 
+__all__ = ["AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
+           "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
+           "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"]
+
 #: Pendulosity axes (i, j, k) of B(w) in (1.3) this module was derived for.
 AXES = (2, 3, 1)
 
@@ -39,10 +43,9 @@ PARAMETERS = (
 
 
 def H(n):
-    """H(n) of (2.2) for unit directions n of shape (3, ...): shape (12, ...)."""
+    """H(n) of (2.2) for unit directions n, shape (3, ...): shape (12, ...)."""
     n1, n2, n3 = np.asarray(n, dtype=float)
-    n_i, n_j, n_k = (n1, n2, n3)[AXES[0] - 1], (n1, n2, n3)[AXES[1] - 1], (n1, n2, n3)[AXES[2] - 1]
-    return np.array([n1**2, n2**2, n3**2, n1*n2, n1*n3, n2*n3, n1, n2, n3, n1**2*n_i, n2**2*n_j, n3**2*n_k])
+    return np.array([n1**2, n2**2, n3**2, n1*n2, n1*n3, n2*n3, n1, n2, n3, n1**2*n2, n2**2*n3, n1*n3**2])
 
 
 #: H(n) entry by entry as monomials n1^a n2^b n3^c (this module's AXES): exponents (a, b, c).
@@ -63,29 +66,37 @@ H_EXPONENTS = (
 
 
 def readings(m, params):
-    """Exact F = f/g of (1.3) for true directions m (unit, shape (3, ...)) and parameters (16, ...)."""
+    """Exact F = f/g of (1.3), shape (3, ...), for true unit directions m, shape (3, ...), and the
+    parameters of PARAMETERS, shape (16, ...)."""
     m1, m2, m3 = np.asarray(m, dtype=float)
     (lambda1, lambda2, lambda3, alpha, beta, gamma, e1, e2, e3, d1, d2, d3, dg, u1, u2, u3) = np.asarray(params, dtype=float)
-    return np.array([d1*m1*m2*(1 - dg)**2 + e1 + m1*(1 - dg)*(lambda1 + 1) + u1, alpha*m1*(1 - dg) + d2*m2*m3*(1 - dg)**2 + e2 + m2*(1 - dg)*(lambda2 + 1) + u2, beta*m1*(1 - dg) + d3*m1*m3*(1 - dg)**2 + e3 + gamma*m2*(1 - dg) + m3*(1 - dg)*(lambda3 + 1) + u3])
+    t0 = dg - 1
+    t1 = m1*t0
+    t2 = t0**2
+    t3 = m2*t2
+    t4 = m2*t0
+    return np.array([d1*m1*t3 + e1 - t1*(lambda1 + 1) + u1, -alpha*t1 + d2*m3*t3 + e2 - t4*(lambda2 + 1) + u2, -beta*t1 + d3*m1*m3*t2 + e3 - gamma*t4 - m3*t0*(lambda3 + 1) + u3])
 
 
-def sigma(F):
-    """sigma = (|F|^2 - 1) / (2 |F|^2) for F = f/g of shape (3, ...)."""
-    r2 = np.sum(np.asarray(F, dtype=float) ** 2, axis=0)
+def residual(f, g=1.0):
+    """sigma(n) of (2.2), shape (...): (|f|^2 - g^2) / (2 |f|^2) for readings f, shape (3, ...), in the
+    units of g (g = 1: f already over g)."""
+    r2 = np.sum((np.asarray(f, dtype=float) / g) ** 2, axis=0)
     return (r2 - 1) / (2 * r2)
 
 
 def q_of(params):
-    """q of (2.2) from the physical parameters (16, ...): shape (12, ...)."""
+    """q of (2.2), shape (12, ...), from the parameters of PARAMETERS, shape (16, ...)."""
     (lambda1, lambda2, lambda3, alpha, beta, gamma, e1, e2, e3, d1, d2, d3, dg, u1, u2, u3) = np.asarray(params, dtype=float)
     return np.array([-dg + lambda1, -dg + lambda2, -dg + lambda3, alpha, beta, gamma, e1, e2, e3, d1, d2, d3])
 
 
 def remainder(m, params):
-    """Exact delta_sigma(n) = sigma(n) - H(n)^T q for true directions m and parameters."""
+    """Exact delta_sigma(n) = sigma(n) - H(n)^T q, shape (...), for true unit directions m, shape
+    (3, ...), and the parameters of PARAMETERS, shape (16, ...)."""
     F = readings(m, params)
     n = F / np.linalg.norm(F, axis=0)
-    return sigma(F) - np.einsum("q...,q...->...", H(n), q_of(params))
+    return residual(F) - np.einsum("q...,q...->...", H(n), q_of(params))
 
 
 def a_max_norm(k_max, v_max):
@@ -97,13 +108,24 @@ def remainder_bound(k_max, v_max, eps_max, delta_max, df_max, dg_max):
     """Proven bound of |delta_sigma| on the sphere (derive/norm.py, docs/norm_001.md); all in units of g:
     eps_max = |eps/g|, delta_max = |delta g|, df_max = |delta_f/g|, dg_max = |Delta_g/g|."""
     K = a_max_norm(k_max, v_max)
-    return K*dg_max + (1/2)*np.sqrt(2)*delta_max*(dg_max**2 + 2*dg_max) + 2*delta_max*(K*(dg_max + 1) + (1/2)*np.sqrt(2)*delta_max*(dg_max + 1)**2 + np.sqrt(3)*df_max + dg_max + np.sqrt(3)*eps_max)/(-K*(dg_max + 1) - 1/2*np.sqrt(2)*delta_max*(dg_max + 1)**2 - np.sqrt(3)*df_max - dg_max - np.sqrt(3)*eps_max + 1) + np.sqrt(3)*df_max + (dg_max + 1)*(np.sqrt(2)*K*(K*(dg_max + 1) + (1/2)*np.sqrt(2)*delta_max*(dg_max + 1)**2 + np.sqrt(3)*df_max + dg_max + np.sqrt(3)*eps_max)/(-K*(dg_max + 1) - 1/2*np.sqrt(2)*delta_max*(dg_max + 1)**2 - np.sqrt(3)*df_max - dg_max - np.sqrt(3)*eps_max + 1) + (K*(dg_max + 1) + (1/2)*np.sqrt(2)*delta_max*(dg_max + 1)**2 + np.sqrt(3)*df_max + dg_max + np.sqrt(3)*eps_max)**2/(-K*(dg_max + 1) - 1/2*np.sqrt(2)*delta_max*(dg_max + 1)**2 - np.sqrt(3)*df_max - dg_max - np.sqrt(3)*eps_max + 1)**2) + (K*(dg_max + 1) + (1/2)*np.sqrt(2)*delta_max*(dg_max + 1)**2 + np.sqrt(3)*df_max + dg_max + np.sqrt(3)*eps_max)**2*(K*(dg_max + 1) + (1/2)*np.sqrt(2)*delta_max*(dg_max + 1)**2 + np.sqrt(3)*df_max + dg_max + np.sqrt(3)*eps_max + 3/2)/(-K*(dg_max + 1) - 1/2*np.sqrt(2)*delta_max*(dg_max + 1)**2 - np.sqrt(3)*df_max - dg_max - np.sqrt(3)*eps_max + 1)**2
+    t0 = np.sqrt(3)
+    t1 = df_max*t0
+    t2 = np.sqrt(2)
+    t3 = delta_max*t2
+    t4 = dg_max + 1
+    t5 = 2*K*t4 + 2*dg_max + 2*eps_max*t0 + 2*t1 + t3*t4**2
+    t6 = t5 - 2
+    t7 = t5/t6
+    return K*dg_max - 2*delta_max*t7 + (1/2)*dg_max*t3*(dg_max + 2) + t1 - t4*t7*(K*t2 - t7) + (1/2)*t5**2*(t5 + 3)/t6**2
 
 
 def published_bound(k_max, v_max, eps_max, delta_max, df_max, dg_max):
     """(2.4) of 001 as printed (last brace read as a product), same arguments as remainder_bound."""
     K = a_max_norm(k_max, v_max)
-    return (3/2)*K**2 + 4*K*delta_max + K*df_max + 2*K*eps_max + (5/2)*delta_max**2 + 2*delta_max*df_max + 3*delta_max*eps_max + (3/2)*df_max**2 + np.sqrt(3)*df_max + (1/2)*dg_max**2 + (3/2)*eps_max**2 + (K + (1/2)*delta_max + np.sqrt(3)*(df_max + dg_max + eps_max))*((1/2)*np.sqrt(2)*delta_max + dg_max + np.sqrt(3)*eps_max)
+    t0 = 2*K
+    t1 = np.sqrt(3)
+    t2 = 2*t1
+    return (3/2)*K**2 + 4*K*delta_max + K*df_max + (5/2)*delta_max**2 + 2*delta_max*df_max + 3*delta_max*eps_max + (3/2)*df_max**2 + df_max*t1 + (1/2)*dg_max**2 + (3/2)*eps_max**2 + eps_max*t0 + (1/4)*(delta_max + t0 + t2*(df_max + dg_max + eps_max))*(np.sqrt(2)*delta_max + 2*dg_max + eps_max*t2)
 
 
 #: Optimal plan: the 18 directions of the table of 001, then 4 per nonlinearity coefficient.
@@ -215,3 +237,11 @@ def _psi():
 
 #: PSI[nu, k]: weight of sigma(PLAN[k]) in the optimal estimate of q_nu; sum |PSI[nu]| = a^T lambda.
 PSI = _psi()
+
+
+def estimate_on_plan(z):
+    """q, shape (12,), from sigma at the directions of PLAN as `residual` returns them, shape (len(PLAN),)."""
+    z = np.asarray(z, dtype=float)
+    if z.shape != (len(PLAN),):
+        raise ValueError(f"z must have shape ({len(PLAN)},) as residual() returns it at PLAN, not {z.shape}")
+    return PSI @ z

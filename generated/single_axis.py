@@ -123,16 +123,17 @@ def equivalent(physical):
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
     (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
+    t0 = Delta_g - 1
     out[[6, 7, 8, 9, 10, 11, 12, 13, 14]] = [
-        (1 - Delta_g)*(Gamma11 + 1) - 1,
-        Gamma12*(1 - Delta_g),
-        Gamma13*(1 - Delta_g),
-        Gamma21*(1 - Delta_g),
-        (1 - Delta_g)*(Gamma22 + 1) - 1,
-        Gamma23*(1 - Delta_g),
-        Gamma31*(1 - Delta_g),
-        Gamma32*(1 - Delta_g),
-        (1 - Delta_g)*(Gamma33 + 1) - 1,
+        -t0*(Gamma11 + 1) - 1,
+        -Gamma12*t0,
+        -Gamma13*t0,
+        -Gamma21*t0,
+        -t0*(Gamma22 + 1) - 1,
+        -Gamma23*t0,
+        -Gamma31*t0,
+        -Gamma32*t0,
+        -t0*(Gamma33 + 1) - 1,
     ]
     out[[5]] = 0.0
     return out
@@ -146,13 +147,16 @@ def _broadcast(*angles):
 def _H_0(phi):
     """H^(p)(angles) of (3): shape (3, 15) + broadcast shape of the angles (rad), mounting +x+y+z."""
     (phi,), zero, one = _broadcast(phi)
+    t0 = np.sin(phi)
+    t1 = np.cos(phi)
+    t2 = -t1
     return np.array([
         [
             -1 * one,
             zero,
             zero,
-            np.sin(phi),
-            np.cos(phi),
+            t0,
+            t1,
             zero,
             zero,
             zero,
@@ -162,17 +166,17 @@ def _H_0(phi):
             one,
             zero,
             zero,
-            -np.cos(phi),
+            t2,
         ],
         [
             zero,
-            -np.cos(phi),
+            t2,
             zero,
             zero,
             zero,
             zero,
-            np.sin(phi),
-            np.cos(phi),
+            t0,
+            t1,
             zero,
             zero,
             zero,
@@ -183,7 +187,7 @@ def _H_0(phi):
         ],
         [
             zero,
-            np.sin(phi),
+            t0,
             zero,
             zero,
             zero,
@@ -191,8 +195,8 @@ def _H_0(phi):
             zero,
             zero,
             zero,
-            np.sin(phi),
-            np.cos(phi),
+            t0,
+            t1,
             zero,
             zero,
             one,
@@ -204,12 +208,15 @@ def _H_0(phi):
 def _H_1(phi):
     """H^(p)(angles) of (3): shape (3, 15) + broadcast shape of the angles (rad), mounting +y+z+x."""
     (phi,), zero, one = _broadcast(phi)
+    t0 = np.cos(phi)
+    t1 = -t0
+    t2 = np.sin(phi)
     return np.array([
         [
             zero,
-            -np.cos(phi),
-            np.sin(phi),
-            np.cos(phi),
+            t1,
+            t2,
+            t0,
             zero,
             zero,
             zero,
@@ -224,12 +231,12 @@ def _H_1(phi):
         ],
         [
             zero,
-            np.sin(phi),
+            t2,
             zero,
             zero,
             zero,
-            np.sin(phi),
-            np.cos(phi),
+            t2,
+            t0,
             zero,
             zero,
             zero,
@@ -248,13 +255,13 @@ def _H_1(phi):
             zero,
             zero,
             zero,
-            np.sin(phi),
-            np.cos(phi),
+            t2,
+            t0,
             zero,
             zero,
             zero,
             one,
-            -np.cos(phi),
+            t1,
         ],
     ])
 
@@ -262,13 +269,16 @@ def _H_1(phi):
 def _H_2(phi):
     """H^(p)(angles) of (3): shape (3, 15) + broadcast shape of the angles (rad), mounting +z+x+y."""
     (phi,), zero, one = _broadcast(phi)
+    t0 = np.sin(phi)
+    t1 = np.cos(phi)
+    t2 = -t1
     return np.array([
         [
             zero,
-            np.sin(phi),
-            np.cos(phi),
+            t0,
+            t1,
             zero,
-            np.sin(phi),
+            t0,
             zero,
             zero,
             zero,
@@ -286,29 +296,29 @@ def _H_2(phi):
             zero,
             zero,
             zero,
-            np.cos(phi),
+            t1,
             zero,
-            np.sin(phi),
+            t0,
             zero,
             zero,
             zero,
             zero,
             one,
             zero,
-            -np.cos(phi),
+            t2,
         ],
         [
             zero,
-            -np.cos(phi),
+            t2,
             zero,
             zero,
             zero,
             zero,
             zero,
             zero,
-            np.cos(phi),
+            t1,
             zero,
-            np.sin(phi),
+            t0,
             zero,
             zero,
             one,

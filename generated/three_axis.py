@@ -127,16 +127,37 @@ def equivalent(physical):
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
     (tilt_x, tilt_y, eps_om, Delta_theta, eps_mi, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
+    t0 = np.sin(theta2)
+    t1 = Delta_g - 1
+    t2 = np.sin(theta3)
+    t3 = np.cos(theta2)
+    t4 = Gamma11 + 1
+    t5 = np.cos(theta3)
+    t6 = t3*t5
+    t7 = np.sin(theta1)
+    t8 = Gamma13*t3
+    t9 = np.cos(theta1)
+    t10 = t5*t9
+    t11 = t2*t7
+    t12 = t0*t11 - t10
+    t13 = t2*t9
+    t14 = t5*t7
+    t15 = t0*t14 + t13
+    t16 = t0*t13 + t14
+    t17 = -t0*t10 + t11
+    t18 = Gamma22 + 1
+    t19 = Gamma33 + 1
+    t20 = t19*t3
     out[[10, 11, 12, 13, 14, 15, 16, 17, 18]] = [
-        -Gamma12*(1 - Delta_g)*np.sin(theta3)*np.cos(theta2) + Gamma13*(1 - Delta_g)*np.sin(theta2) + (1 - Delta_g)*(Gamma11 + 1)*np.cos(theta2)*np.cos(theta3) - 1,
-        Gamma12*(1 - Delta_g)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - Gamma13*(1 - Delta_g)*np.sin(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma11 + 1)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)),
-        Gamma12*(1 - Delta_g)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)) + Gamma13*(1 - Delta_g)*np.cos(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma11 + 1)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)),
-        Gamma21*(1 - Delta_g)*np.cos(theta2)*np.cos(theta3) + Gamma23*(1 - Delta_g)*np.sin(theta2) - (1 - Delta_g)*(Gamma22 + 1)*np.sin(theta3)*np.cos(theta2),
-        Gamma21*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)) - Gamma23*(1 - Delta_g)*np.sin(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma22 + 1)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - 1,
-        Gamma21*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)) + Gamma23*(1 - Delta_g)*np.cos(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma22 + 1)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)),
-        Gamma31*(1 - Delta_g)*np.cos(theta2)*np.cos(theta3) - Gamma32*(1 - Delta_g)*np.sin(theta3)*np.cos(theta2) + (1 - Delta_g)*(Gamma33 + 1)*np.sin(theta2),
-        Gamma31*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)) + Gamma32*(1 - Delta_g)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - (1 - Delta_g)*(Gamma33 + 1)*np.sin(theta1)*np.cos(theta2),
-        Gamma31*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)) + Gamma32*(1 - Delta_g)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)) + (1 - Delta_g)*(Gamma33 + 1)*np.cos(theta1)*np.cos(theta2) - 1,
+        Gamma12*t1*t2*t3 - Gamma13*t0*t1 - t1*t4*t6 - 1,
+        t1*(Gamma12*t12 - t15*t4 + t7*t8),
+        -t1*(Gamma12*t16 + t17*t4 + t8*t9),
+        t1*(-Gamma21*t6 - Gamma23*t0 + t18*t2*t3),
+        -Gamma21*t1*t15 + Gamma23*t1*t3*t7 + t1*t12*t18 - 1,
+        -t1*(Gamma21*t17 + Gamma23*t3*t9 + t16*t18),
+        t1*(-Gamma31*t6 + Gamma32*t2*t3 - t0*t19),
+        t1*(-Gamma31*t15 + Gamma32*t12 + t20*t7),
+        -Gamma31*t1*t17 - Gamma32*t1*t16 - t1*t20*t9 - 1,
     ]
     out[[6, 7, 8, 9]] = 0.0
     return out
@@ -150,17 +171,30 @@ def _broadcast(*angles):
 def H(psi, theta, phi):
     """H^(p)(angles) of (3): shape (3, 17) + broadcast shape of the angles (rad)."""
     (psi, theta, phi,), zero, one = _broadcast(psi, theta, phi)
+    t0 = np.sin(psi)
+    t1 = np.cos(phi)
+    t2 = t0*t1
+    t3 = np.cos(psi)
+    t4 = np.sin(phi)
+    t5 = np.sin(theta)
+    t6 = t4*t5
+    t7 = t1*t3
+    t8 = t1*t5
+    t9 = np.cos(theta)
+    t10 = t1*t9
+    t11 = t4*t9
+    t12 = -t11
     return np.array([
         [
-            np.sin(phi)*np.sin(theta)*np.cos(psi) + np.sin(psi)*np.cos(phi),
-            np.sin(phi)*np.sin(psi)*np.sin(theta) - np.cos(phi)*np.cos(psi),
-            -np.cos(phi),
-            -np.sin(phi)*np.sin(theta),
-            np.sin(theta)*np.cos(phi),
-            np.cos(phi)*np.cos(theta),
-            -np.sin(phi)*np.cos(theta),
-            np.sin(theta),
-            np.cos(phi)*np.cos(theta),
+            t2 + t3*t6,
+            t0*t6 - t7,
+            -t1,
+            -t6,
+            t8,
+            t10,
+            t12,
+            t5,
+            t10,
             zero,
             zero,
             zero,
@@ -171,18 +205,18 @@ def H(psi, theta, phi):
             zero,
         ],
         [
-            np.cos(psi)*np.cos(theta),
-            np.sin(psi)*np.cos(theta),
+            t3*t9,
+            t0*t9,
             zero,
-            -np.cos(theta),
-            zero,
-            zero,
+            -t9,
             zero,
             zero,
             zero,
-            -np.sin(phi)*np.cos(theta),
-            np.sin(theta),
-            np.cos(phi)*np.cos(theta),
+            zero,
+            zero,
+            t12,
+            t5,
+            t10,
             zero,
             zero,
             zero,
@@ -190,20 +224,20 @@ def H(psi, theta, phi):
             zero,
         ],
         [
-            np.sin(phi)*np.sin(psi) - np.sin(theta)*np.cos(phi)*np.cos(psi),
-            -np.sin(phi)*np.cos(psi) - np.sin(psi)*np.sin(theta)*np.cos(phi),
-            -np.sin(phi),
-            np.sin(theta)*np.cos(phi),
-            np.sin(phi)*np.sin(theta),
-            np.sin(phi)*np.cos(theta),
+            t0*t4 - t5*t7,
+            -t2*t5 - t3*t4,
+            -t4,
+            t8,
+            t6,
+            t11,
             zero,
             zero,
             zero,
             zero,
             zero,
             zero,
-            np.sin(theta),
-            np.cos(phi)*np.cos(theta),
+            t5,
+            t10,
             zero,
             zero,
             one,
@@ -223,7 +257,8 @@ H_SUP = np.array([
 def up_nominal(psi, theta, phi):
     """Nominal up-vector u in instrument axes for an ideal stand at the read angles, shape (3, ...)."""
     (psi, theta, phi,), zero, one = _broadcast(psi, theta, phi)
-    return np.array([-np.sin(phi)*np.cos(theta), np.sin(theta), np.cos(phi)*np.cos(theta)])
+    t0 = np.cos(theta)
+    return np.array([-t0*np.sin(phi), np.sin(theta), t0*np.cos(phi)])
 
 
 def readings(psi, theta, phi, physical, g):

@@ -123,16 +123,37 @@ def equivalent(physical):
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
     (kappa, epsilon, Delta_alpha, Delta_beta, alpha_star, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
+    t0 = np.sin(theta2)
+    t1 = Delta_g - 1
+    t2 = np.sin(theta3)
+    t3 = np.cos(theta2)
+    t4 = Gamma11 + 1
+    t5 = np.cos(theta3)
+    t6 = t3*t5
+    t7 = np.sin(theta1)
+    t8 = Gamma13*t3
+    t9 = np.cos(theta1)
+    t10 = t5*t9
+    t11 = t2*t7
+    t12 = t0*t11 - t10
+    t13 = t2*t9
+    t14 = t5*t7
+    t15 = t0*t14 + t13
+    t16 = t0*t13 + t14
+    t17 = -t0*t10 + t11
+    t18 = Gamma22 + 1
+    t19 = Gamma33 + 1
+    t20 = t19*t3
     out[[9, 10, 11, 12, 13, 14, 15, 16, 17]] = [
-        -Gamma12*(1 - Delta_g)*np.sin(theta3)*np.cos(theta2) + Gamma13*(1 - Delta_g)*np.sin(theta2) + (1 - Delta_g)*(Gamma11 + 1)*np.cos(theta2)*np.cos(theta3) - 1,
-        Gamma12*(1 - Delta_g)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - Gamma13*(1 - Delta_g)*np.sin(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma11 + 1)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)),
-        Gamma12*(1 - Delta_g)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)) + Gamma13*(1 - Delta_g)*np.cos(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma11 + 1)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)),
-        Gamma21*(1 - Delta_g)*np.cos(theta2)*np.cos(theta3) + Gamma23*(1 - Delta_g)*np.sin(theta2) - (1 - Delta_g)*(Gamma22 + 1)*np.sin(theta3)*np.cos(theta2),
-        Gamma21*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)) - Gamma23*(1 - Delta_g)*np.sin(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma22 + 1)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - 1,
-        Gamma21*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)) + Gamma23*(1 - Delta_g)*np.cos(theta1)*np.cos(theta2) + (1 - Delta_g)*(Gamma22 + 1)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)),
-        Gamma31*(1 - Delta_g)*np.cos(theta2)*np.cos(theta3) - Gamma32*(1 - Delta_g)*np.sin(theta3)*np.cos(theta2) + (1 - Delta_g)*(Gamma33 + 1)*np.sin(theta2),
-        Gamma31*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta2)*np.cos(theta3) + np.sin(theta3)*np.cos(theta1)) + Gamma32*(1 - Delta_g)*(-np.sin(theta1)*np.sin(theta2)*np.sin(theta3) + np.cos(theta1)*np.cos(theta3)) - (1 - Delta_g)*(Gamma33 + 1)*np.sin(theta1)*np.cos(theta2),
-        Gamma31*(1 - Delta_g)*(np.sin(theta1)*np.sin(theta3) - np.sin(theta2)*np.cos(theta1)*np.cos(theta3)) + Gamma32*(1 - Delta_g)*(np.sin(theta1)*np.cos(theta3) + np.sin(theta2)*np.sin(theta3)*np.cos(theta1)) + (1 - Delta_g)*(Gamma33 + 1)*np.cos(theta1)*np.cos(theta2) - 1,
+        Gamma12*t1*t2*t3 - Gamma13*t0*t1 - t1*t4*t6 - 1,
+        t1*(Gamma12*t12 - t15*t4 + t7*t8),
+        -t1*(Gamma12*t16 + t17*t4 + t8*t9),
+        t1*(-Gamma21*t6 - Gamma23*t0 + t18*t2*t3),
+        -Gamma21*t1*t15 + Gamma23*t1*t3*t7 + t1*t12*t18 - 1,
+        -t1*(Gamma21*t17 + Gamma23*t3*t9 + t16*t18),
+        t1*(-Gamma31*t6 + Gamma32*t2*t3 - t0*t19),
+        t1*(-Gamma31*t15 + Gamma32*t12 + t20*t7),
+        -Gamma31*t1*t17 - Gamma32*t1*t16 - t1*t20*t9 - 1,
     ]
     out[[5, 6, 7, 8]] = 0.0
     return out
@@ -146,14 +167,22 @@ def _broadcast(*angles):
 def H(alpha, beta):
     """H^(p)(angles) of (3): shape (3, 15) + broadcast shape of the angles (rad)."""
     (alpha, beta,), zero, one = _broadcast(alpha, beta)
+    t0 = np.cos(beta)
+    t1 = np.sin(beta)
+    t2 = np.cos(alpha)
+    t3 = t1*t2
+    t4 = -t0*t2
+    t5 = np.sin(alpha)
+    t6 = t1*t5
+    t7 = t0*t5
     return np.array([
         [
-            -np.cos(beta),
-            -np.sin(beta)*np.cos(alpha),
-            -np.cos(alpha)*np.cos(beta),
-            np.cos(alpha),
-            np.sin(alpha)*np.sin(beta),
-            np.sin(alpha)*np.cos(beta),
+            -t0,
+            -t3,
+            t4,
+            t2,
+            t6,
+            t7,
             one,
             zero,
             zero,
@@ -165,16 +194,16 @@ def H(alpha, beta):
             zero,
         ],
         [
-            np.sin(beta),
-            -np.cos(alpha)*np.cos(beta),
-            np.sin(beta)*np.cos(alpha),
+            t1,
+            t4,
+            t3,
             zero,
             zero,
             zero,
             zero,
-            np.cos(alpha),
-            np.sin(alpha)*np.sin(beta),
-            np.sin(alpha)*np.cos(beta),
+            t2,
+            t6,
+            t7,
             one,
             zero,
             zero,
@@ -183,7 +212,7 @@ def H(alpha, beta):
         ],
         [
             zero,
-            np.sin(alpha),
+            t5,
             zero,
             zero,
             zero,
@@ -193,9 +222,9 @@ def H(alpha, beta):
             zero,
             zero,
             zero,
-            np.sin(alpha)*np.sin(beta),
-            np.sin(alpha)*np.cos(beta),
-            np.cos(alpha),
+            t6,
+            t7,
+            t2,
             one,
         ],
     ])
@@ -213,7 +242,8 @@ H_SUP = np.array([
 def up_nominal(alpha, beta):
     """Nominal up-vector u in instrument axes for an ideal stand at the read angles, shape (3, ...)."""
     (alpha, beta,), zero, one = _broadcast(alpha, beta)
-    return np.array([np.sin(alpha)*np.sin(beta), np.sin(alpha)*np.cos(beta), np.cos(alpha)])
+    t0 = np.sin(alpha)
+    return np.array([t0*np.sin(beta), t0*np.cos(beta), np.cos(alpha)])
 
 
 def readings(alpha, beta, physical, g):

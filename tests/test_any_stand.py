@@ -1,6 +1,6 @@
 """Issue 15 (part): fixed turns of any angle (a wedge), tilted unit-vector axes, detents and ranges
 honoured by simulate and diagnose. Each generated model is checked against a rotation chain written
-here independently in numpy (passive rotations, SPEC.md's C1-C3; Rodrigues for a tilted axis)."""
+here independently in numpy (passive rotations, C1-C3 of section 2 of 000; Rodrigues for a tilted axis)."""
 from pathlib import Path
 
 import numpy as np

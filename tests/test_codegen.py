@@ -83,3 +83,33 @@ def test_every_generated_model_keeps_one_protocol(name):
     assert np.abs(m.estimate_on_plan(z) - models.q_of(m, p)).max() < 1e-11
     with pytest.raises(ValueError, match="shape"):
         m.estimate_on_plan(z.T)
+
+
+def test_norm_module_keeps_the_protocol():
+    # The coarse stand (001): residual() gives sigma(n) of (2.2) at the directions of PLAN, which
+    # estimate_on_plan() takes; for errors of 1e-6 the chain recovers q to the nonlinearity (1e-11).
+    import numpy as np
+    from garant.generated import norm as m
+    assert all(hasattr(m, n) for n in m.__all__)
+    p = np.random.default_rng(1).uniform(-1e-6, 1e-6, len(m.PARAMETERS))
+    p[-4:] = 0.0                                  # dg and the noise u: q is then the block's own
+    z = m.residual(m.readings(m.PLAN.T, p) * 9.81, 9.81)
+    assert z.shape == (len(m.PLAN),)
+    assert np.abs(m.estimate_on_plan(z) - m.q_of(p)).max() < 1e-11
+    with pytest.raises(ValueError, match="shape"):
+        m.estimate_on_plan(z[:-1])
+
+
+def test_generated_functions_compute_each_trigonometric_term_once():
+    # Common subexpressions are named once per function (sympy.cse): a function that calls np.cos(alpha)
+    # (or any np.<f>(x)) twice, as H did before, fails here.
+    import ast
+    import collections
+    for path in sorted((ROOT / "generated").glob("*.py")):
+        for fn in ast.walk(ast.parse(path.read_text())):
+            if isinstance(fn, ast.FunctionDef):
+                calls = collections.Counter(ast.unparse(c) for c in ast.walk(fn) if isinstance(c, ast.Call)
+                                            and ast.unparse(c.func).startswith("np.")
+                                            and ast.unparse(c.func) not in ("np.array", "np.asarray"))
+                again = [c for c, k in calls.items() if k > 1]
+                assert not again, f"{path.name}:{fn.name} computes {again} more than once"

@@ -22,7 +22,7 @@ def parse(text):
 
 
 def test_H_equals_published_3_with_the_lost_zero(d):
-    # (3) of 000; the printed H^(3) has 14 entries, SPEC.md: one zero of positions 3..11 is lost.
+    # (3) of 000; the printed H^(3) has 14 entries: one zero of positions 3..11 is lost in the transcription.
     h3 = list(published.H_000[2])
     h3.insert(3, "0")
     printed = [published.H_000[0], published.H_000[1], h3]

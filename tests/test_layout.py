@@ -196,3 +196,15 @@ def test_architecture_lists_every_module():
     missing = [str(p.relative_to(ROOT)) for p in modules().values()
                if p.read_text().strip() and f"`{p.relative_to(ROOT)}`" not in text]
     assert not missing, f"modules docs/architecture.md does not list: {missing}"
+
+
+def test_project_cites_the_papers_not_files_outside_it():
+    # Users get the repository: its code, docs and generated files cite 000, 001 and 003 by equation,
+    # never the notes they were built from. A docstring citing "SPEC.md" (as rotations.py did) fails here.
+    # (Example commands may name the real recordings beside the clone: those are data, cited by paper.)
+    tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True).stdout.split()
+    if not tracked:
+        pytest.skip("not a git checkout")
+    bad = [f for f in tracked if f.endswith((".py", ".md", ".jinja", ".toml")) and f != "tests/test_layout.py"
+           and any(s in (ROOT / f).read_text(errors="replace") for s in ("SPEC.md", "STYLE.md"))]
+    assert not bad, f"cite the papers, not outside files: {bad}"

@@ -12,7 +12,7 @@ from garant.verify.solve import sphere
 @pytest.mark.parametrize("axes", [(2, 3, 1), (3, 1, 2), (2, 1, 1)])
 def test_sigma_expansion_is_H_q_to_first_order(axes):
     # (2.2) of 001: the derived sigma = (|f|^2 - g^2)/(2|f|^2) has linear part H(n)^T q + n.u;
-    # the printed |f|^2 - g^2/|f|^2 has four times that (SPEC.md: transcription defect).
+    # the printed |f|^2 - g^2/|f|^2 has four times that (a defect of the transcription, docs/norm_001.md).
     ours, printed = norm.first_order_checks(norm.NormModel(axes))
     assert ours == 0 and printed == 0
 
