@@ -193,12 +193,33 @@ def load(path, source_file=None):
 
 
 def from_data(data, path="<description>"):
+    """The Model a parsed description (a dict as TOML gives it) states; `path` names it in errors.
+    Every key is checked against a whitelist and every name against the declared ones: nothing in the
+    data is evaluated."""
     for k in data:
         if k not in KEYS:
             _fail(path, k, f"unknown table (allowed: {', '.join(KEYS)})")
     stand = data.get("stand", {})
     _keys(path, "stand", stand, KEYS["stand"])
     name = _name(path, "stand.name", stand.get("name"))
+    angles = _angles(path, data)
+    params = _parameters(path, data, angles)
+    refs = _References(path, {p.name for p in params})
+    links = _links(path, data, angles, refs)
+    theta, dg, mounts = _block(path, data, refs)
+    unused = refs.declared - refs.used
+    if unused:
+        _fail(path, "parameter", f"declared but used nowhere: {', '.join(sorted(unused))}")
+    preferred, plan, remount = _estimation(path, data, links, refs.declared, theta, dg, len(angles))
+    st = Stand(name=name, title=_text(path, "stand.title", stand.get("title"), name), angles=tuple(angles),
+               chain=tuple(links[::-1]), parameters=tuple(params), theta=theta, gravity_error=dg,
+               source=_text(path, "stand.source", stand.get("source"), str(path)))
+    return Model(stand=st, block=Block(), preferred=tuple(preferred), plan_deg=plan,
+                 remount=remount, mountings=mounts, source_file=path)
+
+
+def _angles(path, data):
+    """The [[angle]] tables, names unique, at least one."""
     angles = []
     for i, a in enumerate(_table_list(path, "angle", data.get("angle", []), LIMITS["angles"]), 1):
         angles.append(_angle(path, f"angle[{i}]", a))
@@ -206,6 +227,11 @@ def from_data(data, path="<description>"):
             _fail(path, f"angle[{i}].name", f"{angles[-1].name!r} is declared twice")
     if not angles:
         _fail(path, "angle", "a stand needs at least one [[angle]]")
+    return angles
+
+
+def _parameters(path, data, angles):
+    """The [[parameter]] tables, names unique among parameters and angles."""
     params = []
     for i, p in enumerate(_table_list(path, "parameter", data.get("parameter", []), LIMITS["parameters"]), 1):
         where = f"parameter[{i}]"
@@ -217,16 +243,25 @@ def from_data(data, path="<description>"):
                                 _text(path, f"{where}.unit", p.get("unit"), "rad"),
                                 _text(path, f"{where}.meaning", p.get("meaning"), pname),
                                 _bound(path, f"{where}.bound", p.get("bound"))))
-    declared = {p.name for p in params}
-    used = set()
+    return params
 
-    def ref(where, value):
-        _name(path, where, value)
-        if value not in declared:
-            _fail(path, where, f"parameter {value!r} is not declared in [[parameter]]")
-        used.add(value)
+
+class _References:
+    """The declared parameter names and those a link or the block refers to (to find unused ones)."""
+
+    def __init__(self, path, declared):
+        self.path, self.declared, self.used = path, declared, set()
+
+    def __call__(self, where, value):
+        _name(self.path, where, value)
+        if value not in self.declared:
+            _fail(self.path, where, f"parameter {value!r} is not declared in [[parameter]]")
+        self.used.add(value)
         return value
 
+
+def _links(path, data, angles, ref):
+    """The [[link]] tables, outermost first: turning (angle, offset, harmonic) or fixed (angle_deg, error)."""
     links = []
     for i, l in enumerate(_table_list(path, "link", data.get("link", []), LIMITS["links"]), 1):
         where = f"link[{i}]"
@@ -257,6 +292,11 @@ def from_data(data, path="<description>"):
                   "or an 'error' (fixed small turn)")
     if not links:
         _fail(path, "link", "a stand needs at least one [[link]]")
+    return links
+
+
+def _block(path, data, ref):
+    """[block]: the mounting misalignment theta (three names), Delta_g's name and the mountings."""
     block = data.get("block", {})
     _keys(path, "block", block, KEYS["block"])
     theta = block.get("misalignment")
@@ -268,13 +308,14 @@ def from_data(data, path="<description>"):
     mounts = block.get("mountings", ["+x+y+z"])
     if not isinstance(mounts, list) or not mounts or len(mounts) > LIMITS["mountings"]:
         _fail(path, "block.mountings", f"give a list of 1 to {LIMITS['mountings']} mountings like \"+y+z+x\"")
-    mounts = tuple(mounts)
     for i, m in enumerate(mounts, 1):
         if not isinstance(m, str) or m not in mountings():
             _fail(path, f"block.mountings[{i}]", f"{m!r} is not a proper mounting like +x+y+z or +y+z+x")
-    unused = declared - used
-    if unused:
-        _fail(path, "parameter", f"declared but used nowhere: {', '.join(sorted(unused))}")
+    return theta, dg, tuple(mounts)
+
+
+def _estimation(path, data, links, declared, theta, dg, n_angles):
+    """[estimation]: the order q is written in (preferred), the plan of the estimators, remount."""
     est = data.get("estimation", {})
     _keys(path, "estimation", est, KEYS["estimation"])
     block_params = [p.name for p in Block().parameters]
@@ -292,16 +333,12 @@ def from_data(data, path="<description>"):
     if not isinstance(plan, list) or len(plan) > LIMITS["plan positions"]:
         _fail(path, "estimation.plan_deg", f"give a list of at most {LIMITS['plan positions']} positions")
     plan = tuple(tuple(_degrees(path, f"estimation.plan_deg[{i}]", v)
-                       for v in _numbers(path, f"estimation.plan_deg[{i}]", p, length=len(angles)))
+                       for v in _numbers(path, f"estimation.plan_deg[{i}]", p, length=n_angles))
                  for i, p in enumerate(plan, 1))
     remount = est.get("remount", False)
     if not isinstance(remount, bool):
         _fail(path, "estimation.remount", "true or false")
-    st = Stand(name=name, title=_text(path, "stand.title", stand.get("title"), name), angles=tuple(angles),
-               chain=tuple(links[::-1]), parameters=tuple(params), theta=theta, gravity_error=dg,
-               source=_text(path, "stand.source", stand.get("source"), str(path)))
-    return Model(stand=st, block=Block(), preferred=tuple(preferred), plan_deg=plan,
-                 remount=remount, mountings=mounts, source_file=path)
+    return preferred, plan, remount
 
 
 def check_observable(model, J):

@@ -80,3 +80,41 @@ def test_api_errors_name_the_api_arguments(tmp_path):
     with pytest.raises(garant.DataError) as err:
         garant.calibrate_norm(str(log), imu=9)
     assert "imu" in str(err.value) and "--imu" not in str(err.value)
+
+
+REAL = ROOT.parent / "shared" / "data" / "real"
+needs_real = pytest.mark.skipif(not REAL.is_dir() and not __import__("os").environ.get("CI"),
+                                reason="../shared/data/real is not present")
+
+
+@needs_real
+def test_calibrate_norm_and_apply_of_the_api_are_the_commands(tmp_path, capsys):
+    # One function per job (workflows/jobs.py): the still-interval options, the calibration, the diagnosis
+    # and the correction are the command's own. Before, garant.calibrate_norm had no window/k/min_still and
+    # no diagnosis, and its calibration was made in api.py.
+    log = str(REAL / "repeat_session2_acc.txt")
+    out, cal, corrected = tmp_path / "c.json", tmp_path / "cal.json", tmp_path / "a.csv"
+    assert main(["calibrate-norm", log, "--g", "9.81744", "--k", "12", "--diagnose", "--json", str(out),
+                 "--save", str(cal)]) == 0
+    res = garant.calibrate_norm(log, g=9.81744, k=12, diagnose=True)
+    assert res.to_dict() == json.loads(out.read_text())
+    assert res.calibration == json.loads(cal.read_text()) and "diagnosis" in res
+    assert main(["apply", str(cal), log, "-o", str(corrected)]) == 0
+    t, a, bound = garant.apply(res.calibration, log)
+    table = np.loadtxt(corrected, delimiter=",", skiprows=1)
+    assert np.allclose(table[:, 1:4], a, rtol=1e-7, atol=1e-9) and np.all(table[:, 4:] >= bound * (1 - 1e-3))
+    # an array (time, x, y, z) is a log too
+    raw = np.loadtxt(log)[:, :4]
+    assert np.allclose(garant.calibrate_norm(raw, g=9.81744, k=12).matrix, res.matrix, rtol=1e-9, atol=1e-12)
+    with pytest.raises(garant.DataError, match=r"log: expected an array of shape \(N, 4\)"):
+        garant.calibrate_norm(raw[:, :3])
+
+
+def test_diagnose_of_the_api_is_the_command(tmp_path, capsys):
+    from garant.generated import two_axis as mod
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
+    f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
+    data, out = write_csv(tmp_path / "d.csv", P, f), tmp_path / "d.json"
+    assert main(["diagnose", "--model", "two-axis", str(data), "--sigma", "1e-5", "--json", str(out)]) == 0
+    res = garant.diagnose("two-axis", np.column_stack([P, f]), 1e-5)
+    assert res.to_dict() == json.loads(out.read_text()) and "_study" not in res and res.study is not None

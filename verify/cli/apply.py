@@ -23,27 +23,23 @@ CHUNK = 1_000_000
 
 
 def run(args):
+    """Correct the log with the calibration and write the CSV piece by piece (CHUNK samples at a time)."""
     import numpy as np
 
-    from ..io import calibration, recordings
     from ..io.report import write_chunks
     from ..io.text import csv_bytes
-    cal = calibration.read(args.calibration)
-    log = recordings.read_log(args.log, args.format, args.sensor, args.imu)
-    if not args.trust_units:
-        calibration.check_units(cal, args.log, log.raw[:100_000], args.calibration)
-    n = len(log.t)
-    worst, total = np.zeros(3), 0.0
+    from ..workflows import jobs
+    pieces = jobs.apply(args.calibration, args.log, args.format, args.sensor, args.imu, args.trust_units, chunk=CHUNK)
+    worst, total, n, kind = np.zeros(3), 0.0, 0, ""
 
-    def pieces():
-        nonlocal total
+    def rows():
+        nonlocal total, n, kind
         yield b"time_s,ax,ay,az,bound_x,bound_y,bound_z\n"
-        for i in range(0, n, CHUNK):
-            a, bound = calibration.apply(cal, log.raw[i:i + CHUNK])
-            np.maximum(worst, bound.max(axis=0), out=worst)
-            total += bound.sum()
-            yield csv_bytes([log.t[i:i + CHUNK], *a.T, *bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
-    write_chunks(args.output, pieces())
-    print(f"wrote {args.output}: {n} samples corrected by {args.calibration} ({cal['kind']} calibration); "
+        for c in pieces:
+            np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
+            total, n, kind = total + c.bound.sum(), n + len(c.t), c.kind
+            yield csv_bytes([c.t, *c.a.T, *c.bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
+    write_chunks(args.output, rows())
+    print(f"wrote {args.output}: {n} samples corrected by {args.calibration} ({kind} calibration); "
           f"worst-case error per component up to {worst.max():.3e} m/s^2 (mean {total / max(3 * n, 1):.3e})")
     return 0

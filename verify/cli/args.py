@@ -3,8 +3,7 @@ import argparse
 import math
 
 from ..models import STANDS
-
-G_DEFAULT = 9.81  # m/s^2
+from ..workflows.premises import G_DEFAULT
 
 
 def positive(text):

@@ -62,32 +62,50 @@ def run(args):
 
 
 def _run(args, into=None):
+    from ..io import report
+    from ..workflows import calibrate_norm, jobs
+    res = jobs.calibrate_norm(args.log, args.g, args.params, args.format, args.sensor, args.imu, args.window, args.k,
+                              args.min_still, args.delta_sigma, args.diagnose)
+    _print(res, args)
+    if args.json:
+        report.write_json(args.json, res)
+    if args.plot:
+        calibrate_norm.plot(res, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    if args.save or args.export_imu_tk:
+        _save(res, args)
+    if args.export_kalibr:
+        from ..io import calibration
+        report.write_text(args.export_kalibr, calibration.kalibr_text(res["noise_density"], res["rate_hz"]))
+        print(f"wrote {args.export_kalibr}")
+    if args.report:
+        _report(res, args)
+    if into is not None:
+        into.update(res)
+    return 0 if res["consistent"] else EXIT_INCONSISTENT
+
+
+def _print(res, args):
+    """The log, the calibration and the verdict, then the bounds (when consistent) and the diagnosis."""
     import numpy as np
 
-    from .. import models
-    from ..io import recordings, report
-    from ..workflows import calibrate_norm
-    mod = models.load("norm")
-    explicit, args.sensor = args.sensor is not None, args.sensor or "adxl355"
-    log = recordings.read_log(args.log, args.format, args.sensor, args.imu)
-    if log.note:
-        print(log.note)
-    if (args.format or recordings.guess_format(args.log)) == "openaxes":
-        other = ", ".join(s for s in sorted(recordings.SENSORS) if s != args.sensor)
-        print(f"OpenAXES log: accelerometer {args.sensor}"
-              + ("" if explicit else f" (the default; --sensor {other} for the other)"))
-    stills, note = recordings.still_intervals(log, window=args.window, k=args.k, min_still=args.min_still)
-    print(f"{args.log}: {len(log.t)} samples over {log.t[-1]:.1f} s; {len(stills)} still intervals ({note})")
-    res = calibrate_norm.run(mod, stills, args.g, args.params, args.log, args.delta_sigma, recordings.quantum(log))
+    from ..io import recordings
+    if res["log_note"]:
+        print(res["log_note"])
+    if res["format"] == "openaxes":
+        other = ", ".join(s for s in sorted(recordings.SENSORS) if s != res["sensor"])
+        print(f"OpenAXES log: accelerometer {res['sensor']}"
+              + ("" if args.sensor else f" (the default; --sensor {other} for the other)"))
+    print(f"{args.log}: {res['samples']} samples over {res['duration_s']:.1f} s; {res['intervals']} still intervals "
+          f"({res['still_note']})")
     print(f"calibration a = M (raw - b), {res['intervals']} still intervals, {res['iterations']} iterations "
           f"({res['start']})")
     print("M (m/s^2 per raw unit):")
     for row in res["matrix"]:
         print("   " + "  ".join(f"{v:+.6e}" for v in row))
     print("b (raw units): " + "  ".join(f"{v:+.6e}" for v in res["bias"]))
-    M = np.array(res["matrix"])
     print("the same in imu_tk's form X' = T K (X - B): T = M diag(M)^-1 (unit diagonal), K = diag(M) = "
-          + "  ".join(f"{v:.6e}" for v in np.diag(M)) + ", B = b")
+          + "  ".join(f"{v:.6e}" for v in np.diag(np.array(res["matrix"]))) + ", B = b")
     dsig = res["delta_sigma_max"]
     print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * args.g:.3e} m/s^2), from the "
           f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
@@ -99,51 +117,31 @@ def _run(args, into=None):
              + ", ".join(map(str, res["disagreements"][:12])) + ". Try --diagnose, or give --delta-sigma."))
     if res["consistent"]:
         _print_bounds(res, args)
-    if args.diagnose:
-        raw = np.array([st.mean for st in stills])
-        fit = calibrate_norm.fit(mod, raw, args.g, args.params)
-        d = calibrate_norm.diagnose_norm(mod, stills, fit, args.g, args.params, recordings.quantum(log))
-        res["diagnosis"] = d
-        print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
-        print(f"  {args.params}-parameter model: worst {d['max_residual_before']:.1f} -> "
-              + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
-        for step in d["scores"]:
-            print("  try: " + ", ".join(f"{k} {v:.1f}" for k, v in sorted(step.items(), key=lambda kv: kv[1])))
-        for group in d["indistinguishable"]:
-            print("  indistinguishable with these orientations: " + " / ".join(group))
-        print("  added: " + (", ".join(d["effects"]) or "nothing") + f"; worst now {d['max_residual_after']:.1f} -> "
-              + ("consistent" if d["consistent_after"] else "still INCONSISTENT: an effect outside the catalogue, "
-                 "or a noise bound too tight"))
-    if args.json:
-        report.write_json(args.json, res)
-    if args.plot:
-        calibrate_norm.plot(res, args.plot)
-        print(f"wrote {args.plot}", file=sys.stderr)
-    if args.save or args.export_imu_tk:
-        _save(res, mod, args)
-    if args.export_kalibr:
-        from ..io import calibration
-        dt = float(np.median(np.diff(log.t)))
-        per_sample = np.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)   # raw units
-        density = float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample) / np.sqrt(3) * np.sqrt(dt))
-        report.write_text(args.export_kalibr, calibration.kalibr_text(density, 1 / dt))
-        print(f"wrote {args.export_kalibr}")
-    if args.report:
-        _report(res, args)
-    if into is not None:
-        into.update(res)
-    return 0 if res["consistent"] else EXIT_INCONSISTENT
+    if "diagnosis" in res:
+        _print_diagnosis(res["diagnosis"], args.params)
 
 
-def _save(res, mod, args):
+def _print_diagnosis(d, params):
+    print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
+    print(f"  {params}-parameter model: worst {d['max_residual_before']:.1f} -> "
+          + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
+    for step in d["scores"]:
+        print("  try: " + ", ".join(f"{k} {v:.1f}" for k, v in sorted(step.items(), key=lambda kv: kv[1])))
+    for group in d["indistinguishable"]:
+        print("  indistinguishable with these orientations: " + " / ".join(group))
+    print("  added: " + (", ".join(d["effects"]) or "nothing") + f"; worst now {d['max_residual_after']:.1f} -> "
+          + ("consistent" if d["consistent_after"] else "still INCONSISTENT: an effect outside the catalogue, "
+             "or a noise bound too tight"))
+
+
+def _save(res, args):
     from ..io import calibration
     if not res["consistent"]:
         print("no calibration file written: the data refute the noise bound, so it has no guaranteed bounds")
         return
-    cal = calibration.from_norm(res, mod.AXES)
     for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):
         if path:
-            write(path, cal)
+            write(path, res["calibration"])
             print(f"wrote {path}")
 
 
@@ -195,9 +193,7 @@ def _report(res, args):
     calibrate_norm.plot(res, folder / "residuals.png")
     rows = res["per_interval"]
     M, b = np.array(res["matrix"]), np.array(res["bias"])
-    n = np.array([r["raw_mean"] for r in rows]) - b
-    n = (n @ M.T).T / np.linalg.norm(n @ M.T, axis=1)
-    plots.residuals_by_direction(n, [r["residual_after_ms2"] for r in rows], [res["g"] * r["noise_rule"] for r in rows],
+    plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows], [res["g"] * r["noise_rule"] for r in rows],
                                  folder / "directions.png", f"{args.log}: residual against the direction of gravity")
     verdict = ("**consistent**" if res["consistent"] else "**INCONSISTENT**: the data refute the noise bound; no bound is given") \
         + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} ({res['delta_sigma_source']}), " \

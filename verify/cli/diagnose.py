@@ -21,15 +21,11 @@ def add(sub):
 def run(args):
     from .. import models
     from ..io import report
-    from ..io.positions import read_positions
-    from ..workflows import diagnose
-    base = models.stand_model(args.model)
-    mod = models.load(args.model)
-    names, mounts = models.layout(mod)
-    pos = read_positions(args.data, names, mounts)
+    from ..workflows import diagnose, jobs
+    names = models.layout(models.load(args.model))[0]
     t0 = time.perf_counter()
-    res = diagnose.diagnose(base, mod, pos, args.sigma, args.g, args.prior, args.g_uncertainty)
-    study = res.pop("_study")
+    res = jobs.diagnose(args.model, args.data, args.sigma, args.g, args.prior, args.g_uncertainty)
+    study = res.study
     print(f"current model: minimax residual less the proven linearisation remainder (<= "
           f"{res['remainder_bound'] / args.sigma:.2f} sigma) is {res['max_residual_before'] / args.sigma:.2f} sigma: "
           + ("consistent" if res["consistent_before"] else "INCONSISTENT"))

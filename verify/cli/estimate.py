@@ -36,19 +36,13 @@ def add(sub):
 def run(args):
     from .. import models
     from ..io import report
-    from ..workflows.estimate import estimate
+    from ..workflows import jobs
+    res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
+                        args.gamma, args.imu, args.which_run,
+                        progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     mod = models.load(args.model)
-    remount = None if args.model.endswith(".toml") else models.load_remount(args.model)
-    if args.mount and (remount is None or args.mount not in remount.MOUNTS):
-        raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
-                        f"+y+z+x; got {args.mount!r}")
-    names, mounts = models.layout(mod)
-    prem = a.premises_of(args, mod)
-    res = estimate(mod, _positions(args, mod, names, mounts), args.sigma, prem.g,
-                   remount=remount, mount=args.mount, gamma=args.gamma, premises=prem,
-                   progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     wanted = args.save or args.export_imu_tk
-    if wanted and res["consistent"] and "physical" not in res and "block" not in res:
+    if wanted and res["consistent"] and "calibration" not in res:
         why = res.get("block_not_separated", "this model has no block parameters")
         raise DataError(f"--save/--export-imu-tk: {why}; nothing written")
     if args.json:
@@ -56,32 +50,6 @@ def run(args):
     if (args.plot or args.report) and "residual_minimax" in res:
         _plots(res, mod, args)
     return print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
-
-
-def _positions(args, mod, names, mounts):
-    """The positions file, or a means file with known nominal directions (docs/formats.md): its run
-    (--run) of one IMU (--imu), the directions turned into the stand's angles."""
-    import numpy as np
-
-    from ..io import means
-    from ..io.positions import Positions, read_positions
-    from ..workflows.directions import angles_for
-    if not means.looks_like(args.data):
-        if args.imu is not None or args.which_run is not None:
-            raise DataError(f"--imu and --run apply to a means file; {args.data} is a positions file")
-        return read_positions(args.data, names, mounts)
-    runs = means.read(args.data, args.imu)
-    keys = [r.name.rsplit("=", 1)[-1] for r in runs]
-    if len(runs) > 1 and args.which_run is None:
-        raise DataError(f"{args.data}: holds runs {', '.join(keys)}; choose one with --run R")
-    run = runs[keys.index(args.which_run)] if args.which_run is not None and args.which_run in keys else runs[0]
-    if args.which_run is not None and args.which_run not in keys:
-        raise DataError(f"--run {args.which_run}: {args.data} holds runs {', '.join(keys)}")
-    if run.nominal is None:
-        raise DataError(f"{args.data}: no nominal directions (nom_x, nom_y, nom_z); estimate needs known positions "
-                        "(garant calibrate-norm and repeatability need none)")
-    deg = angles_for(mod, run.nominal, args.data)
-    return Positions(args.data, deg, np.array([st.mean for st in run.stills]))
 
 
 def _plots(res, mod, args):
@@ -181,10 +149,9 @@ def print_estimate(res, mod, args):
         print_block(res, args.units == "human")
     if args.save or args.export_imu_tk:
         from ..io import calibration
-        cal = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
         for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):
             if path:
-                write(path, cal)
+                write(path, res["calibration"])
                 print(f"wrote {path}")
     return 0
 

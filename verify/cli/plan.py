@@ -38,7 +38,24 @@ def run(args):
     if args.grid is not None and 360 % args.grid:
         raise DataError(f"--grid {args.grid:g}: give a step that divides 360 degrees")
     res = search_plan(mod, args.model, args.grid, args.count_seconds, args.max_candidates)
-    r, cont, d = res.search, res.continuum, res.to_dict()
+    d = res.to_dict()
+    _print(mod, res, d, args.grid, names)
+    if args.json:
+        report.write_json(args.json, d)
+    if args.certificates:
+        _certificates(mod, args, res.search, res.plan)
+    if args.csv:
+        header = [f"{a}_deg" for a in names] + (["mount"] if res.multi else [])
+        report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
+            f"{v:g}" if not isinstance(v, str) else v for v in pos) for pos in d["plan"]]) + "\n")
+        print(f"wrote {args.csv}")
+    return 0
+
+
+def _print(mod, res, d, grid, names):
+    """The optimal errors per q (candidates and continuum), the minimal number of positions, the plan."""
+    from ..io import report
+    r, cont = res.search, res.continuum
     report.table(("q", "definition", "optimal error on the candidates (sigma)",
                   "continuum optimum (exchange)", "candidates are"),
                  [(q, dq, f"{e:g}", "-" if c is None else f"{c:.6g}",
@@ -51,7 +68,7 @@ def run(args):
     exact = d["guaranteed_errors_exact"]
     if any(e is not None and not e.lstrip("-").isdigit() and "/" not in e for e in exact):
         print("exact optimal errors: " + ", ".join(f"{q} {e}" for q, e in zip(mod.Q_NAMES, exact) if e))
-    where = (f"grid of {args.grid:g}-degree steps" if args.grid else "grid of detents/quarter turns") + (
+    where = (f"grid of {grid:g}-degree steps" if grid else "grid of detents/quarter turns") + (
         " and the exchange positions" if res.added else "") + (" x mountings" if res.multi else "")
     print(f"\nminimal number of positions optimal for every q ({where}, {len(r.angles_deg)} positions): "
           f"{r.min_positions}")
@@ -59,20 +76,10 @@ def run(args):
           + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped; "
                                                              "--count-seconds for more)")
           + f"; counted by {r.method}"
-          + ("; every one on quarter turns" if d["optimal_plans_on_quarter_turns"] and args.grid else ""))
+          + ("; every one on quarter turns" if d["optimal_plans_on_quarter_turns"] and grid else ""))
     print(f"plan ({', '.join(a + '_deg' for a in names)}{', mounting' if res.multi else ''}): "
           + ", ".join("(" + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in pos) + ")"
                       for pos in d["plan"]))
-    if args.json:
-        report.write_json(args.json, d)
-    if args.certificates:
-        _certificates(mod, args, r, res.plan)
-    if args.csv:
-        header = [f"{a}_deg" for a in names] + (["mount"] if res.multi else [])
-        report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
-            f"{v:g}" if not isinstance(v, str) else v for v in pos) for pos in d["plan"]]) + "\n")
-        print(f"wrote {args.csv}")
-    return 0
 
 
 def _certificates(mod, args, r, plan):

@@ -164,3 +164,32 @@ def read_plan(path, angles, mountings=None):
             raise DataError(f"{path}: mount {bad!r} is not one of {', '.join(mountings)}")
         mounts = np.array([list(mountings).index(n) for n in names])
     return P, mounts
+
+
+def from_columns(data, names, mounts):
+    """Positions from a pandas DataFrame (columns as in the CSV: <angle>_deg, f1, f2, f3 and mount) or an
+    array (N, angles + 3): the stand's angles in degrees, then f1, f2, f3 in m/s^2 (and, for a stand with
+    several mountings, a last column with the mounting's index)."""
+    cols = [f"{a}_deg" for a in names] + ["f1", "f2", "f3"]
+    multi = len(mounts) > 1
+    if hasattr(data, "columns"):                       # a pandas DataFrame, read by column name
+        missing = [c for c in cols + (["mount"] * multi) if c not in data.columns]
+        if missing:
+            raise DataError(f"data: missing column(s) {', '.join(missing)}")
+        values = np.column_stack([np.asarray(data[c], float) for c in cols])
+        m = None if not multi else np.array([mounts.index(v) if v in mounts else -1 for v in data["mount"]])
+    else:
+        try:
+            arr = np.asarray(data, float)
+        except (TypeError, ValueError):
+            raise DataError("data: expected a CSV path, a DataFrame or an array of numbers") from None
+        width = len(cols) + multi
+        if arr.ndim != 2 or arr.shape[1] != width:
+            raise DataError(f"data: expected an array of shape (N, {width}): {', '.join(cols)}"
+                            + (", mounting index" if multi else "") + f"; got shape {arr.shape}")
+        values, m = arr[:, :len(cols)], (arr[:, -1].astype(int) if multi else None)
+    if not np.all(np.isfinite(values)):
+        raise DataError("data: every angle and reading must be a finite number")
+    if m is not None and (np.any(m < 0) or np.any(m >= len(mounts))):
+        raise DataError(f"data: a mounting is not one of the stand's ({', '.join(mounts)})")
+    return Positions("data", values[:, :len(names)], values[:, len(names):], m)

@@ -19,6 +19,7 @@ class Log:
     step: float = None     # quantisation step in raw units when the format states it
     note: str = ""         # what the reader did (skipped bytes, the IMU read)
     dt: float = None       # median sample interval, s (computed when None)
+    fmt: str = ""          # the format it was read as (FORMATS), or "array"
 
 
 #: Time column names of a `csv` log, and the unit each one states (factor to seconds).
@@ -179,7 +180,7 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
     dt, repeats = _check_time(path, t, unit)
     if repeats:
         note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))
-    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt)      # t is the reader's own array
+    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt, fmt)      # t is the reader's own array
 
 
 def quantum(log):

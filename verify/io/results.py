@@ -82,7 +82,9 @@ class Estimate(Result):
               "guaranteed_error_linear": "sigma sum |W| of each q",
               "guaranteed_error_remainder": "the proven linearisation remainder part of each q",
               "units": "unit of each q (1: dimensionless; a bias q is over g)",
-              "definitions": "each q in the physical parameters ((4) of 000)"}
+              "definitions": "each q in the physical parameters ((4) of 000)",
+              "calibration": "the block's garant-calibration-1 dictionary `garant.apply` takes (when consistent and "
+                             "the stand separates the block's errors)"}
 
 
 class NormCalibration(Result):
@@ -92,7 +94,10 @@ class NormCalibration(Result):
               "premises": "what has to hold for the bounds to hold",
               "delta_sigma_source": "where the noise bound comes from (statistical rule or --delta-sigma)",
               "matrix": "M of a = M (raw - b)", "bias": "b, in the log's raw unit",
-              "calibration": "the garant-calibration-1 dictionary `garant.apply` takes (when consistent)"}
+              "calibration": "the garant-calibration-1 dictionary `garant.apply` takes (when consistent)",
+              "samples": "samples in the log", "duration_s": "length of the log, s",
+              "noise_density": "median noise density of the still intervals, m/s^2/sqrt(Hz) (Kalibr's)",
+              "rate_hz": "sample rate, Hz", "diagnosis": "the effect catalogue's test (with diagnose=True)"}
 
 
 class Diagnosis(Result):

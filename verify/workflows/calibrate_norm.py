@@ -199,23 +199,31 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "residual_before_ms2": float(g * sb),
-                          "residual_after_ms2": float(g * sa)}
-                         for s, nr, sb, sa in zip(stills, rule, before, res["sigma"])],
+                          "residual_after_ms2": float(g * sa), "direction": d.tolist()}
+                         for s, nr, sb, sa, d in zip(stills, rule, before, res["sigma"], res["n"].T)],
     }
     if not consistent:
         out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > noise + rb)]
         return out
+    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err))
+    return out
+
+
+def bounds(mod, res, raw, g, params, noise, rb, dsig, err):
+    """For data consistent with the noise bound: the estimate (the LP estimator's correction folded into
+    the fit `res`), its parameters with guaranteed errors (noise + remainder rb per interval; `err` the
+    linear part), those of the optimal plan, and the orientations worth adding."""
     plan = mod.PLAN[:18] if params == 9 else mod.PLAN
     _, best = lp.primal(mod.H(plan.T)[:params])
     # The estimate the bound is for: the LP estimator's correction Phi^T sigma folded into the fit (the
     # minimax fit itself is only within twice the bound).
     Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
     M, b, delta = fold(res["M"], res["b"], res["delta"], Phi.T @ res["sigma"], g)
-    out.update({"matrix": M.tolist(), "bias": b.tolist(),
-                "nonlinearity_delta_g": delta.tolist() if params == 12 else None})
-    si = res["note"].startswith("log in m/s^2")
+    si = raw_unit(raw, g) == "m/s^2"
     q = parameters(M, b, g).tolist() + delta.tolist()[: params - 9] if si else None
-    out.update({
+    found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
+    return {
+        "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
         "parameters": None if q is None else dict(zip(PARAM_LABELS, q)),
         # the printed parameters' bounds (relative to the raw axes: carried through inv(M) exactly); for a
         # log in raw units, those of (1.3)'s parameters of the calibrated block, as q itself
@@ -224,11 +232,9 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], best * dsig) if si
                                                                  else best * dsig).tolist())),
         "guaranteed_error_q": dict(zip(PARAM_LABELS, bound.tolist())),
-    })
-    found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
-    out.update({"directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
-                "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN}})
-    return out
+        "directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
+        "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN},
+    }
 
 
 def parameter_bounds(M_fit, e):

@@ -159,6 +159,15 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         "residual": (y - lin.A.T @ (W @ y)).reshape(-1, 3),
         "warnings": near_prior(lin, q, e) + unrefutable(lin.A, W, mod),
     })
+    out.update(block_errors(mod, q, W, v, sigma, g, premises, remount, mount, gamma))
+    return out
+
+
+def block_errors(mod, q, W, v, sigma, g, premises, remount=None, mount=None, gamma="lower"):
+    """The block's errors from the estimate q (weights W, verdict v): its physical errors in `mount` by
+    the remount formulas (28)-(29) of 000 when the model has them, else the block's calibration (Gamma,
+    biases) where the stand separates it, else why not."""
+    e = v.guaranteed_error
     if remount is not None:
         gap = 0.0
         if premises.absorbed:                    # the split into Gamma and theta_k is linear in the literal q
@@ -169,14 +178,13 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         if premises.absorbed:
             note += "; the split of Gamma and theta_k assumes " + ", ".join(
                 f"|{n}| <= {b:g} ({src})" for n, (b, src) in premises.split.items())
-        out.update(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound,
-                   physical_note=note)
-    elif all(n in mod.PARAMETER_NAMES for n in block.BLOCK):
-        try:
-            out["block"] = block.calibration(mod, q, e, premises)
-        except DataError as err:                 # the estimate stands; only a calibration of the block cannot
-            out["block_not_separated"] = str(err)
-    return out
+        return dict(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound, physical_note=note)
+    if not all(n in mod.PARAMETER_NAMES for n in block.BLOCK):
+        return {}
+    try:
+        return {"block": block.calibration(mod, q, e, premises)}
+    except DataError as err:                     # the estimate stands; only a calibration of the block cannot
+        return {"block_not_separated": str(err)}
 
 
 def refuted_by_repeats(mod, positions, spread, bad, sigma, g, premises, rows):

@@ -1,0 +1,138 @@
+"""The jobs a user runs, one function each, from their inputs (paths or arrays) to the result object.
+
+The command (cli/) parses its options, calls one of these and prints the result; the notebook API
+(api.py) calls the same function and returns the result: the two cannot disagree. Results are the
+objects of io/results.py (a dict whose keys are also attributes, with `to_json()`).
+"""
+import numpy as np
+
+from .. import models
+from ..errors import DataError
+from ..io import results
+from .premises import G_DEFAULT, premises as make_premises
+
+
+def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
+             imu=None, which_run=None, progress=None):
+    """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors
+    from positions: a CSV path, a means file (with `imu` and `which_run`), a DataFrame or an array
+    (`positions_of`). g in m/s^2 (None: 9.81 with the uncertainty of an assumed g); the premises of
+    the bounds are in the result. A consistent result with the block's errors holds "calibration",
+    the dictionary `apply` takes."""
+    from . import estimate as est
+    mod = models.load(model)
+    remount = None if str(model).endswith(".toml") else models.load_remount(model)
+    if mount and (remount is None or mount not in remount.MOUNTS):
+        raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
+                        f"+y+z+x; got {mount!r}")
+    prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
+                         g_uncertainty=g_uncertainty, prior=prior)
+    res = est.estimate(mod, positions_of(mod, data, imu, which_run), sigma, prem.g, remount=remount, mount=mount,
+                       gamma=gamma, premises=prem, progress=progress)
+    if res["consistent"] and ("physical" in res or "block" in res):
+        from ..io import calibration
+        res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
+    return results.Estimate(res)
+
+
+def positions_of(mod, data, imu=None, which_run=None):
+    """Positions for `mod` from a positions CSV, a means file with known nominal directions (its run
+    `which_run` of IMU `imu`, the directions turned into the stand's angles), a DataFrame or an array."""
+    from ..io import means
+    from ..io.positions import Positions, from_columns, read_positions
+    from .directions import angles_for
+    names, mounts = models.layout(mod)
+    if not (isinstance(data, (str, bytes)) or hasattr(data, "__fspath__")):
+        return from_columns(data, names, mounts)
+    if not means.looks_like(data):
+        if imu is not None or which_run is not None:
+            raise DataError(f"--imu and --run apply to a means file; {data} is a positions file")
+        return read_positions(data, names, mounts)
+    runs = means.read(data, imu)
+    keys = [r.name.rsplit("=", 1)[-1] for r in runs]
+    if which_run is None and len(runs) > 1:
+        raise DataError(f"{data}: holds runs {', '.join(keys)}; choose one with --run R")
+    if which_run is not None and which_run not in keys:
+        raise DataError(f"--run {which_run}: {data} holds runs {', '.join(keys)}")
+    run = runs[keys.index(which_run)] if which_run is not None else runs[0]
+    if run.nominal is None:
+        raise DataError(f"{data}: no nominal directions (nom_x, nom_y, nom_z); estimate needs known positions "
+                        "(garant calibrate-norm and repeatability need none)")
+    return Positions(str(data), angles_for(mod, run.nominal, data), np.array([st.mean for st in run.stills]))
+
+
+def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, imu=None, window=1.0, k=10.0,
+                   min_still=2.0, delta_sigma=None, diagnose=False):
+    """Calibrate a static log (a path, or an array (N, 4): time in s, then the three raw axes) through
+    the norm relation (2.2) of 001: still intervals (moving variance over `window` s below `k` times the
+    first seconds', at least `min_still` s), the verdict, M and b with guaranteed errors. A consistent
+    result holds "calibration", the dictionary `apply` takes; `diagnose` adds the effect catalogue's test."""
+    from ..io import calibration, recordings
+    from . import calibrate_norm as cn
+    mod = models.load("norm")
+    data = _log(log, fmt, sensor, imu)
+    stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
+    res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data))
+    dt = float(np.median(np.diff(data.t)))
+    per_sample = np.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
+    res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
+                "format": data.fmt, "sensor": sensor or "adxl355", "rate_hz": 1 / dt,
+                "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
+                                       / np.sqrt(3) * np.sqrt(dt))})
+    if res["consistent"]:
+        res["calibration"] = calibration.from_norm(res, mod.AXES)
+    if diagnose:
+        raw = np.array([st.mean for st in stills])
+        res["diagnosis"] = cn.diagnose_norm(mod, stills, cn.fit(mod, raw, g, params), g, params,
+                                            recordings.quantum(data))
+    return results.NormCalibration(res)
+
+
+def _log(log, fmt, sensor, imu):
+    """A Log from a path (any supported format) or from an array (N, 4): time (s), three raw axes."""
+    from ..io import recordings
+    if isinstance(log, (str, bytes)) or hasattr(log, "__fspath__"):
+        return recordings.read_log(log, fmt, sensor or "adxl355", imu)
+    try:
+        arr = np.asarray(log, float)
+    except (TypeError, ValueError):
+        raise DataError("log: expected a path or an array of numbers (N, 4): time in s, x, y, z") from None
+    if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) < recordings.MIN_SAMPLES:
+        raise DataError(f"log: expected an array of shape (N, 4), N >= {recordings.MIN_SAMPLES}: time in s, x, y, z; "
+                        f"got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)) or np.any(np.diff(arr[:, 0]) <= 0):
+        raise DataError("log: every value must be finite and the times increasing")
+    return recordings.Log("array", arr[:, 0] - arr[0, 0], arr[:, 1:], fmt="array")
+
+
+def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
+    """The missing-effect workflow of diagnose.py on positions (see `positions_of`): the verdict of the
+    current model, the catalogue effects the data need, their estimates and what separates the rest.
+    The result's attribute `study` (not a field: not in JSON) is what `diagnose.write_module` needs."""
+    from . import diagnose as dg
+    mod = models.load(model)
+    res = dg.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, g, prior, g_uncertainty)
+    study = res.pop("_study")
+    out = results.Diagnosis(res)
+    out.study = study
+    return out
+
+
+def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, chunk=None):
+    """Correct a raw log with a calibration (a garant-calibration-1 file or the dictionary a result
+    holds), checked as a file is (schema, a well-conditioned M, the log's unit unless `trust_units`).
+    Returns the Correction t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2; with `chunk`, an iterator of
+    Corrections of at most `chunk` samples (the command writes a long log piece by piece)."""
+    from ..io import calibration as cal_io
+    cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
+    data = _log(log, fmt, sensor, imu)
+    if not trust_units:
+        cal_io.check_units(cal, data.path, data.raw[:100_000],
+                           "the calibration" if isinstance(calibration, dict) else str(calibration))
+
+    def piece(i, j):
+        a, bound = cal_io.apply(cal, data.raw[i:j])
+        return results.Correction(t=data.t[i:j], a=a, bound=bound, kind=cal["kind"])
+    if chunk is None:
+        return piece(0, len(data.t))
+    return (piece(i, i + chunk) for i in range(0, len(data.t), chunk))
