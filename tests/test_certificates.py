@@ -129,10 +129,10 @@ def test_every_certificate_in_verify_holds(tmp_path):
 
 def test_continuum_solver_matches_the_proven_optima():
     mod = models.load("two-axis")
-    sol = continuum.solve(mod.H, 2, np.eye(15))
+    sol = continuum.exchange(mod.H, 2, np.eye(15))
     np.testing.assert_allclose(sol.values, 1, atol=1e-7)
     single = models.load("single-axis")
-    sol = continuum.solve(build.stacked_H(single), 1, np.eye(15))
+    sol = continuum.exchange(build.stacked_H(single), 1, np.eye(15))
     assert sol.values[14] == pytest.approx(2 + np.sqrt(2), abs=1e-6)   # better than 4 on quarter turns
 
 

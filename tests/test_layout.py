@@ -208,3 +208,27 @@ def test_project_cites_the_papers_not_files_outside_it():
     bad = [f for f in tracked if f.endswith((".py", ".md", ".jinja", ".toml")) and f != "tests/test_layout.py"
            and any(s in (ROOT / f).read_text(errors="replace") for s in ("SPEC.md", "STYLE.md"))]
     assert not bad, f"cite the papers, not outside files: {bad}"
+
+
+def test_only_commands_print_and_only_io_plots():
+    # Workflows compute and return results; the commands (cli/) print them and io/ writes and plots them,
+    # so the API (which calls the same workflows) never prints. A print() or a matplotlib import planted in
+    # a workflow (as identify.print_report and calibrate_norm.plot were) fails here. Developer tools and
+    # `if __name__ == "__main__"` blocks aside.
+    allowed = ("verify/cli/", "verify/io/", "verify/bench/", "verify/power/", "derive/__main__.py")
+    bad = []
+    for name, path in modules().items():
+        rel = str(path.relative_to(ROOT))
+        if rel.startswith(allowed):
+            continue
+        tree = ast.parse(path.read_text())
+        main_blocks = {id(n) for node in tree.body if isinstance(node, ast.If) and "__main__" in ast.unparse(node.test)
+                       for n in ast.walk(node)}
+        for node in ast.walk(tree):
+            if id(node) in main_blocks:
+                continue
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "print":
+                bad.append(f"{rel}:{node.lineno} print")
+            if isinstance(node, (ast.Import, ast.ImportFrom)) and "matplotlib" in ast.unparse(node):
+                bad.append(f"{rel}:{node.lineno} matplotlib")
+    assert not bad, bad

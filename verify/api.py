@@ -13,7 +13,7 @@ from .workflows.premises import G_DEFAULT
 
 
 #: The commands' options by the API's argument names: an error raised below names what the caller wrote.
-ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--k": "k", "--min-still": "min_still", "--format": "fmt", "--sigma": "sigma", "--g-uncertainty": "g_uncertainty",
+ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--still-factor": "k", "--k": "k", "--min-still": "min_still", "--format": "fmt", "--sigma": "sigma", "--g-uncertainty": "g_uncertainty",
              "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
              "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid"}
 

@@ -203,7 +203,7 @@ def bench_continuum(mod):
     """Exchange method for the 15 two-axis optima vs per-target LPs on a 3-degree grid (all 15
     targets, 14,400 positions, actually run; a 1-degree grid would take minutes)."""
     from ..solve import continuum
-    t, sol = timed(lambda: continuum.solve(mod.H, 2, np.eye(15)))
+    t, sol = timed(lambda: continuum.exchange(mod.H, 2, np.eye(15)))
     assert np.allclose(sol.values, 1, atol=1e-7)
     g = np.deg2rad(np.arange(0, 360, 3))
     A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))

@@ -3,7 +3,7 @@ import sys
 
 from ..errors import DataError
 from ..io.recordings import FORMATS, SENSORS
-from . import args as a
+from . import args as options
 from .estimate import EXIT_INCONSISTENT
 
 
@@ -14,19 +14,20 @@ def add(sub):
     p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or all of them "
                    "in turn (then --json holds one result per IMU)")
-    a.g(p, "local gravity, m/s^2 (default 9.81)")
+    options.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
-    p.add_argument("--window", type=a.positive, default=1.0, help="moving-variance window, s")
-    p.add_argument("--k", type=a.positive, default=10.0, help="still when the moving variance < k x the initial one")
-    p.add_argument("--min-still", type=a.positive, default=2.0, help="shortest still interval kept, s")
-    p.add_argument("--delta-sigma", type=a.small, metavar="D",
+    p.add_argument("--window", type=options.positive, default=1.0, help="moving-variance window, s")
+    p.add_argument("--still-factor", "--k", dest="k", type=options.positive, default=10.0,
+                   help="still when the moving variance is below this factor times that of the first 5 s")
+    p.add_argument("--min-still", type=options.positive, default=2.0, help="shortest still interval kept, s")
+    p.add_argument("--delta-sigma", type=options.small, metavar="D",
                    help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; default: the "
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
                    help="test the model against each interval's noise and try the effect catalogue")
-    a.units(p)
-    a.json(p)
+    options.units(p)
+    options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: verdict, tables, plots, the command")
     p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
@@ -62,15 +63,15 @@ def run(args):
 
 
 def _run(args, into=None):
-    from ..io import report
-    from ..workflows import calibrate_norm, jobs
+    from ..io import plots, report
+    from ..workflows import jobs
     res = jobs.calibrate_norm(args.log, args.g, args.params, args.format, args.sensor, args.imu, args.window, args.k,
                               args.min_still, args.delta_sigma, args.diagnose)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)
     if args.plot:
-        calibrate_norm.plot(res, args.plot)
+        plots.norm_residuals(res, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
     if args.save or args.export_imu_tk:
         _save(res, args)
@@ -186,11 +187,10 @@ def _report(res, args):
 
     import numpy as np
 
-    from ..io import report
-    from ..workflows import calibrate_norm, plots
+    from ..io import plots, report
     folder = Path(args.report)
     folder.mkdir(parents=True, exist_ok=True)
-    calibrate_norm.plot(res, folder / "residuals.png")
+    plots.norm_residuals(res, folder / "residuals.png")
     rows = res["per_interval"]
     M, b = np.array(res["matrix"]), np.array(res["bias"])
     plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows], [res["g"] * r["noise_rule"] for r in rows],

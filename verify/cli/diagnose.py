@@ -2,17 +2,17 @@
 import sys
 import time
 
-from . import args as a
+from . import args as options
 
 
 def add(sub):
     p = sub.add_parser("diagnose", help="find the effect missing from the model, add it, show the gap shrink")
     p.add_argument("data", metavar="DATA.csv", help="as for estimate; optional columns time_s, temp_c")
-    a.model(p)
-    a.sigma(p, "noise bound, units of g")
-    a.g(p)
-    a.premises(p)
-    a.json(p)
+    options.model(p)
+    options.sigma(p, "noise bound, units of g")
+    options.g(p)
+    options.premises(p)
+    options.json(p)
     p.add_argument("--plot", metavar="FILE.png")
     p.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
     return p
@@ -20,7 +20,7 @@ def add(sub):
 
 def run(args):
     from .. import models
-    from ..io import report
+    from ..io import plots, report
     from ..workflows import diagnose, jobs
     names = models.layout(models.load(args.model))[0]
     t0 = time.perf_counter()
@@ -61,7 +61,7 @@ def run(args):
         for f in diagnose.write_module(study, res["effects"], args.report):
             print(f"wrote {f}")
     if args.plot:
-        diagnose.plot(res, args.plot, f"{args.data}: residuals before and after")
+        plots.diagnosis(res, args.plot, f"{args.data}: residuals before and after")
     if args.json:
         report.write_json(args.json, res)
     return 0

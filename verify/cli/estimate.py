@@ -2,7 +2,7 @@
 import sys
 
 from ..errors import DataError
-from . import args as a
+from . import args as options
 
 #: Exit status when the data refute sigma (docs: README, "Exit status").
 EXIT_INCONSISTENT = 3
@@ -12,18 +12,18 @@ def add(sub):
     p = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
     p.add_argument("data", metavar="DATA.csv", help="CSV: <angle>_deg for each angle (alpha_deg,beta_deg on the "
                    "two-axis stand), f1,f2,f3 in m/s^2, and mount when the stand uses several mountings")
-    a.model(p)
-    a.sigma(p)
-    a.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
+    options.model(p)
+    options.sigma(p)
+    options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a means file with an imu column")
     p.add_argument("--run", dest="which_run", metavar="R", help="run R of a means file with a run column (exp or run)")
     p.add_argument("--mount", metavar="Q", help="mounting of the block, e.g. +y+z+x (block axis 1 along "
                    "table +y, ...): also report the block's physical errors, (28)-(29) of 000")
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
-    a.premises(p)
-    a.units(p)
-    a.json(p)
+    options.premises(p)
+    options.units(p)
+    options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
     p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
@@ -58,7 +58,7 @@ def _plots(res, mod, args):
     import numpy as np
 
     from ..io import report
-    from ..workflows import plots
+    from ..io import plots
     title = f"{args.data}: residuals of the minimax fit, " + ("consistent" if res["consistent"] else "INCONSISTENT")
     targets = [p for p in (args.plot, args.report and str(Path(args.report) / "residuals.png")) if p]
     if args.report:

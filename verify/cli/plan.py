@@ -1,19 +1,19 @@
 """garant plan: optimal guaranteed errors and a minimal optimal plan of a stand."""
 from ..errors import DataError
 from ..workflows.plan import MAX_CANDIDATES
-from . import args as a
+from . import args as options
 
 
 def add(sub):
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
     p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or norm "
                    "(the coarse stand of 001: which orientations to hold the IMU in)")
-    a.json(p)
-    p.add_argument("--grid", type=a.positive, metavar="STEP", help="search positions every STEP degrees (detents "
+    options.json(p)
+    p.add_argument("--grid", type=options.positive, metavar="STEP", help="search positions every STEP degrees (detents "
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
-    p.add_argument("--count-seconds", type=a.positive, default=5.0, metavar="S",
+    p.add_argument("--count-seconds", type=options.positive, default=5.0, metavar="S",
                    help="time allowed for counting the optimal plans on a large grid (default 5 s)")
-    p.add_argument("--max-candidates", type=a.positive_int, default=MAX_CANDIDATES, metavar="N",
+    p.add_argument("--max-candidates", type=options.positive_int, default=MAX_CANDIDATES, metavar="N",
                    help=f"refuse a --grid of more than N candidate positions (times mountings; default {MAX_CANDIDATES:,}: "
                         "a 3-degree grid on the two-axis stand takes about 30 s)")
     p.add_argument("--certificates", metavar="DIR", help="write a certificate of the plan's optimality for each "

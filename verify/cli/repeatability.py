@@ -3,7 +3,7 @@ effect named when they disagree, and the between-run envelope to expect of the n
 import sys
 
 from ..io.recordings import FORMATS, SENSORS
-from . import args as a
+from . import args as options
 
 
 def add(sub):
@@ -15,14 +15,14 @@ def add(sub):
                    "positions file of per-position means (docs/formats.md)")
     p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
-    a.g(p, "local gravity, m/s^2 (default 9.81)")
+    options.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9, help="9 or 12 parameters (as calibrate-norm)")
-    p.add_argument("--count", type=a.small, metavar="STEP",
+    p.add_argument("--count", type=options.small, metavar="STEP",
                    help="quantisation step of the readings a means file averaged, m/s^2, below 1 (the noise rule adds "
                    "half of it; a raw log states its own)")
-    p.add_argument("--rate", type=a.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
+    p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
                    "stop_sample columns (gives the runs a time, for the bias_drift effect)")
-    a.json(p)
+    options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
     p.add_argument("--markdown", metavar="FILE.md", help="the tables and coverage figures as Markdown")
     return p
@@ -66,7 +66,7 @@ def _runs(args, fmt, imu):
 
 def run(args):
     from .. import models
-    from ..io import means, recordings, report
+    from ..io import means, plots, recordings, report
     from ..workflows import repeatability
     fmt = args.format or ("means" if means.looks_like(args.logs[0]) else recordings.guess_format(args.logs[0]))
     mod = models.load("norm")
@@ -84,7 +84,7 @@ def run(args):
     if args.json:
         report.write_json(args.json, results if len(results) > 1 else next(iter(results.values())))
     if args.plot:
-        repeatability.plot(results, args.plot)
+        plots.repeatability(results, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
     if args.markdown:
         report.write_text(args.markdown, markdown(results, args))

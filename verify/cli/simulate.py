@@ -1,18 +1,18 @@
 """garant simulate: readings from the exact nonlinear model, with hidden effects, for testing."""
-from . import args as a
+from . import args as options
 
 
 def add(sub):
     p = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
-    a.model(p)
+    options.model(p)
     p.add_argument("--plan", required=True, help="optimal10, quarter16, grid:AxB (steps per angle in degrees), or a "
                    "plan file PLAN.csv (`garant plan --csv`)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
                    help="a catalogue effect and its parameter values (repeatable)")
-    a.sigma(p, "noise bound, units of g")
-    p.add_argument("--seed", type=a.seed, default=0, help="random seed, a whole number >= 0 (default 0)")
-    a.g(p)
-    p.add_argument("--size", type=a.small, default=1e-4, help="bound of the random stand and block errors")
+    options.sigma(p, "noise bound, units of g")
+    p.add_argument("--seed", type=options.seed, default=0, help="random seed, a whole number >= 0 (default 0)")
+    options.g(p)
+    p.add_argument("--size", type=options.small, default=1e-4, help="bound of the random stand and block errors")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
 

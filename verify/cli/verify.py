@@ -2,12 +2,12 @@
 import sys
 import time
 
-from . import args as a
+from . import args as options
 
 
 def add(sub):
     p = sub.add_parser("verify", help="run every check of the built-in models against the papers")
-    a.json(p)
+    options.json(p)
     p.add_argument("--certificates", metavar="DIR", help="write every optimality certificate (JSON) here")
     return p
 

@@ -178,7 +178,7 @@ def a_priori(mod, step=10):
             xm, x = cp.Variable(m), cp.Variable(K)
             prob = cp.Problem(cp.Minimize(qmax @ cp.abs(xm) + dsig * cp.sum(cp.abs(x))),
                               [xm + A @ x == np.eye(m)[nu]])
-            lp.solve(prob, "a priori (5.2)-(5.3)")
+            lp.optimal(prob, "a priori (5.2)-(5.3)")
             errs.append(prob.value)
         holds = 4 * dsig <= qmax_nl
         want = 4 * dsig if holds else qmax_nl

@@ -58,7 +58,7 @@ def _continuum_certificates(mod, d, rows, names, m, step=sp.pi / 24):
     complementary slackness; the checker decides whether it holds."""
     from ..solve import continuum, exact, lp, plans
     H = stacked_H(mod)
-    sol = continuum.solve(H, len(names), np.eye(m))
+    sol = continuum.exchange(H, len(names), np.eye(m))
     r = plans.search(mod, count_limit=1)                 # one plan is enough here: no count
     cols_grid = exact.integer_columns(mod, r.angles_deg, r.mounts)
     k = np.rint(sol.positions / float(step))
@@ -163,7 +163,7 @@ def exact_primal(cols, nu, lam):
     w = cp.Variable(len(cand), nonneg=True)
     prob = cp.Problem(cp.Minimize(0), [V.T @ w == np.eye(V.shape[1])[nu]])
     try:
-        lp.solve(prob, "exact primal support")
+        lp.optimal(prob, "exact primal support")
     except LPFailed:
         return None
     support = [k for k in np.argsort(-w.value) if w.value[k] > 1e-9]

@@ -56,7 +56,7 @@ def _refine(H, X, Lam, step, lo, hi, iterations=400):
     return X, best
 
 
-def solve(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60, top=12, ranges_deg=None):
+def exchange(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter=60, top=12, ranges_deg=None):
     """Exchange method on the box of angles (default [0, 2 pi)^n_angles; `ranges_deg` (lo, hi) per
     angle for a stand with limited ranges) for the targets (columns of `targets`, m x T)."""
     ranges = np.array(ranges_deg if ranges_deg is not None else [(0, 360)] * n_angles, float)

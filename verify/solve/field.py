@@ -135,7 +135,7 @@ class QF:
         return f"QF({', '.join(str(x) for x in self.c)})"
 
 
-def solve(vectors, target):
+def combination(vectors, target):
     """Exact x with sum_k x_k vectors[k] = target in QF (vectors linearly independent), or None when
     target is not in their span."""
     from garant.derive.linear import solve_exact

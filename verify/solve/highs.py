@@ -39,7 +39,7 @@ def new(presolve=True):
     return h
 
 
-def solve(c, M, row_lo, row_hi, col_lo, col_hi, what):
+def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
     """(x, row duals, objective) of the LP above; LPFailed unless optimal."""
     M = np.asarray(M, float)
     rows, cols = M.shape
@@ -128,7 +128,7 @@ def _chebyshev(A, z, w, s, free, what):
     M = np.block([[A.T, w[:, None]], [A.T, -w[:, None]]])
     c = np.zeros(m + 1)
     c[-1] = 1.0
-    x, _, t = solve(c, M, np.r_[z - s, np.full(K, -INF)], np.r_[np.full(K, INF), z + s],
+    x, _, t = minimize(c, M, np.r_[z - s, np.full(K, -INF)], np.r_[np.full(K, INF), z + s],
                     np.r_[np.full(m, -INF), -INF if free else 0.0], INF, what)
     q = x[:m]
     return q, float(t), z - A.T @ q
@@ -202,7 +202,7 @@ def dual(A, targets=None):
     T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
     Lam, values = np.zeros((m, T.shape[1])), np.zeros(T.shape[1])
     for k, a in enumerate(T.T):
-        Lam[:, k], _, neg = solve(-a, A.T, -np.ones(K), np.ones(K), -INF, INF, "dual (9)-(10)")
+        Lam[:, k], _, neg = minimize(-a, A.T, -np.ones(K), np.ones(K), -INF, INF, "dual (9)-(10)")
         values[k] = -neg
     return Lam, values
 
@@ -219,7 +219,7 @@ def sparse_dual(A, targets=None, slack=1e-9):
     for k, a in enumerate(T.T):
         floor = values[k] - slack * max(1.0, values[k])
         M = np.block([[A.T, np.zeros((K, m))], [a[None], np.zeros((1, m))], [I, -I], [-I, -I]])
-        x, _, _ = solve(np.r_[np.zeros(m), np.ones(m)], M,
+        x, _, _ = minimize(np.r_[np.zeros(m), np.ones(m)], M,
                         np.r_[-np.ones(K), floor, np.full(2 * m, -INF)], np.r_[np.ones(K), INF, np.zeros(2 * m)],
                         np.r_[np.full(m, -INF), np.zeros(m)], INF, "sparse dual")
         Lam[:, k] = x[:m]

@@ -14,7 +14,7 @@ from ..errors import LPFailed
 from . import highs
 
 
-def solve(problem, what):
+def optimal(problem, what):
     """Solve a cvxpy problem with HiGHS; LPFailed unless optimal."""
     import cvxpy as cp
     highs.new()                                   # the first HiGHS of the process prints a banner: not here
@@ -52,7 +52,7 @@ def chebyshev(A):
     m, K = A.shape
     Y, t = cp.Variable((m, m)), cp.Variable(m)
     cons = [cp.diag(Y) == 1, cp.abs(A.T @ Y) <= cp.reshape(t, (1, m), order="C")]
-    solve(cp.Problem(cp.Minimize(cp.sum(t)), cons), "Chebyshev polynomial (12)")
+    optimal(cp.Problem(cp.Minimize(cp.sum(t)), cons), "Chebyshev polynomial (12)")
     return t.value, Y.value
 
 

@@ -126,7 +126,7 @@ def _slackness_dual(cols, nu, A, lam_float):
     columns = [[field.QF.of(cols[s_, p][i] if _algebraic(cols) else int(cols[s_, p][i])) for s_, p in chosen]
                + [field.QF(int(i == z)) for z in zeros] for i in range(m)]
     signs = [1 if v[s_, p] > 0 else -1 for s_, p in chosen] + [0] * len(zeros)
-    lam = field.solve(columns, signs)
+    lam = field.combination(columns, signs)
     if lam is None or abs(float(lam[nu]) - lam_float[nu]) > 1e-6:
         return None
     return _exact_dual(cols, lam, exact=lam)
@@ -234,7 +234,7 @@ def _minimal(cols, nu, lam, first=False):
         resid = np.abs(np.einsum("nk,nkm->nm", x, B[ok]) - e).max(axis=1)
         for row in idx[ok][(resid < 1e-9) & (x.min(axis=1) > 1e-9)]:
             if exact and algebraic:                            # confirmed in Q(sqrt2, sqrt3)
-                w = field.solve([[h * signs[i] for h in cols[cand[i]]] for i in row],
+                w = field.combination([[h * signs[i] for h in cols[cand[i]]] for i in row],
                                 [int(j == nu) for j in range(m)])
                 if w is None or min(x.sign() for x in w) <= 0:
                     raise AssertionError("float and exact arithmetic disagree on a minimal set")
@@ -350,7 +350,7 @@ def estimator_in(cols, nu, lam):
     V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float)          # (C, m)
     m = V.shape[1]
     try:
-        w, _, _ = highs.solve(np.zeros(len(cand)), V.T, np.eye(m)[nu], np.eye(m)[nu], 0.0, highs.INF,
+        w, _, _ = highs.minimize(np.zeros(len(cand)), V.T, np.eye(m)[nu], np.eye(m)[nu], 0.0, highs.INF,
                               "an estimator on the plan")
     except Exception:
         return None
@@ -361,7 +361,7 @@ def estimator_in(cols, nu, lam):
     if not is_exact(lam):
         return [(cand[k][0], cand[k][1], float(w[k]) * signs[k]) for k in chosen]
     vecs = [[field.QF.of(h if _algebraic(cols) else int(h)) * signs[k] for h in cols[cand[k]]] for k in chosen]
-    x = field.solve(vecs, [int(j == nu) for j in range(m)])
+    x = field.combination(vecs, [int(j == nu) for j in range(m)])
     if x is None or any(v.sign() <= 0 for v in x):
         return None
     return [(cand[k][0], cand[k][1], xi * signs[k]) for k, xi in zip(chosen, x)]

@@ -36,7 +36,7 @@ def calibration(mod, q, e, premises):
             c = np.zeros(len(names))
             c[k] = sign
             try:
-                x, _, _ = highs.solve(c, M, lo_rows, hi_rows, col_lo, col_hi, f"range of {name}")
+                x, _, _ = highs.minimize(c, M, lo_rows, hi_rows, col_lo, col_hi, f"range of {name}")
             except LPFailed:
                 raise DataError(f"this stand does not separate the block's {name} (its range over the premises "
                                 "is unbounded): no calibration of the block from it") from None

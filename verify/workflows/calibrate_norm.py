@@ -12,7 +12,6 @@ import numpy as np
 
 from ..errors import DataError
 from ..io.recordings import BATCHES, raw_unit
-from ..io.report import save_figure
 from ..solve import highs, lp
 
 MAX_ITER = 60
@@ -254,37 +253,6 @@ def linearisation_remainder(mod, e, params):
     second order; the noise itself is delta_sigma_max, not counted twice (df = 0); g is taken as exact."""
     return float(mod.remainder_bound(k_max=e[:3].max(), v_max=e[3:6].max(), eps_max=e[6:9].max(),
                                      delta_max=e[9:12].max() if params == 12 else 0.0, df_max=0.0, dg_max=0.0))
-
-
-def plot(result, path):
-    """PNG of the norm residual per still interval: before (the starting map) and after the
-    calibration, each at its own scale, with the noise bound band after."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    rows = result["per_interval"]
-    k = np.arange(1, len(rows) + 1)
-    g = result["g"]
-    fig, (a0, a1) = plt.subplots(1, 2, figsize=(10, 4))
-    a0.plot(k, [r["residual_before_ms2"] for r in rows], "o", color="C3")
-    a0.set_title("before (starting map)", fontsize=9)
-    a1.plot(k, [r["residual_after_ms2"] for r in rows], "s", color="C0")
-    a1.plot(k, [g * r["noise_rule"] for r in rows], "_", color="C2", label="noise rule of each interval")
-    a1.plot(k, [-g * r["noise_rule"] for r in rows], "_", color="C2")
-    band = g * (result["delta_sigma_max"] + result["remainder_bound"])
-    a1.axhspan(-band, band, color="C0", alpha=0.12,
-               label=f"+- (delta_sigma_max + remainder) g = {band:.2e} m/s^2")
-    a1.set_title(f"after ({result['params']}-parameter calibration): "
-                 + ("consistent" if result["consistent"] else "INCONSISTENT"), fontsize=9)
-    for ax in (a0, a1):
-        ax.axhline(0, color="k", lw=0.6)
-        ax.set_xlabel("still interval")
-    a0.set_ylabel("(|a|^2 - g^2) / (2 |a|^2) x g   (m/s^2)")
-    fig.legend(*a1.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
-    fig.suptitle(f"{result['log'].rsplit('/', 1)[-1]}: norm residual per still interval", fontsize=10)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    save_figure(fig, path)
-    plt.close(fig)
 
 
 def weighted_fit(Hk, s, bounds):

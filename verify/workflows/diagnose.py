@@ -13,7 +13,6 @@
 import numpy as np
 
 from ..errors import DataError
-from ..io.report import save_figure
 from ..models import reachable_grid
 from ..solve import highs, lp
 from . import guarantee
@@ -202,29 +201,3 @@ def write_module(study, chosen, directory):
     """The extended model's generated module and report, written to `directory`."""
     from garant.derive import codegen
     return codegen.write_files(codegen.model_files(study.model(chosen), str(directory), str(directory)))
-
-
-def plot(res, path, title):
-    """Residuals of the minimax fit before and after the effects are added, each panel at its own
-    scale, against the position (three components each), with +-sigma and the proven remainder."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    s = res["sigma"]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    added = "with " + (", ".join(res["effects"]) if res["effects"] else "no effect added")
-    for ax, key, colour, label in ((axes[0], "residual_before", "C3", "current model"),
-                                   (axes[1], "residual_after", "C0", added)):
-        r = np.array(res[key]).reshape(-1) / s
-        ax.plot(np.arange(r.size) / 3, r, "o", ms=3, color=colour)
-        ax.axhspan(-1, 1, color="0.85", zorder=0, label="+- sigma")
-        ax.axhline(1 + res["remainder_bound"] / s, color="k", lw=0.8, ls=":", label="+ the largest proven remainder")
-        ax.axhline(-1 - res["remainder_bound"] / s, color="k", lw=0.8, ls=":")
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("position (three components each)")
-    axes[0].set_ylabel("minimax-fit residual (units of sigma)")
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    save_figure(fig, path)
-    plt.close(fig)

@@ -69,27 +69,3 @@ def report(model, plan_path=None):
                 "relations": [r.text() for r in out["relations"]], "confounded_groups": out["groups"],
                 "degenerate_trajectories": [{"trajectory": t, "relations": [r.text() for r in rel]}
                                             for t, rel in out["degenerate"]]}
-
-
-def print_report(res):
-    print(f"model: {res['model']}" + (f" ({res['title']})" if "title" in res else ""))
-    if "V" in res:
-        print(f"constraint residual V = {res['V']}")
-        print("basis functions (003, (9)): " + "; ".join(res["basis_functions"]))
-    if "estimable" in res:
-        print("estimable combinations, (4) of 000:")
-        for e in res["estimable"]:
-            print(f"  {e}")
-    print("identical relations among the basis functions (directions no data can see):")
-    for r in res["relations"] or ["none: every parameter is estimable for generic data"]:
-        print(f"  {r}")
-    print("confounded groups: " + ("; ".join("{" + ", ".join(g) + "}" for g in res["confounded_groups"])
-                                   or "none"))
-    for d in res.get("degenerate_trajectories", []):
-        print(f"degenerate on trajectories with {d['trajectory']}: " + "; ".join(d["relations"]))
-    if "plan" in res:
-        p = res["plan"]
-        print(f"plan {p['path']}: " + ("identifies every q" if not p["not_identifiable"] else
-                                      "cannot identify " + "; ".join(p["not_identifiable"])))
-        for b in p["invisible_combinations"]:
-            print(f"  invisible: {b}")

@@ -109,9 +109,9 @@ def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
     """The missing-effect workflow of diagnose.py on positions (see `positions_of`): the verdict of the
     current model, the catalogue effects the data need, their estimates and what separates the rest.
     The result's attribute `study` (not a field: not in JSON) is what `diagnose.write_module` needs."""
-    from . import diagnose as dg
+    from . import diagnose as diagnosis
     mod = models.load(model)
-    res = dg.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, g, prior, g_uncertainty)
+    res = diagnosis.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, g, prior, g_uncertainty)
     study = res.pop("_study")
     out = results.Diagnosis(res)
     out.study = study

@@ -7,7 +7,6 @@ Reusing D itself carries the bias (D A^T - E) q: its guaranteed error is infinit
 """
 import numpy as np
 
-from ..io.report import save_figure
 from ..solve import lp
 def plan_estimators(mod):
     """D: the generated optimal estimators on PLAN_DEG as an m x 3S matrix, columns ordered (s, p)."""
@@ -69,29 +68,6 @@ def sweep(mod, misses_deg, trials=20, seed=0):
     return np.array(out)
 
 
-def plot(mod, path, misses_deg=np.linspace(0, 5, 11)):
-    """PNG: guaranteed error (units of sigma) against the position error, (23) vs the LP optimum."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    s = sweep(mod, misses_deg)
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    ax.plot(s[:, 0], s[:, 2], "o-", color="C1", label="estimator (23), worst of 20 plans")
-    ax.plot(s[:, 0], s[:, 1], "o--", color="C1", alpha=0.6, label="estimator (23), mean")
-    ax.plot(s[:, 0], s[:, 4], "s-", color="C0", label="LP optimum on the realised plan, worst")
-    ax.plot(s[:, 0], s[:, 3], "s--", color="C0", alpha=0.6, label="LP optimum, mean")
-    ax.axhline(1, color="k", lw=0.8)
-    ax.set_xlabel("position error: each angle uniform in [-d, d], d in degrees")
-    ax.set_ylabel("max over q of the guaranteed error (units of sigma)")
-    ax.set_title("Two-axis stand, optimal 10-position plan set with errors\n"
-                 "(reusing the exact-plan estimators: biased, guaranteed error infinite)", fontsize=9)
-    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
-    fig.tight_layout(rect=(0, 0.14, 1, 1))
-    save_figure(fig, path)
-    plt.close(fig)
-    return s
-
-
 if __name__ == "__main__":
     import sys
     import warnings
@@ -99,7 +75,9 @@ if __name__ == "__main__":
     from garant.generated import two_axis
     warnings.filterwarnings("ignore", category=RuntimeWarning)
     target = sys.argv[1] if len(sys.argv) > 1 else "docs/img/realised_plan.png"
-    rows = plot(two_axis, target)
+    from ..io import plots
+    rows = sweep(two_axis, np.linspace(0, 5, 11))
+    plots.realised_plan(rows, target)
     print(f"wrote {target}")
     print("miss_deg  (23)_mean  (23)_worst  LP_mean  LP_worst")
     for r in rows:

@@ -77,7 +77,7 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
     detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
     cont, added = None, 0
     if not all(len(d) for d in detents):    # the continuum of reachable angles: the exchange method there
-        sol = continuum.solve(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
+        sol = continuum.exchange(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
         cont = sol.values
         if any(e > c + 1e-7 for e, c in zip(r.errors, cont)):   # the exchange positions become candidates
             r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), count_seconds)

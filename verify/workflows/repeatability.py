@@ -179,39 +179,3 @@ def run(mod, runs, g, params=9):
         "unexplained": [c for c in comps if not c["inside"] and not c.get("explained_by")],
     })
     return out
-
-
-def plot(results, path):
-    """PNG: each parameter per run with its guaranteed bound, and the envelope band; one colour per
-    sensor when several are given (results: {label: run() output})."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    first = next(iter(results.values()))
-    names = first["parameters"]
-    cols = 3
-    fig, axes = plt.subplots((len(names) + cols - 1) // cols, cols, figsize=(12, 3 * ((len(names) + 2) // cols)))
-    for p, (name, ax) in enumerate(zip(names, axes.flat)):
-        for c, (label, res) in enumerate(results.items()):
-            if "envelope" not in res:
-                continue
-            a = np.array([r["parameters"][name] for r in res["runs"]])
-            e = np.array([r["guaranteed_error"][name] for r in res["runs"]])
-            ref = res["envelope"][name]
-            mid = (ref["lo"] + ref["hi"]) / 2
-            x = np.arange(1, len(a) + 1) + 0.08 * c
-            ax.errorbar(x, a - mid, e, fmt="o", ms=3, color=f"C{c % 10}", label=label)
-            ax.hlines([ref["lo"] - mid, ref["hi"] - mid], x[0] - 0.2, x[-1] + 0.2, colors=f"C{c % 10}",
-                      linestyles="dashed", lw=0.8)
-        ax.set_title(f"{name} (minus the envelope centre)", fontsize=9)
-        ax.set_xlabel("run")
-    for ax in list(axes.flat)[len(names):]:
-        ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 8), fontsize=8)
-    fig.suptitle("per-run estimate with its guaranteed bound; dashed: the between-run envelope "
-                 "(units as the parameter: 1, rad, or 1 over g)", fontsize=10)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
-    from ..io.report import save_figure
-    save_figure(fig, path)
-    plt.close(fig)

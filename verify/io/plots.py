@@ -1,0 +1,166 @@
+"""Plots people read: residuals against each stand angle (where a pattern shows), legends outside the
+data, every panel at its own scale."""
+import numpy as np
+
+from .report import save_figure
+
+
+def residuals_by_angle(angles_deg, names, residual, sigma, path, title):
+    """One panel per stand angle: the three residual components (units of sigma) against the angle as
+    read, with the +-sigma band."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    r = np.asarray(residual, float) / sigma
+    fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names), 3.6), squeeze=False)
+    for ax, k, name in zip(axes[0], range(len(names)), names):
+        for i in range(3):
+            ax.plot(angles_deg[:, k], r[:, i], "o", ms=3, color=f"C{i}", label=f"accelerometer {i + 1}")
+        ax.axhspan(-1, 1, color="0.85", zorder=0, label="+- sigma")
+        ax.set_xlabel(f"{name} as read (deg)")
+        ax.set_xticks(range(0, 361, 90))
+    axes[0][0].set_ylabel("residual (units of sigma)")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, bbox_to_anchor=(0.5, 0))
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def residuals_by_direction(n, residual_ms2, noise_ms2, path, title):
+    """The norm residual of each still interval against the direction of gravity in sensor axes
+    (elevation and azimuth), with each interval's noise bound."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    n = np.asarray(n, float)
+    elevation = np.degrees(np.arcsin(np.clip(n[2], -1, 1)))
+    azimuth = np.degrees(np.arctan2(n[1], n[0]))
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
+    for ax, x, label in ((axes[0], elevation, "elevation of n (deg)"), (axes[1], azimuth, "azimuth of n (deg)")):
+        ax.errorbar(x, residual_ms2, yerr=noise_ms2, fmt="o", ms=3, color="C0", ecolor="0.6",
+                    label="residual, +- the interval's noise bound")
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xlabel(label)
+    axes[0].set_ylabel("norm residual (m/s^2)")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", fontsize=8, bbox_to_anchor=(0.5, 0))
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def norm_residuals(result, path):
+    """PNG of the norm residual per still interval: before (the starting map) and after the
+    calibration, each at its own scale, with the noise bound band after."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = result["per_interval"]
+    k = np.arange(1, len(rows) + 1)
+    g = result["g"]
+    fig, (a0, a1) = plt.subplots(1, 2, figsize=(10, 4))
+    a0.plot(k, [r["residual_before_ms2"] for r in rows], "o", color="C3")
+    a0.set_title("before (starting map)", fontsize=9)
+    a1.plot(k, [r["residual_after_ms2"] for r in rows], "s", color="C0")
+    a1.plot(k, [g * r["noise_rule"] for r in rows], "_", color="C2", label="noise rule of each interval")
+    a1.plot(k, [-g * r["noise_rule"] for r in rows], "_", color="C2")
+    band = g * (result["delta_sigma_max"] + result["remainder_bound"])
+    a1.axhspan(-band, band, color="C0", alpha=0.12,
+               label=f"+- (delta_sigma_max + remainder) g = {band:.2e} m/s^2")
+    a1.set_title(f"after ({result['params']}-parameter calibration): "
+                 + ("consistent" if result["consistent"] else "INCONSISTENT"), fontsize=9)
+    for ax in (a0, a1):
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xlabel("still interval")
+    a0.set_ylabel("(|a|^2 - g^2) / (2 |a|^2) x g   (m/s^2)")
+    fig.legend(*a1.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
+    fig.suptitle(f"{result['log'].rsplit('/', 1)[-1]}: norm residual per still interval", fontsize=10)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def diagnosis(res, path, title):
+    """Residuals of the minimax fit before and after the effects are added, each panel at its own
+    scale, against the position (three components each), with +-sigma and the proven remainder."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    s = res["sigma"]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    added = "with " + (", ".join(res["effects"]) if res["effects"] else "no effect added")
+    for ax, key, colour, label in ((axes[0], "residual_before", "C3", "current model"),
+                                   (axes[1], "residual_after", "C0", added)):
+        r = np.array(res[key]).reshape(-1) / s
+        ax.plot(np.arange(r.size) / 3, r, "o", ms=3, color=colour)
+        ax.axhspan(-1, 1, color="0.85", zorder=0, label="+- sigma")
+        ax.axhline(1 + res["remainder_bound"] / s, color="k", lw=0.8, ls=":", label="+ the largest proven remainder")
+        ax.axhline(-1 - res["remainder_bound"] / s, color="k", lw=0.8, ls=":")
+        ax.set_title(label, fontsize=9)
+        ax.set_xlabel("position (three components each)")
+    axes[0].set_ylabel("minimax-fit residual (units of sigma)")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def repeatability(results, path):
+    """PNG: each parameter per run with its guaranteed bound, and the envelope band; one colour per
+    sensor when several are given (results: {label: run() output})."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    first = next(iter(results.values()))
+    names = first["parameters"]
+    cols = 3
+    fig, axes = plt.subplots((len(names) + cols - 1) // cols, cols, figsize=(12, 3 * ((len(names) + 2) // cols)))
+    for p, (name, ax) in enumerate(zip(names, axes.flat)):
+        for c, (label, res) in enumerate(results.items()):
+            if "envelope" not in res:
+                continue
+            a = np.array([r["parameters"][name] for r in res["runs"]])
+            e = np.array([r["guaranteed_error"][name] for r in res["runs"]])
+            ref = res["envelope"][name]
+            mid = (ref["lo"] + ref["hi"]) / 2
+            x = np.arange(1, len(a) + 1) + 0.08 * c
+            ax.errorbar(x, a - mid, e, fmt="o", ms=3, color=f"C{c % 10}", label=label)
+            ax.hlines([ref["lo"] - mid, ref["hi"] - mid], x[0] - 0.2, x[-1] + 0.2, colors=f"C{c % 10}",
+                      linestyles="dashed", lw=0.8)
+        ax.set_title(f"{name} (minus the envelope centre)", fontsize=9)
+        ax.set_xlabel("run")
+    for ax in list(axes.flat)[len(names):]:
+        ax.axis("off")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 8), fontsize=8)
+    fig.suptitle("per-run estimate with its guaranteed bound; dashed: the between-run envelope "
+                 "(units as the parameter: 1, rad, or 1 over g)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def realised_plan(s, path):
+    """PNG: guaranteed error (units of sigma) against the position error, (23) vs the LP optimum: the rows
+    of nearby.sweep (miss in degrees, (23) mean and worst, LP mean and worst)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    ax.plot(s[:, 0], s[:, 2], "o-", color="C1", label="estimator (23), worst of 20 plans")
+    ax.plot(s[:, 0], s[:, 1], "o--", color="C1", alpha=0.6, label="estimator (23), mean")
+    ax.plot(s[:, 0], s[:, 4], "s-", color="C0", label="LP optimum on the realised plan, worst")
+    ax.plot(s[:, 0], s[:, 3], "s--", color="C0", alpha=0.6, label="LP optimum, mean")
+    ax.axhline(1, color="k", lw=0.8)
+    ax.set_xlabel("position error: each angle uniform in [-d, d], d in degrees")
+    ax.set_ylabel("max over q of the guaranteed error (units of sigma)")
+    ax.set_title("Two-axis stand, optimal 10-position plan set with errors\n"
+                 "(reusing the exact-plan estimators: biased, guaranteed error infinite)", fontsize=9)
+    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
+    fig.tight_layout(rect=(0, 0.14, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)
