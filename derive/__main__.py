@@ -6,6 +6,7 @@ from . import codegen
 
 
 def main(argv=None):
+    """Regenerate every committed file, or with --check compare in memory; the exit status."""
     ap = argparse.ArgumentParser(prog="python -m derive", description=__doc__)
     ap.add_argument("--check", action="store_true",
                     help="render in memory and exit 1 with a unified diff if any committed file differs")

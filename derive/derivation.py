@@ -10,6 +10,7 @@ from .description import check_observable
 
 @dataclass(frozen=True)
 class Derivation:
+    """One stand model derived: exact readings per mounting, the Jacobian, H, q and the estimators."""
     model: model_mod.Model
     up_nominal: tuple            # per mounting: u(angles) in block axes
     force_over_g: tuple          # per mounting: exact readings over g, (1) of 000
@@ -19,10 +20,12 @@ class Derivation:
 
     @property
     def angles(self):
+        """The symbols of the stand's read angles."""
         return self.model.angle_symbols
 
     @property
     def names(self):
+        """The physical parameters' names, in the model's order."""
         return tuple(p.name for p in self.model.parameters)
 
 

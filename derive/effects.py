@@ -17,6 +17,7 @@ VARIABLE_DEFAULTS = {"time_s": 0.0, "temp_c": 20.0}     # s; degrees C (the refe
 
 @dataclass(frozen=True)
 class Effect:
+    """A catalogue effect: its physics in one line, its parameters, and how it enters the readings."""
     name: str
     physics: str                          # one line: what it is, as a formula
     params: tuple[Parameter, ...]

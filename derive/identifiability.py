@@ -16,13 +16,16 @@ import sympy as sp
 
 @dataclass(frozen=True)
 class Relation:
+    """An identity sum a_k phi_k = 0 among basis functions: a direction no data can see."""
     coefficients: tuple          # a_k, one per basis function
     names: tuple                 # names of the basis functions
 
     def expr(self):
+        """The relation as a SymPy expression in the basis functions' names."""
         return sum((a * sp.Symbol(n) for a, n in zip(self.coefficients, self.names)), sp.Integer(0))
 
     def text(self):
+        """The relation as text, '... = 0'."""
         return f"{sp.sstr(self.expr())} = 0"
 
 

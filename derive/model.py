@@ -26,6 +26,7 @@ class Angle:
 
     @property
     def symbol(self):
+        """The angle's real SymPy symbol."""
         return sp.Symbol(self.name, real=True)
 
 
@@ -95,6 +96,7 @@ class Model:
 
     @property
     def parameters(self):
+        """Every physical parameter: the stand's, the block's and the effects' added."""
         return self.stand.parameters + self.block.parameters + tuple(
             p for name in self.effects for p in CATALOGUE[name].params)
 
@@ -123,10 +125,12 @@ class Model:
 
     @property
     def symbols(self):
+        """{name: symbol} of every physical parameter."""
         return {p.name: p.symbol for p in self.parameters}
 
     @property
     def angle_symbols(self):
+        """The symbols of the read angles, in the description's order."""
         return tuple(a.symbol for a in self.stand.angles)
 
 

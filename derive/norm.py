@@ -44,6 +44,7 @@ n_sym = sp.symbols("n1:4", real=True)
 
 
 def block(model):
+    """A, the bias, the nonlinearity coefficients, Delta_g/g and the noise of (1.3) of 001, as symbols."""
     lam1, lam2, lam3, al, be, ga, e1, e2, e3, d1, d2, d3, dg, u1, u2, u3 = PARAMS
     A = sp.Matrix([[lam1, 0, 0], [al, lam2, 0], [be, ga, lam3]])
     return A, sp.Matrix([e1, e2, e3]), (d1, d2, d3), dg, sp.Matrix([u1, u2, u3])

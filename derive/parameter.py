@@ -17,4 +17,5 @@ class Parameter:
 
     @property
     def symbol(self):
+        """The parameter's real SymPy symbol."""
         return sp.Symbol(self.name, real=True)

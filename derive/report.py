@@ -71,6 +71,7 @@ def _estimator_text(terms):
 
 
 def report_context(d):
+    """Template context of the derivation report of the stand of 000: derived beside printed."""
     m, ident = d.model, d.ident
     derived_H = [list(ident.H.row(p)) for p in range(ident.H.rows)]
     printed_H, h_notes = _aligned_published_H(published.H_000, derived_H, lambda t: _parse(t, m))

@@ -232,3 +232,17 @@ def test_only_commands_print_and_only_io_plots():
             if isinstance(node, (ast.Import, ast.ImportFrom)) and "matplotlib" in ast.unparse(node):
                 bad.append(f"{rel}:{node.lineno} matplotlib")
     assert not bad, bad
+
+
+def test_every_public_definition_has_a_docstring():
+    # derive/, verify/ and generated/: a public function, class or method without a docstring fails here
+    # (141 of 494 had none).
+    missing = []
+    for name, path in modules().items():
+        tree = ast.parse(path.read_text())
+        for node in tree.body:
+            for it in [node] + (node.body if isinstance(node, ast.ClassDef) else []):
+                if isinstance(it, (ast.FunctionDef, ast.ClassDef)) and not it.name.startswith("_") \
+                        and not ast.get_docstring(it):
+                    missing.append(f"{path.relative_to(ROOT)}:{it.lineno} {it.name}")
+    assert not missing, missing

@@ -378,11 +378,13 @@ def bench_calibrate_norm(samples=1_000_000):
 
 
 def codegen_outputs():
+    """Every generated file rendered in memory (what `derive --check` compares)."""
     from garant.derive import codegen
     return codegen.outputs()
 
 
 def main():
+    """Run every benchmark and print each figure as a ratio to its baseline measured in this run."""
     from ..solve import highs
     warnings.filterwarnings("ignore", category=RuntimeWarning)
     highs.new()                                   # HiGHS prints a banner on its first construction: not here

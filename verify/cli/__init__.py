@@ -34,6 +34,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: `garant: error: ...` and exit status 2."""
 
     def error(self, message):
+        """One line on stderr naming the problem and --help; exit status 2."""
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
@@ -48,6 +49,7 @@ def parser(only=None):
 
 
 def main(argv=None):
+    """`garant`: parse, run the command, and turn a DataError into one line and a non-zero exit."""
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser(argv[0] if argv else None).parse_args(argv)
     warnings.simplefilter("ignore", RuntimeWarning)     # inputs are checked; a failure is one line

@@ -3,6 +3,7 @@ from ..io.recordings import FORMATS, SENSORS
 
 
 def add(sub):
+    """The `garant apply` subcommand and its options."""
     p = sub.add_parser("apply", help="correct a raw log with a calibration (garant JSON): specific force in "
                                      "m/s^2 and its worst-case error per sample")
     p.add_argument("calibration", metavar="CAL.json", help="a garant-calibration-1 file (calibrate-norm --save)")

@@ -50,6 +50,7 @@ def rate(text):
 
 
 def model(p, *, positional=False):
+    """--model (or a positional MODEL): a built-in stand or a STAND.toml."""
     help_ = f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml"
     if positional:
         p.add_argument("model", help=help_)
@@ -58,6 +59,7 @@ def model(p, *, positional=False):
 
 
 def sigma(p, help_="bound on each residual component, dimensionless (units of g), (5) of 000"):
+    """--sigma: the noise bound (5) of 000, dimensionless (units of g)."""
     p.add_argument("--sigma", type=small, required=True, help=help_)
 
 
@@ -67,6 +69,7 @@ def g(p, help_="model gravity, m/s^2 (default 9.81)", default=G_DEFAULT):
 
 
 def json(p):
+    """--json FILE: the result as JSON too."""
     p.add_argument("--json", metavar="FILE", help="also write the result as JSON")
 
 
@@ -80,6 +83,7 @@ def small(text):
 
 
 def units(p):
+    """--units si|human: human also prints ppm, mrad/urad and mg/ug beside SI."""
     p.add_argument("--units", choices=("si", "human"), default="si",
                    help="human: also print scale factors and misalignments in ppm, angles in mrad or urad, biases "
                         "in mg or ug (beside SI)")

@@ -8,6 +8,7 @@ from .estimate import EXIT_INCONSISTENT
 
 
 def add(sub):
+    """The `garant calibrate-norm` subcommand and its options."""
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
     p.add_argument("log", metavar="LOG")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
@@ -38,6 +39,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant calibrate-norm`: parse, call the job, print; the exit status."""
     if args.imu is None or args.imu != "all":
         if args.imu is not None:
             try:

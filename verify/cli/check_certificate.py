@@ -5,6 +5,7 @@ from ..errors import DataError
 
 
 def add(sub):
+    """The `garant check-certificate` subcommand and its options."""
     p = sub.add_parser("check-certificate", help="re-check optimality certificates, independently of any solver")
     p.add_argument("files", metavar="FILE.json", nargs="+", help="one or more certificates (e.g. DIR/*.json)")
     return p
@@ -19,6 +20,7 @@ def _escaped(value, limit=300):
 
 
 def run(args):
+    """`garant check-certificate`: parse, call the job, print; the exit status."""
     from ..proof import check
     held = 0
     for path in args.files:

@@ -5,6 +5,7 @@ from ..errors import DataError
 
 
 def add(sub):
+    """The `garant derive` subcommand and its options."""
     p = sub.add_parser("derive", help="derive a stand description: generated module and derivation report")
     p.add_argument("stand", metavar="STAND.toml")
     p.add_argument("--out", default=".", help="directory for the module and report (default: here)")
@@ -12,6 +13,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant derive`: parse, call the job, print; the exit status."""
     from garant.derive import codegen, description
 
     from .. import models

@@ -6,6 +6,7 @@ from . import args as options
 
 
 def add(sub):
+    """The `garant diagnose` subcommand and its options."""
     p = sub.add_parser("diagnose", help="find the effect missing from the model, add it, show the gap shrink")
     p.add_argument("data", metavar="DATA.csv", help="as for estimate; optional columns time_s, temp_c")
     options.model(p)
@@ -19,6 +20,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant diagnose`: parse, call the job, print; the exit status."""
     from .. import models
     from ..io import plots, report
     from ..workflows import diagnose, jobs

@@ -9,6 +9,7 @@ EXIT_INCONSISTENT = 3
 
 
 def add(sub):
+    """The `garant estimate` subcommand and its options."""
     p = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
     p.add_argument("data", metavar="DATA.csv", help="CSV: <angle>_deg for each angle (alpha_deg,beta_deg on the "
                    "two-axis stand), f1,f2,f3 in m/s^2, and mount when the stand uses several mountings")
@@ -34,6 +35,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant estimate`: parse, call the job, print; the exit status."""
     from .. import models
     from ..io import report
     from ..workflows import jobs
@@ -114,6 +116,7 @@ def print_verdict(res, mod, path):
 
 
 def print_estimate(res, mod, args):
+    """The consistent result: the premises, q with guaranteed errors, the block's errors, the files written."""
     from ..io import report
     print(f"consistent: the minimax residual of the exact model is {res['minimax_residual']:.3e} "
           f"({res['minimax_residual'] / args.sigma:.2f} sigma); linearised at that fit, the proven remainder left "
@@ -175,6 +178,7 @@ def print_block(res, human=False):
 
 
 def print_physical(res):
+    """The block's physical errors in its mounting, (28)-(29) of 000, with their bounds."""
     from ..io import report
     phys, bound = res["physical"], res["physical_bound"]
     rows = [(k, f"{phys[k]:+.6e}", f"{bound[k]:.3e}", "rad") for k in ("kappa", "dalpha_plus_astar", "epsilon")]

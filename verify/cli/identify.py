@@ -3,6 +3,7 @@ from . import args as options
 
 
 def add(sub):
+    """The `garant identify` subcommand and its options."""
     p = sub.add_parser("identify", help="estimable combinations, confounded parameters, a plan's blind spots")
     p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or "
                    "003-example1 / 003-example2")
@@ -13,6 +14,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant identify`: parse, call the job, print; the exit status."""
     from ..io import report
     from ..workflows import identify
     res = identify.report(args.model, args.plan)

@@ -5,6 +5,7 @@ from . import args as options
 
 
 def add(sub):
+    """The `garant plan` subcommand and its options."""
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
     p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or norm "
                    "(the coarse stand of 001: which orientations to hold the IMU in)")
@@ -24,6 +25,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant plan`: parse, call the job, print; the exit status."""
     if args.model == "norm":
         given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates)) if v is not None]
         if given:

@@ -7,6 +7,7 @@ from . import args as options
 
 
 def add(sub):
+    """The `garant repeatability` subcommand and its options."""
     p = sub.add_parser("repeatability", help="compare runs of one sensor against their guaranteed bounds; "
                        "name the effect when they disagree; the between-run envelope")
     p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "
@@ -65,6 +66,7 @@ def _runs(args, fmt, imu):
 
 
 def run(args):
+    """`garant repeatability`: parse, call the job, print; the exit status."""
     from .. import models
     from ..io import means, plots, recordings, report
     from ..workflows import repeatability
@@ -165,6 +167,7 @@ def _summary(results):
 
 
 def markdown(results, args):
+    """The comparison of the runs as a Markdown page (the command that made it at the top)."""
     from ..io import report
     comps, per_run, pairs, loo = _coverage(results)
     first = next(iter(results.values()))

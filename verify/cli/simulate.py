@@ -3,6 +3,7 @@ from . import args as options
 
 
 def add(sub):
+    """The `garant simulate` subcommand and its options."""
     p = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
     options.model(p)
     p.add_argument("--plan", required=True, help="optimal10, quarter16, grid:AxB (steps per angle in degrees), or a "
@@ -18,6 +19,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant simulate`: parse, call the job, print; the exit status."""
     import numpy as np
 
     from garant.derive.effects import CATALOGUE

@@ -6,6 +6,7 @@ from . import args as options
 
 
 def add(sub):
+    """The `garant verify` subcommand and its options."""
     p = sub.add_parser("verify", help="run every check of the built-in models against the papers")
     options.json(p)
     p.add_argument("--certificates", metavar="DIR", help="write every optimality certificate (JSON) here")
@@ -13,6 +14,7 @@ def add(sub):
 
 
 def run(args):
+    """`garant verify`: parse, call the job, print; the exit status."""
     from .. import models
     from ..io import report
     from ..papers import certificates, norm_001, redundancy_003, stand_000

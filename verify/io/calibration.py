@@ -88,6 +88,7 @@ def from_block(res):
 
 
 def write(path, cal):
+    """Write a calibration as a garant-calibration-1 JSON file."""
     write_json(path, cal)
 
 
@@ -184,6 +185,7 @@ def imu_tk_text(cal):
 
 
 def write_imu_tk(path, cal):
+    """Write a calibration in imu_tk's text form (T, K, B)."""
     write_text(path, imu_tk_text(cal))
 
 

@@ -22,6 +22,7 @@ MAX_BYTES = 200 * MAX_ROWS
 
 @dataclass
 class Run:
+    """One run of a means file: the still positions' means (m/s^2), their nominal directions if given."""
     name: str
     stills: list                   # Still per position, mean in m/s^2
     nominal: np.ndarray = None     # (K, 3) nominal up-directions, when the file gives them

@@ -22,14 +22,17 @@ class Positions:
 
     @property
     def alpha_deg(self):
+        """The first angle as read, degrees."""
         return self.angles_deg[:, 0]
 
     @property
     def beta_deg(self):
+        """The second angle as read, degrees."""
         return self.angles_deg[:, 1]
 
     @property
     def radians(self):
+        """Each angle as read, radians, one array per angle."""
         return tuple(np.deg2rad(self.angles_deg[:, i]) for i in range(self.angles_deg.shape[1]))
 
 

@@ -13,6 +13,7 @@ SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 @dataclass
 class Log:
+    """A raw log: time (s) and three accelerometer columns in the sensor's own unit."""
     path: str
     t: np.ndarray          # s
     raw: np.ndarray        # (N, 3), the sensor's own units (counts or m/s^2)
@@ -36,6 +37,7 @@ MAX_LOG_BYTES = 4_000_000_000
 
 
 def guess_format(path):
+    """The log's format from its first bytes: mimu (binary packets), openaxes, csv or imu_tk."""
     with open(path, "rb") as fh:
         start = fh.read(4096)
     if mimu.looks_like(start[: 4 * mimu.PACKET]):
@@ -196,6 +198,7 @@ def quantum(log):
 
 @dataclass
 class Still:
+    """A still interval of a log: its span (s), mean (raw units) and the mean's standard errors."""
     start: float           # s
     stop: float            # s
     mean: np.ndarray       # (3,) raw units

@@ -13,10 +13,12 @@ ETA = 1e-9          # dual certificates are proven to |H^T lambda| <= 1 + ETA on
 
 
 def exact_direction(text):
+    """An exact direction of the generated PLAN_EXACT ('1/2, 0, -sqrt(3)/2') as SymPy numbers."""
     return [sp.sympify(x) for x in text.split(",")]
 
 
 def H_exact(exponents, n):
+    """H(n) of (2.2) from its monomial exponents, exact in the direction n."""
     return [n[0]**a * n[1]**b * n[2]**c for a, b, c in exponents]
 
 
@@ -62,6 +64,7 @@ def continuum(mod):
 
 
 def grid_lp(mod, step=5):
+    """Rows: the LP optimum of each q on a grid of the sphere, primal against dual, against 001's table."""
     A = mod.H(sphere.grid(step))
     _, primal = lp.primal(A)
     _, dual = lp.dual(A)

@@ -127,4 +127,5 @@ def _groups_of(combinations, names):
 
 
 def all_groups():
+    """The check groups of 003, as `garant verify` runs them."""
     return [(examples, ()), (trace_identity, ()), (limits, ()), (monte_carlo, ())]

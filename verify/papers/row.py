@@ -4,6 +4,7 @@ from dataclasses import asdict, dataclass
 
 @dataclass(frozen=True)
 class Check:
+    """One row of `garant verify`: the check, its source (paper and equation), expected, got, passed."""
     name: str
     source: str
     expected: str
@@ -11,4 +12,5 @@ class Check:
     passed: bool
 
     def as_dict(self):
+        """The row as a dictionary (the --json output)."""
         return asdict(self)

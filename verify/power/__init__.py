@@ -45,6 +45,7 @@ def named_at(base, mod, plan, effect, a, seed=0):
 
 
 def clean_alarm(base, mod, plan, seed):
+    """Whether diagnose names an effect in data made with none (a false alarm)."""
     from ..io.positions import read_positions
     from ..workflows import diagnose, simulate
     P, f, t, T, _, mounts = simulate.simulate(base, mod, plan, [], SIGMA, seed, G, size=1e-3)
@@ -109,6 +110,7 @@ def mems_sets(sets=10, mounting=5e-3, stand=2e-5):
 
 
 def main():
+    """Run the power study and print the detection rates (python -m verify.power)."""
     if sys.argv[1:2] == ["--mems"]:
         print(f"MEMS-size units (issue 23, item 0), two-axis stand, 30 x 45 degree grid, sigma = {SIGMA:g}, "
               "g exact (--g), mounting to 5e-3 rad, stand errors to 2e-5 rad")

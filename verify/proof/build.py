@@ -196,10 +196,12 @@ def for_norm():
 
 
 def for_model(name):
+    """Every certificate of a built-in model (its q's optimal errors on its plan)."""
     return for_norm() if name == "norm" else for_stand(MODELS[name])
 
 
 def file_name(cert):
+    """The file name a certificate is written under."""
     q = cert["claim"].split(" of ", 1)[1].split(" ", 1)[0]
     return f"{cert['model'].replace('_', '-')}_{q}.json"
 

@@ -452,6 +452,7 @@ def _as_grad(value, like):
 
 
 def write(cert, path):
+    """Write a certificate as JSON (atomically)."""
     from ..io.report import write_text
     write_text(path, json.dumps(cert, indent=1) + "\n")
 

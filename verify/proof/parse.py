@@ -57,9 +57,11 @@ class _Parser:
         self.names = {**{str(s): s for s in symbols}, "pi": sp.pi}
 
     def peek(self):
+        """The next token, not consumed."""
         return self.toks[self.k] if self.k < len(self.toks) else (None, None)
 
     def take(self, op=None):
+        """Consume the next token; it must be `want` when given."""
         tok = self.peek()
         if tok[0] is None or (op is not None and tok != ("op", op)):
             raise ParseError(f"expected {op or 'more'} in {self.text[:60]!r}")
@@ -67,6 +69,7 @@ class _Parser:
         return tok
 
     def nested(self, fn):
+        """Parse a sub-expression one level deeper; refuse nesting beyond the limit."""
         self.depth += 1
         if self.depth > MAX_DEPTH:
             raise ParseError(f"nested more than {MAX_DEPTH} deep")
@@ -75,6 +78,7 @@ class _Parser:
         return out
 
     def expr(self):
+        """expr := term (('+' | '-') term)*"""
         value = self.term()
         while self.peek() in (("op", "+"), ("op", "-")):
             sign = self.take()[1]
@@ -82,6 +86,7 @@ class _Parser:
         return value
 
     def term(self):
+        """term := unary (('*' | '/') unary)*"""
         value = self.unary()
         while self.peek() in (("op", "*"), ("op", "/")):
             op = self.take()[1]
@@ -92,6 +97,7 @@ class _Parser:
         return value
 
     def unary(self):
+        """unary := '-' unary | power"""
         if self.peek() in (("op", "+"), ("op", "-")):
             sign = self.take()[1]
             inner = self.nested(self.unary)
@@ -99,6 +105,7 @@ class _Parser:
         return self.power()
 
     def power(self):
+        """power := atom ('**' exponent)?"""
         base = self.atom()
         if self.peek() == ("op", "**"):
             self.take()
@@ -112,6 +119,7 @@ class _Parser:
         return base
 
     def exponent(self):
+        """exponent := a small integer or a half-integer (a root), signed"""
         kind, value = self.peek()
         if (kind, value) == ("op", "("):
             self.take()
@@ -134,6 +142,7 @@ class _Parser:
         return e
 
     def atom(self):
+        """atom := integer | allowed name | sqrt(expr) | sin(expr) | cos(expr) | (expr)"""
         kind, value = self.take()
         if kind == "int":
             return sp.Integer(value)

@@ -69,6 +69,7 @@ def terms_from_published(terms):
 
 
 def terms_from_generated(mod, nu):
+    """A generated module's estimator terms as exact fractions per (position, component)."""
     return [(Fraction(num, den), p, tuple(int(v) for v in mod.PLAN_DEG[s]))
             for s, p, num, den in mod.ESTIMATOR_TERMS[nu]]
 

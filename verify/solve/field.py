@@ -23,6 +23,7 @@ class QF:
 
     @staticmethod
     def of(x):
+        """A QF from an int, a Fraction or a QF."""
         return x if isinstance(x, QF) else QF(x)
 
     def __add__(self, o):
@@ -56,6 +57,7 @@ class QF:
     __rmul__ = __mul__
 
     def inverse(self):
+        """1/x in closed form: two conjugations (sqrt2 -> -sqrt2, then sqrt3 -> -sqrt3) make the norm rational."""
         if self.is_zero():
             raise ZeroDivisionError("division by an exact zero")
         # x sigma2(x) = u + v sqrt3 (sigma2: sqrt2 -> -sqrt2), and (u + v sqrt3)(u - v sqrt3) = u^2 - 3 v^2:
@@ -77,6 +79,7 @@ class QF:
         return out
 
     def is_zero(self):
+        """Whether every coefficient is 0."""
         return not any(self.c)
 
     def __bool__(self):
@@ -127,6 +130,7 @@ class QF:
         return float(a) + float(b) * 2 ** 0.5 + float(c) * 3 ** 0.5 + float(d) * 6 ** 0.5
 
     def sympy(self):
+        """The number as a SymPy expression."""
         import sympy as sp
         return sum((sp.Rational(x.numerator, x.denominator) * (sp.sqrt(r) if r > 1 else 1)
                     for x, r in zip(self.c, (1, *ROOTS))), sp.Integer(0))

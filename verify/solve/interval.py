@@ -59,6 +59,7 @@ class Iv:
     __rmul__ = __mul__
 
     def square(self):
+        """x^2 (its lower end 0 when the interval straddles 0), rounded outward."""
         lo2, hi2 = self.lo**2, self.hi**2
         straddle = (self.lo <= 0) & (self.hi >= 0)
         lo = np.where(straddle, 0.0, np.minimum(lo2, hi2))
@@ -72,21 +73,27 @@ class Iv:
         return Iv(*_out(1 / self.hi, 1 / self.lo))
 
     def sqrt(self):
+        """sqrt of the nonnegative part, rounded outward."""
         return Iv(*_out(np.sqrt(np.maximum(self.lo, 0)), np.sqrt(self.hi)))
 
     def sin(self):
+        """sin over the interval (the extrema it contains included), rounded outward."""
         return _trig(self, np.sin, np.pi / 2)
 
     def cos(self):
+        """cos over the interval (the extrema it contains included), rounded outward."""
         return _trig(self, np.cos, 0.0)
 
     def hull(self, o):
+        """The smallest interval holding both."""
         return Iv(np.minimum(self.lo, o.lo), np.maximum(self.hi, o.hi))
 
     def intersect(self, o):
+        """The common part of both (empty where lo > hi)."""
         return Iv(np.maximum(self.lo, o.lo), np.minimum(self.hi, o.hi))
 
     def mag(self):
+        """The largest |x| over the interval."""
         return np.maximum(np.abs(self.lo), np.abs(self.hi))
 
 
@@ -140,6 +147,7 @@ class Grad:
     __rmul__ = __mul__
 
     def recip(self):
+        """1/x with its gradient -x'/x^2."""
         r = self.v.recip()
         r2 = r.square()
         return Grad(r, [-(a * r2) for a in self.d])
@@ -153,15 +161,18 @@ class Grad:
         return out
 
     def sqrt(self):
+        """sqrt with its gradient x'/(2 sqrt x)."""
         r = self.v.sqrt()
         half = (r * 2).recip()
         return Grad(r, [a * half for a in self.d])
 
     def sin(self):
+        """sin with its gradient cos(x) x'."""
         c = self.v.cos()
         return Grad(self.v.sin(), [a * c for a in self.d])
 
     def cos(self):
+        """cos with its gradient -sin(x) x'."""
         s = -self.v.sin()
         return Grad(self.v.cos(), [a * s for a in self.d])
 

@@ -179,6 +179,7 @@ def _float(cols):
 
 
 def is_exact(lam):
+    """Whether every entry is exact (a Fraction or a QF), not a float."""
     return all(isinstance(v, (Fraction, field.QF)) for v in lam)
 
 
@@ -267,11 +268,13 @@ def minimal_sets(cols, nu, lam=None):
 
 
 def popcount(x):
+    """The number of set bits of each integer (positions in a plan bitmask)."""
     return np.array([bin(int(v)).count("1") for v in x]) if len(x) else np.array([], int)
 
 
 @dataclass(frozen=True)
 class PlanSearch:
+    """The result of a plan search: the grid, each q's optimal error and the minimal optimal plans."""
     angles_deg: np.ndarray                      # (S, n_angles) grid
     mounts: np.ndarray                          # (S,) mounting index
     min_positions: int
@@ -284,6 +287,7 @@ class PlanSearch:
     method: str = ""                            # how the plans were counted
 
     def plan_deg(self, plan):
+        """The angles in degrees of the positions of a plan (indices into the grid)."""
         return [tuple(float(v) for v in self.angles_deg[s]) for s in plan]
 
     def is_optimal_for(self, nu, positions):
@@ -297,6 +301,7 @@ class PlanSearch:
 
     @property
     def grid_deg(self):
+        """Every grid position's angles, degrees."""
         return [tuple(a) for a in self.angles_deg]
 
 

@@ -109,10 +109,12 @@ class Jet2:
         return lambda f0: Jet2(f0, self.g * f1, _square(self.g) * f2 + self.h * f1)
 
     def sin(self):
+        """sin of the jet (value, first and second derivatives by the chain rule)."""
         s, c = self.v.sin(), self.v.cos()
         return self._chain(c, -s)(s)
 
     def cos(self):
+        """cos of the jet (value, first and second derivatives by the chain rule)."""
         s, c = self.v.sin(), self.v.cos()
         return self._chain(-s, -c)(c)
 

@@ -45,12 +45,14 @@ def pendulosity(mod, n, delta):
 
 
 def calibrated(mod, raw, M, b, delta, g):
+    """The readings calibrated by M, b and the nonlinearity delta, over g: shape (K, 3)."""
     f = (raw - b) @ M.T / g                                  # (K, 3), units of g
     n = f.T / np.linalg.norm(f, axis=1)
     return (f.T - pendulosity(mod, n, delta)).T
 
 
 def sigma_and_n(f):
+    """sigma of (2.2) of 001 and the direction n of each calibrated reading f (K, 3) in units of g."""
     r2 = np.sum(f**2, axis=1)
     return (r2 - 1) / (2 * r2), (f / np.sqrt(r2)[:, None]).T
 

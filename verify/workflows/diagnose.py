@@ -62,6 +62,7 @@ class Study:
         return ok, skipped
 
     def model(self, names):
+        """The base model extended by the named catalogue effects."""
         return self.cat.extend(self.base_model, names)
 
     def H(self, names, angles=None, columns=None, mounts=None):
@@ -81,11 +82,13 @@ class Study:
         return np.take_along_axis(Hs, idx[:, None, :], axis=0)
 
     def A(self, names, angles=None, columns=None, mounts=None):
+        """The measurement matrix (m x 3N) of the base model with the named effects."""
         Hs = self.H(names, angles, columns, mounts)
         return np.transpose(Hs, (1, 2, 0)).reshape(Hs.shape[1], -1)
 
 
 def rank(A):
+    """The numerical rank of A (singular values above 1e-9 of the largest)."""
     s = np.linalg.svd(A, compute_uv=False)
     return int((s > 1e-9 * s.max()).sum())
 

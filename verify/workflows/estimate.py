@@ -11,6 +11,7 @@ EXACT_DEG = 1e-6   # positions closer than this to the plan count as on it
 
 
 def describe(mod, nus):
+    """'q_nu = definition' of the q's at indices nus, for a message."""
     return ", ".join(f"{mod.Q_NAMES[nu]} = {mod.Q_DEFINITIONS[nu]}" for nu in nus)
 
 

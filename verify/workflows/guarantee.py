@@ -79,6 +79,7 @@ class Linearisation:
 
     @property
     def t_bound(self):
+        """The a-priori bounds of the parameters no plan separates (t)."""
         return self.premises.bounds[self.T]
 
     @property
@@ -266,6 +267,7 @@ def _weighted_minimax(A, z, rb):
 
 @dataclass
 class Verdict:
+    """Whether the data are consistent with sigma and, with an estimator, the guaranteed errors and their parts."""
     consistent: bool
     sigma: float
     sigma_min_supported: float       # smallest sigma the data support, to SIGMA_TOLERANCE (sigma when consistent)
@@ -283,6 +285,7 @@ class Verdict:
 
     @property
     def guaranteed_error(self):
+        """Linear part plus proven remainder part, per q."""
         return self.error_linear + self.error_remainder
 
 

@@ -14,6 +14,7 @@ def plan_estimators(mod):
 
 
 def realised_matrix(mod, positions_deg):
+    """The measurement matrix of the positions actually reached (degrees)."""
     return lp.measurement_matrix(mod.H, np.deg2rad(np.asarray(positions_deg, float)))
 
 
@@ -36,6 +37,7 @@ def compare(mod, realised_deg):
 
 
 def wrap_deg(x):
+    """Angles wrapped into [-180, 180) degrees."""
     return (np.asarray(x, float) + 180.0) % 360.0 - 180.0
 
 

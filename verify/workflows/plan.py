@@ -22,10 +22,12 @@ class Plan:
 
     @property
     def finite(self):
+        """Whether the stand reaches finitely many positions (detents only): no continuum optimum."""
         return self.continuum is None
 
     @property
     def multi(self):
+        """Whether the stand uses several mountings."""
         return len(getattr(self.mod, "MOUNTINGS", ("+x+y+z",))) > 1
 
     def position(self, s):
@@ -36,6 +38,7 @@ class Plan:
         return [*(float(v) for v in r.angles_deg[s]), *([mounts[r.mounts[s]]] if self.multi else [])]
 
     def to_dict(self):
+        """The plan as `garant plan --json` writes it."""
         from ..models import layout
         names, mounts = layout(self.mod)
         r = self.search

@@ -69,6 +69,7 @@ class Premises:
         return out
 
     def to_dict(self):
+        """The premises as the JSON results carry them: statement, meaning, each bound and its source."""
         return {"statement": self.statement(), "meaning": self.meaning(), "absorbed": list(self.absorbed),
                 "split": {n: {"bound": b, "source": src} for n, (b, src) in self.split.items()},
                 "sigma": self.sigma, "sigma_source": self.sigma_source,
