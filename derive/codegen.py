@@ -276,7 +276,7 @@ def norm_context(model):
 def _cse_code(exprs, array=False):
     """(assignments, expressions) of code for `exprs` with their common subexpressions named t0, t1, ...;
     with `array`, constant expressions broadcast like the angles (`_array_code`)."""
-    cse, out = sp.cse(list(exprs), symbols=sp.numbered_symbols("t"), optimizations="basic")
+    cse, out = sp.cse(list(exprs), symbols=sp.numbered_symbols("t"))
     code = [pycode(e) for e in out]
     if array:          # an entry that is constant (also through a named subexpression) still broadcasts
         code = [_array_code(e) if e.is_number else c + " * one" if x.is_number else c

@@ -188,8 +188,11 @@ def _product(mats):
 
 def table_from_base(stand, symbols, angles, *, nominal=False):
     """Matrix taking base axes to instrument axes: the product of the chain's links."""
-    R = _product(chain_factors(stand, symbols, angles))
-    return R.subs({s: 0 for s in symbols.values()}) if nominal else R
+    factors = chain_factors(stand, symbols, angles)
+    if nominal:                      # the errors set to 0 in each factor before the product, not after
+        zero = {s: sp.Integer(0) for s in symbols.values()}
+        factors = [f.xreplace(zero) for f in factors]
+    return _product(factors)
 
 
 def up_nominal(model, Q=None):

@@ -90,9 +90,10 @@ def q_of_params():
 
 
 def first_order(expr):
-    """Linear part of expr in all parameters: sum_p p d(expr)/dp at p = 0."""
-    zero = {p: 0 for p in PARAMS}
-    return sp.expand(sum(p * sp.diff(expr, p).subs(zero) for p in PARAMS))
+    """Linear part of expr in all parameters: sum_p p d(expr)/dp at p = 0, taken as d/de expr(e p) at
+    e = 0 (one derivative instead of one per parameter)."""
+    e = sp.Dummy("e")
+    return sp.expand(sp.diff(expr.xreplace({p: e * p for p in PARAMS}), e).subs(e, 0))
 
 
 def on_sphere(expr):
@@ -160,9 +161,11 @@ def published_bound():
 
 def second_order_terms(expr):
     """Coefficients of the Taylor expansion of a bound to second order in the maxima."""
-    t = sp.Symbol("t")
+    t = sp.Dummy("t")
     small = (K, emax, dmax, fmax, Gmax)
-    poly = sp.expand(sp.series(expr.subs({s: t * s for s in small}), t, 0, 3).removeO().subs(t, 1))
+    f = expr.subs({s: t * s for s in small})      # f(0) + f'(0) + f''(0)/2: the terms of order 0 to 2
+    d1 = sp.diff(f, t)
+    poly = sp.expand(f.subs(t, 0) + d1.subs(t, 0) + sp.diff(d1, t).subs(t, 0) / 2)
     return sp.Poly(poly, *small).as_dict(), small
 
 
@@ -215,7 +218,11 @@ def estimators(model):
     unbiasedness equations (3.2) has sum |x| = a^T lambda, the optimum.
     """
     from itertools import combinations
+
+    import numpy as np
     dirs = plan(model)
+    cols = {k: H(model, list(n)) for k, n in enumerate(dirs)}
+    approx = {k: np.array([float(v) for v in c]) for k, c in cols.items()}
     out = []
     for nu, lam in enumerate(duals(model)):
         cand = touching(model, lam, dirs)
@@ -223,9 +230,13 @@ def estimators(model):
         found = None
         for size in range(1, len(cand) + 1):
             for subset in combinations(cand, size):
-                A = sp.Matrix.hstack(*[s * H(model, list(dirs[k])) for k, s in subset])
-                if A.rank() < size:
+                # in floats first (a subset that fails there cannot hold exactly); then exactly
+                A = np.column_stack([s * approx[k] for k, s in subset])
+                x, *_ = np.linalg.lstsq(A, np.asarray(e, float).ravel(), rcond=None)
+                if np.abs(A @ x - np.asarray(e, float).ravel()).max() > 1e-9 or np.any(x <= 1e-12) \
+                        or np.linalg.matrix_rank(A) < size:
                     continue
+                A = sp.Matrix.hstack(*[s * cols[k] for k, s in subset])
                 try:
                     x, params = A.gauss_jordan_solve(e)
                 except ValueError:

@@ -70,12 +70,12 @@ def readings(m, params):
     parameters of PARAMETERS, shape (16, ...)."""
     m1, m2, m3 = np.asarray(m, dtype=float)
     (lambda1, lambda2, lambda3, alpha, beta, gamma, e1, e2, e3, d1, d2, d3, dg, u1, u2, u3) = np.asarray(params, dtype=float)
-    t0 = dg - 1
+    t0 = 1 - dg
     t1 = m1*t0
     t2 = t0**2
     t3 = m2*t2
     t4 = m2*t0
-    return np.array([d1*m1*t3 + e1 - t1*(lambda1 + 1) + u1, -alpha*t1 + d2*m3*t3 + e2 - t4*(lambda2 + 1) + u2, -beta*t1 + d3*m1*m3*t2 + e3 - gamma*t4 - m3*t0*(lambda3 + 1) + u3])
+    return np.array([d1*m1*t3 + e1 + t1*(lambda1 + 1) + u1, alpha*t1 + d2*m3*t3 + e2 + t4*(lambda2 + 1) + u2, beta*t1 + d3*m1*m3*t2 + e3 + gamma*t4 + m3*t0*(lambda3 + 1) + u3])
 
 
 def residual(f, g=1.0):
@@ -111,21 +111,21 @@ def remainder_bound(k_max, v_max, eps_max, delta_max, df_max, dg_max):
     t0 = np.sqrt(3)
     t1 = df_max*t0
     t2 = np.sqrt(2)
-    t3 = delta_max*t2
+    t3 = (1/2)*delta_max*t2
     t4 = dg_max + 1
-    t5 = 2*K*t4 + 2*dg_max + 2*eps_max*t0 + 2*t1 + t3*t4**2
-    t6 = t5 - 2
+    t5 = K*t4 + dg_max + eps_max*t0 + t1 + t3*t4**2
+    t6 = 1 - t5
     t7 = t5/t6
-    return K*dg_max - 2*delta_max*t7 + (1/2)*dg_max*t3*(dg_max + 2) + t1 - t4*t7*(K*t2 - t7) + (1/2)*t5**2*(t5 + 3)/t6**2
+    t8 = t5**2/t6**2
+    return K*dg_max + 2*delta_max*t7 + t1 + t3*(dg_max**2 + 2*dg_max) + t4*(K*t2*t7 + t8) + t8*(t5 + 3/2)
 
 
 def published_bound(k_max, v_max, eps_max, delta_max, df_max, dg_max):
     """(2.4) of 001 as printed (last brace read as a product), same arguments as remainder_bound."""
     K = a_max_norm(k_max, v_max)
-    t0 = 2*K
-    t1 = np.sqrt(3)
-    t2 = 2*t1
-    return (3/2)*K**2 + 4*K*delta_max + K*df_max + (5/2)*delta_max**2 + 2*delta_max*df_max + 3*delta_max*eps_max + (3/2)*df_max**2 + df_max*t1 + (1/2)*dg_max**2 + (3/2)*eps_max**2 + eps_max*t0 + (1/4)*(delta_max + t0 + t2*(df_max + dg_max + eps_max))*(np.sqrt(2)*delta_max + 2*dg_max + eps_max*t2)
+    t0 = np.sqrt(3)
+    t1 = (1/2)*delta_max
+    return (3/2)*K**2 + 4*K*delta_max + K*df_max + 2*K*eps_max + (5/2)*delta_max**2 + 2*delta_max*df_max + 3*delta_max*eps_max + (3/2)*df_max**2 + df_max*t0 + (1/2)*dg_max**2 + (3/2)*eps_max**2 + (K + t0*(df_max + dg_max + eps_max) + t1)*(dg_max + eps_max*t0 + np.sqrt(2)*t1)
 
 
 #: Optimal plan: the 18 directions of the table of 001, then 4 per nonlinearity coefficient.

@@ -123,17 +123,17 @@ def equivalent(physical):
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
     (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
-    t0 = Delta_g - 1
+    t0 = 1 - Delta_g
     out[[6, 7, 8, 9, 10, 11, 12, 13, 14]] = [
-        -t0*(Gamma11 + 1) - 1,
-        -Gamma12*t0,
-        -Gamma13*t0,
-        -Gamma21*t0,
-        -t0*(Gamma22 + 1) - 1,
-        -Gamma23*t0,
-        -Gamma31*t0,
-        -Gamma32*t0,
-        -t0*(Gamma33 + 1) - 1,
+        t0*(Gamma11 + 1) - 1,
+        Gamma12*t0,
+        Gamma13*t0,
+        Gamma21*t0,
+        t0*(Gamma22 + 1) - 1,
+        Gamma23*t0,
+        Gamma31*t0,
+        Gamma32*t0,
+        t0*(Gamma33 + 1) - 1,
     ]
     out[[5]] = 0.0
     return out
@@ -368,7 +368,7 @@ def _readings_0(phi, physical, g):
     """
     (phi,), zero, one = _broadcast(phi)
     (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = np.asarray(physical, dtype=float)
-    t0 = Delta_g - 1
+    t0 = 1 - Delta_g
     t1 = np.sin(kappa)
     t2 = np.sin(theta2)
     t3 = np.sin(theta1)
@@ -377,19 +377,18 @@ def _readings_0(phi, physical, g):
     t6 = Delta_phi - phi
     t7 = t5*np.sin(t6)
     t8 = np.cos(theta1)
-    t9 = t5*np.cos(t6)
-    t10 = t0*(-t1*t2 + t3*t4*t7 + t4*t8*t9)
-    t11 = np.sin(theta3)
-    t12 = t1*t4
-    t13 = np.cos(theta3)
-    t14 = t13*t3
-    t15 = t11*t8
-    t16 = t13*t8
-    t17 = t11*t3
-    t18 = t0*(t11*t12 + t7*(-t16 + t17*t2) + t9*(t14 + t15*t2))
-    t19 = t12*t13 + t7*(t14*t2 + t15) - t9*(-t16*t2 + t17)
-    t20 = t0*t19
-    return g * np.array([-Gamma12*t18 - Gamma13*t10 + bias1 + t0*t19*(Gamma11 + 1), Gamma21*t20 - Gamma23*t10 + bias2 - t18*(Gamma22 + 1), Gamma31*t20 - Gamma32*t18 + bias3 - t10*(Gamma33 + 1)])
+    t9 = np.cos(t6)
+    t10 = t5*t9
+    t11 = t0*(-t1*t2 + t10*t4*t8 + t3*t4*t7)
+    t12 = np.sin(theta3)
+    t13 = t1*t4
+    t14 = np.cos(theta3)
+    t15 = t14*t3
+    t16 = t12*t8
+    t17 = t12*t3
+    t18 = t0*(t10*(t15 + t16*t2) + t12*t13 - t7*(t14*t8 - t17*t2))
+    t19 = t0*(-t13*t14 + t5*t9*(-t14*t2*t8 + t17) - t7*(t15*t2 + t16))
+    return g * np.array([Gamma12*t18 + Gamma13*t11 + bias1 + t19*(Gamma11 + 1), Gamma21*t19 + Gamma23*t11 + bias2 + t18*(Gamma22 + 1), Gamma31*t19 + Gamma32*t18 + bias3 + t11*(Gamma33 + 1)])
 
 
 def _readings_1(phi, physical, g):
@@ -400,7 +399,7 @@ def _readings_1(phi, physical, g):
     """
     (phi,), zero, one = _broadcast(phi)
     (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = np.asarray(physical, dtype=float)
-    t0 = Delta_g - 1
+    t0 = 1 - Delta_g
     t1 = np.sin(kappa)
     t2 = np.sin(theta2)
     t3 = np.sin(theta1)
@@ -409,18 +408,18 @@ def _readings_1(phi, physical, g):
     t6 = Delta_phi - phi
     t7 = t5*np.sin(t6)
     t8 = np.cos(theta1)
-    t9 = t5*np.cos(t6)
-    t10 = t0*(-t1*t2 + t3*t4*t7 + t4*t8*t9)
-    t11 = np.cos(theta3)
-    t12 = t1*t4
-    t13 = np.sin(theta3)
-    t14 = t13*t8
-    t15 = t11*t3
-    t16 = t13*t3
-    t17 = t11*t8
-    t18 = t11*t12 + t7*(t14 + t15*t2) - t9*(t16 - t17*t2)
-    t19 = t0*(t12*t13 + t7*(t16*t2 - t17) + t9*(t14*t2 + t15))
-    return g * np.array([-Gamma12*t10 + Gamma13*t0*t18 + bias1 - t19*(Gamma11 + 1), -Gamma21*t19 + Gamma23*t0*t18 + bias2 - t10*(Gamma22 + 1), -Gamma31*t19 - Gamma32*t10 + bias3 + t0*t18*(Gamma33 + 1)])
+    t9 = np.cos(t6)
+    t10 = t5*t9
+    t11 = t0*(-t1*t2 + t10*t4*t8 + t3*t4*t7)
+    t12 = np.cos(theta3)
+    t13 = t1*t4
+    t14 = np.sin(theta3)
+    t15 = t14*t8
+    t16 = t12*t3
+    t17 = t14*t3
+    t18 = t0*(-t12*t13 + t5*t9*(-t12*t2*t8 + t17) - t7*(t15 + t16*t2))
+    t19 = t0*(t10*(t15*t2 + t16) + t13*t14 - t7*(t12*t8 - t17*t2))
+    return g * np.array([Gamma12*t11 + Gamma13*t18 + bias1 + t19*(Gamma11 + 1), Gamma21*t19 + Gamma23*t18 + bias2 + t11*(Gamma22 + 1), Gamma31*t19 + Gamma32*t11 + bias3 + t18*(Gamma33 + 1)])
 
 
 def _readings_2(phi, physical, g):
@@ -431,7 +430,7 @@ def _readings_2(phi, physical, g):
     """
     (phi,), zero, one = _broadcast(phi)
     (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = np.asarray(physical, dtype=float)
-    t0 = Delta_g - 1
+    t0 = 1 - Delta_g
     t1 = np.sin(kappa)
     t2 = np.sin(theta2)
     t3 = np.sin(theta1)
@@ -440,18 +439,18 @@ def _readings_2(phi, physical, g):
     t6 = Delta_phi - phi
     t7 = t5*np.sin(t6)
     t8 = np.cos(theta1)
-    t9 = t5*np.cos(t6)
-    t10 = t0*(-t1*t2 + t3*t4*t7 + t4*t8*t9)
-    t11 = np.cos(theta3)
-    t12 = t1*t4
-    t13 = np.sin(theta3)
-    t14 = t13*t8
-    t15 = t11*t3
-    t16 = t13*t3
-    t17 = t11*t8
-    t18 = t11*t12 + t7*(t14 + t15*t2) - t9*(t16 - t17*t2)
-    t19 = t0*(t12*t13 + t7*(t16*t2 - t17) + t9*(t14*t2 + t15))
-    return g * np.array([Gamma12*t0*t18 - Gamma13*t19 + bias1 - t10*(Gamma11 + 1), -Gamma21*t10 - Gamma23*t19 + bias2 + t0*t18*(Gamma22 + 1), -Gamma31*t10 + Gamma32*t0*t18 + bias3 - t19*(Gamma33 + 1)])
+    t9 = np.cos(t6)
+    t10 = t5*t9
+    t11 = t0*(-t1*t2 + t10*t4*t8 + t3*t4*t7)
+    t12 = np.sin(theta3)
+    t13 = t1*t4
+    t14 = np.cos(theta3)
+    t15 = t14*t3
+    t16 = t12*t8
+    t17 = t12*t3
+    t18 = t0*(t10*(t15 + t16*t2) + t12*t13 - t7*(t14*t8 - t17*t2))
+    t19 = t0*(-t13*t14 + t5*t9*(-t14*t2*t8 + t17) - t7*(t15*t2 + t16))
+    return g * np.array([Gamma12*t19 + Gamma13*t18 + bias1 + t11*(Gamma11 + 1), Gamma21*t11 + Gamma23*t18 + bias2 + t19*(Gamma22 + 1), Gamma31*t11 + Gamma32*t19 + bias3 + t18*(Gamma33 + 1)])
 
 
 #: The mountings the block is used in (v_block = Q v_table), by index.

@@ -128,36 +128,44 @@ def equivalent(physical):
     out = np.array(physical, dtype=float)
     (tilt_x, tilt_y, eps_om, Delta_theta, eps_mi, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
     t0 = np.sin(theta2)
-    t1 = Delta_g - 1
-    t2 = np.sin(theta3)
-    t3 = np.cos(theta2)
-    t4 = Gamma11 + 1
-    t5 = np.cos(theta3)
-    t6 = t3*t5
-    t7 = np.sin(theta1)
-    t8 = Gamma13*t3
-    t9 = np.cos(theta1)
-    t10 = t5*t9
-    t11 = t2*t7
-    t12 = t0*t11 - t10
-    t13 = t2*t9
-    t14 = t5*t7
-    t15 = t0*t14 + t13
-    t16 = t0*t13 + t14
-    t17 = -t0*t10 + t11
-    t18 = Gamma22 + 1
-    t19 = Gamma33 + 1
-    t20 = t19*t3
+    t1 = 1 - Delta_g
+    t2 = Gamma12*t1
+    t3 = np.sin(theta3)
+    t4 = np.cos(theta2)
+    t5 = t3*t4
+    t6 = np.cos(theta3)
+    t7 = Gamma11 + 1
+    t8 = np.sin(theta1)
+    t9 = t1*t4
+    t10 = Gamma13*t9
+    t11 = np.cos(theta1)
+    t12 = t3*t8
+    t13 = -t0*t12 + t11*t6
+    t14 = t11*t3
+    t15 = t6*t8
+    t16 = t0*t15 + t14
+    t17 = t1*t7
+    t18 = t0*t14 + t15
+    t19 = -t0*t11*t6 + t12
+    t20 = t0*t1
+    t21 = Gamma21*t1
+    t22 = t4*t6
+    t23 = t1*(Gamma22 + 1)
+    t24 = Gamma23*t9
+    t25 = Gamma33 + 1
+    t26 = Gamma31*t1
+    t27 = Gamma32*t1
+    t28 = t25*t9
     out[[10, 11, 12, 13, 14, 15, 16, 17, 18]] = [
-        Gamma12*t1*t2*t3 - Gamma13*t0*t1 - t1*t4*t6 - 1,
-        t1*(Gamma12*t12 - t15*t4 + t7*t8),
-        -t1*(Gamma12*t16 + t17*t4 + t8*t9),
-        t1*(-Gamma21*t6 - Gamma23*t0 + t18*t2*t3),
-        -Gamma21*t1*t15 + Gamma23*t1*t3*t7 + t1*t12*t18 - 1,
-        -t1*(Gamma21*t17 + Gamma23*t3*t9 + t16*t18),
-        t1*(-Gamma31*t6 + Gamma32*t2*t3 - t0*t19),
-        t1*(-Gamma31*t15 + Gamma32*t12 + t20*t7),
-        -Gamma31*t1*t17 - Gamma32*t1*t16 - t1*t20*t9 - 1,
+        Gamma13*t0*t1 + t1*t4*t6*t7 - t2*t5 - 1,
+        -t10*t8 + t13*t2 + t16*t17,
+        t10*t11 + t17*t19 + t18*t2,
+        Gamma23*t20 + t21*t22 - t23*t5,
+        t13*t23 + t16*t21 - t24*t8 - 1,
+        t11*t24 + t18*t23 + t19*t21,
+        t20*t25 + t22*t26 - t27*t5,
+        t13*t27 + t16*t26 - t28*t8,
+        t11*t28 + t18*t27 + t19*t26 - 1,
     ]
     out[[6, 7, 8, 9]] = 0.0
     return out
@@ -269,7 +277,7 @@ def readings(psi, theta, phi, physical, g):
     """
     (psi, theta, phi,), zero, one = _broadcast(psi, theta, phi)
     (tilt_x, tilt_y, eps_om, Delta_theta, eps_mi, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = np.asarray(physical, dtype=float)
-    t0 = Delta_g - 1
+    t0 = 1 - Delta_g
     t1 = np.sin(theta1)
     t2 = np.cos(theta2)
     t3 = np.sin(eps_mi)
@@ -289,26 +297,27 @@ def readings(psi, theta, phi, physical, g):
     t17 = t10*t9 + t11*t8
     t18 = np.sin(t15)
     t19 = t12*t4 + t6*t7
-    t20 = -t16*t17 + t18*t19
-    t21 = t13*t3 + t14*t20
+    t20 = t16*t17 - t18*t19
+    t21 = -t13*t3 + t14*t20
     t22 = np.sin(theta2)
     t23 = Delta_phi - phi
     t24 = np.sin(t23)
     t25 = t16*t19 + t17*t18
     t26 = np.cos(t23)
-    t27 = t24*t25 + t26*(t13*t14 - t20*t3)
-    t28 = np.cos(theta1)
-    t29 = t24*(t13*t14 - t20*t3) - t25*t26
-    t30 = t0*(t1*t2*t21 - t2*t28*t29 + t22*t27)
-    t31 = np.cos(theta3)
-    t32 = t28*t31
+    t27 = t13*t14 + t20*t3
+    t28 = t24*t25 + t26*t27
+    t29 = np.cos(theta1)
+    t30 = -t24*t27 + t25*t26
+    t31 = t0*(-t1*t2*t21 + t2*t29*t30 + t22*t28)
+    t32 = np.cos(theta3)
     t33 = np.sin(theta3)
     t34 = t1*t33
-    t35 = t1*t31
-    t36 = t28*t33
-    t37 = t0*(-t2*t27*t33 + t21*(t22*t34 - t32) - t29*(t22*t36 + t35))
-    t38 = t0*(t2*t27*t31 - t21*(t22*t35 + t36) - t29*(-t22*t32 + t34))
-    return g * np.array([-Gamma12*t37 - Gamma13*t30 + bias1 - t38*(Gamma11 + 1), -Gamma21*t38 - Gamma23*t30 + bias2 - t37*(Gamma22 + 1), -Gamma31*t38 - Gamma32*t37 + bias3 - t30*(Gamma33 + 1)])
+    t35 = t2*t28
+    t36 = t1*t32
+    t37 = t29*t33
+    t38 = t0*(t21*(-t22*t34 + t29*t32) + t30*(t22*t37 + t36) - t33*t35)
+    t39 = t0*(t21*(t22*t36 + t37) + t30*(-t22*t29*t32 + t34) + t32*t35)
+    return g * np.array([Gamma12*t38 + Gamma13*t31 + bias1 + t39*(Gamma11 + 1), Gamma21*t39 + Gamma23*t31 + bias2 + t38*(Gamma22 + 1), Gamma31*t39 + Gamma32*t38 + bias3 + t31*(Gamma33 + 1)])
 
 
 def residual(psi, theta, phi, f, g):

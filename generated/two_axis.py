@@ -124,36 +124,44 @@ def equivalent(physical):
     out = np.array(physical, dtype=float)
     (kappa, epsilon, Delta_alpha, Delta_beta, alpha_star, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
     t0 = np.sin(theta2)
-    t1 = Delta_g - 1
-    t2 = np.sin(theta3)
-    t3 = np.cos(theta2)
-    t4 = Gamma11 + 1
-    t5 = np.cos(theta3)
-    t6 = t3*t5
-    t7 = np.sin(theta1)
-    t8 = Gamma13*t3
-    t9 = np.cos(theta1)
-    t10 = t5*t9
-    t11 = t2*t7
-    t12 = t0*t11 - t10
-    t13 = t2*t9
-    t14 = t5*t7
-    t15 = t0*t14 + t13
-    t16 = t0*t13 + t14
-    t17 = -t0*t10 + t11
-    t18 = Gamma22 + 1
-    t19 = Gamma33 + 1
-    t20 = t19*t3
+    t1 = 1 - Delta_g
+    t2 = Gamma12*t1
+    t3 = np.sin(theta3)
+    t4 = np.cos(theta2)
+    t5 = t3*t4
+    t6 = np.cos(theta3)
+    t7 = Gamma11 + 1
+    t8 = np.sin(theta1)
+    t9 = t1*t4
+    t10 = Gamma13*t9
+    t11 = np.cos(theta1)
+    t12 = t3*t8
+    t13 = -t0*t12 + t11*t6
+    t14 = t11*t3
+    t15 = t6*t8
+    t16 = t0*t15 + t14
+    t17 = t1*t7
+    t18 = t0*t14 + t15
+    t19 = -t0*t11*t6 + t12
+    t20 = t0*t1
+    t21 = Gamma21*t1
+    t22 = t4*t6
+    t23 = t1*(Gamma22 + 1)
+    t24 = Gamma23*t9
+    t25 = Gamma33 + 1
+    t26 = Gamma31*t1
+    t27 = Gamma32*t1
+    t28 = t25*t9
     out[[9, 10, 11, 12, 13, 14, 15, 16, 17]] = [
-        Gamma12*t1*t2*t3 - Gamma13*t0*t1 - t1*t4*t6 - 1,
-        t1*(Gamma12*t12 - t15*t4 + t7*t8),
-        -t1*(Gamma12*t16 + t17*t4 + t8*t9),
-        t1*(-Gamma21*t6 - Gamma23*t0 + t18*t2*t3),
-        -Gamma21*t1*t15 + Gamma23*t1*t3*t7 + t1*t12*t18 - 1,
-        -t1*(Gamma21*t17 + Gamma23*t3*t9 + t16*t18),
-        t1*(-Gamma31*t6 + Gamma32*t2*t3 - t0*t19),
-        t1*(-Gamma31*t15 + Gamma32*t12 + t20*t7),
-        -Gamma31*t1*t17 - Gamma32*t1*t16 - t1*t20*t9 - 1,
+        Gamma13*t0*t1 + t1*t4*t6*t7 - t2*t5 - 1,
+        -t10*t8 + t13*t2 + t16*t17,
+        t10*t11 + t17*t19 + t18*t2,
+        Gamma23*t20 + t21*t22 - t23*t5,
+        t13*t23 + t16*t21 - t24*t8 - 1,
+        t11*t24 + t18*t23 + t19*t21,
+        t20*t25 + t22*t26 - t27*t5,
+        t13*t27 + t16*t26 - t28*t8,
+        t11*t28 + t18*t27 + t19*t26 - 1,
     ]
     out[[5, 6, 7, 8]] = 0.0
     return out
@@ -254,39 +262,39 @@ def readings(alpha, beta, physical, g):
     """
     (alpha, beta,), zero, one = _broadcast(alpha, beta)
     (kappa, epsilon, Delta_alpha, Delta_beta, alpha_star, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = np.asarray(physical, dtype=float)
-    t0 = Delta_g - 1
+    t0 = 1 - Delta_g
     t1 = np.cos(theta1)
     t2 = np.cos(theta2)
     t3 = np.sin(epsilon)
     t4 = np.sin(kappa)
     t5 = np.cos(epsilon)
-    t6 = np.cos(kappa)
-    t7 = np.sin(alpha_star)
-    t8 = Delta_alpha - alpha
-    t9 = np.sin(t8)
+    t6 = Delta_alpha - alpha
+    t7 = np.sin(t6)
+    t8 = np.cos(kappa)
+    t9 = t8*np.sin(alpha_star)
     t10 = np.cos(alpha_star)
-    t11 = np.cos(t8)
-    t12 = -t10*t11 + t7*t9
-    t13 = t12*t5*t6 + t3*t4
+    t11 = np.cos(t6)
+    t12 = t10*t11*t8 - t7*t9
+    t13 = t12*t5 - t3*t4
     t14 = np.sin(theta2)
     t15 = Delta_beta - beta
     t16 = np.sin(t15)
-    t17 = t6*(t10*t9 + t11*t7)
+    t17 = -t10*t7*t8 - t11*t9
     t18 = np.cos(t15)
-    t19 = -t12*t3*t6 + t4*t5
-    t20 = t16*t17 - t18*t19
+    t19 = -t12*t3 - t4*t5
+    t20 = -t16*t17 + t18*t19
     t21 = np.sin(theta1)
     t22 = t16*t19 + t17*t18
-    t23 = t0*(-t1*t13*t2 + t14*t20 + t2*t21*t22)
+    t23 = t0*(t1*t13*t2 + t14*t20 - t2*t21*t22)
     t24 = np.cos(theta3)
     t25 = t21*t24
     t26 = np.sin(theta3)
     t27 = t1*t26
-    t28 = t1*t24
+    t28 = t2*t20
     t29 = t21*t26
-    t30 = t0*(-t13*(t14*t27 + t25) - t2*t20*t26 + t22*(t14*t29 - t28))
-    t31 = t0*(-t13*(-t14*t28 + t29) + t2*t20*t24 - t22*(t14*t25 + t27))
-    return g * np.array([-Gamma12*t30 - Gamma13*t23 + bias1 - t31*(Gamma11 + 1), -Gamma21*t31 - Gamma23*t23 + bias2 - t30*(Gamma22 + 1), -Gamma31*t31 - Gamma32*t30 + bias3 - t23*(Gamma33 + 1)])
+    t30 = t0*(t13*(t14*t27 + t25) + t22*(t1*t24 - t14*t29) - t26*t28)
+    t31 = t0*(t13*(-t1*t14*t24 + t29) + t22*(t14*t25 + t27) + t24*t28)
+    return g * np.array([Gamma12*t30 + Gamma13*t23 + bias1 + t31*(Gamma11 + 1), Gamma21*t31 + Gamma23*t23 + bias2 + t30*(Gamma22 + 1), Gamma31*t31 + Gamma32*t30 + bias3 + t23*(Gamma33 + 1)])
 
 
 def residual(alpha, beta, f, g):

@@ -127,6 +127,15 @@ def test_every_certificate_in_verify_holds(tmp_path):
         json.loads(f.read_text())
 
 
+def test_committed_certificates_are_what_the_builder_builds():
+    # `garant verify` re-checks the committed certificates (verify/proof/certificates/); a change to the
+    # models or the builder that is not rebuilt (`python -m verify.proof`) fails here, as --check does.
+    fresh = build.built()
+    old = {p.name: p.read_text() for p in build.COMMITTED.glob("*.json")}
+    assert sorted(fresh) == sorted(old)
+    assert [n for n in fresh if fresh[n] != old[n]] == []
+
+
 def test_continuum_solver_matches_the_proven_optima():
     mod = models.load("two-axis")
     sol = continuum.exchange(mod.H, 2, np.eye(15))

@@ -1,6 +1,6 @@
 """Every row of `garant verify` can fail (issue 13): for each check group, a wrong input (a perturbed
 value, a wrong count, a broken estimator) turns its rows red. Each test names the wrong input."""
-import copy
+import json
 import dataclasses
 import types
 
@@ -193,24 +193,32 @@ def test_003_monte_carlo_red_on_a_wrong_covariance(monkeypatch):
 
 # ---------------------------------------------------------------- certificates
 
-def test_certificate_rows_red_on_a_tampered_certificate(monkeypatch):
+def _committed_copy(tmp_path, monkeypatch):
+    """The committed certificates copied to tmp_path, which `garant verify` then reads instead."""
+    import shutil
     from garant.verify.proof import build
-    true = build.for_model
-
-    def tampered(name):
-        certs = copy.deepcopy(true(name))
-        if name == "two-axis":
-            certs[0]["value"] = "1/2"
-        return certs
-    monkeypatch.setattr(build, "for_model", tampered)
+    shutil.copytree(build.COMMITTED, tmp_path / "c")
+    monkeypatch.setattr(build, "COMMITTED", tmp_path / "c")
     monkeypatch.setattr(certificates, "MODELS", {"two-axis": "two_axis"})
+    return tmp_path / "c"
+
+
+def test_certificate_rows_red_on_a_tampered_certificate(tmp_path, monkeypatch):
+    folder = _committed_copy(tmp_path, monkeypatch)
+    cert = json.loads((folder / "two-axis_q1.json").read_text())
+    cert["value"] = "1/2"                                      # the claim no longer matches its proof
+    (folder / "two-axis_q1.json").write_text(json.dumps(cert))
     bad = failed(certificates.certificates())
     assert [r.name.split(":")[0] for r in bad] == ["certificate two-axis q1"]
 
 
-def test_certificate_rows_red_on_a_missing_certificate(monkeypatch):
-    from garant.verify.proof import build
-    true = build.for_model
-    monkeypatch.setattr(build, "for_model", lambda name: true(name)[1:])
-    monkeypatch.setattr(certificates, "MODELS", {"two-axis": "two_axis"})
+def test_certificate_rows_red_on_a_swapped_certificate(tmp_path, monkeypatch):
+    folder = _committed_copy(tmp_path, monkeypatch)
+    (folder / "two-axis_q1.json").write_text((folder / "two-axis_q2.json").read_text())
+    assert [r.name for r in failed(certificates.certificates())][:1] == ["certificate two-axis q1"]
+
+
+def test_certificate_rows_red_on_a_missing_certificate(tmp_path, monkeypatch):
+    folder = _committed_copy(tmp_path, monkeypatch)
+    (folder / "two-axis_q1.json").unlink()
     assert [r.name for r in failed(certificates.certificates())] == ["certificates two-axis: every optimal value certified"]

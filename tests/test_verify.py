@@ -44,11 +44,24 @@ def test_primal_dual_chebyshev_agree_on_a_coarse_grid(mod):
     A = lp.measurement_matrix(mod.H, np.array([(x, y) for x in g for y in g]))
     Phi, primal = lp.primal(A)
     _, dual = lp.dual(A)
-    L, _ = lp.chebyshev(A)
+    L, Y = lp.chebyshev(A)
+    np.testing.assert_allclose(L, np.abs(A.T @ Y).max(axis=0), atol=1e-10)     # Y attains L
+    np.testing.assert_allclose(L, _chebyshev_as_stated(A), atol=1e-8)          # (12) as cvxpy states it
     np.testing.assert_allclose(primal, 1, atol=1e-8)
     np.testing.assert_allclose(dual, 1, atol=1e-8)
     np.testing.assert_allclose(1 / L, 1, atol=1e-8)
     np.testing.assert_allclose(A @ Phi, np.eye(15), atol=1e-8)
+
+
+def _chebyshev_as_stated(A):
+    """(12) of 000 written as the paper states it, all nu at once: min sum t_nu subject to diag(Y) = 1,
+    |A^T Y| <= t (cvxpy): the reference lp.chebyshev's per-nu HiGHS fit is compared with."""
+    import cvxpy as cp
+    m = A.shape[0]
+    Y, t = cp.Variable((m, m)), cp.Variable(m)
+    cons = [cp.diag(Y) == 1, cp.abs(A.T @ Y) <= cp.reshape(t, (1, m), order="C")]
+    lp.optimal(cp.Problem(cp.Minimize(cp.sum(t)), cons), "Chebyshev polynomial (12)")
+    return t.value
 
 
 def test_nine_positions_of_the_starred_plan_are_not_optimal(mod):

@@ -5,7 +5,9 @@ derived estimators on the 30 directions and the Chebyshev polynomials of section
 the exchange solution on the continuum, made exact (rational or surd duals, exact primals on the
 quarter turns or on multiples of pi/24).
 """
+import json
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import sympy as sp
@@ -243,3 +245,23 @@ def for_plan(mod, model, r, plan, grid_step=None):
             cert["model_sha256"] = hashlib.sha256(Path(model).read_bytes()).hexdigest()
         out.append((q, cert))
     return out
+
+
+#: The certificates of the built-in models, built once and committed: `garant verify` re-checks these
+#: (the check is the proof; building is a search that takes seconds). `python -m verify.proof` rebuilds
+#: them, `--check` fails on any difference, and tests/test_certificates.py does the same.
+COMMITTED = Path(__file__).resolve().parent / "certificates"
+
+
+def committed(name, q_names):
+    """[(q, the committed certificate of q, or None when there is none)] of a built-in model."""
+    from . import check
+    return [(q, check.read(COMMITTED / f"{name}_{q}.json") if (COMMITTED / f"{name}_{q}.json").is_file() else None)
+            for q in q_names]
+
+
+def built():
+    """{file name: JSON text} of every built-in model's certificates, built now."""
+    from .reference import MODELS
+    return {file_name(c): json.dumps(c, indent=1) + "\n" for name in MODELS for c in for_model(name)}
+

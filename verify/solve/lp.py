@@ -47,13 +47,18 @@ def sparse_dual(A, targets=None, slack=1e-9):
 
 
 def chebyshev(A):
-    """L_nu and the minimising y (column nu, y_nu = 1) of the Chebyshev polynomial (12)."""
-    import cvxpy as cp
-    m, K = A.shape
-    Y, t = cp.Variable((m, m)), cp.Variable(m)
-    cons = [cp.diag(Y) == 1, cp.abs(A.T @ Y) <= cp.reshape(t, (1, m), order="C")]
-    optimal(cp.Problem(cp.Minimize(cp.sum(t)), cons), "Chebyshev polynomial (12)")
-    return t.value, Y.value
+    """L_nu and the minimising y (column nu, y_nu = 1) of the Chebyshev polynomial (12): min over y with
+    y_nu = 1 of max_k |a_k^T y|. With y_nu fixed that is the minimax fit of the row a_nu by the other rows
+    (y_j = -q_j), solved by HiGHS per nu (highs.chebyshev_fit). cvxpy's statement of (12) as one problem,
+    which tests/test_verify.py compares with this, cost 1.8 s of `garant verify` (python -m verify.bench)."""
+    A = np.asarray(A, float)
+    m = A.shape[0]
+    L, Y = np.zeros(m), np.zeros((m, m))
+    for nu in range(m):
+        others = np.arange(m) != nu
+        q, L[nu], _ = highs.chebyshev_fit(A[others], A[nu], what="Chebyshev polynomial (12)")
+        Y[nu, nu], Y[others, nu] = 1.0, -q
+    return L, Y
 
 
 def measurement_matrix(H, positions, mounts=None):
