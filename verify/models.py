@@ -1,9 +1,7 @@
 """The models the command line knows: built-in generated modules, or a stand description file."""
-import hashlib
 import importlib
 import math
 import os
-import tempfile
 import types
 from pathlib import Path
 
@@ -41,6 +39,7 @@ def generator_version():
     generator makes every cached module stale."""
     import garant
     root = Path(__file__).resolve().parent.parent / "derive"
+    import hashlib
     h = hashlib.sha256(garant.__version__.encode())
     for f in sorted(root.rglob("*")):
         if f.suffix in (".py", ".jinja", ".toml") and f.is_file():
@@ -59,6 +58,7 @@ def from_description(path):
             raw = fh.read(1_000_001)
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    import hashlib
     key = hashlib.sha256(raw + generator_version().encode()).hexdigest()
     hit = next(iter(sorted(cache_dir().glob(f"{key}-*.py"))), None) if cache_dir().is_dir() else None
     if hit is not None:
@@ -80,6 +80,7 @@ def _keep(folder, name, text):
     written: without a cache the next command derives again."""
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        import tempfile
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=".", suffix=".part")
         with os.fdopen(fd, "w") as fh:
             fh.write(text)

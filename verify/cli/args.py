@@ -5,6 +5,9 @@ import math
 from ..models import STANDS
 from ..workflows.premises import G_DEFAULT
 
+#: Exit status when the data refute the noise bound (docs: README, "Exit status").
+EXIT_INCONSISTENT = 3
+
 
 def positive(text):
     """An argparse type: a finite number > 0 (nan, inf, 0 and negatives refused)."""

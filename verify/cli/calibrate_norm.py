@@ -4,7 +4,6 @@ import sys
 from ..errors import DataError
 from ..io.recordings import FORMATS, SENSORS
 from . import args as options
-from .estimate import EXIT_INCONSISTENT
 
 
 def add(sub):
@@ -85,7 +84,7 @@ def _run(args, into=None):
         _report(res, args)
     if into is not None:
         into.update(res)
-    return 0 if res["consistent"] else EXIT_INCONSISTENT
+    return 0 if res["consistent"] else options.EXIT_INCONSISTENT
 
 
 def _print(res, args):

@@ -4,8 +4,7 @@ import sys
 from ..errors import DataError
 from . import args as options
 
-#: Exit status when the data refute sigma (docs: README, "Exit status").
-EXIT_INCONSISTENT = 3
+EXIT_INCONSISTENT = options.EXIT_INCONSISTENT
 
 
 def add(sub):

@@ -1,0 +1,150 @@
+"""python -m verify.bench.peer: `garant calibrate-norm` against the real imu_tk (C++, Ceres), side by side.
+
+imu_tk is the peer a user would pick instead: its accelerometer multi-position calibration, built from
+its own source (`../shared/peers/imu_tk/build.sh`, or the IMU_TK_ACC environment variable naming the
+binary). Both run as fresh processes on the same log, alternately, REPEAT times each; the figures are
+the medians of CPU seconds (user + system of the child), wall seconds and peak memory (ru_maxrss of
+the child). Then the parameters: imu_tk's biases and scale factors against garant's estimates and
+guaranteed bounds (imu_tk's misalignments are upper-triangular, garant's lower: not comparable one by one).
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+SHARED = ROOT.parent / "shared"
+REAL = SHARED / "data" / "real"
+REPEAT = 5
+G_LOGS = 9.81744            # the local gravity the repeat sessions and the Xsens sample were recorded under
+#: Real logs: (file, imu_tk's initial bias guess in raw units: 0 for m/s^2, mid-scale for 16-bit counts).
+LOGS = (("repeat_session1_acc.txt", 0), ("repeat_session2_acc.txt", 0), ("repeat_session3_acc.txt", 0),
+        ("repeat_session4_acc.txt", 0), ("imu_tk_xsens_acc.txt", 32768))
+
+
+def imu_tk_binary():
+    """The imu_tk_acc binary, or None when it is not built."""
+    for p in (os.environ.get("IMU_TK_ACC"), SHARED / "peers" / "imu_tk" / "imu_tk_acc"):
+        if p and Path(p).is_file() and os.access(p, os.X_OK):
+            return str(p)
+    return None
+
+
+def measured(cmd):
+    """(CPU s, wall s, peak MiB, stdout, exit status) of one run of cmd as a child process. CPU from
+    wait4 (the child and what it waited for); the peak from GNU time's %M (ru_maxrss of a fresh child
+    would report this large process's own peak)."""
+    with tempfile.NamedTemporaryFile("r") as peak:
+        t0 = time.perf_counter()
+        p = subprocess.Popen(["/usr/bin/time", "-f", "%M", "-o", peak.name, *cmd], stdout=subprocess.PIPE,
+                             stderr=subprocess.DEVNULL, text=True)
+        out = p.stdout.read()
+        _, status, ru = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - t0
+        kib = float(peak.read().split()[-1] or "nan")
+    return ru.ru_utime + ru.ru_stime, wall, kib / 1024, out, os.waitstatus_to_exitcode(status)
+
+
+def side_by_side(log, bias0, binary, json_path):
+    """Alternate runs of both: medians of (CPU, wall, MiB) per side, imu_tk's printed result, garant's JSON."""
+    garant = [str(Path(sys.executable).with_name("garant")), "calibrate-norm", str(log), "--g", str(G_LOGS),
+              "--json", json_path]
+    peer = [binary, str(log), str(G_LOGS), "5", *[str(bias0)] * 3]
+    runs = {"garant": [], "imu_tk": []}
+    out = {}
+    for _ in range(REPEAT):
+        for name, cmd in (("garant", garant), ("imu_tk", peer)):
+            cpu, wall, mib, text, code = measured(cmd)
+            runs[name].append((cpu, wall, mib))
+            out[name] = (text, code)
+    med = {k: tuple(float(np.median([r[i] for r in v])) for i in range(3)) for k, v in runs.items()}
+    return med, out
+
+
+def imu_tk_result(text):
+    """imu_tk's nine parameters from its RESULT line, or None when it reported failure."""
+    line = next((l for l in text.splitlines() if l.startswith("RESULT")), None)
+    ok = next((l for l in text.splitlines() if l.startswith("samples")), "")
+    if line is None or " ok 1 " not in ok + " ":
+        return None
+    parts = line.split()[1:]
+    return dict(zip(parts[::2], map(float, parts[1::2])))
+
+
+def compare(peer, res):
+    """imu_tk's biases (raw units) and scale factors against garant's, in units of garant's bound.
+
+    Biases: b is the same raw-axis offset in both conventions. Scale: imu_tk's s_j against the norm of
+    garant's column M e_j (the rotation between the lower- and upper-triangular frames keeps column
+    norms). To first order (the misalignments squared, 1e-6 here, aside): the column norm's bound is
+    |M e_j| times that of lambda_j; the bias's is g times that of eps_j/g for a log in m/s^2 (whose bounds
+    are given relative to the raw axes), and |M^-1| g e_eps for a log in counts (whose bounds are those
+    of the calibrated block's parameters)."""
+    M, b = np.array(res["matrix"]), np.array(res["bias"])
+    err = res["guaranteed_error"]
+    e_eps = G_LOGS * np.array([err[f"eps{j + 1}/g"] for j in range(3)])
+    bias_bound = e_eps if res["raw_unit"] == "m/s^2" else np.abs(np.linalg.inv(M)) @ e_eps
+    rows = []
+    for j, ax in enumerate("XYZ"):
+        norm = np.linalg.norm(M[:, j])
+        rows.append((f"b{ax} (raw units)", peer[f"b{ax}"], b[j], bias_bound[j]))
+        rows.append((f"s{ax}", peer[f"s{ax}"], norm, norm * err[f"lambda{j + 1}"]))
+    return rows
+
+
+def main():
+    """Both tools on every real log, then on synthetic logs of 1e5 and 1e6 samples."""
+    binary = imu_tk_binary()
+    if binary is None:
+        print("imu_tk is not built (../shared/peers/imu_tk/build.sh, or IMU_TK_ACC=path): no peer rows")
+        return
+    print(f"garant calibrate-norm against imu_tk ({binary}); medians of {REPEAT} alternating runs each")
+    floor = np.median([measured([sys.executable, "-c", "import numpy, highspy"])[0] for _ in range(REPEAT)])
+    print(f"the floor of any Python command here: the interpreter with numpy and highspy imported, "
+          f"{floor:.3f} s CPU")
+    print(f"{'log':34s} {'garant CPU s':>12s} {'imu_tk CPU s':>12s} {'ratio':>6s} {'wall g/i':>12s} {'MiB g/i':>11s}")
+    with tempfile.TemporaryDirectory() as tmp:
+        logs = [(REAL / f, b) for f, b in LOGS] + _synthetic(tmp)
+        compared = []
+        for log, b0 in logs:
+            med, out = side_by_side(log, b0, binary, f"{tmp}/r.json")
+            (gc, gw, gm), (ic, iw, im) = med["garant"], med["imu_tk"]
+            gres = json.loads(Path(f"{tmp}/r.json").read_text()) if out["garant"][1] in (0, 3) else None
+            note = "" if gres is not None else " (garant refuses the log)"
+            peer = imu_tk_result(out["imu_tk"][0])
+            note += "" if peer is not None else " (imu_tk reports failure)"
+            print(f"{log.name:34s} {gc:12.3f} {ic:12.3f} {gc / ic:6.2f} {gw:5.2f}/{iw:5.2f} {gm:5.0f}/{im:5.0f}{note}")
+            if gres is not None and gres.get("consistent") and peer is not None and log.parent == REAL:
+                compared.append((log.name, compare(peer, gres)))
+    print("\nimu_tk's parameters against garant's guaranteed bounds (|imu_tk - garant| / bound):")
+    for name, rows in compared:
+        worst = max(abs(p - g) / e for _, p, g, e in rows)
+        print(f"{name:34s} " + "  ".join(f"{k.split()[0]} {abs(p - g) / e:.2f}" for k, p, g, e in rows)
+              + f"  -> {'within' if worst <= 1 else 'OUTSIDE'}")
+
+
+def _synthetic(tmp):
+    """Synthetic logs in m/s^2 (40 orientations, noise 0.01 m/s^2) of 1e5 and 1e6 samples at 100 Hz."""
+    rng = np.random.default_rng(0)
+    out = []
+    for samples in (100_000, 1_000_000):
+        rows, per = [], samples // 40
+        for d in rng.normal(size=(40, 3)):
+            n = d / np.linalg.norm(d)
+            still = per * 2 // 3
+            rows.append(np.tile(G_LOGS * n, (still, 1)) + rng.normal(0, 0.01, (still, 3)))
+            rows.append(rng.normal(0, 3, (per - still, 3)) + G_LOGS * n)
+        raw = np.vstack(rows)
+        path = Path(tmp) / f"synthetic_{samples:.0e}.txt"
+        np.savetxt(path, np.column_stack([np.arange(len(raw)) * 0.01, raw]), fmt="%.6f")
+        out.append((path, 0))
+    return out
+
+
+if __name__ == "__main__":
+    main()
