@@ -118,3 +118,16 @@ def test_diagnose_of_the_api_is_the_command(tmp_path, capsys):
     assert main(["diagnose", "--model", "two-axis", str(data), "--sigma", "1e-5", "--json", str(out)]) == 0
     res = garant.diagnose("two-axis", np.column_stack([P, f]), 1e-5)
     assert res.to_dict() == json.loads(out.read_text()) and "_study" not in res and res.study is not None
+
+
+@needs_real
+def test_a_npy_log_calibrates_as_its_text(tmp_path):
+    # Binary input for large logs (issue 27): the same samples as .npy give the same calibration; an object
+    # array is refused, never unpickled (a file is data).
+    log = REAL / "repeat_session2_acc.txt"
+    np.save(tmp_path / "s.npy", np.loadtxt(log)[:, :4])
+    text, binary = garant.calibrate_norm(str(log), g=9.81744), garant.calibrate_norm(str(tmp_path / "s.npy"), g=9.81744)
+    assert binary.format == "npy" and np.allclose(binary.matrix, text.matrix, rtol=1e-12, atol=1e-15)
+    np.save(tmp_path / "o.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(garant.DataError, match="not a NumPy array of numbers"):
+        garant.calibrate_norm(str(tmp_path / "o.npy"))

@@ -7,7 +7,7 @@ import numpy as np
 from ..errors import DataError
 from . import files, mimu
 
-FORMATS = ("imu_tk", "csv", "openaxes", "mimu")
+FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy")
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 
@@ -42,6 +42,8 @@ def guess_format(path):
         start = fh.read(4096)
     if mimu.looks_like(start[: 4 * mimu.PACKET]):
         return "mimu"
+    if start.startswith(b"\x93NUMPY"):
+        return "npy"
     head = start.split(b"\n", 1)[0].decode("utf-8", errors="replace")
     if ";" in head and "TIME" in head:
         return "openaxes"
@@ -77,6 +79,26 @@ def _load(path, delimiter, usecols, skip):
         row, col = (int(v[0]) for v in np.nonzero(big))
         raise DataError(f"{path} line {row + skip + 1}: {data[row, col]:g} is beyond any reading or time stamp "
                         f"(|value| > {MAX_VALUE:g})")
+    return data
+
+
+def _load_npy(path):
+    """A NumPy .npy array of shape (N, 4), float: t (s), x, y, z (binary: no text parsing, for large logs).
+    Never unpickled: an object array is refused like any other file that is not numbers."""
+    try:
+        data = np.load(path, mmap_mode="r", allow_pickle=False)
+    except ValueError as e:
+        raise DataError(f"{path}: not a NumPy array of numbers ({e})") from None
+    if data.ndim != 2 or data.shape[1] != 4 or data.dtype.kind not in "fiu":
+        raise DataError(f"{path}: a .npy log must be an array of numbers of shape (N, 4): t (s), x, y, z; "
+                        f"this one is {data.dtype} of shape {data.shape}")
+    data = np.asarray(data, dtype=float)
+    if not np.isfinite(data.sum()):
+        bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
+        if bad.size:
+            raise DataError(f"{path} row {int(bad[0]) + 1}: NaN or infinite value")
+    if np.abs(data).max(initial=0.0) > MAX_VALUE:
+        raise DataError(f"{path}: a value beyond any reading or time stamp (|value| > {MAX_VALUE:g})")
     return data
 
 
@@ -173,6 +195,9 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
         elif fmt == "imu_tk":
             data = _load(path, None, [0, 1, 2, 3], 0)
             t, raw, unit = data[:, 0], data[:, 1:4], True
+        elif fmt == "npy":
+            data = _load_npy(path)
+            t, raw, unit = data[:, 0].copy(), data[:, 1:4], True
         else:
             raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
     except OSError as e:
