@@ -475,10 +475,17 @@ def read(path):
     if len(data) > MAX_BYTES:
         raise MalformedCertificate(f"larger than {MAX_BYTES} bytes")
     try:
-        return json.loads(data.decode("utf-8"), parse_int=_json_int)
+        cert = json.loads(data.decode("utf-8"), parse_int=_json_int)
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MalformedCertificate(f"not JSON ({e})") from None
     except ValueError as e:
         raise MalformedCertificate(str(e)) from None
     except RecursionError:
         raise MalformedCertificate("JSON nested too deep") from None
+    from ..errors import DataError
+    from ..io import schemas
+    try:                                   # the published form first (docs/schemas/), then the exact content
+        schemas.validate(cert, "certificate", "the certificate")
+    except DataError as e:
+        raise MalformedCertificate(str(e).removeprefix("the certificate: ")) from None
+    return cert
