@@ -227,14 +227,14 @@ def estimators(model):
     for nu, lam in enumerate(duals(model)):
         cand = touching(model, lam, dirs)
         e = sp.Matrix([int(i == nu) for i in range(12)])
+        target = np.eye(12)[nu]
         found = None
         for size in range(1, len(cand) + 1):
             for subset in combinations(cand, size):
                 # in floats first (a subset that fails there cannot hold exactly); then exactly
                 A = np.column_stack([s * approx[k] for k, s in subset])
-                x, *_ = np.linalg.lstsq(A, np.asarray(e, float).ravel(), rcond=None)
-                if np.abs(A @ x - np.asarray(e, float).ravel()).max() > 1e-9 or np.any(x <= 1e-12) \
-                        or np.linalg.matrix_rank(A) < size:
+                x, *_ = np.linalg.lstsq(A, target, rcond=None)
+                if np.abs(A @ x - target).max() > 1e-9 or np.any(x <= 1e-12) or np.linalg.matrix_rank(A) < size:
                     continue
                 A = sp.Matrix.hstack(*[s * cols[k] for k, s in subset])
                 try:

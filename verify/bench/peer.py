@@ -35,18 +35,18 @@ def imu_tk_binary():
     return None
 
 
-def measured(cmd):
+def measured(cmd, env=None):
     """(CPU s, wall s, peak MiB, stdout, exit status) of one run of cmd as a child process. CPU from
     wait4 (the child and what it waited for); the peak from GNU time's %M (ru_maxrss of a fresh child
     would report this large process's own peak)."""
     with tempfile.NamedTemporaryFile("r") as peak:
         t0 = time.perf_counter()
         p = subprocess.Popen(["/usr/bin/time", "-f", "%M", "-o", peak.name, *cmd], stdout=subprocess.PIPE,
-                             stderr=subprocess.DEVNULL, text=True)
+                             stderr=subprocess.DEVNULL, text=True, env=env)
         out = p.stdout.read()
         _, status, ru = os.wait4(p.pid, 0)
         wall = time.perf_counter() - t0
-        kib = float(peak.read().split()[-1] or "nan")
+        kib = float((peak.read().split() or ["nan"])[-1])
     return ru.ru_utime + ru.ru_stime, wall, kib / 1024, out, os.waitstatus_to_exitcode(status)
 
 
@@ -104,9 +104,11 @@ def main():
         print("imu_tk is not built (../shared/peers/imu_tk/build.sh, or IMU_TK_ACC=path): no peer rows")
         return
     print(f"garant calibrate-norm against imu_tk ({binary}); medians of {REPEAT} alternating runs each")
-    floor = np.median([measured([sys.executable, "-c", "import numpy, highspy"])[0] for _ in range(REPEAT)])
-    print(f"the floor of any Python command here: the interpreter with numpy and highspy imported, "
-          f"{floor:.3f} s CPU")
+    one_thread = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}      # as the garant command sets it
+    floor = np.median([measured([sys.executable, "-c", "import numpy, highspy"], one_thread)[0]
+                       for _ in range(REPEAT)])
+    print(f"the floor of any Python command here: the interpreter with numpy (one BLAS thread, as garant "
+          f"runs it) and highspy imported, {floor:.3f} s CPU")
     print(f"{'log':34s} {'garant CPU s':>12s} {'imu_tk CPU s':>12s} {'ratio':>6s} {'wall g/i':>12s} {'MiB g/i':>11s}")
     with tempfile.TemporaryDirectory() as tmp:
         logs = [(REAL / f, b) for f, b in LOGS] + _synthetic(tmp)

@@ -49,8 +49,8 @@ def sparse_dual(A, targets=None, slack=1e-9):
 def chebyshev(A):
     """L_nu and the minimising y (column nu, y_nu = 1) of the Chebyshev polynomial (12): min over y with
     y_nu = 1 of max_k |a_k^T y|. With y_nu fixed that is the minimax fit of the row a_nu by the other rows
-    (y_j = -q_j), solved by HiGHS per nu (highs.chebyshev_fit). cvxpy's statement of (12) as one problem,
-    which tests/test_verify.py compares with this, cost 1.8 s of `garant verify` (python -m verify.bench)."""
+    (y_j = -q_j), solved by HiGHS per nu (highs.chebyshev_fit). cvxpy's statement of (12) as one problem is
+    the reference tests/test_verify.py compares this with; `garant verify` need not import cvxpy."""
     A = np.asarray(A, float)
     m = A.shape[0]
     L, Y = np.zeros(m), np.zeros((m, m))
