@@ -40,6 +40,14 @@ def trig_basis(expr, angles, others=()):
     return out
 
 
+def harmonic_degree(J, angle, angles):
+    """The highest harmonic of `angle` in J: the largest power of cos and sin of it in one monomial
+    of J's trigonometric basis (its entries are trigonometric polynomials of that degree in it)."""
+    trig = (sp.cos(angle), sp.sin(angle))
+    return max((sum(term.as_powers_dict().get(f, 0) for f in trig)
+                for entry in J for term in trig_basis(entry, angles)), default=0)
+
+
 @dataclass(frozen=True)
 class Identification:
     """Result of the rank analysis: rows of (4), the functions of (3), the unseparable directions."""
@@ -72,10 +80,17 @@ def identify(J, names, preferred, angles, others=(), positions=None):
             for term in sorted({t for d in parts for t in d}, key=sp.default_sort_key):
                 keys.append((p, term))
                 rows.append([parts[k].get(term, 0) for k in index])
-    else:
+    else:                            # positions may fix only some angles: the others stay a trig basis
+        rest = [a for a in angles if a not in positions[0]]
         for at in positions:
             for p in range(J.rows):
-                rows.append([sp.nsimplify(sp.expand_trig(J[p, k].subs(at))) for k in index])
+                values = [sp.nsimplify(sp.expand_trig(J[p, k].subs(at))) for k in index]
+                if not rest:
+                    rows.append(values)
+                    continue
+                parts = [trig_basis(v, rest) for v in values]
+                rows.extend([d.get(t, 0) for d in parts]
+                            for t in sorted({t for d in parts for t in d}, key=sp.default_sort_key))
     M = sp.Matrix(rows)
     rref, pivots = M.rref()
     rank = len(pivots)

@@ -36,7 +36,7 @@ def derive(model):
     check_observable(model, J)
     names = [p.name for p in model.parameters]
     ident = combinations.identify(J, names, model.preferred, model.angle_symbols, model.variables)
-    reach = reachable_positions(model)
+    reach = reachable_positions(model, J)
     if reach is not None:                      # detents: what the stand can reach decides, if it sees less
         finite = combinations.identify(J, names, model.preferred, model.angle_symbols, positions=reach)
         if finite.R.rows < ident.R.rows:
@@ -49,14 +49,24 @@ def derive(model):
                       ident=ident, estimators=tuple(est))
 
 
-def reachable_positions(model):
-    """Every position of a stand whose angles all have detents (exact angles), or None."""
+def reachable_positions(model, J):
+    """The positions at which the detents can hide a combination (exact angles of the angles with too
+    few detents; the others stay free), or None when none can.
+
+    An angle whose readings are trigonometric polynomials of degree d in it, with at least 2d + 1
+    distinct detents, sees exactly what its whole circle sees: a nonzero trigonometric polynomial of
+    degree d has at most 2d zeros in a turn, and on a product of such sets the evaluation of a product
+    basis is one-to-one as each factor's is (Kronecker). Only the other angles need their detents."""
     from itertools import product
     angles = model.stand.angles
     if model.variables or not all(a.detents_deg for a in angles):
         return None
-    values = [[sp.pi * sp.Rational(str(d)) / 180 for d in a.detents_deg] for a in angles]
-    return [dict(zip(model.angle_symbols, combo)) for combo in product(*values)]
+    few = [(s, a) for s, a in zip(model.angle_symbols, angles)
+           if len(a.detents_deg) <= 2 * combinations.harmonic_degree(J, s, model.angle_symbols)]
+    if not few:
+        return None
+    values = [[sp.pi * sp.Rational(str(d)) / 180 for d in a.detents_deg] for _, a in few]
+    return [dict(zip([s for s, _ in few], combo)) for combo in product(*values)]
 
 
 @lru_cache(maxsize=None)

@@ -15,7 +15,9 @@ from .workflows.premises import G_DEFAULT
 #: The commands' options by the API's argument names: an error raised below names what the caller wrote.
 ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--still-factor": "k", "--k": "k", "--min-still": "min_still", "--format": "fmt", "--sigma": "sigma", "--g-uncertainty": "g_uncertainty",
              "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
-             "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid"}
+             "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid",
+             "--search-seconds": "search_seconds", "--count-seconds": "count_seconds",
+             "--max-candidates": "max_candidates"}
 
 
 def _api_names(fn):
@@ -34,14 +36,17 @@ def _api_names(fn):
 
 
 @_api_names
-def plan(model, grid=None, count_seconds=5.0):
+def plan(model, grid=None, count_seconds=5.0, max_candidates=None, search_seconds=None):
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
-    as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001."""
-    from .workflows.plan import norm_plan, plan as search_plan
+    as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
+    `max_candidates` and `search_seconds` (None: the command's defaults) bound the size and the time of
+    the search for the fewest positions."""
+    from .workflows.plan import MAX_CANDIDATES, SEARCH_SECONDS, norm_plan, plan as search_plan
     mod = models.load(model)
     if model == "norm":
         return results.Plan(norm_plan(mod))
-    return results.Plan(search_plan(mod, model, grid, count_seconds).to_dict())
+    return results.Plan(search_plan(mod, model, grid, count_seconds, max_candidates or MAX_CANDIDATES,
+                                    search_seconds or SEARCH_SECONDS).to_dict())
 
 
 @_api_names

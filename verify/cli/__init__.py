@@ -62,6 +62,13 @@ def main(argv=None):
     except (DataError, ValueError) as e:
         print(f"garant: error: {e}", file=sys.stderr)
         return 2
+    except MemoryError:
+        print("garant: error: out of memory: the inputs are too large for this machine (see the size limits in "
+              "docs/formats.md)", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:                          # Ctrl-C: outputs are written atomically, none half
+        print("garant: interrupted; no output was written after the interruption", file=sys.stderr)
+        return 130
     except BrokenPipeError:                            # output piped into a reader that stopped (head)
         sys.stderr.close()
         return 0

@@ -1,6 +1,8 @@
 """garant plan: optimal guaranteed errors and a minimal optimal plan of a stand."""
+import sys
+
 from ..errors import DataError
-from ..workflows.plan import MAX_CANDIDATES
+from ..workflows.plan import MAX_CANDIDATES, SEARCH_SECONDS
 from . import args as options
 
 
@@ -14,6 +16,9 @@ def add(sub):
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
     p.add_argument("--count-seconds", type=options.positive, default=5.0, metavar="S",
                    help="time allowed for counting the optimal plans on a large grid (default 5 s)")
+    p.add_argument("--search-seconds", type=options.positive, default=SEARCH_SECONDS, metavar="S",
+                   help=f"time allowed for proving the fewest positions (default {SEARCH_SECONDS:g} s); when it runs "
+                        "out, the plan found is printed with a proven lower bound on the fewest")
     p.add_argument("--max-candidates", type=options.positive_int, default=MAX_CANDIDATES, metavar="N",
                    help=f"refuse a --grid of more than N candidate positions (times mountings; default {MAX_CANDIDATES:,}: "
                         "a 3-degree grid on the two-axis stand takes about 30 s)")
@@ -39,13 +44,16 @@ def run(args):
     names, mounts = models.layout(mod)
     if args.grid is not None and 360 % args.grid:
         raise DataError(f"--grid {args.grid:g}: give a step that divides 360 degrees")
-    res = search_plan(mod, args.model, args.grid, args.count_seconds, args.max_candidates)
+    res = search_plan(mod, args.model, args.grid, args.count_seconds, args.max_candidates, args.search_seconds,
+                      progress=lambda text: print(f"plan: {text} ...", file=sys.stderr, flush=True),
+                      certify=bool(args.certificates))
     d = res.to_dict()
+    certs = _certificates(mod, args, res.search, res.plan) if args.certificates else None   # before any file
     _print(mod, res, d, args.grid, names)
     if args.json:
         report.write_json(args.json, d)
-    if args.certificates:
-        _certificates(mod, args, res.search, res.plan)
+    if certs is not None:
+        _write_certificates(mod, args.certificates, certs)
     if args.csv:
         header = [f"{a}_deg" for a in names] + (["mount"] if res.multi else [])
         report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
@@ -73,28 +81,41 @@ def _print(mod, res, d, grid, names):
     where = (f"grid of {grid:g}-degree steps" if grid else "grid of detents/quarter turns") + (
         " and the exchange positions" if res.added else "") + (" x mountings" if res.multi else "")
     print(f"\nminimal number of positions optimal for every q ({where}, {len(r.angles_deg)} positions): "
-          f"{r.min_positions}")
-    print(f"optimal plans of {r.min_positions} positions on that grid: "
-          + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped; "
-                                                             "--count-seconds for more)")
-          + f"; counted by {r.method}"
-          + ("; every one on quarter turns" if d["optimal_plans_on_quarter_turns"] and grid else ""))
+          + (f"{r.min_positions}" if r.floor is None else
+             f"at most {r.min_positions}, at least {r.floor} (the search stopped after --search-seconds "
+             f"{res.search_seconds:g}; raise it to prove the fewest)"))
+    if r.floor is not None:
+        print(f"a plan of {r.min_positions} positions optimal for every q (not proven the fewest), found by {r.method}")
+    else:
+        print(f"optimal plans of {r.min_positions} positions on that grid: "
+              + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped; "
+                                                                 "--count-seconds for more)")
+              + f"; counted by {r.method}"
+              + ("; every one on quarter turns" if d["optimal_plans_on_quarter_turns"] and grid else ""))
     print(f"plan ({', '.join(a + '_deg' for a in names)}{', mounting' if res.multi else ''}): "
           + ", ".join("(" + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in pos) + ")"
                       for pos in d["plan"]))
 
 
 def _certificates(mod, args, r, plan):
+    """The plan's certificates in memory, [(path, q, certificate)]: built before anything is written."""
     from pathlib import Path
 
-    from ..proof import build, check
-    folder = Path(args.certificates)
-    folder.mkdir(parents=True, exist_ok=True)
-    certs = build.for_plan(mod, args.model, r, plan, args.grid)
+    from ..proof import build
     stem = Path(args.model).stem.replace("_", "-")
-    for q, cert in certs:
-        check.write(cert, folder / f"{stem}_plan_{q}.json")
-    missing = [q for q in mod.Q_NAMES if q not in {q for q, _ in certs}]
+    return [(Path(args.certificates) / f"{stem}_plan_{q}.json", q, cert)
+            for q, cert in build.for_plan(mod, args.model, r, plan, args.grid)]
+
+
+def _write_certificates(mod, folder, certs):
+    """Write the certificates built by `_certificates` and say which q have none."""
+    from pathlib import Path
+
+    from ..proof import check
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    for path, _, cert in certs:
+        check.write(cert, path)
+    missing = [q for q in mod.Q_NAMES if q not in {q for _, q, _ in certs}]
     print(f"wrote {len(certs)} certificate(s) to {folder}/ (garant check-certificate FILE re-checks each)"
           + (f"; none for {', '.join(missing)}: no exact dual or estimator (off the 15-degree grid?)"
              if missing else ""))

@@ -8,6 +8,7 @@ from . import args as options
 
 def add(sub):
     """The `garant repeatability` subcommand and its options."""
+    from ..workflows.repeatability import MAX_RUNS
     p = sub.add_parser("repeatability", help="compare runs of one sensor against their guaranteed bounds; "
                        "name the effect when they disagree; the between-run envelope")
     p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "
@@ -23,6 +24,8 @@ def add(sub):
                    "half of it; a raw log states its own)")
     p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
                    "stop_sample columns (gives the runs a time, for the bias_drift effect)")
+    p.add_argument("--max-runs", type=options.positive_int, default=MAX_RUNS, metavar="N",
+                   help=f"refuse more than N runs (default {MAX_RUNS}; the effect test grows with the square of the runs)")
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
     p.add_argument("--markdown", metavar="FILE.md", help="the tables and coverage figures as Markdown")
@@ -79,7 +82,7 @@ def run(args):
         if len(imus) > 1:
             print(f"[{k}/{len(imus)}] {label}", file=sys.stderr)
         runs = _runs(args, fmt, imu)
-        results[label] = res = repeatability.run(mod, runs, args.g, args.params)
+        results[label] = res = repeatability.run(mod, runs, args.g, args.params, args.max_runs)
         _print(label, res)
     if len(results) > 1:
         _summary(results)

@@ -41,6 +41,19 @@ def regular(path, what="the file", max_bytes=None):
     return path
 
 
+#: The longest header line a text input may have (characters).
+MAX_HEADER = 65_536
+
+
+def header_line(fh, path):
+    """The first line of an open text file (at most MAX_HEADER characters, else DataError): every reader
+    takes the header from here, so none reads past a long one differently from another."""
+    line = fh.readline(MAX_HEADER + 1)
+    if len(line) > MAX_HEADER:
+        raise DataError(f"{path}: the header line is longer than {MAX_HEADER:,} characters")
+    return line
+
+
 def _identity(path):
     try:
         st = os.stat(path)

@@ -1,6 +1,7 @@
 """Reading measured positions from CSV, with one clear line for every way a file can be wrong."""
 import csv
 import math
+import os
 import warnings
 from dataclasses import dataclass, field
 
@@ -51,10 +52,20 @@ def _number(text, path, line, col):
 MAX_BYTES = 2_000_000_000
 
 
+#: The most data rows of a positions file: 2e6 readings (the verdict's remainder and fits grow with
+#: the distinct positions; 1e6 rows at 96 positions take seconds). Readings of one position are
+#: better averaged before (the means format).
+MAX_ROWS = 2_000_000
+
+
 def read_positions(path, angles=("alpha", "beta"), mountings=None):
     """Read a CSV with columns <angle>_deg for each angle, f1, f2, f3 (m/s^2), and `mount` (a name
-    such as +y+z+x) when the stand uses several mountings; other columns are kept."""
+    such as +y+z+x) when the stand uses several mountings; other columns are kept. More than MAX_ROWS
+    lines are refused before any is parsed."""
     files.regular(path, "the positions file", MAX_BYTES)
+    if os.path.getsize(path) > 10 * MAX_ROWS and _lines(path) > MAX_ROWS + 1:       # a row has at least 10 bytes
+        raise DataError(f"{path}: more than {MAX_ROWS:,} rows, the most a positions file may have: average the "
+                        "readings of each position first (the means format, docs/formats.md)")
     angle_cols = [f"{a}_deg" for a in angles]
     required = angle_cols + ["f1", "f2", "f3"] + (["mount"] if mountings and len(mountings) > 1 else [])
     fast = _numeric(path, required)
@@ -66,6 +77,8 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
         return pos
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
+            files.header_line(fh, path)
+            fh.seek(0)
             rows = list(csv.reader(fh))
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
@@ -103,6 +116,15 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
     return pos
 
 
+def _lines(path, chunk=1 << 24):
+    """The number of line ends in a file, counted in chunks (no line is decoded)."""
+    n = 0
+    with open(path, "rb") as fh:
+        while block := fh.read(chunk):
+            n += block.count(b"\n")
+    return n
+
+
 def _check_degrees(path, angle_cols, pos):
     for c, v in zip(angle_cols, pos.angles_deg.T):
         if len(v) > 2 and np.abs(v).max() <= 2 * math.pi + 1e-9 and np.any(np.abs(v) > 1e-9):
@@ -116,7 +138,7 @@ def _numeric(path, required, others=False):
     file). None otherwise: the cell-by-cell reader then finds and names any problem."""
     try:
         with open(path, encoding="utf-8-sig") as fh:
-            header = [h.strip() for h in fh.readline(1_000_000).split(",")]
+            header = [h.strip() for h in files.header_line(fh, path).split(",")]
             if "mount" in header or any(c not in header for c in required) or (
                     not others and len(header) != len(required)):
                 return None
@@ -142,6 +164,8 @@ def read_plan(path, angles, mountings=None):
         return data[:, [header.index(c) for c in cols]], None
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
+            files.header_line(fh, path)
+            fh.seek(0)
             rows = list(csv.reader(fh))
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None

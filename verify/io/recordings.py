@@ -52,7 +52,7 @@ def guess_format(path):
 
 def _header(path, delimiter):
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
-        line = fh.readline(1_000_000)
+        line = files.header_line(fh, path)
     if not line.strip():
         raise DataError(f"{path}: empty file; expected a header line")
     return [h.strip() for h in line.rstrip("\r\n").split(delimiter)]

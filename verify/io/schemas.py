@@ -34,13 +34,53 @@ def _inlined(node, defs):
 
 
 def validate(data, name, path):
-    """DataError for the first problem (by place in the file) of `data` against docs/schemas/NAME.schema.json."""
+    """DataError for the first problem (by place in the file) of `data` against docs/schemas/NAME.schema.json.
+    Arrays longer than the schema allows are refused first, by length alone (no item is looked at)."""
+    long = _too_long(data, _validator(name).schema)
+    if long:
+        raise DataError(f"{path}: {_where(long[0])}: {long[1]} (schema {name}.schema.json)")
     errors = sorted(_validator(name).iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path])
     if errors:
         e = errors[0]
-        where = "".join(f"[{p}]" if isinstance(p, int) else (f".{p}" if i else str(p))
-                        for i, p in enumerate(e.absolute_path)) or "the top level"
-        raise DataError(f"{path}: {where}: {_what(e)} (schema {name}.schema.json)")
+        raise DataError(f"{path}: {_where(e.absolute_path)}: {_what(e)} (schema {name}.schema.json)")
+
+
+def _where(place):
+    """A place in a JSON document as a field path: primal[3].weight."""
+    return "".join(f"[{p}]" if isinstance(p, int) else (f".{p}" if i else str(p))
+                   for i, p in enumerate(place)) or "the top level"
+
+
+def _too_long(node, schema, place=()):
+    """(place, complaint) of the first array longer than its schema's maxItems, or None: checked from
+    the top down, so a 10^6-item array is refused before any of its items is validated."""
+    if isinstance(node, list):
+        most = schema.get("maxItems")
+        if most is not None and len(node) > most:
+            return place, f"has {len(node):,} items, at most {most:,}"
+        items = schema.get("items")
+        if isinstance(items, dict):
+            for i, v in enumerate(node):
+                found = _too_long(v, items, (*place, i))
+                if found:
+                    return found
+    elif isinstance(node, dict):
+        for key, sub in schema.get("properties", {}).items():
+            found = key in node and _too_long(node[key], sub, (*place, key))
+            if found:
+                return found
+    for sub in schema.get("allOf", ()):
+        found = _too_long(node, sub, place)
+        if found:
+            return found
+    return None
+
+
+def _count(schema):
+    """How many items an array schema allows, in words: "3", "at least 1", "at most 12"."""
+    lo, hi = schema.get("minItems"), schema.get("maxItems")
+    return f"{lo}" if lo == hi else f"at least {lo}" if hi is None else f"at most {hi}" if lo is None else \
+        f"{lo} to {hi}"
 
 
 def _what(e):
@@ -61,7 +101,7 @@ def _what(e):
                            "type": f"must be of type {e.validator_value}",
                            "minimum": f"must be >= {limit}",
                            "maximum": f"must be <= {limit}",
-                           "minItems": f"must have {e.validator_value} items",
-                           "maxItems": f"must have {e.validator_value} items",
+                           "minItems": f"must have {_count(e.schema)} items",
+                           "maxItems": f"must have {_count(e.schema)} items",
                            "maxLength": f"is longer than {e.validator_value} characters"}.get(
         e.validator, e.message[:120].encode("unicode_escape").decode())

@@ -150,6 +150,8 @@ class _Parser:
             self.take("(")
             arg = self.nested(self.expr)
             self.take(")")
+            if value == "sqrt" and arg.is_number and arg.is_negative:
+                raise ParseError(f"the square root of a negative number in {self.text[:60]!r}: not a real number")
             return FUNCTIONS[value](arg)
         if kind == "name":
             if value not in self.names:
@@ -171,4 +173,6 @@ def exact(text, symbols=()):
     value = p.expr()
     if p.k != len(p.toks):
         raise ParseError(f"unexpected {p.toks[p.k][1]!r} in {text[:60]!r}")
+    if value.is_number and value.is_real is False:
+        raise ParseError(f"{text[:60]!r} is not a real number")
     return value

@@ -25,7 +25,11 @@ def exact_columns(mod, angles_deg, mounts=None):
     from ..models import symbolic_H
     from .field import evaluator
     H, symbols = symbolic_H(mod)
-    f = evaluator(list(H), symbols)
+    try:
+        f = evaluator(list(H), symbols)
+    except ValueError as e:
+        raise ValueError(f"H is not exact in Q(sqrt2, sqrt3) ({e}); exact plan search takes axes and wedges "
+                         "whose components lie there, e.g. [0, 1, 1]") from None
     P = np.atleast_2d(np.asarray(angles_deg, float))
     mounts = np.zeros(len(P), int) if mounts is None else np.asarray(mounts)
     m = H.cols

@@ -11,7 +11,7 @@ import os
 import highspy
 import numpy as np
 
-from ..errors import LPFailed
+from ..errors import DataError, LPFailed
 
 INF = highspy.kHighsInf
 _quiet = False
@@ -226,15 +226,20 @@ def sparse_dual(A, targets=None, slack=1e-9):
     return Lam, values
 
 
-def covering_plans(S, blocks, limit, seconds=30.0):
+def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None):
     """Every smallest set of positions x (binary, S) such that, for each block (V (m x C), owner (C,)
     position of each column, cap), some w >= 0 has V w = e and w_k <= cap x_owner(k): a mixed-integer
     program solved, then re-solved with each set found cut off (sum over it <= size - 1) and the size
-    fixed, until infeasible, `limit` sets or `seconds` of solving. Returns (size, sets, complete)."""
+    fixed, until infeasible, `limit` sets or `seconds` of solving. Returns (size, sets, complete, floor):
+    floor is None when size is proven smallest, else the solver's proven lower bound on it (the first
+    solve stopped at `search_seconds` with a set found but not proven smallest)."""
+    import math
     import time
     start = time.perf_counter()
     h = new()
     h.setOptionValue("mip_rel_gap", 0.0)
+    if search_seconds is not None:
+        h.setOptionValue("time_limit", float(search_seconds))
     inf = INF
     h.addVars(S, np.zeros(S), np.ones(S))
     h.changeColsIntegrality(S, np.arange(S, dtype=np.int32), np.full(S, highspy.HighsVarType.kInteger))
@@ -257,10 +262,17 @@ def covering_plans(S, blocks, limit, seconds=30.0):
         h.run()
         status = h.getModelStatus()
         if found and status == highspy.HighsModelStatus.kTimeLimit:
-            return size, tuple(found), False
+            return size, tuple(found), False, None
+        if status == highspy.HighsModelStatus.kTimeLimit and h.getInfo().primal_solution_status == 2:
+            x = np.array(h.getSolution().col_value[:S])              # a plan, not proven the smallest
+            plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
+            return len(plan), (plan,), False, math.ceil(h.getInfo().mip_dual_bound - 1e-6)
+        if status == highspy.HighsModelStatus.kTimeLimit:
+            raise DataError(f"the plan search found no plan within --search-seconds on {S} candidate positions: "
+                            "raise --search-seconds, or give fewer candidates")
         if status != highspy.HighsModelStatus.kOptimal:
             if found:
-                return size, tuple(found), True
+                return size, tuple(found), True, None
             raise LPFailed(f"the plan search (mixed-integer program): {h.modelStatusToString(h.getModelStatus())}")
         x = np.array(h.getSolution().col_value[:S])
         plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
@@ -269,4 +281,4 @@ def covering_plans(S, blocks, limit, seconds=30.0):
             h.addRow(size, size, S, np.arange(S, dtype=np.int32), np.ones(S))
         found.append(plan)
         h.addRow(-inf, size - 1, size, np.array(plan, dtype=np.int32), np.ones(size))
-    return size, tuple(found), False
+    return size, tuple(found), False, None

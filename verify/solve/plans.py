@@ -285,6 +285,7 @@ class PlanSearch:
     proven: tuple                               # per nu: the error holds on the whole continuum
     duals: tuple = ()                           # per nu: the dual vector lambda (exact when it could be)
     method: str = ""                            # how the plans were counted
+    floor: int | None = None                    # None: min_positions proven; else a proven lower bound
 
     def plan_deg(self, plan):
         """The angles in degrees of the positions of a plan (indices into the grid)."""
@@ -325,7 +326,7 @@ def _bitmask_plans(S, per_nu):
 PLAN_COUNT_LIMIT = 200
 
 
-def _milp_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0):
+def _milp_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None):
     """The fewest positions carrying an optimal estimator of every q, and every plan of that size: a
     mixed-integer program (HiGHS), re-solved with each plan found cut off until the size grows (or
     `limit` plans). Returns (size, plans, complete).
@@ -339,7 +340,7 @@ def _milp_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0):
         cand, signs = touching(cols, lam)
         V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float).T        # (m, C)
         blocks.append((V, np.array([s for s, _ in cand]), float(lam[nu]), np.eye(m)[nu]))
-    return highs.covering_plans(S, blocks, limit, seconds)
+    return highs.covering_plans(S, blocks, limit, seconds, search_seconds)
 
 
 def estimator_in(cols, nu, lam):
@@ -382,8 +383,15 @@ def _confirm(cols, lams, plan):
     return all(is_exact(lam) for lam in lams)
 
 
-def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0):
-    """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans."""
+def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0,
+           search_seconds=None):
+    """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans.
+
+    A mixed-integer search (grids beyond the bit masks) still running `search_seconds` after the call
+    began keeps the plan it found, with the solver's proven lower bound on the fewest positions as
+    `floor`."""
+    import time
+    deadline = None if search_seconds is None else time.perf_counter() + search_seconds
     if angles_deg is None:
         angles_deg, mounts = grid(mod)
     mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
@@ -403,16 +411,18 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
                         and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
                    for nu, lam in enumerate(lams))
     S = len(angles_deg)
+    floor = None
     if S <= BITMASK_LIMIT and all(sets is not None for sets in per_nu):
         n, plans = _bitmask_plans(S, per_nu)
         exhaustive, method = True, "every subset of the grid (bit masks)" + (
             ", in floating point (positions off the 15-degree grid)" if cols.dtype.kind == "f" else "")
     else:
-        n, plans, exhaustive = _milp_plans(_float(cols), cols, lams, count_limit, count_seconds)
+        left = None if deadline is None else max(deadline - time.perf_counter(), 0.5)
+        n, plans, exhaustive, floor = _milp_plans(_float(cols), cols, lams, count_limit, count_seconds, left)
         exact = all([_confirm(cols, lams, plan) for plan in plans])
         method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
                   + ("exactly" if exact else "(in floating point where the dual is not exact)"))
     if not plans:
         raise ValueError("no plan on this grid is optimal for every parameter")
     return PlanSearch(np.asarray(angles_deg, float), mounts, n, plans, exhaustive, tuple(per_nu), errors, proven,
-                      tuple(lams), method)
+                      tuple(lams), method, floor)

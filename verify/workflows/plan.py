@@ -19,6 +19,7 @@ class Plan:
     continuum: list | None        # the exchange method's optimum on the continuum, per q (None: detents)
     added: int                    # exchange positions added to the candidates
     grid_step: float | None       # degrees (None: detents or quarter turns)
+    search_seconds: float | None = None   # the time allowed for proving the fewest positions
 
     @property
     def finite(self):
@@ -50,7 +51,8 @@ class Plan:
             "continuum_errors": None if self.continuum is None else [float(c) for c in self.continuum],
             "reachable_set": "detents" if self.finite else "continuum", "exchange_candidates_added": self.added,
             "guaranteed_errors_exact": r.exact_errors(), "grid_step_deg": self.grid_step, "count_method": r.method,
-            "min_positions": r.min_positions,
+            "min_positions": r.min_positions, "min_positions_proven": r.floor is None,
+            "min_positions_at_least": r.min_positions if r.floor is None else r.floor,
             "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
             "optimal_plans_on_quarter_turns": bool(on_quarter),
             "plan": [self.position(s) for s in self.plan],
@@ -61,12 +63,21 @@ class Plan:
 #: grid on the two-axis stand (14,400) takes about 30 s on one core.
 MAX_CANDIDATES = 10_000
 
+#: The time the search for the fewest positions may take (s) before it keeps the plan it has, with a
+#: proven lower bound on the fewest: 24 mountings of a four-detent table take minutes to prove, the
+#: built-in stands' grids under 3 s.
+SEARCH_SECONDS = 7.0
 
-def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES):
+
+def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES, search_seconds=SEARCH_SECONDS,
+         progress=None, certify=False):
     """The Plan of a stand model: candidates every `grid` degrees (default: detents or quarter turns), and
     on a stand with a continuous angle the exchange method's positions added when the candidates miss
     the continuum optimum. A grid of more than `max_candidates` positions (times mountings) is refused
-    before any work."""
+    before any work; the search for the fewest positions keeps its best plan after `search_seconds`.
+    `progress(text)`, when given, hears the size of a search beyond the bit masks before it starts.
+    With `certify`, a stand whose H is not exact at the candidates (no certificate can be written) is
+    refused before the search."""
     from ..models import layout
     from ..proof import build
     from ..solve import continuum, plans
@@ -74,7 +85,16 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
     if grid is not None and 360 % grid:
         raise DataError(f"grid step {grid:g}: give a step that divides 360 degrees")
     P, M = _grid(mod, grid, max_candidates) if grid else plans.grid(mod)
-    r = plans.search(mod, P, M, count_seconds=count_seconds)
+    if certify:
+        from ..solve import exact
+        try:
+            exact.exact_columns(mod, P[:1], M[:1])
+        except ValueError as e:
+            raise DataError(f"--certificates: {e}") from None
+    if progress is not None and len(P) > plans.BITMASK_LIMIT:
+        progress(f"{len(P)} candidate positions, {len(mod.Q_NAMES)} combinations: the fewest positions by a "
+                 f"mixed-integer program (up to {search_seconds:g} s, then {count_seconds:g} s counting)")
+    r = plans.search(mod, P, M, count_seconds=count_seconds, search_seconds=search_seconds)
     n = len(names)
     ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
     detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
@@ -83,11 +103,13 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
         sol = continuum.exchange(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
         cont = sol.values
         if any(e > c + 1e-7 for e, c in zip(r.errors, cont)):   # the exchange positions become candidates
-            r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), count_seconds)
-    return Plan(model, mod, r, _preferred_plan(mod, r), None if cont is None else list(cont), added, grid)
+            r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), count_seconds,
+                                      search_seconds)
+    return Plan(model, mod, r, _preferred_plan(mod, r), None if cont is None else list(cont), added, grid,
+                search_seconds)
 
 
-def _with_exchange(mod, r, P, M, sol, ranges, detents, k, count_seconds):
+def _with_exchange(mod, r, P, M, sol, ranges, detents, k, count_seconds, search_seconds):
     """The search again with the exchange method's positions as candidates: exact ones (multiples of 15
     degrees) first, then all, until the candidates reach the continuum optimum. (search, added)."""
     from ..solve import plans
@@ -101,7 +123,7 @@ def _with_exchange(mod, r, P, M, sol, ranges, detents, k, count_seconds):
             continue
         P2 = np.vstack([base, np.array(new)])
         r, added = plans.search(mod, np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2)),
-                                count_seconds=count_seconds), len(new)
+                                count_seconds=count_seconds, search_seconds=search_seconds), len(new)
         if all(e <= c + 1e-7 for e, c in zip(r.errors, sol.values)):
             break
     return r, added

@@ -130,10 +130,19 @@ def effect_test(mod, runs, ref, g, params):
     return out
 
 
-def run(mod, runs, g, params=9):
-    """The whole repeatability study of one sensor's runs: the dictionary the CLI prints and writes."""
+#: The most runs compared unless told otherwise: the effect test fits every run at once, so its LP
+#: grows with the square of the runs (20 runs of 16 positions take 0.2 s, 200 runs 80 s).
+MAX_RUNS = 50
+
+
+def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
+    """The whole repeatability study of one sensor's runs: the dictionary the CLI prints and writes.
+    More than `max_runs` usable runs are refused before any fit."""
     refused = [{"log": r.name, "reason": r.refused} for r in runs if getattr(r, "refused", None)]
     runs = [r for r in runs if not getattr(r, "refused", None)]
+    if len(runs) > max_runs:
+        raise DataError(f"{len(runs):,} runs, over the limit of {max_runs} (the effect test fits every run at once "
+                        "and grows with the square of their number): compare fewer runs, or raise --max-runs")
     runs, results, more = calibrate_runs(mod, runs, g, params)
     refused += more
     if len(runs) < 2:
