@@ -642,3 +642,105 @@ def test_a_certificate_is_checked_against_its_published_schema(tmp_path, capsys,
     assert main(["check-certificate", str(path)]) == 2
     err = capsys.readouterr().err
     assert field in err and "certificate.schema.json" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda c: c.update(primal=c["primal"] * 20_000), "primal: has 40,000 items, at most 10,000"),
+    (lambda c: c["dual"].__setitem__(0, "sqrt(-1)"), "dual[0]: the square root of a negative number"),
+    (lambda c: c.update(value="sqrt(10**16000 + 1)"), "value: exponent 16000 is beyond 16"),
+])
+def test_a_huge_or_imaginary_certificate_is_refused_in_one_line(tmp_path, capsys, change, words):
+    # Issue 26: a 44 MB certificate was validated item by item for 32 s before its length was refused;
+    # sqrt(-1) was read as I and the check went on.
+    from garant.verify.proof import build
+    cert = json.loads((build.COMMITTED / "two-axis_q1.json").read_text())
+    change(cert)
+    path = tmp_path / "c.json"
+    path.write_text(json.dumps(cert))
+    refused(["check-certificate", path], capsys, words)
+
+
+def _mountings(n):
+    import itertools
+    out = []
+    for perm in itertools.permutations("xyz"):
+        for signs in itertools.product("+-", repeat=3):
+            M = np.zeros((3, 3))
+            for i, (a, s) in enumerate(zip(perm, signs)):
+                M[i, "xyz".index(a)] = 1 if s == "+" else -1
+            if round(np.linalg.det(M)) == 1:
+                out.append("".join(s + a for a, s in zip(perm, signs)))
+    return out[:n]
+
+
+def test_a_plan_search_beyond_its_time_keeps_its_plan_with_a_proven_floor(tmp_path, capsys):
+    # Issue 26: a four-detent table in all 24 mountings ran for minutes with no word. The search now says
+    # its size first, keeps its best plan after --search-seconds, and says it is not proven the fewest.
+    old = 'mountings = ["+x+y+z", "+y+z+x", "+z+x+y"]'
+    assert old in BASE
+    (tmp_path / "m24.toml").write_text(BASE.replace(old, "mountings = " + json.dumps(_mountings(24))))
+    out = tmp_path / "p.json"
+    code = main(["plan", str(tmp_path / "m24.toml"), "--search-seconds", "1", "--json", str(out)])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "96 candidate positions" in captured.err
+    d = json.loads(out.read_text())
+    if d["min_positions_proven"]:                     # a fast machine may prove it: then nothing to say
+        assert d["min_positions_at_least"] == d["min_positions"]
+    else:
+        assert "not proven the fewest" in captured.out and d["min_positions_at_least"] < d["min_positions"]
+    assert d["min_positions_at_least"] >= 5        # 15 q need 15 independent readings, 3 per position
+
+
+def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_search(tmp_path, capsys):
+    # Issue 26: an axis of 15-digit components searched for 12 s, wrote the plan's JSON, then failed on
+    # sqrt(1000110612605718049052708272757) with no word of why.
+    text = (Path(__file__).parent / "data" / "stands" / "tilted_inner.toml").read_text()
+    assert "axis = [0, 1, 1]" in text
+    (tmp_path / "t.toml").write_text(text.replace("axis = [0, 1, 1]", "axis = [0.123456789012345, 0.234567890123456, "
+                                                                    "0.964285714285714]"))
+    refused(["plan", tmp_path / "t.toml", "--certificates", tmp_path / "c", "--json", tmp_path / "p.json"], capsys,
+            "--certificates: H is not exact in Q(sqrt2, sqrt3)", outputs=[tmp_path / "c", tmp_path / "p.json"])
+
+
+def test_more_runs_than_the_limit_are_refused_by_name(tmp_path, capsys):
+    # Issue 26: 1,000 runs in a means file ran past 60 s (the effect test grows with their square).
+    rows = ["exp,imu,f_x,f_y,f_z,std_x,std_y,std_z,n_samples"]
+    for run_ in range(1, 61):
+        rows += [f"{run_},1,{9.81 * x},{9.81 * y},{9.81 * z},0.01,0.01,0.01,1000"
+                 for x, y, z in np.eye(3).tolist() + (-np.eye(3)).tolist()]
+    (tmp_path / "m.csv").write_text("\n".join(rows) + "\n")
+    refused(["repeatability", "--format", "means", tmp_path / "m.csv", "--imu", "1"], capsys,
+            "60 runs, over the limit of 50", "--max-runs")
+
+
+def test_a_positions_file_over_its_row_limit_is_refused_before_parsing(tmp_path, capsys, monkeypatch):
+    # Issue 26: 1e7 distinct positions ended in a MemoryError traceback. The cap (2e6 rows) is made 100 here.
+    from garant.verify.io import positions
+    monkeypatch.setattr(positions, "MAX_ROWS", 100)
+    path = tmp_path / "d.csv"
+    path.write_text("alpha_deg,beta_deg,f1,f2,f3\n" + "0,0,0.0001,0.0001,9.81\n" * 150)
+    refused(["estimate", "--model", "two-axis", path, "--sigma", "1e-5"], capsys, "more than 100 rows")
+
+
+@pytest.mark.parametrize("command", [
+    lambda p: ["estimate", "--model", "two-axis", p, "--sigma", "1e-5"],
+    lambda p: ["calibrate-norm", p, "--format", "csv"],
+])
+def test_a_header_line_of_a_megabyte_is_refused_by_every_reader(tmp_path, capsys, command):
+    # Issue 26: a data row hidden after 1 MB of spaces in the header was read by one reader and not the other.
+    path = tmp_path / "d.csv"
+    path.write_text("alpha_deg,beta_deg,f1,f2,f3" + " " * (1 << 20) + "0,0,0,0,9.81\n0,90,0,0,9.81\n")
+    refused(command(str(path)), capsys, "the header line is longer than 65,536 characters")
+
+
+def test_out_of_memory_is_one_line(tmp_path, capsys, monkeypatch):
+    from garant.verify.io import positions
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+    monkeypatch.setattr(positions, "read_positions", exhausted)
+    P, f = _plan_rows()
+    np.savetxt(tmp_path / "d.csv", np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3",
+               comments="")
+    refused(["estimate", "--model", "two-axis", tmp_path / "d.csv", "--sigma", "1e-5"], capsys, "out of memory")

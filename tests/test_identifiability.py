@@ -1,5 +1,6 @@
 """Identifiability service and limiting accuracy (003)."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -61,3 +62,42 @@ def test_trace_identity_exact_random_geometries(r, q, N):
 def test_003_checks_pass(group):
     rows = list(group())
     assert rows and all(r.passed for r in rows), [r for r in rows if not r.passed]
+
+
+# Issue 26: a table of 72 x 72 detents spent minutes in nsimplify on every reachable position. An angle
+# with at least 2d + 1 detents (d: the highest harmonic of it in J) sees what its whole circle sees, so
+# the analysis on detents runs only over the angles with fewer; these tests check that claim exactly.
+
+DETENT_STANDS = ["single-axis", *(str(Path(__file__).parent / "data" / "stands" / f"{n}.toml")
+                                  for n in ("wedge45", "wedge90", "table120"))]
+
+
+@pytest.mark.parametrize("name", DETENT_STANDS)
+def test_detents_that_see_the_whole_circle_give_the_rank_of_every_reachable_position(name):
+    from itertools import product
+
+    from garant.derive import combinations
+    from garant.derive.derivation import derive, reachable_positions
+    from garant.verify.models import stand_model
+    m = stand_model(name)
+    d = derive(m)
+    assert reachable_positions(m, d.J) is None          # every angle has at least 2d + 1 detents
+    values = [[sp.pi * sp.Rational(str(v)) / 180 for v in a.detents_deg] for a in m.stand.angles]
+    every = [dict(zip(m.angle_symbols, c)) for c in product(*values)]
+    finite = combinations.identify(d.J, list(d.names), m.preferred, m.angle_symbols, positions=every)
+    assert finite.R.rows == d.ident.R.rows
+
+
+def test_two_detents_a_half_turn_apart_hide_combinations(tmp_path):
+    # Two detents, first harmonic: cos and sin cannot both be seen (2 <= 2d), so the analysis on the
+    # detents runs and finds fewer combinations than the circle would give.
+    from garant.derive.derivation import derive, reachable_positions
+    from garant.verify.models import stand_model
+    text = (Path(__file__).parent / "data" / "stands" / "wedge90.toml").read_text()
+    assert "detents_deg = [0, 90, 180, 270]" in text
+    (tmp_path / "half.toml").write_text(text.replace("detents_deg = [0, 90, 180, 270]", "detents_deg = [0, 180]"))
+    (tmp_path / "full.toml").write_text(text.replace("detents_deg = [0, 90, 180, 270]", "detents_deg = []")
+                                        .replace('name = "wedge90"', 'name = "wedge90_full"'))
+    half, full = stand_model(str(tmp_path / "half.toml")), stand_model(str(tmp_path / "full.toml"))
+    assert len(reachable_positions(half, derive(half).J)) == 2
+    assert derive(half).ident.R.rows < derive(full).ident.R.rows
