@@ -103,3 +103,57 @@ def test_a_plan_file_with_other_numeric_columns_is_read_in_c_and_a_text_column_f
     quoted.write_text("\n".join([text[0] + ",note"] + [t + ',"a, b"' for t in text[1:]]) + "\n")
     assert positions._numeric(str(quoted), ["alpha_deg", "beta_deg"], others=True) is None
     assert np.array_equal(positions.read_plan(str(quoted), ("alpha", "beta"))[0], rows[:, :2])
+
+
+def _schema_errors(name, document):
+    import json
+
+    import jsonschema
+    from garant.verify.io.schemas import FOLDER
+    schema = json.loads((FOLDER / f"{name}.schema.json").read_text())
+    jsonschema.Draft202012Validator.check_schema(schema)
+    return [e.message for e in jsonschema.Draft202012Validator(schema).iter_errors(document)]
+
+
+def _outputs(tmp_path):
+    """The --json of estimate (consistent and not), plan and calibrate-norm, written by the commands."""
+    import json
+
+    from garant.verify.cli import main
+    out = {}
+    d = tmp_path / "d.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(d)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(d), "--sigma", "1e-5", "--json", str(tmp_path / "e.json")]) == 0
+    out["estimate"] = json.loads((tmp_path / "e.json").read_text())
+    text = d.read_text().splitlines()
+    cells = text[1].split(",")
+    cells[4] = str(float(cells[4]) + 0.1)                         # f3 1000 sigma off: inconsistent
+    d.write_text("\n".join([text[0], ",".join(cells), *text[2:]]) + "\n")
+    assert main(["estimate", "--model", "two-axis", str(d), "--sigma", "1e-5", "--json", str(tmp_path / "x.json")]) == 3
+    out["estimate-inconsistent"] = json.loads((tmp_path / "x.json").read_text())
+    assert main(["plan", "two-axis", "--json", str(tmp_path / "p.json")]) == 0
+    out["plan"] = json.loads((tmp_path / "p.json").read_text())
+    log = ROOT.parent / "shared" / "data" / "real" / "imu_tk_xsens_acc.txt"
+    assert main(["calibrate-norm", str(log), "--json", str(tmp_path / "c.json")]) == 0
+    out["calibrate-norm"] = json.loads((tmp_path / "c.json").read_text())
+    return out
+
+
+def test_every_result_json_follows_its_published_schema(tmp_path, capsys):
+    # Issue 26: docs/schemas/{estimate,plan,calibrate-norm}.schema.json describe what the commands write.
+    out = _outputs(tmp_path)
+    capsys.readouterr()
+    for kind, doc in out.items():
+        assert _schema_errors(kind.split("-inconsistent")[0], doc) == [], kind
+    assert not out["estimate-inconsistent"]["consistent"]
+    for kind in ("estimate", "calibrate-norm"):                    # the calibration inside is a calibration file
+        assert _schema_errors("calibration", out[kind]["calibration"]) == [], kind
+    # and the schemas can fail: a result without its premises, or a consistent one without q
+    broken = dict(out["estimate"])
+    broken.pop("premises")
+    assert _schema_errors("estimate", broken)
+    broken = dict(out["estimate"])
+    broken.pop("q")
+    assert _schema_errors("estimate", broken)
+    broken = dict(out["plan"], min_positions_proven="yes")
+    assert _schema_errors("plan", broken)
