@@ -16,6 +16,7 @@ _API = {
     "estimate": ("garant.verify.api", "estimate"),
     "calibrate_norm": ("garant.verify.api", "calibrate_norm"),
     "diagnose": ("garant.verify.api", "diagnose"),
+    "next_position": ("garant.verify.api", "next_position"),
     "apply": ("garant.verify.api", "apply"),
     "load_model": ("garant.verify.models", "load"),
     "DataError": ("garant.verify.errors", "DataError"),

@@ -17,7 +17,7 @@ ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--stil
              "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
              "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid",
              "--search-seconds": "search_seconds", "--count-seconds": "count_seconds",
-             "--max-candidates": "max_candidates"}
+             "--max-candidates": "max_candidates", "--target": "target"}
 
 
 def _api_names(fn):
@@ -99,6 +99,26 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigm
     NormCalibration; when consistent its "calibration" is the dictionary `apply` takes.
     """
     return jobs.calibrate_norm(log, g, params, fmt, sensor, imu, window, k, min_still, delta_sigma, diagnose)
+
+
+@_api_names
+def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
+                  search_seconds=None):
+    """The position to measure next, as `garant next --json` (the same function: workflows/jobs.py).
+
+    Parameters
+    ----------
+    model : a built-in stand's name or a STAND.toml. data : the positions measured so far (a CSV path, a
+    header alone at the start, a DataFrame or an array (0 or more rows): see `positions`). sigma : the
+    noise bound (units of g). target : the guaranteed error wanted for every q (units of q); None: sigma
+    times the stand's optimal errors. grid : candidate step in degrees. g, g_uncertainty, prior : the
+    premises of the verdict on the data, as in `estimate`.
+
+    Returns
+    -------
+    NextPosition: `next` (None when `done`), `still_needed`, the errors before and after.
+    """
+    return jobs.next_position(model, data, sigma, target, grid, g, g_uncertainty, prior, search_seconds)
 
 
 @_api_names

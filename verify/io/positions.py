@@ -58,10 +58,11 @@ MAX_BYTES = 2_000_000_000
 MAX_ROWS = 2_000_000
 
 
-def read_positions(path, angles=("alpha", "beta"), mountings=None):
+def read_positions(path, angles=("alpha", "beta"), mountings=None, empty_ok=False):
     """Read a CSV with columns <angle>_deg for each angle, f1, f2, f3 (m/s^2), and `mount` (a name
     such as +y+z+x) when the stand uses several mountings; other columns are kept. More than MAX_ROWS
-    lines are refused before any is parsed."""
+    lines are refused before any is parsed; a header alone is refused unless `empty_ok` (a session
+    that has measured nothing yet)."""
     files.regular(path, "the positions file", MAX_BYTES)
     if os.path.getsize(path) > 10 * MAX_ROWS and _lines(path) > MAX_ROWS + 1:       # a row has at least 10 bytes
         raise DataError(f"{path}: more than {MAX_ROWS:,} rows, the most a positions file may have: average the "
@@ -106,6 +107,9 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None):
             if c == "mount" and "mount" in required and cell.strip() not in mountings:
                 raise DataError(f"{path} line {line}: mount {cell.strip()!r} is not one of {', '.join(mountings)}")
             data[c].append(_number(cell, path, line, c) if c in numeric else cell.strip())
+    if not data[required[0]] and empty_ok:
+        return Positions(path, np.zeros((0, len(angle_cols))), np.zeros((0, 3)),
+                         np.zeros(0, int) if "mount" in required else None)
     if not data[required[0]]:
         raise DataError(f"{path}: no data rows after the header")
     mounts = (np.array([list(mountings).index(m) for m in data["mount"]]) if "mount" in required else None)

@@ -116,3 +116,18 @@ class Correction(Result):
 
     def __iter__(self):
         return iter((self["t"], self["a"], self["bound"]))
+
+
+class NextPosition(Result):
+    """`garant next --json`: where a calibration session stands and the position to measure next."""
+
+    FIELDS = {"done": "whether every q's guaranteed error is at or below its target",
+              "next": "the position to measure next: angles in degrees (and the mounting); None when done",
+              "still_needed": "positions still needed, the next one included",
+              "still_needed_proven": "whether still_needed is the fewest (else a lower bound)",
+              "guaranteed_error_before": "per q, on the positions measured so far (None: no estimator yet), units of q",
+              "guaranteed_error_after": "per q, once the next position is measured, units of q",
+              "target": "per q, units of q", "target_source": "where the target comes from",
+              "measured": "the distinct positions measured so far", "angles": "the stand's angle names",
+              "consistent": "whether the data so far are "
+              "consistent with sigma (None while some q has no estimator)"}

@@ -226,13 +226,14 @@ def sparse_dual(A, targets=None, slack=1e-9):
     return Lam, values
 
 
-def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None):
+def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()):
     """Every smallest set of positions x (binary, S) such that, for each block (V (m x C), owner (C,)
     position of each column, cap), some w >= 0 has V w = e and w_k <= cap x_owner(k): a mixed-integer
     program solved, then re-solved with each set found cut off (sum over it <= size - 1) and the size
     fixed, until infeasible, `limit` sets or `seconds` of solving. Returns (size, sets, complete, floor):
     floor is None when size is proven smallest, else the solver's proven lower bound on it (the first
-    solve stopped at `search_seconds` with a set found but not proven smallest)."""
+    solve stopped at `search_seconds` with a set found but not proven smallest). The positions `fixed`
+    are in every set (those already measured)."""
     import math
     import time
     start = time.perf_counter()
@@ -241,7 +242,9 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None):
     if search_seconds is not None:
         h.setOptionValue("time_limit", float(search_seconds))
     inf = INF
-    h.addVars(S, np.zeros(S), np.ones(S))
+    lower = np.zeros(S)
+    lower[list(fixed)] = 1.0
+    h.addVars(S, lower, np.ones(S))
     h.changeColsIntegrality(S, np.arange(S, dtype=np.int32), np.full(S, highspy.HighsVarType.kInteger))
     h.changeColsCost(S, np.arange(S, dtype=np.int32), np.ones(S))
     n = S

@@ -326,13 +326,14 @@ def _bitmask_plans(S, per_nu):
 PLAN_COUNT_LIMIT = 200
 
 
-def _milp_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None):
+def covering_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None, fixed=()):
     """The fewest positions carrying an optimal estimator of every q, and every plan of that size: a
     mixed-integer program (HiGHS), re-solved with each plan found cut off until the size grows (or
     `limit` plans). Returns (size, plans, complete).
 
     For each q_nu, weights w >= 0 on the measurements where its dual certificate touches, with
-    sum_k w_k sign_k H_k = e_nu (then sum w = lambda_nu, the optimum), and w_k <= lambda_nu x_s."""
+    sum_k w_k sign_k H_k = e_nu (then sum w = lambda_nu, the optimum), and w_k <= lambda_nu x_s.
+    Positions `fixed` are in every plan."""
     from . import highs
     S, _, m = cols.shape
     blocks = []
@@ -340,7 +341,7 @@ def _milp_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_
         cand, signs = touching(cols, lam)
         V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float).T        # (m, C)
         blocks.append((V, np.array([s for s, _ in cand]), float(lam[nu]), np.eye(m)[nu]))
-    return highs.covering_plans(S, blocks, limit, seconds, search_seconds)
+    return highs.covering_plans(S, blocks, limit, seconds, search_seconds, fixed)
 
 
 def estimator_in(cols, nu, lam):
@@ -418,7 +419,7 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
             ", in floating point (positions off the 15-degree grid)" if cols.dtype.kind == "f" else "")
     else:
         left = None if deadline is None else max(deadline - time.perf_counter(), 0.5)
-        n, plans, exhaustive, floor = _milp_plans(_float(cols), cols, lams, count_limit, count_seconds, left)
+        n, plans, exhaustive, floor = covering_plans(_float(cols), cols, lams, count_limit, count_seconds, left)
         exact = all([_confirm(cols, lams, plan) for plan in plans])
         method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
                   + ("exactly" if exact else "(in floating point where the dual is not exact)"))

@@ -35,9 +35,10 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     return results.Estimate(res)
 
 
-def positions_of(mod, data, imu=None, which_run=None):
+def positions_of(mod, data, imu=None, which_run=None, empty_ok=False):
     """Positions for `mod` from a positions CSV, a means file with known nominal directions (its run
-    `which_run` of IMU `imu`, the directions turned into the stand's angles), a DataFrame or an array."""
+    `which_run` of IMU `imu`, the directions turned into the stand's angles), a DataFrame or an array.
+    `empty_ok`: a CSV of a header alone gives no positions rather than an error."""
     from ..io import means
     from ..io.positions import Positions, from_columns, read_positions
     from .directions import angles_for
@@ -47,7 +48,7 @@ def positions_of(mod, data, imu=None, which_run=None):
     if not means.looks_like(data):
         if imu is not None or which_run is not None:
             raise DataError(f"--imu and --run apply to a means file; {data} is a positions file")
-        return read_positions(data, names, mounts)
+        return read_positions(data, names, mounts, empty_ok)
     runs = means.read(data, imu)
     keys = [r.name.rsplit("=", 1)[-1] for r in runs]
     if which_run is None and len(runs) > 1:
@@ -103,6 +104,27 @@ def _log(log, fmt, sensor, imu):
     if not np.all(np.isfinite(arr)) or np.any(np.diff(arr[:, 0]) <= 0):
         raise DataError("log: every value must be finite and the times increasing")
     return recordings.Log("array", arr[:, 0] - arr[0, 0], arr[:, 1:], fmt="array")
+
+
+def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
+                  search_seconds=None):
+    """The position to measure next on a stand, from the positions measured so far (a positions CSV,
+    a header alone at the start, or an array; see `positions_of`): next.py's suggestion, and once every
+    q has an estimator the verdict of `estimate` on the data (`consistent`; its `disagreements` when
+    the data refute sigma)."""
+    from .next import next_position as suggest
+    mod = models.load(model)
+    pos = positions_of(mod, data, empty_ok=True)
+    mounts = pos.mounts if pos.mounts is not None else np.zeros(len(pos.angles_deg), int)
+    out = results.NextPosition(suggest(mod, model, pos.angles_deg, mounts, sigma, target, grid,
+                                       search_seconds).to_dict())
+    out["consistent"] = None
+    if all(e is not None for e in out["guaranteed_error_before"]):
+        verdict = estimate(model, data, sigma, g, g_uncertainty, prior)
+        out["consistent"] = verdict["consistent"]
+        if not verdict["consistent"]:
+            out["disagreements"] = verdict.get("disagreements")
+    return out
 
 
 def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):

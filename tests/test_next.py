@@ -1,0 +1,79 @@
+"""garant next (issue 28): a calibration session led position by position reaches the target in the
+fewest positions of the plan search ((7)-(12) of 000: on the two-axis stand 10, since no plan of 9 serves
+every q), every suggestion reachable, and data that refute sigma stop it."""
+import json
+
+import numpy as np
+import pytest
+
+import garant
+from garant.verify import models
+from garant.verify.cli import main
+
+SIGMA = 1e-5
+
+
+def _readings(tmp_path, model):
+    """Readings of one simulated unit at every reachable quarter-turn position (the candidates)."""
+    path = tmp_path / "all.csv"
+    assert main(["simulate", "--model", model, "--plan", "quarter", "--sigma", str(SIGMA), "--seed", "3",
+                 "-o", str(path)]) == 0
+    lines = path.read_text().splitlines()
+    return lines[0], lines[1:]
+
+
+def _row_at(header, rows, position):
+    cols = header.split(",")
+    for row in rows:
+        cells = row.split(",")
+        angles = [float(cells[cols.index(c)]) for c in cols if c.endswith("_deg")]
+        mount = cells[cols.index("mount")] if "mount" in cols else None
+        if np.allclose(angles, position[:len(angles)]) and (mount is None or mount == position[-1]):
+            return row
+    raise AssertionError(f"no reading at {position}")
+
+
+@pytest.mark.parametrize("model", ["two-axis", "single-axis"])
+def test_a_session_reaches_the_optimal_errors_in_the_fewest_positions(tmp_path, capsys, model):
+    mod = models.load(model)
+    header, rows = _readings(tmp_path, model)
+    fewest = garant.plan(model).min_positions                     # 10 on two-axis (000), 8 on single-axis
+    session = tmp_path / "s.csv"
+    session.write_text(header + "\n")
+    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * len(mod.ANGLES))
+    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * len(mod.ANGLES))
+    needed = []
+    for _ in range(fewest + 1):
+        res = garant.next_position(model, str(session), SIGMA)
+        if res.done:
+            break
+        needed.append(res.still_needed)
+        assert res.still_needed_proven
+        assert models.unreachable(ranges, detents, [res.next[:len(mod.ANGLES)]]) is None
+        session.write_text(session.read_text() + _row_at(header, rows, res.next) + "\n")
+    assert res.done and res.consistent
+    assert needed == list(range(fewest, 0, -1))                   # each step one fewer: exact counts
+    assert all(e <= t * (1 + 1e-7) for e, t in zip(res.guaranteed_error_before, res.target))
+    # the command says the same, in one step from the same file, and writes its JSON
+    assert main(["next", "--model", model, str(session), "--sigma", str(SIGMA), "--json", str(tmp_path / "n.json")]) == 0
+    assert "done" in capsys.readouterr().out
+    assert json.loads((tmp_path / "n.json").read_text())["done"]
+
+
+def test_data_that_refute_sigma_stop_the_session(tmp_path, capsys):
+    header, rows = _readings(tmp_path, "two-axis")
+    cells = rows[0].split(",")
+    cells[4] = str(float(cells[4]) + 0.1)                        # f3 of the first position 1000 sigma off
+    (tmp_path / "s.csv").write_text("\n".join([header, ",".join(cells), *rows[1:]]) + "\n")
+    assert main(["next", "--model", "two-axis", str(tmp_path / "s.csv"), "--sigma", str(SIGMA)]) == 3
+    assert "refute sigma" in capsys.readouterr().out
+
+
+def test_a_target_below_the_optimum_is_refused_and_a_looser_one_is_reached(tmp_path, capsys):
+    header, rows = _readings(tmp_path, "two-axis")
+    (tmp_path / "s.csv").write_text(header + "\n")
+    assert main(["next", "--model", "two-axis", str(tmp_path / "s.csv"), "--sigma", str(SIGMA),
+                 "--target", "1e-6"]) == 2
+    assert "below the stand's optimal error" in capsys.readouterr().err
+    res = garant.next_position("two-axis", str(tmp_path / "s.csv"), SIGMA, target=3 * SIGMA)
+    assert not res.still_needed_proven and res.still_needed >= 5    # 15 q, three readings per position

@@ -1,0 +1,59 @@
+"""garant next: the position to measure next at the stand, how many are still needed, and when to stop."""
+from . import args as options
+
+
+def add(sub):
+    """The `garant next` subcommand and its options."""
+    p = sub.add_parser("next", help="the reachable position to measure next, the bounds before and after it, "
+                       "and how many positions are still needed")
+    p.add_argument("data", metavar="DATA.csv", help="the positions measured so far, as for estimate (a header "
+                   "line alone at the start of a session)")
+    options.model(p)
+    options.sigma(p)
+    p.add_argument("--target", type=options.positive, metavar="T",
+                   help="the guaranteed error wanted for every q (units of q); default: sigma times the stand's "
+                        "optimal errors, reached by a plan of the fewest positions")
+    p.add_argument("--grid", type=options.positive, metavar="STEP", help="candidate positions every STEP degrees "
+                   "(detents and ranges honoured); default: detents or quarter turns")
+    p.add_argument("--search-seconds", type=options.positive, metavar="S",
+                   help="time allowed for proving the fewest positions still needed (default as for plan)")
+    options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
+    options.premises(p)
+    options.json(p)
+    return p
+
+
+def run(args):
+    """`garant next`: parse, call the job, print; the exit status (3 when the data so far refute sigma)."""
+    from ..io import report
+    from ..workflows import jobs
+    res = jobs.next_position(args.model, args.data, args.sigma, args.target, args.grid, args.g, args.g_uncertainty,
+                             args.prior, args.search_seconds)
+    if args.json:
+        report.write_json(args.json, res)
+    _print(res)
+    if res["consistent"] is False:
+        return options.EXIT_INCONSISTENT
+    return 0
+
+
+def _print(res):
+    from ..io import report
+    fmt = (lambda v: "no estimator yet" if v is None else f"{v:.3e}")          # noqa: E731
+    after = res["guaranteed_error_after"] or [None] * len(res["q_names"])
+    report.table(("q", "target", "guaranteed error now", "after the next position"),
+                 [(q, f"{t:.3e}", fmt(b), "-" if res["done"] else fmt(a))
+                  for q, t, b, a in zip(res["q_names"], res["target"], res["guaranteed_error_before"], after)])
+    print(f"units of q (dimensionless or rad); target: {res['target_source']}; sigma = {res['sigma']:g}; "
+          f"{len(res['measured'])} distinct position(s) measured, {res['candidates']} reachable candidates")
+    if res["consistent"] is False:
+        print("the data so far refute sigma (as `garant estimate` says): find the cause before measuring more")
+        return
+    if res["done"]:
+        print("done: every guaranteed error is at or below its target")
+        return
+    pos = res["next"]
+    print("next position: " + ", ".join(f"{a} = {v:g} deg" for a, v in zip(res["angles"], pos))
+          + (f", mounting {pos[-1]}" if len(pos) > len(res["angles"]) else ""))
+    print(("positions still needed, this one included: " if res["still_needed_proven"]
+           else "positions still needed, this one included: at least ") + f"{res['still_needed']}")
