@@ -18,8 +18,8 @@ from .parameter import Parameter
 
 AXES = {"x": 1, "y": 2, "z": 3}
 KEYS = {
-    "stand": {"name", "title", "source"},
-    "angle": {"name", "latex", "meaning", "range_deg", "detents_deg"},
+    "stand": {"name", "title", "source", "settle_s", "remount_s"},
+    "angle": {"name", "latex", "meaning", "range_deg", "detents_deg", "speed_deg_s", "acceleration_deg_s2"},
     "parameter": {"name", "latex", "unit", "meaning", "bound"},
     "link": {"axis", "angle", "offset", "harmonic", "error", "angle_deg"},
     "block": {"misalignment", "gravity_error", "mountings"},
@@ -168,7 +168,19 @@ def _angle(path, where, a):
         if not lo <= d <= hi:
             _fail(path, f"{where}.detents_deg", f"{d} is outside the range [{lo}, {hi}]")
     return Angle(name, _text(path, f"{where}.latex", a.get("latex"), name),
-                 _text(path, f"{where}.meaning", a.get("meaning"), f"{name}, as read"), (lo, hi), tuple(detents))
+                 _text(path, f"{where}.meaning", a.get("meaning"), f"{name}, as read"), (lo, hi), tuple(detents),
+                 _motion(path, f"{where}.speed_deg_s", a.get("speed_deg_s"), 1e4, "deg/s"),
+                 _motion(path, f"{where}.acceleration_deg_s2", a.get("acceleration_deg_s2"), 1e6, "deg/s^2"))
+
+
+def _motion(path, where, value, most, unit):
+    """A speed, acceleration or time of the stand's motion (for `plan --route`): a number > 0 and below
+    `most` in `unit`, or absent."""
+    if value is None:
+        return None
+    if not _is_number(value) or not 0 < value < most:
+        _fail(path, where, f"{_short(value)} is not a {unit} figure: give a number > 0 and < {most:g}")
+    return float(value)
 
 
 def load(path, source_file=None):
@@ -213,7 +225,9 @@ def from_data(data, path="<description>"):
     preferred, plan, remount = _estimation(path, data, links, refs.declared, theta, dg, len(angles))
     st = Stand(name=name, title=_text(path, "stand.title", stand.get("title"), name), angles=tuple(angles),
                chain=tuple(links[::-1]), parameters=tuple(params), theta=theta, gravity_error=dg,
-               source=_text(path, "stand.source", stand.get("source"), str(path)))
+               source=_text(path, "stand.source", stand.get("source"), str(path)),
+               settle_s=_motion(path, "stand.settle_s", stand.get("settle_s"), 1e5, "s"),
+               remount_s=_motion(path, "stand.remount_s", stand.get("remount_s"), 1e5, "s"))
     return Model(stand=st, block=Block(), preferred=tuple(preferred), plan_deg=plan,
                  remount=remount, mountings=mounts, source_file=path)
 

@@ -23,6 +23,8 @@ class Angle:
     meaning: str
     range_deg: tuple[float, float] = (0.0, 360.0)
     detents_deg: tuple[float, ...] = ()
+    speed_deg_s: float | None = None              # top speed and acceleration (plan --route), if stated
+    acceleration_deg_s2: float | None = None
 
     @property
     def symbol(self):
@@ -62,6 +64,8 @@ class Stand:
     theta: tuple[str, str, str]
     gravity_error: str
     source: str
+    settle_s: float | None = None                 # settling time at a position, s (plan --route)
+    remount_s: float | None = None                # time to remount the block in another mounting, s
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,9 @@ def add(sub):
                         "a 3-degree grid on the two-axis stand takes about 30 s)")
     p.add_argument("--certificates", metavar="DIR", help="write a certificate of the plan's optimality for each "
                    "q (garant check-certificate re-checks it without any solver)")
+    p.add_argument("--route", action="store_true", help="order the plan's positions for the least total stand "
+                   "time (the description's speed_deg_s, acceleration_deg_s2, settle_s, remount_s), or without speeds "
+                   "for the least largest angle per move; print the schedule (--csv carries it)")
     p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
     return p
@@ -48,16 +51,27 @@ def run(args):
                       progress=lambda text: print(f"plan: {text} ...", file=sys.stderr, flush=True),
                       certify=bool(args.certificates))
     d = res.to_dict()
+    if args.route:
+        from ..workflows.plan import route
+        d["route"] = route(res)
     certs = _certificates(mod, args, res.search, res.plan) if args.certificates else None   # before any file
     _print(mod, res, d, args.grid, names)
+    if args.route:
+        _print_route(d["route"], names, res.multi)
     if args.json:
         report.write_json(args.json, d)
     if certs is not None:
         _write_certificates(mod, args.certificates, certs)
     if args.csv:
         header = [f"{a}_deg" for a in names] + (["mount"] if res.multi else [])
+        rows = [[*pos] for pos in d["plan"]]
+        if args.route:
+            rt = d["route"]
+            header += ["order", "move_s" if rt["arrive_s"] else "largest_turn_deg"] + (["arrive_s"] if rt["arrive_s"] else [])
+            rows = [[*pos, k + 1, mv, *([rt["arrive_s"][k]] if rt["arrive_s"] else [])]
+                    for k, (pos, mv) in enumerate(zip(rt["positions"], rt["move"]))]
         report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
-            f"{v:g}" if not isinstance(v, str) else v for v in pos) for pos in d["plan"]]) + "\n")
+            f"{v:g}" if not isinstance(v, str) else v for v in row) for row in rows]) + "\n")
         print(f"wrote {args.csv}")
     return 0
 
@@ -95,6 +109,25 @@ def _print(mod, res, d, grid, names):
     print(f"plan ({', '.join(a + '_deg' for a in names)}{', mounting' if res.multi else ''}): "
           + ", ".join("(" + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in pos) + ")"
                       for pos in d["plan"]))
+
+
+def _print_route(rt, names, multi):
+    """The schedule: each position in route order, the angles turned to reach it, the move's cost."""
+    from ..io import report
+    timed = rt["arrive_s"] is not None
+    print(f"\nroute ({rt['method']}; least {rt['objective']}):")
+    report.table(("#", ", ".join(f"{a}_deg" for a in names) + (", mounting" if multi else ""),
+                  "turned (deg)", "move (s)" if timed else "largest turn (deg)", *(("arrive (s)",) if timed else ())),
+                 [(k + 1, ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in pos),
+                   ", ".join(f"{t:g}" for t in turned), f"{mv:.3g}", *((f"{rt['arrive_s'][k]:.4g}",) if timed else ()))
+                  for k, (pos, turned, mv) in enumerate(zip(rt["positions"], rt["turned_deg"], rt["move"]))])
+    print(f"total stand time: {rt['total']:.4g} s" if timed else
+          f"largest angle in one move: {rt['total']:g} deg (no speeds in the description: speed_deg_s per angle "
+          "gives a schedule in seconds)")
+    if rt["lower_bound"] is not None:
+        print(f"lower bound on any order: {rt['lower_bound']:.4g} s (the route is within {100 * rt['gap']:.1f} % of it)")
+    for note in rt["notes"]:
+        print(f"note: {note}")
 
 
 def _certificates(mod, args, r, plan):

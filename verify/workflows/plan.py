@@ -172,3 +172,40 @@ def norm_plan(mod):
             "min_positions": {"9": len(plans[9]), "12": len(plans[12])},
             "directions": {str(k): [mod.PLAN[i].tolist() for i in idx] for k, idx in plans.items()},
             "directions_exact": {str(k): [mod.PLAN_EXACT[i] for i in idx] for k, idx in plans.items()}}
+
+
+def route(res):
+    """The plan's positions in the order of least total stand time, from the motion the stand's
+    description states (per angle speed_deg_s and acceleration_deg_s2; settle_s, remount_s), or without
+    speeds in the order of least largest angle turned in one move: a dictionary (`plan --json`'s
+    "route")."""
+    from ..models import layout, stand_model
+    from ..solve import route as rt
+    try:
+        stand = stand_model(res.model).stand
+        angles = stand.angles
+        motion = rt.Motion(tuple(a.speed_deg_s for a in angles), tuple(a.acceleration_deg_s2 for a in angles),
+                           stand.settle_s or 0.0, stand.remount_s or 0.0)
+    except DataError:                                          # a generated module: no description to read
+        motion = rt.Motion((None,) * len(res.mod.ANGLES), (None,) * len(res.mod.ANGLES))
+        stand = None
+    r = res.search
+    P, M = r.angles_deg[res.plan], r.mounts[res.plan]
+    ranges = getattr(res.mod, "ANGLE_RANGES_DEG", ((0, 360),) * len(res.mod.ANGLES))
+    C = rt.costs(P, M, ranges, motion)
+    order, method, bound = rt.order(C, bottleneck=not motion.timed)
+    moves = [0.0] + [float(C[a, b]) for a, b in zip(order, order[1:])]
+    turned = rt.travel(P, ranges)
+    notes = []
+    if motion.timed and res.multi and stand is not None and stand.remount_s is None:
+        notes.append("the description states no remount_s: a change of mounting is counted as no time")
+    if motion.timed and any(a is None for a in motion.acceleration):
+        notes.append("an angle without acceleration_deg_s2 is taken to reach its speed at once")
+    total = float(sum(moves))
+    return {"objective": "total stand time, s" if motion.timed else "largest angle turned in one move, degrees",
+            "method": method, "positions": [res.position(res.plan[k]) for k in order],
+            "turned_deg": [[0.0] * len(res.mod.ANGLES)] + [turned[a, b].tolist() for a, b in zip(order, order[1:])],
+            "move": moves, "arrive_s": list(np.cumsum(moves)) if motion.timed else None,
+            "total": total if motion.timed else max(moves), "lower_bound": bound,
+            "gap": None if bound is None or not bound else total / bound - 1, "notes": notes,
+            "layout": layout(res.mod)[0]}
