@@ -246,7 +246,6 @@ def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_positio
     # bound elsewhere.
     mod = models.load("two-axis")
     pos = _random_positions(mod, 400, seed=3)
-    A = lp.measurement_matrix(mod, np.column_stack(pos.radians))
     p = np.random.default_rng(3).uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
     z = (mod.residual(*pos.radians, mod.readings(*pos.radians, p, G), G).T
          + np.random.default_rng(4).uniform(-1e-5, 1e-5, (len(pos.f), 3))).reshape(-1)

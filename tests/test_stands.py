@@ -4,7 +4,6 @@ import json
 import numpy as np
 import pytest
 
-from garant.derive import description
 from garant.derive.builtin import MODELS, STANDS_DIR
 from garant.verify import models
 from garant.verify.solve import plans
