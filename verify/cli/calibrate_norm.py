@@ -29,7 +29,7 @@ def add(sub):
     options.units(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
-    p.add_argument("--report", metavar="DIR", help="DIR/report.md: verdict, tables, plots, the command")
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, tables, plots, the command, inputs SHA-256) and DIR/report.md")
     p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
                    "for `garant apply`")
     p.add_argument("--export-imu-tk", metavar="FILE", help="write the calibration in imu_tk's form (T, K, B)")
@@ -200,16 +200,16 @@ def _report(res, args):
         + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} ({res['delta_sigma_source']}), " \
         + f"proven remainder {res['remainder_bound']:.1e} (units of g)"
     sections = [("Verdict", verdict), ("Premises", res["premises"]),
-                ("Calibration a = M (raw - b)", report.markdown_table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
+                ("Calibration a = M (raw - b)", report.Table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
                  [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
     if res["consistent"]:
         pars = res.get("parameters") or {}
-        sections.append(("Parameters of (1.3) and their guaranteed errors", report.markdown_table(
+        sections.append(("Parameters of (1.3) and their guaranteed errors", report.Table(
             ("parameter", "estimate", "guaranteed error", "on the optimal plan"),
             [(k, f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
              for k, v in res["guaranteed_error"].items()])))
-    sections += [("Residual per still interval", "![residuals](residuals.png)"),
-                 ("Residual against the direction of gravity", "![directions](directions.png)")]
+    sections += [("Residual per still interval", report.Image("residuals.png")),
+                 ("Residual against the direction of gravity", report.Image("directions.png"))]
     command = f"garant calibrate-norm {args.log} --g {args.g:g} --params {args.params}" + (
         f" --format {args.format}" if args.format else "") + (f" --delta-sigma {args.delta_sigma:g}" if args.delta_sigma else "")
-    print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections)}")
+    print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections, [args.log])}")

@@ -25,7 +25,7 @@ def add(sub):
     options.units(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
-    p.add_argument("--report", metavar="DIR", help="DIR/report.md: the verdict, the table, the plot, the command")
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, tables, plots, the command, inputs SHA-256) and DIR/report.md")
     p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
                    "`garant apply`, from any stand")
     p.add_argument("--export-imu-tk", metavar="FILE", help="also write the block's calibration in imu_tk's form "
@@ -77,15 +77,16 @@ def _plots(res, mod, args):
         sections = [("Verdict", verdict), ("Premises", " ".join(filter(None, (res["premises"]["statement"] + ".",
                                                                     res["premises"]["meaning"]))))]
         if res["consistent"]:
-            sections.append(("Estimates (guaranteed error = linear + remainder)", report.markdown_table(
+            sections.append(("Estimates (guaranteed error = linear + remainder)", report.Table(
                 ("q", "definition", "estimate", "guaranteed error", "linear", "remainder", "unit"),
                 [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
                   f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
                   res["units"][q]) for q in mod.Q_NAMES])))
-        sections.append(("Residuals against each stand angle", "![residuals](residuals.png)"))
+        sections.append(("Residuals against each stand angle", report.Image("residuals.png")))
         command = "garant " + " ".join(a for a in sys.argv[1:]) if sys.argv[1:2] == ["estimate"] else \
             f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} --g {res['g']:g}"
-        page = report.write_page(args.report, f"Estimate: {args.data}", command, sections)
+        page = report.write_page(args.report, f"Estimate: {args.data}", command, sections,
+                                 [args.data, *([args.model] if str(args.model).endswith(".toml") else [])])
         print(f"wrote {page}")
 
 

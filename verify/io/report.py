@@ -101,12 +101,75 @@ def markdown_table(headers, rows):
     return "\n".join(out)
 
 
-def write_page(folder, title, command, sections):
-    """DIR/report.md: the title, the command that reproduces it, then (heading, Markdown) sections."""
+class Table(tuple):
+    """A section's table: (headers, rows), rendered as Markdown or HTML by write_page."""
+
+    def __new__(cls, headers, rows):
+        return super().__new__(cls, (tuple(headers), [tuple(r) for r in rows]))
+
+
+class Image(str):
+    """A section's plot: the name of a PNG file in the report's folder."""
+
+
+def write_page(folder, title, command, sections, inputs=()):
+    """DIR/report.md and DIR/index.html: the title, the command that reproduces it, then (heading, body)
+    sections, a body being text (with **bold**), a Table or an Image; the HTML is one self-contained file
+    (plots embedded, no request to the network, A4 print styles) that also states garant's version and
+    the SHA-256 of each input file. Returns the path of index.html."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     text = [f"# {title}", "", "Reproduce with:", "", "```sh", command, "```", ""]
     for heading, body in sections:
-        text += [f"## {heading}", "", body, ""]
+        text += [f"## {heading}", "", _markdown(body), ""]
     write_text(folder / "report.md", "\n".join(text))
-    return folder / "report.md"
+    write_text(folder / "index.html", _html(folder, title, command, sections, inputs))
+    return folder / "index.html"
+
+
+def _markdown(body):
+    if isinstance(body, Table):
+        return markdown_table(*body)
+    if isinstance(body, Image):
+        return f"![{Path(body).stem}]({body})"
+    return body
+
+
+HTML_STYLE = """body{font-family:sans-serif;max-width:60em;margin:1em auto;padding:0 1em;color:#111}
+table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}th,td{border:1px solid #999;padding:2px 6px;
+text-align:left}th{background:#eee}img{max-width:100%}pre{background:#f4f4f4;padding:0.5em;white-space:pre-wrap}
+@page{size:A4;margin:15mm}@media print{body{max-width:none;margin:0}h2{break-after:avoid}
+table,img{break-inside:avoid}}"""
+
+
+def _html(folder, title, command, sections, inputs):
+    """The report as one HTML page: every string escaped, plots as data: URIs."""
+    import base64
+    import hashlib
+    import re
+    from html import escape
+
+    from ... import __version__
+    bold = (lambda t: re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", escape(t)))      # noqa: E731
+    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">', f"<title>{escape(title)}</title>",
+           f"<style>{HTML_STYLE}</style></head><body>", f"<h1>{escape(title)}</h1>",
+           f"<p>Reproduce with:</p><pre>{escape(command)}</pre>"]
+    for heading, body in sections:
+        out.append(f"<h2>{escape(heading)}</h2>")
+        if isinstance(body, Table):
+            headers, rows = body
+            out.append("<table><tr>" + "".join(f"<th>{escape(str(h))}</th>" for h in headers) + "</tr>"
+                       + "".join("<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+                       + "</table>")
+        elif isinstance(body, Image):
+            data = base64.b64encode((folder / body).read_bytes()).decode()
+            out.append(f'<img alt="{escape(Path(body).stem)}" src="data:image/png;base64,{data}">')
+        else:
+            out.append(f"<p>{bold(body)}</p>")
+    files = [(p, hashlib.sha256(Path(p).read_bytes()).hexdigest()) for p in inputs if Path(p).is_file()]
+    out.append(f"<h2>Provenance</h2><p>garant {escape(__version__)}</p>"
+               + ("<table><tr><th>input</th><th>SHA-256</th></tr>" + "".join(
+                   f"<tr><td>{escape(str(p))}</td><td><code>{h}</code></td></tr>" for p, h in files) + "</table>"
+                  if files else ""))
+    out.append("</body></html>")
+    return "\n".join(out) + "\n"
