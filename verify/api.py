@@ -103,7 +103,7 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigm
 
 @_api_names
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
-                  search_seconds=None):
+                  search_seconds=None, max_candidates=None):
     """The position to measure next, as `garant next --json` (the same function: workflows/jobs.py).
 
     Parameters
@@ -111,14 +111,16 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     model : a built-in stand's name or a STAND.toml. data : the positions measured so far (a CSV path, a
     header alone at the start, a DataFrame or an array (0 or more rows): see `positions`). sigma : the
     noise bound (units of g). target : the guaranteed error wanted for every q (units of q); None: sigma
-    times the stand's optimal errors. grid : candidate step in degrees. g, g_uncertainty, prior : the
+    times the stand's optimal errors. grid : candidate step in degrees (at most `max_candidates`
+    positions; None: the command's default). g, g_uncertainty, prior : the
     premises of the verdict on the data, as in `estimate`.
 
     Returns
     -------
     NextPosition: `next` (None when `done`), `still_needed`, the errors before and after.
     """
-    return jobs.next_position(model, data, sigma, target, grid, g, g_uncertainty, prior, search_seconds)
+    return jobs.next_position(model, data, sigma, target, grid, g, g_uncertainty, prior, search_seconds,
+                              max_candidates)
 
 
 @_api_names

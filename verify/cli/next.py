@@ -15,6 +15,8 @@ def add(sub):
                         "optimal errors, reached by a plan of the fewest positions")
     p.add_argument("--grid", type=options.positive, metavar="STEP", help="candidate positions every STEP degrees "
                    "(detents and ranges honoured); default: detents or quarter turns")
+    p.add_argument("--max-candidates", type=options.positive_int, metavar="N",
+                   help="refuse a --grid of more than N candidate positions (times mountings; default as for plan)")
     p.add_argument("--search-seconds", type=options.positive, metavar="S",
                    help="time allowed for proving the fewest positions still needed (default as for plan)")
     options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
@@ -28,7 +30,7 @@ def run(args):
     from ..io import report
     from ..workflows import jobs
     res = jobs.next_position(args.model, args.data, args.sigma, args.target, args.grid, args.g, args.g_uncertainty,
-                             args.prior, args.search_seconds)
+                             args.prior, args.search_seconds, args.max_candidates)
     if args.json:
         report.write_json(args.json, res)
     _print(res)

@@ -45,8 +45,6 @@ def run(args):
     from ..workflows.plan import plan as search_plan
     mod = models.load(args.model)
     names, mounts = models.layout(mod)
-    if args.grid is not None and 360 % args.grid:
-        raise DataError(f"--grid {args.grid:g}: give a step that divides 360 degrees")
     res = search_plan(mod, args.model, args.grid, args.count_seconds, args.max_candidates, args.search_seconds,
                       progress=lambda text: print(f"plan: {text} ...", file=sys.stderr, flush=True),
                       certify=bool(args.certificates))

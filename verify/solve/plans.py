@@ -326,16 +326,17 @@ def _bitmask_plans(S, per_nu):
 PLAN_COUNT_LIMIT = 200
 
 
-def covering_plans(colsf, cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None, fixed=()):
+def covering_plans(cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None, fixed=()):
     """The fewest positions carrying an optimal estimator of every q, and every plan of that size: a
     mixed-integer program (HiGHS), re-solved with each plan found cut off until the size grows (or
-    `limit` plans). Returns (size, plans, complete).
+    `limit` plans). Returns (size, plans, complete, floor) as highs.covering_plans.
 
     For each q_nu, weights w >= 0 on the measurements where its dual certificate touches, with
     sum_k w_k sign_k H_k = e_nu (then sum w = lambda_nu, the optimum), and w_k <= lambda_nu x_s.
     Positions `fixed` are in every plan."""
     from . import highs
     S, _, m = cols.shape
+    colsf = _float(cols)
     blocks = []
     for nu, lam in enumerate(lams):
         cand, signs = touching(cols, lam)
@@ -384,6 +385,15 @@ def _confirm(cols, lams, plan):
     return all(is_exact(lam) for lam in lams)
 
 
+def columns(mod, angles_deg, mounts):
+    """H^(p) at the positions (S, 3, m): exact (solve/exact.py) where the stand allows, else in floating
+    point (e.g. exchange positions at 22.5 degrees)."""
+    try:
+        return exact_columns(mod, angles_deg, mounts)
+    except ValueError:
+        return np.moveaxis(H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts), -1, 0)
+
+
 def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0,
            search_seconds=None):
     """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans.
@@ -396,10 +406,7 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
     if angles_deg is None:
         angles_deg, mounts = grid(mod)
     mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
-    try:
-        cols = exact_columns(mod, angles_deg, mounts)
-    except ValueError:                                  # e.g. exchange positions at 22.5 degrees
-        cols = np.moveaxis(H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts), -1, 0)
+    cols = columns(mod, angles_deg, mounts)
     m = cols.shape[2]
     small = len(angles_deg) <= BITMASK_LIMIT
     lams, per_nu = zip(*[dual_on_grid(cols, nu, small) for nu in range(m)])
@@ -419,7 +426,7 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
             ", in floating point (positions off the 15-degree grid)" if cols.dtype.kind == "f" else "")
     else:
         left = None if deadline is None else max(deadline - time.perf_counter(), 0.5)
-        n, plans, exhaustive, floor = covering_plans(_float(cols), cols, lams, count_limit, count_seconds, left)
+        n, plans, exhaustive, floor = covering_plans(cols, lams, count_limit, count_seconds, left)
         exact = all([_confirm(cols, lams, plan) for plan in plans])
         method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
                   + ("exactly" if exact else "(in floating point where the dual is not exact)"))

@@ -65,18 +65,19 @@ def errors_on(mod, angles_deg, mounts):
     return out
 
 
-def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None, search_seconds=None):
+def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None, search_seconds=None,
+                  max_candidates=None):
     """The Next of a session whose distinct measured positions are `angles_deg` (N, angles; degrees)
     in mountings `mounts` (N,): target None is sigma times the stand's optimal errors on its reachable
     positions (then the suggestion completes a plan of the fewest positions, which the measured ones
     are part of), a number is one target for every q (units of q)."""
     from ..models import layout
     from ..solve import plans
-    from .plan import SEARCH_SECONDS, _grid
+    from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates
     names, mount_names = layout(mod)
-    P, M = _grid(mod, grid, 100_000) if grid else plans.grid(mod)
-    P, M, fixed = _with_measured(P, M, np.asarray(angles_deg, float).reshape(-1, len(names)), np.asarray(mounts, int))
-    cols = _columns(mod, P, M)
+    P, M, fixed = _with_measured(*candidates(mod, grid, max_candidates or MAX_CANDIDATES), np.asarray(angles_deg, float).reshape(-1, len(names)),
+                                 np.asarray(mounts, int))
+    cols = plans.columns(mod, P, M)
     m = len(mod.Q_NAMES)
     lams = [plans.dual_on_grid(cols, nu, False)[0] for nu in range(m)]
     optimal = np.array([float(lam[nu]) for nu, lam in enumerate(lams)])       # units of sigma
@@ -95,8 +96,7 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     if np.all(before <= goal * (1 + AT_TARGET)):
         return Next(**common, position=None, after=None, still_needed=0, still_needed_proven=True)
     if target is None:
-        n, found, _, floor = plans.covering_plans(plans._float(cols), cols, lams, 1, 1.0,
-                                                  search_seconds or SEARCH_SECONDS, fixed)
+        n, found, _, floor = plans.covering_plans(cols, lams, 1, 1.0, search_seconds or SEARCH_SECONDS, fixed)
         pool, needed, proven = [s for s in found[0] if s not in fixed], n - len(fixed), floor is None
     else:
         pool = [s for s in range(len(P)) if s not in fixed]
@@ -118,16 +118,6 @@ def _with_measured(P, M, measured, mounts):
         if int(hit[0]) not in fixed:
             fixed.append(int(hit[0]))
     return P, M, fixed
-
-
-def _columns(mod, P, M):
-    """H at the candidates, exact where the stand allows (solve/plans.py), else in floating point."""
-    from ..models import H_at
-    from ..solve import exact
-    try:
-        return exact.exact_columns(mod, P, M)
-    except ValueError:
-        return np.moveaxis(H_at(mod, np.deg2rad(P), M), -1, 0)
 
 
 def _best(mod, P, M, fixed, pool, sigma, goal):

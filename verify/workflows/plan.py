@@ -82,9 +82,7 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
     from ..proof import build
     from ..solve import continuum, plans
     names, mounts = layout(mod)
-    if grid is not None and 360 % grid:
-        raise DataError(f"grid step {grid:g}: give a step that divides 360 degrees")
-    P, M = _grid(mod, grid, max_candidates) if grid else plans.grid(mod)
+    P, M = candidates(mod, grid, max_candidates)
     if certify:
         from ..solve import exact
         try:
@@ -138,8 +136,15 @@ def _snap(X, ranges, detents, step=15.0, tol=1e-6):
     return [x for x in X if unreachable(ranges, detents, x[None]) is None]
 
 
-def _grid(mod, step, limit):
-    """Positions every `step` degrees that the stand can take, in every mounting (at most `limit` in all)."""
+def candidates(mod, step=None, limit=MAX_CANDIDATES):
+    """The candidate positions (degrees, (S, angles)) and mountings (S,) of a search: every `step` degrees
+    that the stand can take, in every mounting (at most `limit` in all), or without a step its detents
+    or quarter turns."""
+    if step is None:
+        from ..solve import plans
+        return plans.grid(mod)
+    if 360 % step:
+        raise DataError(f"--grid {step:g}: give a step that divides 360 degrees")
     from ..models import layout, reachable_grid
     n = len(mod.ANGLES)
     k = len(layout(mod)[1])
