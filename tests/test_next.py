@@ -78,3 +78,23 @@ def test_a_target_below_the_optimum_is_refused_and_a_looser_one_is_reached(tmp_p
     assert "below the stand's optimal error" in capsys.readouterr().err
     res = garant.next_position("two-axis", str(tmp_path / "s.csv"), SIGMA, target=3 * SIGMA)
     assert not res.still_needed_proven and res.still_needed >= 5    # 15 q, three readings per position
+
+
+def test_a_session_for_the_block_parameters_reaches_their_targets(tmp_path, capsys):
+    """next --mount: the targets bound the block's parameters of (28)-(29) of 000 in one mounting; each
+    'at least' of positions still needed is a true lower bound (never more than the session then took)."""
+    header, rows = _readings(tmp_path, "two-axis")
+    session = tmp_path / "s.csv"
+    session.write_text(header + "\n")
+    lower = []
+    for _ in range(len(rows) + 1):
+        res = garant.next_position("two-axis", str(session), SIGMA, mount="+y+z+x")
+        if res.done:
+            break
+        assert "Gamma12" not in res.names and "theta_k3" in res.names    # zero by the split: no target
+        lower.append(res.still_needed)
+        session.write_text(session.read_text() + _row_at(header, rows, res.next) + "\n")
+    assert res.done and res.consistent and lower
+    assert all(lb <= len(lower) - k for k, lb in enumerate(lower))
+    assert main(["next", "--model", "two-axis", str(session), "--sigma", str(SIGMA), "--mount", "+y+z+q"]) == 2
+    assert "--mount needs" in capsys.readouterr().err

@@ -200,7 +200,8 @@ def test_the_published_repeatability_tables_are_what_the_command_writes(tmp_path
     """docs/repeatability_mimu4444bt.md is the output of the command it names: rerun it and compare."""
     monkeypatch.chdir(ROOT)
     doc = ROOT / "docs" / "repeatability_mimu4444bt.md"
-    command = doc.read_text().splitlines()[0].split("`")[1].split()
+    lines = doc.read_text().splitlines()
+    command = lines[lines.index("```sh") + 1].split()
     assert command[:2] == ["garant", "repeatability"]
     out = tmp_path / "rep.md"
     args = command[1:]

@@ -7,6 +7,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from garant.verify.cli import main
@@ -15,12 +16,20 @@ REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
 
 def _reports(tmp_path):
+    """One report of each kind: estimate, calibrate-norm, diagnose, repeatability -> (folder: an input)."""
     data = tmp_path / "a<b>.csv"                             # a file name that must be escaped
     assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)]) == 0
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--report", str(tmp_path / "e")]) == 0
     log = REAL / "repeat_session2_acc.txt"
     assert main(["calibrate-norm", str(log), "--report", str(tmp_path / "c")]) == 0
-    return {"e": data, "c": log}
+    hidden = tmp_path / "h.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--effect",
+                 "scale_asymmetry=5e-5,0,0", "-o", str(hidden)]) == 0
+    assert main(["diagnose", "--model", "two-axis", str(hidden), "--sigma", "1e-5", "--report", str(tmp_path / "d")]) == 0
+    means = REAL / "mimu4444bt" / "static_positions_runs1-5.csv"
+    assert main(["repeatability", str(means), "--imu", "1", "--g", "9.80665", "--count", "0.0047884",
+                 "--report", str(tmp_path / "r")]) == 0
+    return {"e": data, "c": log, "d": hidden, "r": means}
 
 
 def test_each_report_is_one_self_contained_page(tmp_path, capsys):
@@ -40,6 +49,11 @@ def test_each_report_is_one_self_contained_page(tmp_path, capsys):
         tmp_path / "e" / "index.html").read_text()
 
 
+PROBE = ("<script>window.addEventListener('load', () => { document.body.dataset.seen = "
+         "[...document.images].map(i => i.naturalWidth + 'x' + i.getBoundingClientRect().height).join(' ') + '|' + "
+         "[...document.querySelectorAll('table')].map(t => t.getBoundingClientRect().height).join(' '); });</script>")
+
+
 def _chromium():
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
@@ -48,12 +62,52 @@ def _chromium():
 def test_each_report_renders_in_headless_chromium(tmp_path, capsys):
     _reports(tmp_path)
     capsys.readouterr()
-    for name in ("e", "c"):
+    for name in ("e", "c", "d", "r"):
         page = tmp_path / name / "index.html"
         shot = tmp_path / f"{name}.png"
-        dom = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom",
-                              page.as_uri()], capture_output=True, text=True, timeout=120).stdout
-        assert "<table>" in dom and dom.count("data:image/png;base64,") >= 1
+        # a copy with a script that records, once loaded, the decoded width and the drawn height of every
+        # plot and the drawn height of every table: what a reader sees, not what the file contains
+        probe = tmp_path / name / "probe.html"
+        probe.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
+        dom = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000",
+                              "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=120).stdout
+        seen = re.search(r'data-seen="([^"]*)"', dom)
+        assert seen, f"{name}: the page did not load"
+        images, tables = (part.split() for part in seen.group(1).split("|"))
+        assert len(images) == len(list((tmp_path / name).glob("*.png"))) and len(tables) >= 1
+        assert all(int(w) > 0 and float(h) > 50 for w, h in (x.split("x") for x in images)), images
+        assert all(float(h) > 10 for h in tables), tables
         subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
                         "--window-size=1000,3000", page.as_uri()], capture_output=True, timeout=120)
         assert shot.exists() and shot.stat().st_size > 10_000      # something visible was drawn
+
+
+@pytest.mark.parametrize("model", ["two-axis", "single-axis", "three-axis"])
+def test_the_plan_plot_shows_the_up_direction_of_each_position(tmp_path, capsys, model):
+    """plan --plot draws, per position, the direction the readings of an error-free block point along
+    (the readings of the exact model (1) of 000 at zero errors over g): one more route to the same vector."""
+    import json
+
+    from garant.verify import models
+    from garant.verify.workflows.directions import up_in_block
+    out = tmp_path / "p.json"
+    assert main(["plan", model, "--json", str(out), "--plot", str(tmp_path / "p.png")]) == 0
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+    mod = models.load(model)
+    names, mounts = models.layout(mod)
+    plan = json.loads(out.read_text())["plan"]
+    deg = np.array([p[:len(names)] for p in plan], float)
+    idx = [mounts.index(p[-1]) for p in plan] if len(mounts) > 1 else [0] * len(plan)
+    U = up_in_block(mod, deg, idx if len(mounts) > 1 else None)
+    for u, x, k in zip(U, np.deg2rad(deg), idx):
+        f = mod.readings(*x, np.zeros(len(mod.PARAMETER_NAMES)), 9.81, **({"mount": k} if len(mounts) > 1 else {}))
+        np.testing.assert_allclose(u, np.ravel(f) / 9.81, atol=1e-12)
+
+
+def test_next_plots_each_bound_before_and_after(tmp_path, capsys):
+    data = tmp_path / "q.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)]) == 0
+    (tmp_path / "s.csv").write_text("\n".join(data.read_text().splitlines()[:6]) + "\n")
+    assert main(["next", "--model", "two-axis", str(tmp_path / "s.csv"), "--sigma", "1e-5",
+                 "--plot", str(tmp_path / "n.png")]) == 0
+    assert (tmp_path / "n.png").stat().st_size > 10_000

@@ -103,7 +103,7 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigm
 
 @_api_names
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
-                  search_seconds=None, max_candidates=None):
+                  search_seconds=None, max_candidates=None, mount=None, gamma="lower"):
     """The position to measure next, as `garant next --json` (the same function: workflows/jobs.py).
 
     Parameters
@@ -113,14 +113,15 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     noise bound (units of g). target : the guaranteed error wanted for every q (units of q); None: sigma
     times the stand's optimal errors. grid : candidate step in degrees (at most `max_candidates`
     positions; None: the command's default). g, g_uncertainty, prior : the
-    premises of the verdict on the data, as in `estimate`.
+    premises of the verdict on the data, as in `estimate`. mount, gamma : target the block's parameters
+    in this mounting ((28)-(29) of 000, two-axis) instead of the q's, as `estimate --mount`.
 
     Returns
     -------
     NextPosition: `next` (None when `done`), `still_needed`, the errors before and after.
     """
     return jobs.next_position(model, data, sigma, target, grid, g, g_uncertainty, prior, search_seconds,
-                              max_candidates)
+                              max_candidates, mount, gamma)
 
 
 @_api_names

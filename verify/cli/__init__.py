@@ -55,6 +55,7 @@ def main(argv=None):
     warnings.simplefilter("ignore", RuntimeWarning)     # inputs are checked; a failure is one line
     try:
         _check_paths(args)
+        args.argv = argv                               # the command line, for the reports that reproduce it
         return args.run(args)
     except LPFailed as e:
         print(f"garant: error: {_plain(e)}", file=sys.stderr)

@@ -210,6 +210,5 @@ def _report(res, args):
              for k, v in res["guaranteed_error"].items()])))
     sections += [("Residual per still interval", report.Image("residuals.png")),
                  ("Residual against the direction of gravity", report.Image("directions.png"))]
-    command = f"garant calibrate-norm {args.log} --g {args.g:g} --params {args.params}" + (
-        f" --format {args.format}" if args.format else "") + (f" --delta-sigma {args.delta_sigma:g}" if args.delta_sigma else "")
+    command = report.command_line(args, f"garant calibrate-norm {args.log} --g {args.g:g} --params {args.params}")
     print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections, [args.log])}")

@@ -15,7 +15,9 @@ def add(sub):
     options.premises(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png")
-    p.add_argument("--report", metavar="DIR", help="write the extended model's module and report here")
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdicts, premises, "
+                   "selection steps, estimates, plot, the command, inputs SHA-256), DIR/report.md, and the extended "
+                   "model's generated module and derivation")
     return p
 
 
@@ -62,8 +64,49 @@ def run(args):
     if args.report:
         for f in diagnose.write_module(study, res["effects"], args.report):
             print(f"wrote {f}")
+        _report(res, args, names)
     if args.plot:
         plots.diagnosis(res, args.plot, f"{args.data}: residuals before and after")
     if args.json:
         report.write_json(args.json, res)
     return 0
+
+
+def _report(res, args, names):
+    """DIR/index.html and DIR/report.md: the verdicts before and after, the premises, where the data
+    disagree, each selection step, the effects added with their estimates, and the residual plot."""
+    from pathlib import Path
+
+    from ..io import plots, report
+    s = args.sigma
+    plots.diagnosis(res, Path(args.report) / "residuals.png", f"{args.data}: residuals before and after")
+    verdict = (lambda key, ok: f"minimax residual {res[key] / s:.2f} sigma (less the proven remainder, <= "
+               f"{res['remainder_bound'] / s:.2f} sigma): " + ("**consistent**" if ok else "**INCONSISTENT**"))
+    sections = [("Current model", verdict("max_residual_before", res["consistent_before"])),
+                ("Premises", res["premises"]["statement"])]
+    if res["disagreements"]:
+        worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:20]
+        sections.append((f"Where the data disagree ({len(res['disagreements'])} components; the largest 20)", report.Table(
+            ("position", *(f"{a} (deg)" for a in names), "component", "residual / sigma"),
+            [(d["position"], *(f"{d[a + '_deg']:g}" for a in names), d["component"], f"{d['residual'] / s:+.2f}")
+             for d in worst])))
+    if res["history"]:
+        sections.append(("Selection: the worst residual (units of sigma) with each candidate effect added", report.Table(
+            ("step", "effect", "worst residual / sigma"),
+            [(h["step"], e, f"{v / s:.2f}") for h in res["history"]
+             for e, v in sorted(h["scores"].items(), key=lambda kv: kv[1])])))
+    if res["effects"]:
+        sections.append(("Effects added: " + ", ".join(res["effects"]), report.Table(
+            ("parameter", "estimate", "guaranteed error", "unit", "combination"),
+            [(k, f"{v['value']:+.4e}", f"{v['bound']:.3e}", v["unit"], v["q"]) for k, v in res["estimates"].items()])))
+    notes = ["indistinguishable on this plan: " + " / ".join(g) for g in res["indistinguishable"]]
+    notes += [f"to separate {' and '.join(x['effects'])}, measure at ({', '.join(names)}) = " + "; ".join(
+        "(" + ", ".join(f"{p[a + '_deg']:g}" for a in names) + ")" for p in x["positions"]) for x in res["separating_positions"]]
+    notes += ["this plan is blind to: " + (", ".join(res["blind_to"]) or "nothing in the catalogue")]
+    notes += [f"not tried: {e} ({why})" for e, why in res["skipped"].items()]
+    sections += [("With the effects added", verdict("max_residual_after", res["consistent_after"])),
+                 ("Notes", "; ".join(notes) + "."),
+                 ("Residuals before and after (three components per position)", report.Image("residuals.png"))]
+    command = report.command_line(args, f"garant diagnose --model {args.model} {args.data} --sigma {s:g}")
+    inputs = [args.data, *([args.model] if str(args.model).endswith(".toml") else [])]
+    print(f"wrote {report.write_page(args.report, f'Diagnosis: {args.data}', command, sections, inputs)}")

@@ -83,8 +83,8 @@ def _plots(res, mod, args):
                   f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
                   res["units"][q]) for q in mod.Q_NAMES])))
         sections.append(("Residuals against each stand angle", report.Image("residuals.png")))
-        command = "garant " + " ".join(a for a in sys.argv[1:]) if sys.argv[1:2] == ["estimate"] else \
-            f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} --g {res['g']:g}"
+        command = report.command_line(args, f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} "
+                                            f"--g {res['g']:g}")
         page = report.write_page(args.report, f"Estimate: {args.data}", command, sections,
                                  [args.data, *([args.model] if str(args.model).endswith(".toml") else [])])
         print(f"wrote {page}")

@@ -21,7 +21,13 @@ def add(sub):
                    help="time allowed for proving the fewest positions still needed (default as for plan)")
     options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
     options.premises(p)
+    p.add_argument("--mount", metavar="Q", help="target the block's parameters in mounting Q (e.g. +y+z+x; "
+                   "(28)-(29) of 000, two-axis stand) instead of the q's")
+    p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
+                   help="with --mount: how Gamma + hat(theta_k) is split (as estimate)")
     options.json(p)
+    p.add_argument("--plot", metavar="FILE.png", help="each q's guaranteed error over its target, now and after "
+                   "the next position")
     return p
 
 
@@ -30,10 +36,16 @@ def run(args):
     from ..io import report
     from ..workflows import jobs
     res = jobs.next_position(args.model, args.data, args.sigma, args.target, args.grid, args.g, args.g_uncertainty,
-                             args.prior, args.search_seconds, args.max_candidates)
+                             args.prior, args.search_seconds, args.max_candidates, args.mount, args.gamma)
     if args.json:
         report.write_json(args.json, res)
     _print(res)
+    if args.plot and not res["done"] and res["consistent"] is not False:
+        from ..io import plots
+        plots.bounds_before_after(res["names"], res["guaranteed_error_before"], res["guaranteed_error_after"],
+                                  res["target"], args.plot, f"{args.data}: {len(res['measured'])} position(s) measured, "
+                                  "next: " + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in res["next"]))
+        print(f"wrote {args.plot}")
     if res["consistent"] is False:
         return options.EXIT_INCONSISTENT
     return 0
@@ -42,11 +54,11 @@ def run(args):
 def _print(res):
     from ..io import report
     fmt = (lambda v: "no estimator yet" if v is None else f"{v:.3e}")          # noqa: E731
-    after = res["guaranteed_error_after"] or [None] * len(res["q_names"])
-    report.table(("q", "target", "guaranteed error now", "after the next position"),
+    after = res["guaranteed_error_after"] or [None] * len(res["names"])
+    report.table(("q" if res["names"][0] == "q1" else "parameter", "target", "guaranteed error now", "after the next position"),
                  [(q, f"{t:.3e}", fmt(b), "-" if res["done"] else fmt(a))
-                  for q, t, b, a in zip(res["q_names"], res["target"], res["guaranteed_error_before"], after)])
-    print(f"units of q (dimensionless or rad); target: {res['target_source']}; sigma = {res['sigma']:g}; "
+                  for q, t, b, a in zip(res["names"], res["target"], res["guaranteed_error_before"], after)])
+    print(f"{res['of']}; units: dimensionless or rad; target: {res['target_source']}; sigma = {res['sigma']:g}; "
           f"{len(res['measured'])} distinct position(s) measured, {res['candidates']} reachable candidates")
     if res["consistent"] is False:
         print("the data so far refute sigma (as `garant estimate` says): find the cause before measuring more")

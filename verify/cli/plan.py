@@ -27,6 +27,8 @@ def add(sub):
     p.add_argument("--route", action="store_true", help="order the plan's positions for the least total stand "
                    "time (the description's speed_deg_s, acceleration_deg_s2, settle_s, remount_s), or without speeds "
                    "for the least largest angle per move; print the schedule (--csv carries it)")
+    p.add_argument("--plot", metavar="FILE.png", help="the up-direction in block axes at each position of the plan "
+                   "(in the route's order with --route): arrows on the unit sphere, the faces that point up")
     p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
     return p
@@ -60,6 +62,8 @@ def run(args):
         report.write_json(args.json, d)
     if certs is not None:
         _write_certificates(mod, args.certificates, certs)
+    if args.plot:
+        _plot(mod, d, args)
     if args.csv:
         header = [f"{a}_deg" for a in names] + (["mount"] if res.multi else [])
         rows = [[*pos] for pos in d["plan"]]
@@ -175,3 +179,17 @@ def run_norm(args):
                                                               for n in d["directions"]["12"]) + "\n")
         print(f"wrote {args.csv}")
     return 0
+
+
+def _plot(mod, d, args):
+    """The plan's up-directions on the unit sphere (io/plots.plan_directions), in the order printed."""
+    from .. import models
+    from ..io import plots
+    from ..workflows.directions import up_in_block
+    names, mounts = models.layout(mod)
+    positions = d["route"]["positions"] if args.route else d["plan"]
+    U = up_in_block(mod, [p[:len(names)] for p in positions],
+                    [mounts.index(p[len(names)]) for p in positions] if len(mounts) > 1 else None)
+    plots.plan_directions(U, args.plot, f"garant plan {args.model}: {len(positions)} positions"
+                          + (" in the route's order" if args.route else ""))
+    print(f"wrote {args.plot}")

@@ -29,6 +29,8 @@ def add(sub):
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
     p.add_argument("--markdown", metavar="FILE.md", help="the tables and coverage figures as Markdown")
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: the tables, the "
+                   "coverage, the effects, the plot, the command, inputs SHA-256) and DIR/report.md")
     return p
 
 
@@ -91,9 +93,16 @@ def run(args):
     if args.plot:
         plots.repeatability(results, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
+    command = report.command_line(args, "garant repeatability " + " ".join(args.logs))
     if args.markdown:
-        report.write_text(args.markdown, markdown(results, args))
+        report.write_text(args.markdown, report.markdown_page(_title(args), command, sections(results)))
         print(f"wrote {args.markdown}", file=sys.stderr)
+    if args.report:
+        from pathlib import Path
+        Path(args.report).mkdir(parents=True, exist_ok=True)
+        plots.repeatability(results, Path(args.report) / "runs.png")
+        page = sections(results) + [("Each parameter per run with its bound; dashed: the envelope", report.Image("runs.png"))]
+        print(f"wrote {report.write_page(args.report, _title(args), command, page, args.logs)}", file=sys.stderr)
     return 0 if all("envelope" in r for r in results.values()) else 3
 
 
@@ -169,47 +178,50 @@ def _summary(results):
           f"envelope {_pct(pairs)} (pairs), {_pct(loo)} (runs against the envelope of the others)")
 
 
-def markdown(results, args):
-    """The comparison of the runs as a Markdown page (the command that made it at the top)."""
+def sections(results):
+    """The comparison of the runs as report sections (io/report.py): the rules, the coverage of every
+    sensor, then per sensor its table, the effects tried, the one named and the comparisons outside."""
     from ..io import report
     comps, per_run, pairs, loo = _coverage(results)
     first = next(iter(results.values()))
-    lines = [f"Written by `garant repeatability {' '.join(args.logs)}"
-             + (f" --format {args.format}" if args.format else "") + (f" --imu {args.imu}" if args.imu else "")
-             + (f" --g {args.g:g}") + (f" --count {args.count:g}" if args.count else "")
-             + (f" --rate {args.rate:g}" if args.rate else "") + f" --markdown {args.markdown}`.", "",
-             f"Comparison: {first['comparison_rule']}. Envelope: {first['envelope_rule']}. Judged on runs left "
-             "out of it: each run pair (i, j) against e_i + e_j + D with D from the other runs, and each run "
-             "against the envelope of the others.", "",
-             report.markdown_table(["sensor", "pairs inside per-run bounds", "pairs inside with the envelope",
-                                    "runs inside the envelope of the others", "named effect", "unexplained"],
-                                   [[k, _p(r.get("coverage_per_run_bounds")), _p(r.get("coverage_with_envelope_pairs")),
-                                     _p(r.get("coverage_with_envelope_leave_one_out")), r.get("named_effect") or "none",
-                                     len(r.get("unexplained", []))] for k, r in results.items()]),
-             "", f"All sensors: {_p(per_run)} of {len(comps)} run-pair x parameter comparisons inside the per-run "
-             f"bounds; with the envelope {_p(pairs)} (pairs) and {_p(loo)} (runs against the envelope of the "
-             "others).", ""]
+    out = [("Rules", f"Comparison: {first['comparison_rule']}. Envelope: {first['envelope_rule']}. Judged on runs left "
+                     "out of it: each run pair (i, j) against e_i + e_j + D with D from the other runs, and each run "
+                     "against the envelope of the others."),
+           ("Coverage", report.Table(["sensor", "pairs inside per-run bounds", "pairs inside with the envelope",
+                                      "runs inside the envelope of the others", "named effect", "unexplained"],
+                                     [[k, _p(r.get("coverage_per_run_bounds")), _p(r.get("coverage_with_envelope_pairs")),
+                                       _p(r.get("coverage_with_envelope_leave_one_out")), r.get("named_effect") or "none",
+                                       len(r.get("unexplained", []))] for k, r in results.items()])),
+           ("All sensors", f"{_p(per_run)} of {len(comps)} run-pair x parameter comparisons inside the per-run bounds; "
+                           f"with the envelope {_p(pairs)} (pairs) and {_p(loo)} (runs against the envelope of the others).")]
+    out.append(("Premises", "Each run's bounds are those of calibrate-norm, on its own premises; run 1 of "
+                f"{next(iter(results))}: {first['runs'][0]['premises']}."))
     for label, res in results.items():
-        lines += [f"### {label}", ""]
         if "envelope" not in res:
-            lines += ["Inconsistent run(s): " + ", ".join(res["inconsistent_runs"]), ""]
+            out.append((label, "Inconsistent run(s): " + ", ".join(res["inconsistent_runs"])))
             continue
-        lines += [report.markdown_table(*_rows(res)), ""]
+        out.append((f"{label}: estimate ± guaranteed error per run (lambda 1, alpha/beta/gamma rad, eps over g)",
+                    report.Table(*_rows(res))))
+        text = ["Effects, all runs fitted at once (worst exact residual in noise units): "
+                + ", ".join(f"{x['effect']} {x['worst_in_noise_units']:.2f}" for x in res["effects"]
+                            if "skipped" not in x) + "."]
         named = next((x for x in res["effects"] if x["effect"] == res["named_effect"]), None)
-        lines += ["Effects, all runs fitted at once (worst exact residual in noise units): "
-                  + ", ".join(f"{x['effect']} {x['worst_in_noise_units']:.2f}" for x in res["effects"]
-                              if "skipped" not in x) + ".", ""]
         if named and named["changes"]:
-            lines += [f"Named: **{named['effect']}** ({named['physics']}); changes from run 1: "
-                      + "; ".join(f"{pair}: " + ", ".join(f"{k} {v:+.1e}" for k, v in ch.items())
-                                  for pair, ch in named["changes"].items()) + ".", ""]
-        out = [c for c in res["comparisons"] if not c["inside"]]
-        if out:
-            lines += ["Outside the per-run bounds: " + "; ".join(
+            text.append(f"Named: **{named['effect']}** ({named['physics']}); changes from run 1: "
+                        + "; ".join(f"{pair}: " + ", ".join(f"{k} {v:+.1e}" for k, v in ch.items())
+                                    for pair, ch in named["changes"].items()) + ".")
+        outside = [c for c in res["comparisons"] if not c["inside"]]
+        if outside:
+            text.append("Outside the per-run bounds: " + "; ".join(
                 f"runs {c['runs'][0]}-{c['runs'][1]} {c['parameter']} ({c['gap'] / c['bound']:.2f}x, "
                 + (f"explained by {c['explained_by']})" if c.get("explained_by") else "UNEXPLAINED)")
-                for c in out) + ".", ""]
-    return "\n".join(lines)
+                for c in outside) + ".")
+        out.append((f"{label}: effects", " ".join(text)))
+    return out
+
+
+def _title(args):
+    return "Repeatability: " + ", ".join(args.logs)
 
 
 def _p(x):

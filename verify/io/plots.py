@@ -164,3 +164,86 @@ def realised_plan(s, path):
     fig.tight_layout(rect=(0, 0.14, 1, 1))
     save_figure(fig, path)
     plt.close(fig)
+
+
+def _face(u):
+    """The block face nearest to pointing up along u: '+x' ... '-z'."""
+    k = int(np.argmax(np.abs(u)))
+    return ("+" if u[k] > 0 else "-") + "xyz"[k]
+
+
+def plan_directions(U, path, title):
+    """PNG: the up-direction in block axes at each position of a plan (U: (S, 3) unit vectors, in the
+    plan's order), as arrows on the unit sphere and on the two hemispheres seen from outside (equal-area),
+    each labelled with its number and the face of the block nearest to pointing up."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    U = np.asarray(U, float)
+    groups = {}                                        # positions with one up-direction share a label
+    for k, u in enumerate(U, 1):
+        groups.setdefault(tuple(np.round(u, 6) + 0.0), []).append(str(k))
+    fig = plt.figure(figsize=(13, 4.4))
+    ax = fig.add_subplot(1, 3, 1, projection="3d")
+    a, b = np.meshgrid(np.linspace(0, 2 * np.pi, 37), np.linspace(0, np.pi, 19))
+    ax.plot_wireframe(np.cos(a) * np.sin(b), np.sin(a) * np.sin(b), np.cos(b), color="0.85", lw=0.4)
+    ax.quiver(0, 0, 0, U[:, 0], U[:, 1], U[:, 2], color="C0", arrow_length_ratio=0.08, lw=1.2)
+    for u, ks in groups.items():
+        ax.text(*(1.15 * np.array(u)), ",".join(ks), fontsize=7)
+    ax.set_xlabel("block x")
+    ax.set_ylabel("block y")
+    ax.set_zlabel("block z")
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_title("up-direction at each position", fontsize=9)
+    for panel, sign, name in ((2, 1, "upper half (z >= 0), seen from +z"), (3, -1, "lower half (z < 0), seen from -z")):
+        h = fig.add_subplot(1, 3, panel)
+        h.add_patch(plt.Circle((0, 0), 1, fill=False, color="0.5"))
+        for u, ks in groups.items():
+            u = np.array(u)
+            if (u[2] < 0) != (sign < 0):
+                continue
+            r = np.sqrt(max(0.0, 1 - sign * u[2]))               # equal-area: radius sqrt(1 - cos(polar angle))
+            xy = np.array([u[0], sign * u[1]])
+            xy = r * xy / (np.linalg.norm(xy) or 1.0)
+            h.plot(*xy, "o", color="C0", ms=5)
+            h.annotate(f"{','.join(ks)}: {_face(u)} up", xy, xytext=(4, 4), textcoords="offset points", fontsize=7)
+        h.set_xlim(-1.3, 1.3)
+        h.set_ylim(-1.3, 1.3)
+        h.set_aspect("equal")
+        h.set_xlabel("block x")
+        h.set_ylabel("block y" if sign > 0 else "block -y (seen from below)")
+        h.set_title(name, fontsize=9)
+    fig.suptitle(title + " (number: position; face: the block face nearest to pointing up)", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.94))
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def bounds_before_after(q_names, before, after, target, path, title):
+    """PNG: each q's guaranteed error over its target before the next position and after it (log scale),
+    the target at 1; a q without an estimator yet drawn at the top, hatched."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    t = np.asarray(target, float)
+    ratios = [np.asarray([np.inf if v is None else v for v in x], float) / t for x in (before, after)]
+    finite = np.concatenate([r[np.isfinite(r)] for r in ratios])
+    top = 2 * max(finite.max() if finite.size else 1.0, 1.0)
+    fig, ax = plt.subplots(figsize=(max(6, 0.55 * len(q_names)), 4))
+    x = np.arange(len(q_names))
+    for shift, r, colour, label in ((-0.2, ratios[0], "C3", "now"), (0.2, ratios[1], "C0", "after the next position")):
+        none = ~np.isfinite(r)
+        if (~none).any():
+            ax.bar(x[~none] + shift, r[~none], 0.4, color=colour, label=label)
+        if none.any():
+            ax.bar(x[none] + shift, top, 0.4, color="none", edgecolor=colour, hatch="//",
+                   label=f"{label}: no estimator yet")
+    ax.axhline(1, color="k", lw=1, label="target")
+    ax.set_yscale("log")
+    ax.set_xticks(x, q_names, rotation=60, fontsize=8)
+    ax.set_ylabel("guaranteed error / target")
+    ax.set_title(title, fontsize=9)
+    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=7)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)

@@ -119,12 +119,25 @@ def write_page(folder, title, command, sections, inputs=()):
     the SHA-256 of each input file. Returns the path of index.html."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    write_text(folder / "report.md", markdown_page(title, command, sections))
+    write_text(folder / "index.html", _html(folder, title, command, sections, inputs))
+    return folder / "index.html"
+
+
+def markdown_page(title, command, sections):
+    """The page of write_page as Markdown: the title, the command that reproduces it, the sections."""
     text = [f"# {title}", "", "Reproduce with:", "", "```sh", command, "```", ""]
     for heading, body in sections:
         text += [f"## {heading}", "", _markdown(body), ""]
-    write_text(folder / "report.md", "\n".join(text))
-    write_text(folder / "index.html", _html(folder, title, command, sections, inputs))
-    return folder / "index.html"
+    return "\n".join(text)
+
+
+def command_line(args, fallback):
+    """The command that reproduces a result: the argument list `garant` was given (shell-quoted), or
+    `fallback` when the work was not started from the command line."""
+    import shlex
+    argv = getattr(args, "argv", None)
+    return "garant " + shlex.join(argv) if argv else fallback
 
 
 def _markdown(body):

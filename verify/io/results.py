@@ -121,7 +121,9 @@ class Correction(Result):
 class NextPosition(Result):
     """`garant next --json`: where a calibration session stands and the position to measure next."""
 
-    FIELDS = {"done": "whether every q's guaranteed error is at or below its target",
+    FIELDS = {"names": "what the targets bound: q1..qm, or the block's parameters with --mount",
+              "of": "what `names` are, in words",
+              "done": "whether every q's guaranteed error is at or below its target",
               "next": "the position to measure next: angles in degrees (and the mounting); None when done",
               "still_needed": "positions still needed, the next one included",
               "still_needed_proven": "whether still_needed is the fewest (else a lower bound)",

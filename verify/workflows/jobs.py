@@ -107,7 +107,7 @@ def _log(log, fmt, sensor, imu):
 
 
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
-                  search_seconds=None, max_candidates=None):
+                  search_seconds=None, max_candidates=None, mount=None, gamma="lower"):
     """The position to measure next on a stand, from the positions measured so far (a positions CSV,
     a header alone at the start, or an array; see `positions_of`): next.py's suggestion, and once every
     q has an estimator the verdict of `estimate` on the data (`consistent`; its `disagreements` when
@@ -117,7 +117,7 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     pos = positions_of(mod, data, empty_ok=True)
     mounts = pos.mounts if pos.mounts is not None else np.zeros(len(pos.angles_deg), int)
     out = results.NextPosition(suggest(mod, model, pos.angles_deg, mounts, sigma, target, grid,
-                                       search_seconds, max_candidates).to_dict())
+                                       search_seconds, max_candidates, mount, gamma).to_dict())
     out["consistent"] = None
     if all(e is not None for e in out["guaranteed_error_before"]):
         verdict = estimate(model, data, sigma, g, g_uncertainty, prior)

@@ -20,7 +20,8 @@ class Next:
 
     model: str
     angles: list                  # the stand's angle names (positions list angles in this order, in degrees)
-    q_names: list
+    names: list                   # what the targets bound: the q's, or the block's parameters (--mount)
+    of: str                       # what they are, in words
     sigma: float
     target: np.ndarray            # per q
     target_source: str
@@ -40,7 +41,7 @@ class Next:
     def to_dict(self):
         """The result as `garant next --json` writes it (an error not yet finite is null)."""
         finite = (lambda v: None if v is None else [None if not np.isfinite(x) else float(x) for x in v])
-        return {"model": self.model, "angles": list(self.angles), "q_names": list(self.q_names), "sigma": self.sigma,
+        return {"model": self.model, "angles": list(self.angles), "names": list(self.names), "of": self.of, "sigma": self.sigma,
                 "target": [float(t) for t in self.target], "target_source": self.target_source,
                 "measured": self.measured, "guaranteed_error_before": finite(self.before), "done": self.done,
                 "next": self.position, "guaranteed_error_after": finite(self.after),
@@ -48,61 +49,100 @@ class Next:
                 "candidates": self.candidates}
 
 
-def errors_on(mod, angles_deg, mounts):
-    """The optimal guaranteed error of each q on these positions (units of sigma): the LP (7)-(8) of
-    000 for the q an unbiased estimator exists for, inf for the others."""
-    from ..models import H_at
-    from ..solve import lp
+def errors_on(mod, angles_deg, mounts, C=None):
+    """The optimal guaranteed error of each functional c^T q (the rows of C; None: each q) on these
+    positions (units of sigma): the LP (7)-(8) of 000 with a = c for those an unbiased estimator exists
+    for, inf for the others."""
     m = len(mod.Q_NAMES)
-    out = np.full(m, np.inf)
+    C = np.eye(m) if C is None else np.asarray(C, float)
+    out = np.full(len(C), np.inf)
     if not len(angles_deg):
         return out
-    H = H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts)           # (3, m, S)
-    A = np.transpose(H, (1, 2, 0)).reshape(m, -1)
-    estimable = np.linalg.norm(A @ np.linalg.pinv(A) - np.eye(m), axis=0) < 1e-9   # e_nu in A's column space
+    A = _matrix(mod, angles_deg, mounts)
+    estimable = np.linalg.norm(A @ (np.linalg.pinv(A) @ C.T) - C.T, axis=0) < 1e-9 * (1 + np.abs(C).sum(axis=1))
     if estimable.any():
-        out[estimable] = lp.primal(A, np.eye(m)[:, estimable])[1]
+        from ..solve import lp
+        out[estimable] = lp.primal(A, C[estimable].T)[1]
     return out
 
 
+def _matrix(mod, angles_deg, mounts):
+    """The measurement matrix (m, 3S) of the positions (degrees, with their mountings)."""
+    from ..models import H_at
+    H = H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts)           # (3, m, S)
+    return np.transpose(H, (1, 2, 0)).reshape(len(mod.Q_NAMES), -1)
+
+
+def rank_still_needed(mod, angles_deg, mounts, C):
+    """A lower bound on the positions still needed before every functional (row of C) has an unbiased
+    estimator: the dimensions the measured positions lack, rank [A, C^T] - rank A, three at most per position
+    (three readings)."""
+    A = _matrix(mod, angles_deg, mounts) if len(angles_deg) else np.zeros((len(mod.Q_NAMES), 0))
+    rank = (lambda X: int(np.linalg.matrix_rank(X, tol=1e-9 * max(1.0, np.abs(X).max()))) if X.size else 0)  # noqa: E731
+    return math.ceil((rank(np.hstack([A, np.asarray(C, float).T])) - rank(A)) / 3)
+
+
+def block_functionals(mod, model, mount, gamma="lower"):
+    """(C, names, units): the block's parameters in mounting `mount` as functionals of q, the rows of the
+    recovery matrix K of (28)-(29) of 000 (biases over g)."""
+    from ..models import load_remount
+    remount = None if str(model).endswith(".toml") else load_remount(model)
+    if remount is None or mount not in remount.MOUNTS:
+        raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like +y+z+x; "
+                        f"got {mount!r}")
+    return remount.recovery_matrix(mount, gamma), list(remount.OUTPUTS), list(remount.UNITS)
+
+
 def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None, search_seconds=None,
-                  max_candidates=None):
+                  max_candidates=None, mount=None, gamma="lower"):
     """The Next of a session whose distinct measured positions are `angles_deg` (N, angles; degrees)
     in mountings `mounts` (N,): target None is sigma times the stand's optimal errors on its reachable
-    positions (then the suggestion completes a plan of the fewest positions, which the measured ones
-    are part of), a number is one target for every q (units of q)."""
+    positions (then, for the q's, the suggestion completes a plan of the fewest positions, which the
+    measured ones are part of), a number is one target for every q (units of q). With `mount` the targets
+    bound the block's parameters in that mounting ((28)-(29) of 000) instead of the q's."""
     from ..models import layout
     from ..solve import plans
     from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates
     names, mount_names = layout(mod)
     P, M, fixed = _with_measured(*candidates(mod, grid, max_candidates or MAX_CANDIDATES), np.asarray(angles_deg, float).reshape(-1, len(names)),
                                  np.asarray(mounts, int))
-    cols = plans.columns(mod, P, M)
     m = len(mod.Q_NAMES)
-    lams = [plans.dual_on_grid(cols, nu, False)[0] for nu in range(m)]
-    optimal = np.array([float(lam[nu]) for nu, lam in enumerate(lams)])       # units of sigma
+    if mount is None:
+        C, labels, of = None, list(mod.Q_NAMES), "the combinations q of (4) of 000"
+        cols = plans.columns(mod, P, M)
+        lams = [plans.dual_on_grid(cols, nu, False)[0] for nu in range(m)]
+        optimal = np.array([float(lam[nu]) for nu, lam in enumerate(lams)])       # units of sigma
+    else:
+        C, labels, _ = block_functionals(mod, model, mount, gamma)
+        keep = np.any(C != 0, axis=1)              # an entry the split sets to zero is no target
+        C, labels = C[keep], [n for n, k in zip(labels, keep) if k]
+        of = f"the block's parameters in mounting {mount}, (28)-(29) of 000 (biases over g)"
+        optimal = errors_on(mod, P, M, C)
+        if not np.all(np.isfinite(optimal)):
+            raise DataError(f"--mount {mount}: this stand does not separate "
+                            + ", ".join(n for n, o in zip(labels, optimal) if not np.isfinite(o)))
     if target is None:
         goal, source = sigma * optimal, "sigma x the stand's optimal errors on its reachable positions"
     else:
-        goal, source = np.full(m, float(target)), "--target"
-        short = [f"{q} ({sigma * o:.3g})" for q, o in zip(mod.Q_NAMES, optimal) if sigma * o > target * (1 + AT_TARGET)]
+        goal, source = np.full(len(labels), float(target)), "--target"
+        short = [f"{q} ({sigma * o:.3g})" for q, o in zip(labels, optimal) if sigma * o > target * (1 + AT_TARGET)]
         if short:
             raise DataError(f"--target {target:g} is below the stand's optimal error of {', '.join(short)}: no plan "
                             "of its reachable positions reaches it")
-    before = sigma * errors_on(mod, P[fixed], M[fixed])
+    before = sigma * errors_on(mod, P[fixed], M[fixed], C)
     position = lambda s: [*(float(v) for v in P[s]), *([mount_names[M[s]]] if len(mount_names) > 1 else [])]  # noqa: E731
-    common = dict(model=model, angles=list(names), q_names=list(mod.Q_NAMES), sigma=sigma, target=goal, target_source=source,
+    common = dict(model=model, angles=list(names), names=labels, of=of, sigma=sigma, target=goal, target_source=source,
                   measured=[position(s) for s in fixed], before=before, candidates=len(P))
     if np.all(before <= goal * (1 + AT_TARGET)):
         return Next(**common, position=None, after=None, still_needed=0, still_needed_proven=True)
-    if target is None:
+    if target is None and mount is None:
         n, found, _, floor = plans.covering_plans(cols, lams, 1, 1.0, search_seconds or SEARCH_SECONDS, fixed)
         pool, needed, proven = [s for s in found[0] if s not in fixed], n - len(fixed), floor is None
     else:
         pool = [s for s in range(len(P)) if s not in fixed]
-        deficit = int(np.sum(~np.isfinite(before)))
-        needed, proven = max(1, math.ceil(deficit / 3)), False        # each position gives three readings
-    best, after = _best(mod, P, M, fixed, pool, sigma, goal)
+        needed = max(1, rank_still_needed(mod, P[fixed], M[fixed], np.eye(m) if C is None else C))
+        proven = False
+    best, after = _best(mod, P, M, fixed, pool, sigma, goal, C)
     return Next(**common, position=position(best), after=after, still_needed=needed, still_needed_proven=proven)
 
 
@@ -120,13 +160,13 @@ def _with_measured(P, M, measured, mounts):
     return P, M, fixed
 
 
-def _best(mod, P, M, fixed, pool, sigma, goal):
+def _best(mod, P, M, fixed, pool, sigma, goal, C=None):
     """The position of `pool` whose addition leaves the fewest q without an estimator, then the smallest
     largest ratio error / target, then the smallest sum of ratios; and the errors once it is added."""
     best, key, after = None, None, None
     for s in pool:
         idx = [*fixed, s]
-        e = sigma * errors_on(mod, P[idx], M[idx])
+        e = sigma * errors_on(mod, P[idx], M[idx], C)
         r = e / goal
         finite = r[np.isfinite(r)]
         k = (int(np.sum(~np.isfinite(r))), float(finite.max()) if len(finite) else 0.0, float(finite.sum()))
