@@ -125,14 +125,15 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
 
 
 @_api_names
-def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
+def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):
     """The missing-effect workflow on positions (a CSV path, a DataFrame or an array: see `positions`),
     as `garant diagnose --json`.
 
     Parameters
     ----------
     model : a built-in stand's name or a STAND.toml. data : positions. sigma : the noise bound (units of g).
-    g : gravity, m/s^2. prior, g_uncertainty : premises as in `estimate`.
+    g : gravity, m/s^2 (None: 9.81 with the uncertainty of an assumed g). prior, g_uncertainty : premises as in
+    `estimate`.
 
     Returns
     -------

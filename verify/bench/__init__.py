@@ -141,6 +141,7 @@ def bench_diagnose(mod):
 
     from ..io.positions import read_positions
     from ..workflows import diagnose, simulate
+    from ..workflows.premises import premises
     P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "grid:30x45", [("scale_quadratic", [1e-4, 0, 0])],
                                       1e-5, 0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -150,7 +151,7 @@ def bench_diagnose(mod):
         def run():
             derivation.derive.cache_clear()
             derivation.numeric_H.cache_clear()
-            return diagnose.diagnose(TWO_AXIS_MODEL, mod, pos, 1e-5, 9.81)
+            return diagnose.diagnose(TWO_AXIS_MODEL, mod, pos, 1e-5, premises(mod, 1e-5, 9.81))
         t_run, res = timed(run)
     assert res["effects"] == ["scale_quadratic"]
     def render_all():

@@ -11,7 +11,7 @@ def add(sub):
     p.add_argument("data", metavar="DATA.csv", help="as for estimate; optional columns time_s, temp_c")
     options.model(p)
     options.sigma(p, "noise bound, units of g")
-    options.g(p)
+    options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
     options.premises(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png")

@@ -104,7 +104,8 @@ class Diagnosis(Result):
     """`garant.diagnose`: where the model and the data disagree, and the effect that closes the gap."""
 
     FIELDS = {"consistent_before": "whether the base model fits the data within sigma",
-              "effects": "the effects named", "estimates": "each named effect's parameters",
+              "effects": "the fewest effects that make the model consistent", "estimates": "each named effect's parameters",
+              "indistinguishable": "per named effect, it and the alternatives that, in its place, also make the model consistent",
               "blind_to": "effects these positions cannot see", "premises": "what the verdict assumes"}
 
 

@@ -16,10 +16,8 @@ from ..errors import DataError
 from ..models import reachable_grid
 from ..solve import highs, lp
 from . import guarantee
-from .premises import premises
 from .estimate import check_residual_size
 
-TIE = 0.02                    # scores within 2% (of sigma) count as equal
 
 
 def chebyshev_fit(A, z, rb=None):
@@ -65,6 +63,25 @@ class Study:
         """The base model extended by the named catalogue effects."""
         return self.cat.extend(self.base_model, names)
 
+    def relinearise(self, lin, A0):
+        """Fit at the exact-model fit `lin` (guarantee.linearise), as `estimate` does: the residuals become
+        z - z0 + A^T q0 (the curvature of the base model at the fit removed) and, in every extended matrix,
+        the base combinations' rows A0 are replaced by the relinearised A (mapped through the extended
+        combinations: exactly where the effect keeps the base q's, (4) of 000, as most do)."""
+        self.lin, self._dA = lin, lin.A - A0
+        self.z_fit = self.z - lin.z0 + lin.A.T @ lin.q0
+
+    def A_fit(self, names):
+        """The extended measurement matrix at the fit (relinearise): A(names) with the base part moved."""
+        A = self.A(names)
+        if not names:
+            return A + self._dA
+        from garant.derive.derivation import derive
+        R0 = np.asarray(derive(self.base_model).ident.R, float)
+        R = np.asarray(derive(self.model(names)).ident.R, float)
+        T = np.hstack([R0, np.zeros((R0.shape[0], R.shape[1] - R0.shape[1]))]) @ np.linalg.pinv(R)   # q_base = T q_ext
+        return A + T.T @ self._dA
+
     def H(self, names, angles=None, columns=None, mounts=None):
         """H of the extended model at positions, (3, m, N): rows of each position's mounting."""
         key = tuple(sorted(names, key=list(self.cat.CATALOGUE).index))
@@ -105,7 +122,7 @@ def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
     cols = {k: np.full(grid.shape[1], np.mean(v)) for k, v in study.columns.items()}
     preds = []
     for alt in (alt1, alt2):
-        q, _, _ = chebyshev_fit(study.A(chosen + [alt]), study.z)
+        q, _, _ = chebyshev_fit(study.A_fit(chosen + [alt]), study.z_fit)
         preds.append(np.einsum("pns,n->sp", study.H(chosen + [alt], tuple(grid), cols, mounts), q))
     diff = np.abs(preds[0] - preds[1]).max(axis=1)
     best = np.argsort(diff)[::-1][:top]
@@ -115,64 +132,101 @@ def separating_positions(study, chosen, alt1, alt2, step=30, top=3):
              "predicted_difference": float(diff[k])} for k in best]
 
 
-PRIOR = 1e-3   # diagnose linearises at zero errors: one a-priori bound for every error, by default this
-
-
-def diagnose(base_model, mod, positions, sigma, g, prior=None, g_uncertainty=None):
-    """The discrepancy workflow: a fit is consistent when its minimax residual less the proven
-    linearisation remainder (a posteriori, workflows/guarantee.py; the linear model (2) at zero errors,
-    so every error within `prior`, default PRIOR, and Delta_g/g within g_uncertainty, default the
-    same) is at most sigma."""
-    prior = PRIOR if prior is None else prior
-    g_uncertainty = prior if g_uncertainty is None else g_uncertainty
-    study = Study(base_model, mod, positions, g)
+def diagnose(base_model, mod, positions, sigma, premises):
+    """The discrepancy workflow, on the fit `estimate` makes: the exact model linearised at its minimax
+    fit, the proven remainder a posteriori around it (workflows/guarantee.py, under `premises`), so the
+    threshold stays near sigma for MEMS-size units too. The current model is consistent when `estimate`'s
+    verdict says so; an extended model when its minimax residual less that remainder is at most sigma."""
+    study = Study(base_model, mod, positions, premises.g)
     check_residual_size(study.z.reshape(-1, 3), positions.path)
     A0 = study.A([])
     if rank(A0) < A0.shape[0]:
         raise DataError(f"{positions.path}: these positions cannot identify the current model; "
                         "see `garant identify --plan`")
-    prem = premises(mod, sigma, g, prior=prior, g_uncertainty=g_uncertainty)
-    lin = guarantee.linearise(mod, positions, study.z, A0, prem, at_zero=True)
-    rb = guarantee.verdict(lin, study.z, sigma, lp.primal(A0)[0].T).remainder
-    limit = sigma
-    _, t0, r0 = chebyshev_fit(A0, study.z, rb)
+    lin = guarantee.linearise(mod, positions, study.z, A0, premises)
+    before = guarantee.verdict(lin, study.z, sigma, lp.primal(lin.A)[0].T)
+    rb = before.remainder
+    study.relinearise(lin, A0)
+    t0, r0 = before.minimax_less_remainder, before.residual
     candidates, skipped = study.available()
     base_rank = rank(A0)
     blind = [e for e in candidates if rank(study.A([e])) == base_rank]
     usable = [e for e in candidates if e not in blind]
-    chosen, score, history, indistinguishable, separate = [], t0, [], [], []
-    while score > limit and len(chosen) < len(usable):
-        scores = {e: chebyshev_fit(study.A(chosen + [e]), study.z, rb)[1] for e in usable if e not in chosen}
-        best = min(scores, key=scores.get)
-        if scores[best] >= score * (1 - 1e-6):
-            break
-        ties = [e for e, s in scores.items() if s <= scores[best] + TIE * sigma and e != best]
-        history.append({"step": len(chosen) + 1, "scores": scores})
-        if ties and scores[best] <= limit:
-            group = [best] + ties
-            indistinguishable.append(group)
-            separate += [{"effects": [best, t], "positions": separating_positions(study, chosen, best, t)}
-                         for t in ties]
-        chosen.append(best)
-        score = scores[best]
-    A1 = study.A(chosen)
-    _, t1, r1 = chebyshev_fit(A1, study.z, rb)
+    chosen, history, indistinguishable = select(study, usable, rb, sigma, t0)
+    separate = []
+    for group in indistinguishable:
+        others = [e for e in chosen if e != group[0]]
+        separate += [{"effects": [group[0], t], "positions": separating_positions(study, others, group[0], t)}
+                     for t in group[1:]]
+    A1 = study.A_fit(chosen)
+    _, t1, r1 = chebyshev_fit(A1, study.z_fit, rb)
     estimates = effect_estimates(study, chosen, A1, sigma + rb) if chosen else {}
     names = [a.name for a in base_model.stand.angles]
     excess = [{"position": int(k // 3), "component": int(k % 3) + 1,
                **{f"{a}_deg": float(positions.angles_deg[k // 3, i]) for i, a in enumerate(names)},
                "residual": float(r0[k]), "remainder": float(rb[k]),
                "excess_over_sigma": float(abs(r0[k]) - rb[k] - sigma)}
-              for k in np.flatnonzero(np.abs(r0) - rb > sigma)]
+              for k in before.disagree]
     return {
-        "sigma": sigma, "prior": prior, "premises": prem.to_dict(), "remainder_bound": float(rb.max()), "consistent_before": bool(t0 <= limit),
-        "max_residual_before": t0, "disagreements": excess, "effects": chosen,
+        "sigma": sigma, "premises": premises.to_dict(), "remainder_bound": float(rb.max()),
+        "consistent_before": before.consistent, "max_residual_before": t0, "disagreements": excess, "effects": chosen,
         "indistinguishable": indistinguishable, "separating_positions": separate,
-        "consistent_after": bool(t1 <= limit), "max_residual_after": t1, "estimates": estimates,
+        "consistent_after": bool(t1 <= sigma), "max_residual_after": t1, "estimates": estimates,
         "blind_to": blind, "skipped": skipped, "history": history,
         "residual_before": r0.reshape(-1, 3).tolist(), "residual_after": r1.reshape(-1, 3).tolist(),
         "_study": study,
     }
+
+
+#: The most effects named at once: the fewest that explain the data are searched among all sets up to this size.
+MAX_EFFECTS = 3
+
+
+def select(study, usable, rb, sigma, t0):
+    """The fewest effects that make the model consistent: forward selection (the effect that lowers the
+    minimax residual most, until it is at most sigma), then every effect named is tried without (backward:
+    one the data do not need is dropped), then, if the model is still inconsistent, every set of up to
+    MAX_EFFECTS. Returns (chosen, history of scores, groups of effects that explain the data equally well).
+    A group lists the chosen effect first, then each alternative that, put in its place, also makes the
+    model consistent: the data cannot tell them apart under the noise bound."""
+    memo = {}
+
+    def score(names):
+        key = frozenset(names)
+        if key not in memo:
+            memo[key] = chebyshev_fit(study.A_fit(sorted(key, key=usable.index)), study.z_fit, rb)[1]
+        return memo[key]
+    chosen, current, history = [], t0, []
+    while current > sigma and len(chosen) < len(usable):
+        scores = {e: score(chosen + [e]) for e in usable if e not in chosen}
+        best = min(scores, key=scores.get)
+        if scores[best] >= current * (1 - 1e-6):
+            break
+        history.append({"step": len(chosen) + 1, "scores": scores})
+        chosen.append(best)
+        current = scores[best]
+    if current > sigma:                     # forward steps stalled: the fewest of all small sets, if any
+        import itertools
+        for k in range(len(chosen) + 1, min(MAX_EFFECTS, len(usable)) + 1):
+            fits = [(score(list(c)), list(c)) for c in itertools.combinations(usable, k)]
+            best_score, best_set = min(fits)
+            if best_score <= sigma:
+                chosen, current = best_set, best_score
+                history.append({"step": "all sets of " + str(k), "scores": {"+".join(c): v for v, c in fits}})
+                break
+    for e in list(chosen):                  # backward: drop an effect the others explain the data without
+        if len(chosen) > 1:
+            without = [x for x in chosen if x != e]
+            if score(without) <= max(sigma, current):
+                chosen = without
+    groups = []
+    if current <= sigma:
+        for e in chosen:
+            rest = [x for x in chosen if x != e]
+            alternatives = [a for a in usable if a not in chosen and score(rest + [a]) <= sigma]
+            if alternatives:
+                groups.append([e] + alternatives)
+    return chosen, history, groups
 
 
 def effect_estimates(study, chosen, A, noise):
@@ -185,7 +239,7 @@ def effect_estimates(study, chosen, A, noise):
     Phi = np.zeros((A.shape[1], A.shape[0]))
     Phi[:, seen] = lp.primal(A, np.eye(A.shape[0])[:, seen])[0]
     err = np.abs(Phi.T) @ noise
-    q = Phi.T @ study.z
+    q = Phi.T @ study.z_fit
     names = [p.name for p in d.model.parameters]
     out = {}
     for e in chosen:

@@ -127,13 +127,15 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     return out
 
 
-def diagnose(model, data, sigma, g=G_DEFAULT, prior=None, g_uncertainty=None):
+def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):
     """The missing-effect workflow of diagnose.py on positions (see `positions_of`): the verdict of the
     current model, the catalogue effects the data need, their estimates and what separates the rest.
     The result's attribute `study` (not a field: not in JSON) is what `diagnose.write_module` needs."""
     from . import diagnose as diagnosis
     mod = models.load(model)
-    res = diagnosis.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, g, prior, g_uncertainty)
+    prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
+                         g_uncertainty=g_uncertainty, prior=prior)
+    res = diagnosis.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, prem)
     study = res.pop("_study")
     out = results.Diagnosis(res)
     out.study = study
