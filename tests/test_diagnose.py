@@ -143,7 +143,7 @@ def test_an_encoder_harmonic_near_the_floor_is_named_for_a_mems_size_unit(seed):
     # zero errors swamped a harmonic at 1.8 sigma on 96 positions and nothing was named.
     power, lab = _lab()
     pos = power.make_set(lab, "grid:30x45", "MEMS", {"alpha_encoder_harmonic": 1.8}, "uniform", seed)
-    named, tied, consistent = power.diagnosis(lab, pos)
+    named, tied, consistent, _ = power.diagnosis(lab, pos)
     assert not consistent and "alpha_encoder_harmonic" in named | tied
     assert named <= {"alpha_encoder_harmonic"} | tied
 
@@ -151,7 +151,7 @@ def test_an_encoder_harmonic_near_the_floor_is_named_for_a_mems_size_unit(seed):
 @pytest.mark.parametrize("size, noise, seed", [("MEMS", "uniform", 0), ("MEMS", "clipped", 1), ("small", "clipped", 2)])
 def test_clean_sets_raise_no_alarm_whatever_the_unit(size, noise, seed):
     power, lab = _lab()
-    named, _, consistent = power.diagnosis(lab, power.make_set(lab, "grid:30x45", size, {}, noise, seed))
+    named, _, consistent, _ = power.diagnosis(lab, power.make_set(lab, "grid:30x45", size, {}, noise, seed))
     assert consistent and not named
 
 

@@ -55,7 +55,8 @@ def run(args):
               + "; ".join("(" + ", ".join(f"{p[a + '_deg']:g}" for a in names)
                           + (f", {p['mount']}" if "mount" in p else "")
                           + f") [differ by {p['predicted_difference'] / args.sigma:.1f} sigma]" for p in s["positions"]))
-    print(f"after: minimax residual {res['max_residual_after'] / args.sigma:.2f} sigma: "
+    print(f"after: minimax residual {res['max_residual_after'] / args.sigma:.2f} sigma (limit 1 + "
+          f"{res['effect_allowance'] / args.sigma:.2f}: the added effects' rows are taken at zero errors): "
           + ("consistent" if res["consistent_after"] else "still INCONSISTENT"))
     print("this plan is blind to: " + (", ".join(res["blind_to"]) or "nothing in the catalogue"))
     for e, why in res["skipped"].items():

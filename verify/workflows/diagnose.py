@@ -70,6 +70,10 @@ class Study:
         combinations: exactly where the effect keeps the base q's, (4) of 000, as most do)."""
         self.lin, self._dA = lin, lin.A - A0
         self.z_fit = self.z - lin.z0 + lin.A.T @ lin.q0
+        # how far the unit's errors move a reading's row of H, relative to the row: an effect's own rows
+        # stay at zero errors, so its part of a fit is off by about this fraction of itself
+        col = np.abs(A0).sum(axis=0)
+        self.shift = float(np.max(np.abs(self._dA).sum(axis=0)[col > 0] / col[col > 0], initial=0.0))
 
     def A_fit(self, names):
         """The extended measurement matrix at the fit (relinearise): A(names) with the base part moved."""
@@ -152,7 +156,10 @@ def diagnose(base_model, mod, positions, sigma, premises):
     base_rank = rank(A0)
     blind = [e for e in candidates if rank(study.A([e])) == base_rank]
     usable = [e for e in candidates if e not in blind]
-    chosen, history, indistinguishable = select(study, usable, rb, sigma, t0)
+    # an extended model is consistent within sigma plus the allowance for its effects' rows taken at zero
+    # errors: at most the relative shift of H times what the effects explain (the misfit plus the noise)
+    limit = sigma + study.shift * (t0 + sigma)
+    chosen, history, indistinguishable = select(study, usable, rb, limit, t0)
     separate = []
     for group in indistinguishable:
         others = [e for e in chosen if e != group[0]]
@@ -171,7 +178,8 @@ def diagnose(base_model, mod, positions, sigma, premises):
         "sigma": sigma, "premises": premises.to_dict(), "remainder_bound": float(rb.max()),
         "consistent_before": before.consistent, "max_residual_before": t0, "disagreements": excess, "effects": chosen,
         "indistinguishable": indistinguishable, "separating_positions": separate,
-        "consistent_after": bool(t1 <= sigma), "max_residual_after": t1, "estimates": estimates,
+        "consistent_after": bool(t1 <= limit), "max_residual_after": t1, "estimates": estimates,
+        "effect_allowance": limit - sigma,
         "blind_to": blind, "skipped": skipped, "history": history,
         "residual_before": r0.reshape(-1, 3).tolist(), "residual_after": r1.reshape(-1, 3).tolist(),
         "_study": study,
@@ -183,8 +191,9 @@ MAX_EFFECTS = 3
 
 
 def select(study, usable, rb, sigma, t0):
-    """The fewest effects that make the model consistent: forward selection (the effect that lowers the
-    minimax residual most, until it is at most sigma), then every effect named is tried without (backward:
+    """The fewest effects that make the model consistent (minimax residual less the remainder rb at most
+    `sigma`, the limit diagnose passes): forward selection (the effect that lowers the minimax residual
+    most, until it is at most sigma), then every effect named is tried without (backward:
     one the data do not need is dropped), then, if the model is still inconsistent, every set of up to
     MAX_EFFECTS. Returns (chosen, history of scores, groups of effects that explain the data equally well).
     A group lists the chosen effect first, then each alternative that, put in its place, also makes the
