@@ -159,7 +159,7 @@ def diagnose(base_model, mod, positions, sigma, premises):
     # an extended model is consistent within sigma plus the allowance for its effects' rows taken at zero
     # errors: at most the relative shift of H times what the effects explain (the misfit plus the noise)
     limit = sigma + study.shift * (t0 + sigma)
-    chosen, history, indistinguishable = select(study, usable, rb, limit, t0)
+    chosen, history, indistinguishable = ([], [], []) if before.consistent else select(study, usable, rb, limit, t0)
     separate = []
     for group in indistinguishable:
         others = [e for e in chosen if e != group[0]]
@@ -191,13 +191,14 @@ MAX_EFFECTS = 3
 
 
 def select(study, usable, rb, sigma, t0):
-    """The fewest effects that make the model consistent (minimax residual less the remainder rb at most
-    `sigma`, the limit diagnose passes): forward selection (the effect that lowers the minimax residual
-    most, until it is at most sigma), then every effect named is tried without (backward:
-    one the data do not need is dropped), then, if the model is still inconsistent, every set of up to
-    MAX_EFFECTS. Returns (chosen, history of scores, groups of effects that explain the data equally well).
-    A group lists the chosen effect first, then each alternative that, put in its place, also makes the
-    model consistent: the data cannot tell them apart under the noise bound."""
+    """For a current model the data refute (minimax residual t0), the fewest effects that make it
+    consistent: minimax residual less the remainder rb at most `sigma` (the limit diagnose passes).
+    Forward selection adds the effect that lowers the minimax residual most, at least one, until the
+    model is consistent; if those steps stall, every set of up to MAX_EFFECTS is tried; then each effect
+    named is tried without (backward: one the data do not need is dropped). Returns (chosen, history of
+    scores, groups of effects that explain the data equally well): a group lists the chosen effect first,
+    then each alternative that, put in its place, also makes the model consistent (the data cannot tell
+    them apart under the noise bound)."""
     memo = {}
 
     def score(names):
@@ -205,8 +206,8 @@ def select(study, usable, rb, sigma, t0):
         if key not in memo:
             memo[key] = chebyshev_fit(study.A_fit(sorted(key, key=usable.index)), study.z_fit, rb)[1]
         return memo[key]
-    chosen, current, history = [], t0, []
-    while current > sigma and len(chosen) < len(usable):
+    chosen, current, history = [], t0, []          # the current model is refuted: at least one effect
+    while (current > sigma or not chosen) and len(chosen) < len(usable):
         scores = {e: score(chosen + [e]) for e in usable if e not in chosen}
         best = min(scores, key=scores.get)
         if scores[best] >= current * (1 - 1e-6):
