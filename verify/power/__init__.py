@@ -61,7 +61,7 @@ class Lab:
     def readings(self, effects, values, P, mounts, t, T):
         """Exact readings (N, 3) in m/s^2 with these effect values (name -> values) added to `values`."""
         from garant.derive.effects import CATALOGUE
-        exact = self.exact([e for e in effects])
+        exact = self.exact(list(effects))
         v = dict(values)
         for name, vals in effects.items():
             v.update(zip((p.name for p in CATALOGUE[name].params), vals))

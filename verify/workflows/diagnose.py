@@ -1,15 +1,20 @@
 """`garant diagnose`: find where the model and the data disagree, name the missing effect, add it.
 
-1. Chebyshev (minimax) fit of the current model: with noise bounded by sigma the best fit must come
-   within sigma (plus the linearisation remainder); the positions that do not are reported.
+1. The verdict of `estimate` on the current model (the exact model's minimax fit, linearised there, the
+   remainder proven a posteriori under the premises): with noise bounded by sigma the fit must come
+   within sigma plus that remainder; the positions that do not are reported.
 2. Each catalogue effect is added to the model symbolically (derive/effects.py, cached); an effect
    that leaves the rank of this plan's measurement matrix unchanged is zero or fully absorbed here
-   (the plan is blind to it). The others are scored by the minimax residual of the extended fit.
-3. Forward selection adds the best effect until the model is consistent; effects that explain the
-   data equally well are reported as indistinguishable, with the positions that would separate them.
+   (the plan is blind to it). The others are scored by the minimax residual of the extended fit, made
+   at the same point (Study.relinearise).
+3. select() names the fewest effects that make the model consistent (forward, all small sets, backward);
+   alternatives that do so in a chosen effect's place are reported as indistinguishable, with the
+   positions that would separate them.
 4. The chosen effects are estimated with guaranteed bounds (the LP on these positions), the extended
    model's module is written, and the residuals before and after are shown against +-sigma.
 """
+import itertools
+
 import numpy as np
 
 from ..errors import DataError
@@ -17,7 +22,6 @@ from ..models import reachable_grid
 from ..solve import highs, lp
 from . import guarantee
 from .estimate import check_residual_size
-
 
 
 def chebyshev_fit(A, z, rb=None):
@@ -68,7 +72,7 @@ class Study:
         z - z0 + A^T q0 (the curvature of the base model at the fit removed) and, in every extended matrix,
         the base combinations' rows A0 are replaced by the relinearised A (mapped through the extended
         combinations: exactly where the effect keeps the base q's, (4) of 000, as most do)."""
-        self.lin, self._dA = lin, lin.A - A0
+        self._dA = lin.A - A0
         self.z_fit = self.z - lin.z0 + lin.A.T @ lin.q0
         # how far the unit's errors move a reading's row of H, relative to the row: an effect's own rows
         # stay at zero errors, so its part of a fit is off by about this fraction of itself
@@ -167,7 +171,7 @@ def diagnose(base_model, mod, positions, sigma, premises):
                      for t in group[1:]]
     A1 = study.A_fit(chosen)
     _, t1, r1 = chebyshev_fit(A1, study.z_fit, rb)
-    estimates = effect_estimates(study, chosen, A1, sigma + rb) if chosen else {}
+    estimates = effect_estimates(study, chosen, A1, limit + rb) if chosen else {}
     names = [a.name for a in base_model.stand.angles]
     excess = [{"position": int(k // 3), "component": int(k % 3) + 1,
                **{f"{a}_deg": float(positions.angles_deg[k // 3, i]) for i, a in enumerate(names)},
@@ -216,7 +220,6 @@ def select(study, usable, rb, sigma, t0):
         chosen.append(best)
         current = scores[best]
     if current > sigma:                     # forward steps stalled: the fewest of all small sets, if any
-        import itertools
         for k in range(len(chosen) + 1, min(MAX_EFFECTS, len(usable)) + 1):
             fits = [(score(list(c)), list(c)) for c in itertools.combinations(usable, k)]
             best_score, best_set = min(fits)
@@ -241,7 +244,8 @@ def select(study, usable, rb, sigma, t0):
 
 def effect_estimates(study, chosen, A, noise):
     """Each effect parameter: the q it leads in the extended model, its value and guaranteed bound
-    (noise: the bound of each residual component, sigma plus the proven remainder of the base model)."""
+    (noise: the bound of each residual component: sigma, the allowance for the effects' rows taken at zero
+    errors, and the proven remainder of the base model)."""
     from garant.derive.derivation import derive
     d = derive(study.model(chosen))
     blind = set(lp.unidentifiable(A))                   # combinations this plan cannot estimate

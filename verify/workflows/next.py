@@ -83,14 +83,14 @@ def rank_still_needed(mod, angles_deg, mounts, C):
 
 
 def block_functionals(mod, model, mount, gamma="lower"):
-    """(C, names, units): the block's parameters in mounting `mount` as functionals of q, the rows of the
+    """(C, names): the block's parameters in mounting `mount` as functionals of q, the rows of the
     recovery matrix K of (28)-(29) of 000 (biases over g)."""
     from ..models import load_remount
     remount = None if str(model).endswith(".toml") else load_remount(model)
     if remount is None or mount not in remount.MOUNTS:
         raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like +y+z+x; "
                         f"got {mount!r}")
-    return remount.recovery_matrix(mount, gamma), list(remount.OUTPUTS), list(remount.UNITS)
+    return remount.recovery_matrix(mount, gamma), list(remount.OUTPUTS)
 
 
 def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None, search_seconds=None,
@@ -113,7 +113,7 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         lams = [plans.dual_on_grid(cols, nu, False)[0] for nu in range(m)]
         optimal = np.array([float(lam[nu]) for nu, lam in enumerate(lams)])       # units of sigma
     else:
-        C, labels, _ = block_functionals(mod, model, mount, gamma)
+        C, labels = block_functionals(mod, model, mount, gamma)
         keep = np.any(C != 0, axis=1)              # an entry the split sets to zero is no target
         C, labels = C[keep], [n for n, k in zip(labels, keep) if k]
         of = f"the block's parameters in mounting {mount}, (28)-(29) of 000 (biases over g)"
