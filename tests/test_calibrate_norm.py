@@ -203,3 +203,15 @@ def test_orientations_are_suggested_only_when_they_shrink_a_bound(tmp_path):
         res = calibrate_norm.run(N, stills, G, 9, str(path), delta_sigma=1e-4)
         gain = res["directions_gain"]
         assert bool(res["directions_to_add"]) is expect and (gain["factor"] >= 1.25) is expect, gain
+
+
+def test_median_is_numpys_median():
+    # recordings.median replaces np.median on the small-log path (np.median loads numpy.ma): the same
+    # value for odd and even counts, along an axis, with repeated values; a wrong middle index turns it red.
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 10, 11):
+        x = rng.normal(size=n)
+        assert recordings.median(x) == np.median(x)
+        X = rng.integers(0, 4, size=(n, 3)).astype(float)
+        assert np.array_equal(recordings.median(X, axis=0), np.median(X, axis=0))
+    assert np.isnan(recordings.median([]))

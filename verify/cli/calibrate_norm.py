@@ -64,7 +64,7 @@ def run(args):
 
 
 def _run(args, into=None):
-    from ..io import plots, report
+    from ..io import report
     from ..workflows import jobs
     res = jobs.calibrate_norm(args.log, args.g, args.params, args.format, args.sensor, args.imu, args.window, args.k,
                               args.min_still, args.delta_sigma, args.diagnose)
@@ -72,6 +72,7 @@ def _run(args, into=None):
     if args.json:
         report.write_json(args.json, res)
     if args.plot:
+        from ..io import plots
         plots.norm_residuals(res, args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
     if args.save or args.export_imu_tk:

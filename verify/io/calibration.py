@@ -145,7 +145,7 @@ def check_units(cal, log_path, raw, cal_path):
     log in m/s^2 (as calibrate-norm decides it)."""
     looks = recordings.raw_unit(raw, cal["g"])
     if looks != cal["raw_unit"]:
-        norm = float(np.median(np.linalg.norm(raw, axis=1)))
+        norm = float(recordings.median(np.linalg.norm(raw, axis=1)))
         say = {"m/s^2": "m/s^2", "count": "raw counts"}
         raise DataError(f"{log_path}: its readings (median norm {norm:.4g}) look like {say[looks]}, but {cal_path} was "
                         f"made from a log in {say[cal['raw_unit']]}; correct a log of the same unit, or pass "

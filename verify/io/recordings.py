@@ -1,6 +1,6 @@
 """Raw accelerometer logs: reading the supported formats and finding the still intervals."""
 import warnings
-from dataclasses import dataclass
+from typing import NamedTuple      # loaded with numpy anyway; dataclasses would add inspect to a small log's run
 
 import numpy as np
 
@@ -11,8 +11,7 @@ FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy")
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 
-@dataclass
-class Log:
+class Log(NamedTuple):
     """A raw log: time (s) and three accelerometer columns in the sensor's own unit."""
     path: str
     t: np.ndarray          # s
@@ -34,6 +33,20 @@ MIN_SAMPLES = 100
 MAX_VALUE = 1e17
 #: The largest log read (1e7 samples of four numbers are about 650 MB as text).
 MAX_LOG_BYTES = 4_000_000_000
+
+
+def median(x, axis=None):
+    """np.median without NaN handling (which loads numpy.ma, a fifth of a small log's run): the middle of
+    the sorted values, or the mean of the two middle ones, along `axis` (all values when None)."""
+    x = np.asarray(x, dtype=float)
+    if axis is None:
+        x, axis = x.ravel(), 0
+    n = x.shape[axis]
+    if n == 0:
+        return np.nan
+    lo, hi = (n - 1) // 2, n // 2
+    p = np.partition(x, (lo, hi), axis=axis)
+    return 0.5 * (np.take(p, lo, axis=axis) + np.take(p, hi, axis=axis))
 
 
 def guess_format(path):
@@ -149,7 +162,7 @@ def _check_time(path, t, named_unit):
     if back.size:
         raise DataError(f"{path}: time goes back at data row {int(back[0]) + 2} (a reset or a merged log); "
                         "split the log or fix the time column")
-    step = float(np.median(dt))
+    step = float(median(dt))
     repeats = int(np.count_nonzero(dt == 0))
     if step == 0:
         raise DataError(f"{path}: {repeats} of {dt.size} time steps are 0 (each time stamp repeated): the time "
@@ -221,8 +234,7 @@ def quantum(log):
     return 1.0 if np.all(log.raw == np.round(log.raw)) else 0.0
 
 
-@dataclass
-class Still:
+class Still(NamedTuple):
     """A still interval of a log: its span (s), mean (raw units) and the mean's standard errors."""
     start: float           # s
     stop: float            # s
@@ -236,7 +248,7 @@ class Still:
 def raw_unit(raw, g):
     """What readings (N, 3) are measured in: "m/s^2" when their median norm is within 20 % of g, else
     "count" (a raw-count log). calibrate-norm starts from it and records it; apply checks a log against it."""
-    norm = float(np.median(np.linalg.norm(raw, axis=1))) if len(raw) else 0.0
+    norm = float(median(np.linalg.norm(raw, axis=1))) if len(raw) else 0.0
     return "m/s^2" if abs(norm / g - 1) < 0.2 else "count"
 
 
@@ -287,7 +299,7 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
 
     Returns (intervals, note): the note says how the threshold was set.
     """
-    dt = log.dt or float(np.median(np.diff(log.t)))
+    dt = log.dt or float(median(np.diff(log.t)))
     span = float(log.t[-1] - log.t[0])
     if window >= span / 4:
         raise DataError(f"--window {window:g} s: the moving-variance window must be under a quarter of the log's "
@@ -295,7 +307,7 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     n = max(int(round(window / dt)), 5)
     var = moving_variance(log.raw, n)
     first = var[: max(int(init / dt) - n, 1)]
-    base = float(np.median(first))
+    base = float(median(first))
     note = f"threshold {k:g} x the moving variance of the first {init:g} s"
     h = 0.05 * (len(var) - 1)                     # the 5th percentile's place among the sorted values
     below = np.count_nonzero(var < base / 20)

@@ -67,8 +67,10 @@ TOLERANCE = 1e-9         # relative: a measurement violating by less is within t
 
 
 def spread(K, size):
-    """`size` indices spread evenly over range(K)."""
-    return np.unique(np.linspace(0, K - 1, min(K, size)).round().astype(int))
+    """`size` indices spread evenly over range(K), increasing (deduplicated by hand: np.unique loads numpy.ma,
+    a tenth of a small estimate's run)."""
+    idx = np.linspace(0, K - 1, min(K, size)).round().astype(int)
+    return idx[np.r_[True, idx[1:] != idx[:-1]]]
 
 
 def _generate(K, solve_on, violation, what, start=None):

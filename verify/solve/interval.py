@@ -21,7 +21,15 @@ def _out(lo, hi):
     """Widen by at least one ulp: a correctly rounded result is within half an ulp of the exact value,
     and |x| 2^-51 is one ulp or more, so [lo - d, hi + d] holds it (the scaling by a power of 2 is
     exact; the subtraction's own rounding is half an ulp, inside the margin)."""
-    return lo - (np.abs(lo) * REL + TINY), hi + (np.abs(hi) * REL + TINY)
+    d = np.abs(lo)                   # in place: -(|lo| 2^-51 + TINY) + lo is lo - (|lo| 2^-51 + TINY) exactly
+    d *= -REL
+    d -= TINY
+    d += lo
+    e = np.abs(hi)
+    e *= REL
+    e += TINY
+    e += hi
+    return d, e
 
 
 class Iv:
@@ -54,7 +62,13 @@ class Iv:
             a, b = self.lo * c, self.hi * c
             return Iv(*_out(np.minimum(a, b), np.maximum(a, b)))
         a, b, c, d = self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi
-        return Iv(*_out(np.minimum(np.minimum(a, b), np.minimum(c, d)), np.maximum(np.maximum(a, b), np.maximum(c, d))))
+        if np.ndim(a) == 0:                                 # numpy scalars: no out= arrays
+            return Iv(*_out(min(a, b, c, d), max(a, b, c, d)))
+        lo = np.minimum(a, b)
+        np.minimum(lo, np.minimum(c, d), out=lo)
+        np.maximum(a, b, out=a)
+        np.maximum(c, d, out=c)
+        return Iv(*_out(lo, np.maximum(a, c, out=a)))
 
     __rmul__ = __mul__
 

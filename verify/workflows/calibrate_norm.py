@@ -11,7 +11,7 @@ residual, which would make the bounds circular), plus the proven remainder (2.3)
 import numpy as np
 
 from ..errors import DataError
-from ..io.recordings import BATCHES, raw_unit
+from ..io.recordings import BATCHES, median, raw_unit
 from ..solve import highs, lp
 
 MAX_ITER = 60
@@ -112,7 +112,7 @@ def directions_to_add(mod, n, params, noise, err, within_deg=10.0):
     if not far:
         return [], 1.0, None
     n_all = np.column_stack([n, np.array([p for p, _ in far]).T])
-    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), np.median(noise))])[0]
+    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), median(noise))])[0]
     factor = err / err_all
     k = int(np.argmax(factor))
     found = [(p.tolist(), a) for p, a in far] if factor[k] >= GAIN else []

@@ -176,6 +176,7 @@ class Remainder:
         self.interp = (taylor.Interpolation(self.mod.TRIG_DEGREE)
                        if taylor.Interpolation.usable(self.mod, self.angles, self.extra) else None)
         self._nodes = {}
+        self._direct_box, self._direct = None, {}
         self.prepare([(self.centre, self.centre), *boxes])
         fit_rows = highs.spread(n, self.FIT_ROWS)
         mid, _ = self._enclosure(self.centre, self.centre, fit_rows, direct=self.interp is None)
@@ -201,9 +202,7 @@ class Remainder:
         position by position (`direct`) or interpolated from the nodes."""
         mounts = None if self.mounts is None else self.mounts[rows]
         if direct:
-            H_lo, H_hi = taylor.packed_hessian(self.mod, [a[rows] for a in self.angles], self.Lv, lo, hi, mounts,
-                                               [v[rows] for v in self.extra], centre=self.centre)
-            return taylor.midrad(H_lo, H_hi)
+            return self._direct_enclosure(lo, hi, rows)
         W = self.interp.weights([a[rows] for a in self.angles])
         key = (tuple(lo), tuple(hi))
         mid, rad = np.empty((len(rows), 3 * self.P)), np.empty((len(rows), 3 * self.P))
@@ -213,6 +212,24 @@ class Remainder:
             sel = slice(None) if k is None else mounts == k
             mid[sel], rad[sel] = self.interp.enclose(W[sel], *self._nodes[key, k])
         return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1)
+
+    def _direct_enclosure(self, lo, hi, rows):
+        """`_enclosure` position by position, each position's enclosure on the last box kept: the last a
+        posteriori box is asked for at the estimator's positions, then at all, then for the functional."""
+        key, rows = (tuple(lo), tuple(hi)), np.asarray(rows, dtype=int)
+        if not len(rows):
+            return np.empty((0, 3, self.P)), np.empty((0, 3, self.P))
+        if self._direct_box != key:
+            self._direct_box, self._direct = key, {}
+        todo = np.array([r for r in rows.tolist() if r not in self._direct], dtype=int)
+        if len(todo):
+            mounts = None if self.mounts is None else self.mounts[todo]
+            H_lo, H_hi = taylor.packed_hessian(self.mod, [a[todo] for a in self.angles], self.Lv, lo, hi, mounts,
+                                               [v[todo] for v in self.extra], centre=self.centre)
+            mid, rad = taylor.midrad(H_lo, H_hi)
+            self._direct.update(zip(todo.tolist(), zip(mid, rad)))
+        got = [self._direct[r] for r in rows.tolist()]
+        return np.array([m for m, _ in got]), np.array([r for _, r in got])
 
     def shift(self, dv):
         """C(dv) = 1/2 dv^T C_nu dv for each q_nu (C held packed): the curvature q absorbs."""
@@ -290,6 +307,9 @@ class Verdict:
 
 
 SIGMA_TOLERANCE = 0.01     # relative: the smallest supported sigma is bracketed this closely
+#: No further a posteriori box once each q's remainder part that the box sets (left after absorption,
+#: absorbed) is within this fraction of its linear part: a smaller box lowers no bound by more.
+BOX_GAIN = 0.001
 
 
 def verdict(lin, z, sigma, W=None, steps=8):
@@ -332,7 +352,9 @@ def verdict(lin, z, sigma, W=None, steps=8):
         rb = np.zeros(len(y))
         rb[cols], cb = rem(lo, hi, support, one_by_one)
         for _ in range(steps):
-            lin_e, rem_e, _, _ = errors(s, rb + rem.t_residual, cb, None)
+            lin_e, rem_e, parts, _ = errors(s, rb + rem.t_residual, cb, None)
+            if np.all(parts["left_after_absorption"] + parts["absorbed_into_q"] <= BOX_GAIN * lin_e):
+                break                                # a smaller box would lower no bound by BOX_GAIN
             lo2, hi2 = box(lin, lin.q0 + dq, lin_e + rem_e)
             lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
             nq = len(lin.keep)                      # t keeps its a-priori bounds: only q's boxes shrink

@@ -74,8 +74,8 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, imu=None, 
     data = _log(log, fmt, sensor, imu)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data))
-    dt = float(np.median(np.diff(data.t)))
-    per_sample = np.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
+    dt = float(recordings.median(np.diff(data.t)))
+    per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
     res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
                 "format": data.fmt, "sensor": sensor or "adxl355", "rate_hz": 1 / dt,
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
