@@ -252,7 +252,7 @@ def bench_scale(rows=(1_000, 10_000, 100_000, 1_000_000), distinct=96):
     return out
 
 
-def bench_estimate(ns=(10, 1_000, 10_000)):
+def bench_estimate(ns=(100, 1_000, 10_000)):
     """`garant estimate` on N distinct random two-axis positions vs the per-target baseline
     (baseline.per_target_estimate), each a fresh process, interpreter start and imports included on both sides.
     N = 1e5 (baseline about a minute per run) is left to `garant estimate` alone (docs/bench.md)."""
