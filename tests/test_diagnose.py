@@ -137,6 +137,24 @@ def _lab():
     return power, power.Lab("two-axis")
 
 
+def test_the_net_signature_of_power_is_what_the_model_cannot_absorb():
+    # python -m verify.power --net scales an effect by the part of its change no q absorbs (the minimax
+    # residual after the best q). A change the model makes itself (H^T q) has none, whatever its size; a
+    # single reading's bump keeps at most its own size. A raw signature in place of the net turns it red.
+    from garant.verify.solve import lp
+    from garant.verify.workflows import simulate
+    power, lab = _lab()
+    P, mounts = simulate.plan_positions(lab.mod, "grid:90x60")
+    A = lp.measurement_matrix(lab.mod, np.deg2rad(P), mounts)
+    absorbed = (A.T @ np.random.default_rng(0).normal(0, 1e-4, A.shape[0])).reshape(-1, 3)
+    assert lab.signature(absorbed, P, mounts, net=False) > 10
+    assert lab.signature(absorbed, P, mounts, net=True) < 1e-6
+    bump = np.zeros((len(P), 3))
+    bump[5, 1] = 3 * power.SIGMA
+    assert 0.1 < lab.signature(bump, P, mounts, net=True) <= 3 * (1 + 1e-9)
+    assert lab.signature(bump, P, mounts, net=False) == pytest.approx(3)
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_an_encoder_harmonic_near_the_floor_is_named_for_a_mems_size_unit(seed):
     # Before: with scale errors of 1e-2 and biases of 5e-2 g, the allowance for the nonlinearity around

@@ -10,8 +10,9 @@ reading it makes, over the positions, in units of sigma). `diagnose` runs with t
 its default premises (a local g). A set counts as named when the effect is chosen or tied with the one
 chosen (indistinguishable on the plan); a spurious effect is one chosen that is neither hidden nor tied.
 
-    python -m verify.power [--sets N] [--levels 1,1.5,2,3] [--setup two-axis:grid:30x45,...]
-                                                              detection rate per effect, level, setup
+    python -m verify.power [--sets N] [--levels 1,1.5,2,3] [--setup two-axis:grid:30x45,...] [--units small,MEMS]
+                           [--net]                            detection rate per effect, level, setup; --net:
+                                                              levels of the part the model cannot absorb
     python -m verify.power --pairs [--sets N]                 two effects at 2 sigma: exactly those two named
     python -m verify.power --clean N                          false alarms of diagnose on N clean sets
     python -m verify.power --mems                             issue 23, item 0: MEMS-size units, estimate
@@ -58,6 +59,14 @@ class Lab:
             out[p.name] = 0.0 if kind == "gravity" else rng.uniform(-1, 1) * SIZES[size][kind]
         return out
 
+    def signature(self, change, P, mounts, net):
+        """An effect's size in sigma from its change of the readings (N, 3) in g: the largest change of a
+        reading, or (`net`) the part the current model cannot absorb, the minimax residual after the best q."""
+        if not net:
+            return np.abs(change).max() / SIGMA
+        from ..solve import highs, lp
+        return highs.chebyshev_fit(lp.measurement_matrix(self.mod, np.deg2rad(P), mounts), change.reshape(-1))[1] / SIGMA
+
     def readings(self, effects, values, P, mounts, t, T):
         """Exact readings (N, 3) in m/s^2 with these effect values (name -> values) added to `values`."""
         from garant.derive.effects import CATALOGUE
@@ -73,9 +82,11 @@ class Lab:
                                                **{n: x[k] for n, x in kw.items()}) for k in range(len(P))]).T
 
 
-def make_set(lab, plan, size, hidden, noise, seed):
+def make_set(lab, plan, size, hidden, noise, seed, net=False):
     """Positions of one simulated set: hidden is {effect: signature in sigma}, each in a random direction
-    of its parameters; the positions in a random order; noise 'uniform' or 'clipped'."""
+    of its parameters; the positions in a random order; noise 'uniform' or 'clipped'. With `net`, the
+    signature is the part of the effect's change the current model cannot absorb: its minimax residual
+    after the best q (the LP of the verdict), not its largest change of a reading."""
     from garant.derive.effects import CATALOGUE
 
     from ..io.positions import Positions
@@ -91,7 +102,7 @@ def make_set(lab, plan, size, hidden, noise, seed):
     for name, a in hidden.items():
         d = rng.normal(size=len(CATALOGUE[name].params))
         d /= np.linalg.norm(d)
-        signature = np.abs(lab.readings({name: d}, values, P, mounts, t, T) - f0).max() / G / SIGMA
+        signature = lab.signature((lab.readings({name: d}, values, P, mounts, t, T) - f0) / G, P, mounts, net)
         effects[name] = a / signature * d          # the readings are linear in an effect's parameters
     f = lab.readings(effects, values, P, mounts, t, T)
     if noise == "uniform":
@@ -122,10 +133,10 @@ def outcome(lab, positions, hidden):
     return found, spurious, not consistent
 
 
-def rates(sets, levels, setups=SETUPS, progress=print):
+def rates(sets, levels, setups=SETUPS, progress=print, net=False, sizes=tuple(SIZES)):
     """Rows (stand, plan, size, effect, level, named %, spurious %, refuted %) over `sets` sets per cell, each
     set with its own unit, direction, order and noise (half uniform, half clipped Gaussian); refuted: the
-    sets whose data refute the current model at all."""
+    sets whose data refute the current model at all. `net`: levels of the part the model cannot absorb."""
     from garant.derive import effects as catalogue
     rows = []
     for stand, plan in setups:
@@ -133,10 +144,11 @@ def rates(sets, levels, setups=SETUPS, progress=print):
         blind = diagnosis(lab, make_set(lab, plan, "small", {}, "uniform", 0))[3]
         for e in blind:           # diagnose says so (blind_to); scaled to a signature, it would be enormous
             progress(f"{stand}  {plan}  {e}: the plan is blind to it (first order), not tried")
-        for size in SIZES:
+        for size in sizes:
             for effect in [e for e in catalogue.applicable(lab.base) if e not in blind]:
                 for a in levels:
-                    res = [outcome(lab, make_set(lab, plan, size, {effect: a}, NOISES[k % 2], 7919 * k + 13), {effect})
+                    res = [outcome(lab, make_set(lab, plan, size, {effect: a}, NOISES[k % 2], 7919 * k + 13, net),
+                                   {effect})
                            for k in range(sets)]
                     rows.append((stand, plan, size, effect, a, *(100.0 * np.mean([r[i] for r in res]) for i in range(3))))
                     progress("  ".join(f"{x:g}" if isinstance(x, float) else str(x) for x in rows[-1]))
@@ -229,6 +241,11 @@ def main():
     print(f"% of {sets} sets in which diagnose names the hidden effect (random direction, shuffled positions, "
           f"half uniform and half clipped-Gaussian noise), sigma = {SIGMA:g}; and % with a spurious effect", flush=True)
     setups = [tuple(x.split(":", 1)) for x in _option("--setup", "", str).split(",") if x] or SETUPS
+    net = "--net" in sys.argv
+    sizes = tuple(_option("--units", ",".join(SIZES), str).split(","))
+    if net:
+        print("level: the part of the effect's change the current model cannot absorb (its minimax residual "
+              "after the best q), in sigma", flush=True)
     print("stand  plan  unit  effect  level  named %  spurious %  refuted %", flush=True)
-    rates(sets, levels, setups, progress=lambda text: print(text, flush=True))
+    rates(sets, levels, setups, progress=lambda text: print(text, flush=True), net=net, sizes=sizes)
     return 0
