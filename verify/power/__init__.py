@@ -13,7 +13,7 @@ chosen (indistinguishable on the plan); a spurious effect is one chosen that is 
     python -m verify.power [--sets N] [--levels 1,1.5,2,3] [--setup two-axis:grid:30x45,...] [--units small,MEMS]
                            [--net]                            detection rate per effect, level, setup; --net:
                                                               levels of the part the model cannot absorb
-    python -m verify.power --pairs [--sets N]                 two effects at 2 sigma: exactly those two named
+    python -m verify.power --pairs [--sets N] [--net]         two effects at 2 sigma: exactly those two named
     python -m verify.power --clean N                          false alarms of diagnose on N clean sets
     python -m verify.power --mems                             issue 23, item 0: MEMS-size units, estimate
 """
@@ -194,7 +194,7 @@ def mems_sets(sets=10, mounting=5e-3, stand=2e-5):
     return rows
 
 
-def pairs(sets, a=2.0, stand="two-axis", plan="grid:30x45", progress=print):
+def pairs(sets, a=2.0, stand="two-axis", plan="grid:30x45", progress=print, net=False):
     """Two effects at a x sigma each: per pair, the % of sets where exactly those two are named (or tied)."""
     import itertools
 
@@ -206,7 +206,8 @@ def pairs(sets, a=2.0, stand="two-axis", plan="grid:30x45", progress=print):
         hits = 0
         for k in range(sets):
             size, noise = list(SIZES)[k % 2], NOISES[(k // 2) % 2]
-            found, spurious, _ = outcome(lab, make_set(lab, plan, size, {e1: a, e2: a}, noise, 104729 * k + 7), {e1, e2})
+            found, spurious, _ = outcome(lab, make_set(lab, plan, size, {e1: a, e2: a}, noise, 104729 * k + 7, net),
+                                         {e1, e2})
             hits += found and not spurious
         rows.append((e1, e2, 100.0 * hits / sets))
         progress(f"{e1} + {e2}: {rows[-1][2]:.0f} %")
@@ -232,16 +233,17 @@ def main():
               f"uniform and clipped noise, sigma = {SIGMA:g}): {clean_alarms(n)}")
         return 0
     sets = _option("--sets", 20)
+    net = "--net" in sys.argv
     if "--pairs" in sys.argv:
-        print(f"two effects at 2 sigma each, two-axis 96 positions, {sets} sets per pair (small and MEMS-size, "
-              "uniform and clipped noise): % of sets with exactly those two named", flush=True)
-        pairs(sets, progress=lambda text: print(text, flush=True))
+        print(f"two effects at 2 sigma each{' (the part the model cannot absorb)' if net else ''}, two-axis 96 "
+              f"positions, {sets} sets per pair (small and MEMS-size, uniform and clipped noise): % of sets with "
+              "exactly those two named", flush=True)
+        pairs(sets, progress=lambda text: print(text, flush=True), net=net)
         return 0
     levels = tuple(float(x) for x in _option("--levels", "1,1.5,2,3", str).split(","))
     print(f"% of {sets} sets in which diagnose names the hidden effect (random direction, shuffled positions, "
           f"half uniform and half clipped-Gaussian noise), sigma = {SIGMA:g}; and % with a spurious effect", flush=True)
     setups = [tuple(x.split(":", 1)) for x in _option("--setup", "", str).split(",") if x] or SETUPS
-    net = "--net" in sys.argv
     sizes = tuple(_option("--units", ",".join(SIZES), str).split(","))
     if net:
         print("level: the part of the effect's change the current model cannot absorb (its minimax residual "
