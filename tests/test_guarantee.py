@@ -274,6 +274,14 @@ def test_kept_enclosures_on_the_last_box_equal_fresh_ones():
     assert all(np.array_equal(a, b) for a, b in
                zip(other, guarantee.Remainder(rem.lin)._enclosure(lo / 2, hi / 2, rows, direct=True)))
     assert np.any(other[1] != kept[1])
+    rem = guarantee.Remainder(rem.lin)                                  # at most DIRECT_ROWS positions kept
+    rem.DIRECT_ROWS = 12
+    rem._enclosure(lo, hi, np.arange(10), direct=True)
+    rem._enclosure(lo, hi, rows, direct=True)                           # 20 added: 11 kept
+    many = rem._enclosure(lo, hi, np.arange(30), direct=True)           # 19 more would pass 12: not kept
+    assert len(rem._direct) == 11
+    assert all(np.array_equal(a, b) for a, b in
+               zip(many, guarantee.Remainder(rem.lin)._enclosure(lo, hi, np.arange(30), direct=True)))
 
 
 @pytest.mark.parametrize("size", [1e-4, 1e-2])

@@ -200,9 +200,9 @@ class Remainder:
     def _enclosure(self, lo, hi, rows, direct):
         """(midpoints, radii) of the packed Hessian enclosure at the given positions: (rows, 3, P),
         position by position (`direct`) or interpolated from the nodes."""
-        mounts = None if self.mounts is None else self.mounts[rows]
         if direct:
             return self._direct_enclosure(lo, hi, rows)
+        mounts = None if self.mounts is None else self.mounts[rows]
         W = self.interp.weights([a[rows] for a in self.angles])
         key = (tuple(lo), tuple(hi))
         mid, rad = np.empty((len(rows), 3 * self.P)), np.empty((len(rows), 3 * self.P))
@@ -214,22 +214,25 @@ class Remainder:
         return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1)
 
     def _direct_enclosure(self, lo, hi, rows):
-        """`_enclosure` position by position, each position's enclosure on the last box kept: the last a
-        posteriori box is asked for at the estimator's positions, then at all, then for the functional."""
+        """`_enclosure` position by position, reusing what is kept for the last box: it is asked for at
+        the estimator's positions, then at all, then for the functional. Up to DIRECT_ROWS positions are
+        kept, so memory stays that of one block whatever the number of positions."""
         key, rows = (tuple(lo), tuple(hi)), np.asarray(rows, dtype=int)
-        if not len(rows):
-            return np.empty((0, 3, self.P)), np.empty((0, 3, self.P))
         if self._direct_box != key:
             self._direct_box, self._direct = key, {}
-        todo = np.array([r for r in rows.tolist() if r not in self._direct], dtype=int)
+        have = np.array([r in self._direct for r in rows.tolist()], dtype=bool)
+        mid, rad = np.empty((len(rows), 3, self.P)), np.empty((len(rows), 3, self.P))
+        todo = rows[~have]
         if len(todo):
             mounts = None if self.mounts is None else self.mounts[todo]
             H_lo, H_hi = taylor.packed_hessian(self.mod, [a[todo] for a in self.angles], self.Lv, lo, hi, mounts,
                                                [v[todo] for v in self.extra], centre=self.centre)
-            mid, rad = taylor.midrad(H_lo, H_hi)
-            self._direct.update(zip(todo.tolist(), zip(mid, rad)))
-        got = [self._direct[r] for r in rows.tolist()]
-        return np.array([m for m, _ in got]), np.array([r for _, r in got])
+            mid[~have], rad[~have] = taylor.midrad(H_lo, H_hi)
+            if len(self._direct) + len(todo) <= self.DIRECT_ROWS:
+                self._direct.update(zip(todo.tolist(), zip(mid[~have], rad[~have])))
+        for i in np.flatnonzero(have):
+            mid[i], rad[i] = self._direct[int(rows[i])]
+        return mid, rad
 
     def shift(self, dv):
         """C(dv) = 1/2 dv^T C_nu dv for each q_nu (C held packed): the curvature q absorbs."""
