@@ -74,7 +74,8 @@ def _array_code(expr):
 #: Names the generated functions use themselves: a user's angle or parameter of one of these names (or
 #: of a builtin, or t<k> like the common subexpressions) is written with "_" appended in the code.
 INTERNAL = {"np", "zero", "one", "physical", "g", "f", "mount", "_broadcast", "_by_mount", "H", "up_nominal",
-            "readings", "residual", "angles", "funcs", "args", "out", "idx", "time_s", "temp_c"}
+            "readings", "residual", "angles", "funcs", "args", "out", "idx", "time_s", "temp_c", "turn_c", "turn_s",
+            "turn_a", "_turn_angle"}
 
 
 def code_symbols(model):
@@ -129,16 +130,39 @@ def model_context(d):
 
 
 def _absorbed_context(m, names, subs):
-    """ABSORBED and the code of `equivalent`: (index, code) of each Gamma' entry, the indices set to 0."""
-    gone, Gp = absorbed(m)
+    """ABSORBED and the code of `equivalent`: (index, code) of each Gamma' entry, the indices set to 0, and,
+    for a turn about the mountings' axis (derive/model.py, `Turn`), the code of its angle and of theta'."""
+    gone, Gp, turn = absorbed(m)
+    none = dict(absorbed=[], equivalent=[], equivalent_cse=[], absorbed_idx=[], turn=None,
+                absorbed_formula="Gamma (none absorbed)")
     if not gone:
-        return dict(absorbed=[], equivalent=[], equivalent_cse=[], absorbed_idx=[],
-                    absorbed_formula="Gamma (none absorbed)")
+        return none
     dg, theta = m.stand.gravity_error, ", ".join(m.stand.theta)
     formula = f"(1 - {dg})(E + Gamma) Q C({theta}) Q^T - E" if len(gone) > 1 else f"(1 - {dg})(E + Gamma) - E"
-    code = _cse_code([Gp[i, j].xreplace(subs) for i in range(3) for j in range(3)])
-    entries = [(names.index(f"Gamma{i + 1}{j + 1}"), code["exprs"][3 * i + j]) for i in range(3) for j in range(3)]
-    return dict(absorbed=list(gone), equivalent=entries, equivalent_cse=code["cse"],
+    exprs = [Gp[i, j].xreplace(subs) for i in range(3) for j in range(3)]
+    if turn is None:
+        code = _cse_code(exprs)
+        entries = [(names.index(f"Gamma{i + 1}{j + 1}"), code["exprs"][3 * i + j]) for i in range(3) for j in range(3)]
+        return dict(none, absorbed=list(gone), equivalent=entries, equivalent_cse=code["cse"],
+                    absorbed_idx=[names.index(n) for n in gone], absorbed_formula=formula)
+    formula = (f"(1 - {dg})(E + Gamma) R^T - E,\n#: R the turn about TURN_AXIS that sets {m.stand.theta[0]} and "
+               f"{turn.offset} to 0 ({m.stand.theta[0]} folded into {turn.offset} first)")
+    # one cse over the turn's condition and the rest; what needs the turn (cos a, sin a) comes after it
+    cse, out = sp.cse([e.xreplace(subs) for e in (*turn.condition, *turn.theta)] + exprs,
+                      symbols=sp.numbered_symbols("t"))
+    later = {turn.c, turn.s}
+    before, after = [], []
+    for sym, e in cse:
+        if e.free_symbols & later:
+            later.add(sym)
+            after.append((pycode(sym), pycode(e)))
+        else:
+            before.append((pycode(sym), pycode(e)))
+    code = [pycode(e) for e in out]
+    entries = [(names.index(f"Gamma{i + 1}{j + 1}"), code[6 + 3 * i + j]) for i in range(3) for j in range(3)]
+    turn_context = dict(axis=[repr(float(v)) for v in turn.axis], condition_cse=before, condition=code[:3],
+                        theta=code[3:6], theta_idx=[names.index(n) for n in m.stand.theta[1:]])
+    return dict(none, absorbed=list(gone), equivalent=entries, equivalent_cse=after, turn=turn_context,
                 absorbed_idx=[names.index(n) for n in gone], absorbed_formula=formula)
 
 

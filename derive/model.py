@@ -218,31 +218,108 @@ def _force_factors(model, Q=None):
             *chain_factors(model.stand, s, angles), sp.Matrix([0, 0, 1])]
 
 
+@dataclass(frozen=True)
+class Turn:
+    """A turn R about the axis n all mountings share, which the block and the mounting absorb exactly.
+
+    With several mountings Q_k all turns about one axis n, R(n, a) Q_k = Q_k R(n, a), so a unit reads like
+    the one with (E + Gamma) R^T for E + Gamma and R C(theta) for its mounting. The mounting's theta1 joins
+    the instrument-side link's offset exactly (C1(theta1) C1(s (read - offset)) is one turn about axis 1),
+    and the mounting folded with it, N = C3(theta3) C2(theta2) C1(theta1 - s offset), turned by the a with
+    (R N)[3, 2] = 0 is C3(theta3') C2(theta2'): the unit with theta1 = offset = 0. `condition` holds
+    (A0, A1, A2) of (R N)[3, 2] = A0 + A1 cos a + A2 sin a; `theta` the expressions of sin theta2',
+    sin theta3' and cos theta3' (entries (3, 1), (1, 2), (2, 2) of R N), all in `c` = cos a, `s` = sin a."""
+
+    axis: tuple             # n, an exact unit vector
+    offset: str             # the link's offset parameter that takes theta1
+    c: sp.Symbol
+    s: sp.Symbol
+    condition: tuple
+    theta: tuple
+
+
 def absorbed(model):
-    """(names, Gamma') of the parameters the block absorbs exactly, else ((), None).
+    """(names, Gamma', turn) of the parameters the block absorbs exactly, else ((), None, None).
 
     Without sensor effects the readings depend on Gamma and Delta_g only through (1 - Delta_g)(E + Gamma),
     and with one mounting Q also theta only through (1 - Delta_g)(E + Gamma) Q C(theta) = (E + Gamma') Q,
     Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta) Q^T - E: a unit and the one with Gamma' and these at 0
     read the same at every position, so data tell only Gamma' (the q of (4) of 000 taken literally,
-    Gamma13 - theta2, are known only to about |Gamma| |theta| whatever the plan). Checked here, not
-    assumed: the identity exactly, and the absorbed parameters nowhere else in the readings."""
+    Gamma13 - theta2, are known only to about |Gamma| |theta| whatever the plan). With several mountings
+    about one axis, theta1 and the first link's offset go instead (`Turn`): Gamma' = (1 - Delta_g)(E + Gamma)
+    R^T - E, in `turn.c`, `turn.s`. Checked here, not assumed: the identities exactly, and the absorbed
+    parameters nowhere else in the readings."""
     st = model.stand
     if model.effects:
-        return (), None
+        return (), None, None
     s = model.symbols
     EG, _ = block_matrices(model)
     dg = s[st.gravity_error]
-    names, Gp, same = (st.gravity_error,), (1 - dg) * EG - sp.eye(3), True
+    names, Gp, same, turn = (st.gravity_error,), (1 - dg) * EG - sp.eye(3), True, None
+    links = st.chain
     if len(model.mountings) == 1:
         Q = mount_matrices(model)[0]
-        turn = small_turn([s[n] for n in st.theta])
-        names, Gp = (*st.theta, st.gravity_error), (1 - dg) * EG * Q * turn * Q.T - sp.eye(3)
-        same = sp.expand((sp.eye(3) + Gp) * Q - (1 - dg) * EG * Q * turn) == sp.zeros(3, 3)
-    rest = set().union(*(f.free_symbols for f in chain_factors(st, s, {a.name: a.symbol for a in st.angles})))
-    if not same or rest & {s[n] for n in names}:
-        return (), None
-    return names, Gp
+        turn_m = small_turn([s[n] for n in st.theta])
+        names, Gp = (*st.theta, st.gravity_error), (1 - dg) * EG * Q * turn_m * Q.T - sp.eye(3)
+        same = sp.expand((sp.eye(3) + Gp) * Q - (1 - dg) * EG * Q * turn_m) == sp.zeros(3, 3)
+    else:
+        turn = _turn(model)
+        if turn is not None:
+            names = tuple(p.name for p in model.parameters if p.name in (turn.offset, st.theta[0], st.gravity_error))
+            R = _turn_matrix(turn)
+            Gp = (1 - dg) * EG * R.T - sp.eye(3)
+            links = st.chain[1:]
+    angles = {a.name: a.symbol for a in st.angles}
+    rest = set().union(set(), *(C(l.axis, link_angle(l, s, angles)).free_symbols for l in links))
+    gone = {s[n] for n in names} | ({s[n] for n in st.theta} if turn is not None else set())
+    if not same or rest & gone:
+        return (), None, None
+    return names, Gp, turn
+
+
+def _turn_matrix(turn):
+    """R(n, a) = c E + (1 - c) n n^T - s [n x], the passive turn about n (rotations.C) in c, s."""
+    n = sp.Matrix(turn.axis)
+    cross = sp.Matrix([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
+    return turn.c * sp.eye(3) + (1 - turn.c) * n * n.T - turn.s * cross
+
+
+def _turn(model):
+    """The Turn of a model with several mountings, or None: every mounting a turn about one axis n, and the
+    instrument-side link a read turn about axis 1 with an offset (the checks, exact, are here)."""
+    st, s = model.stand, model.symbols
+    axes = []
+    for Q in mount_matrices(model):
+        if Q != sp.eye(3):
+            fixed = (Q - sp.eye(3)).nullspace()
+            if len(fixed) != 1:
+                return None
+            axes.append(fixed[0] / fixed[0].norm())
+    link = st.chain[0]
+    if not axes or link.axis != 1 or link.angle is None or not link.error:
+        return None
+    n = axes[0]
+    if any(sp.simplify(v - n) != sp.zeros(3, 1) and sp.simplify(v + n) != sp.zeros(3, 1) for v in axes):
+        return None
+    c, sn = sp.Symbol("turn_c", real=True), sp.Symbol("turn_s", real=True)
+    turn = Turn(tuple(n), link.error, c, sn, (), ())
+    R = _turn_matrix(turn)
+    if any(sp.expand(R * Q - Q * R) != sp.zeros(3, 3) for Q in mount_matrices(model)):
+        return None
+    theta = [s[x] for x in st.theta]
+    angle = {a.name: a.symbol for a in st.angles}
+    folded = small_turn([theta[0] - link.sign * s[link.error], theta[1], theta[2]])
+    # C3 C2 C1(theta1) C1(link) = C3 C2 C1(theta1 - s offset) C1(link at offset 0): the C1 factors alone
+    lhs = C(1, theta[0]) * C(1, link_angle(link, s, angle))
+    rhs = C(1, theta[0] - link.sign * s[link.error]) * C(1, link_angle(link, s, angle).subs(s[link.error], 0))
+    if (lhs - rhs).applyfunc(lambda e: sp.expand(sp.expand_trig(e))) != sp.zeros(3, 3):
+        return None
+    M = R * folded
+    cond = sp.Poly(sp.expand(M[2, 1]), c, sn)
+    if cond.total_degree() > 1:
+        return None
+    A = (cond.coeff_monomial(1), cond.coeff_monomial(c), cond.coeff_monomial(sn))
+    return Turn(tuple(n), link.error, c, sn, A, (M[2, 0], M[0, 1], M[1, 1]))
 
 
 def up_true(model):

@@ -10,7 +10,7 @@ Linearised residual (2)-(3): z^(p) = H^(p)(angles)^T q + rho^(p), |rho^(p)| <= s
 import numpy as np
 
 __all__ = ["ANGLES", "PARAMETERS", "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES",
-           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "equivalent", "H", "up_nominal",
+           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "equivalent", "H", "up_nominal",
            "readings", "residual", "PLAN_DEG", "PSI", "estimate_on_plan", "MOUNTINGS"]
 
 #: Read stand angles, in the order H takes them (rad).
@@ -114,8 +114,11 @@ UNSEPARABLE = np.array([
 ])
 
 #: Parameters the block absorbs exactly: the readings depend on them and Gamma only through
-#: Gamma' = (1 - Delta_g)(E + Gamma) - E (derive/model.py, `absorbed`).
-ABSORBED = ("Delta_g",)
+#: Gamma' = (1 - Delta_g)(E + Gamma) R^T - E,
+#: R the turn about TURN_AXIS that sets theta1 and Delta_phi to 0 (theta1 folded into Delta_phi first) (derive/model.py, `absorbed`).
+ABSORBED = ("Delta_phi", "theta1", "Delta_g")
+#: The axis n all mountings turn about when a turn about it is absorbed (derive/model.py, `Turn`), else None.
+TURN_AXIS = (0.5773502691896257, 0.5773502691896257, 0.5773502691896257)
 
 
 def equivalent(physical):
@@ -123,20 +126,64 @@ def equivalent(physical):
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
     (kappa, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
-    t0 = 1 - Delta_g
+    t0 = np.cos(theta2)
+    t1 = Delta_phi - theta1
+    t2 = np.sin(t1)
+    t3 = t0*t2
+    t4 = np.cos(theta3)
+    t5 = np.cos(t1)
+    t6 = t4*t5
+    t7 = (1/3)*t6
+    t8 = np.sin(theta3)
+    t9 = np.sin(theta2)
+    t10 = t2*t9
+    t11 = t10*t4
+    t12 = t10*t8
+    t13 = -1/3*t11 + (1/3)*t12 + (1/3)*t5*t8 + t7
+    t14 = np.sqrt(3)
+    t15 = (1/3)*t14
+    t21 = -t11 + t5*t8
+    t22 = t12 + t6
+    t23 = 1 - Delta_g
+    t24 = t23*(Gamma11 + 1)
+    t25 = Gamma12*t23
+    t26 = Gamma13*t23
+    t27 = Gamma21*t23
+    t28 = Gamma23*t23
+    t29 = t23*(Gamma22 + 1)
+    t30 = Gamma31*t23
+    t31 = Gamma32*t23
+    t32 = t23*(Gamma33 + 1)
+    turn_a = _turn_angle(t13 + (1/3)*t3, (2/3)*t0*t2 - t13, -t11*t15 - t12*t15 + (1/3)*t14*t5*t8 - t14*t7)
+    turn_c, turn_s = np.cos(turn_a), np.sin(turn_a)
+    t16 = (2/3)*turn_c + 1/3
+    t17 = (1/3)*turn_c
+    t18 = t15*turn_s
+    t19 = -t17 + t18 + 1/3
+    t20 = -t17 - t18 + 1/3
+    out[[3, 4]] = [np.arcsin(t0*t19*t4 - t0*t20*t8 + t16*t9), np.arctan2(t16*t21 + t19*t22 + t20*t3, t16*t22 + t19*t3 + t20*t21)]
     out[[6, 7, 8, 9, 10, 11, 12, 13, 14]] = [
-        t0*(Gamma11 + 1) - 1,
-        Gamma12*t0,
-        Gamma13*t0,
-        Gamma21*t0,
-        t0*(Gamma22 + 1) - 1,
-        Gamma23*t0,
-        Gamma31*t0,
-        Gamma32*t0,
-        t0*(Gamma33 + 1) - 1,
+        t16*t24 + t19*t25 + t20*t26 - 1,
+        t16*t25 + t19*t26 + t20*t24,
+        t16*t26 + t19*t24 + t20*t25,
+        t16*t27 + t19*t29 + t20*t28,
+        t16*t29 + t19*t28 + t20*t27 - 1,
+        t16*t28 + t19*t27 + t20*t29,
+        t16*t30 + t19*t31 + t20*t32,
+        t16*t31 + t19*t32 + t20*t30,
+        t16*t32 + t19*t30 + t20*t31 - 1,
     ]
-    out[[5]] = 0.0
+    out[[1, 2, 5]] = 0.0
     return out
+
+
+def _turn_angle(A0, A1, A2):
+    """The root a of A0 + A1 cos a + A2 sin a = 0 nearest 0: the turn about TURN_AXIS that takes the mounting
+    with theta1 folded into the offset to C3(theta3) C2(theta2) (entry (3, 2) of the turned mounting is 0)."""
+    rho = np.hypot(A1, A2)
+    base, half = np.arctan2(A2, A1), np.arccos(np.clip(-A0 / rho, -1.0, 1.0))
+    roots = np.remainder(np.array([base + half, base - half]) + np.pi, 2 * np.pi) - np.pi
+    return roots[np.argmin(np.abs(roots))]
 
 
 def _broadcast(*angles):

@@ -10,7 +10,7 @@ Linearised residual (2)-(3): z^(p) = H^(p)(angles)^T q + rho^(p), |rho^(p)| <= s
 import numpy as np
 
 __all__ = ["ANGLES", "PARAMETERS", "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES",
-           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "equivalent", "H", "up_nominal",
+           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "equivalent", "H", "up_nominal",
            "readings", "residual", "PLAN_DEG", "PSI", "estimate_on_plan"]
 
 #: Read stand angles, in the order H takes them (rad).
@@ -120,6 +120,8 @@ UNSEPARABLE = np.array([
 #: Parameters the block absorbs exactly: the readings depend on them and Gamma only through
 #: Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta1, theta2, theta3) Q^T - E (derive/model.py, `absorbed`).
 ABSORBED = ("theta1", "theta2", "theta3", "Delta_g")
+#: The axis n all mountings turn about when a turn about it is absorbed (derive/model.py, `Turn`), else None.
+TURN_AXIS = None
 
 
 def equivalent(physical):

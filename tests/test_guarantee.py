@@ -21,11 +21,11 @@ G = 9.81
 def at_zero(mod, pos, prior, z=None):
     """The linear model (2) of 000 at zero errors with every a-priori bound `prior`: (L of the remainder's
     coordinates v, the a-priori box lo, hi, the Linearisation, its Remainder). The parameters the block
-    absorbs get `prior` too: the remainder's machinery holds for any box, and a wider one tests more."""
+    absorbs get `prior` too, and so does the mounting a turn about the mountings' axis would widen: the
+    remainder's machinery holds for any box, and a wider one tests more."""
     A = lp.measurement_matrix(mod, np.column_stack(pos.radians), pos.mounts)
     prem = premises(mod, 1e-5, G, prior=prior, g_uncertainty=prior)
-    prem = dataclasses.replace(prem, bounds=np.where(np.isin(prem.names, prem.absorbed), prior, prem.bounds),
-                               absorbed=())
+    prem = dataclasses.replace(prem, bounds=np.where(np.isfinite(prem.bounds), prior, prem.bounds), absorbed=())
     lin = guarantee.linearise(mod, pos, np.zeros(A.shape[1]) if z is None else z, A, prem, at_zero=True)
     rem = guarantee.Remainder(lin)
     return (rem.Lv, *guarantee.box(lin), lin, rem)

@@ -150,6 +150,8 @@ def print_estimate(res, mod, args):
         print_physical(res)
     elif "block" in res:
         print_block(res, args.units == "human")
+    elif "block_not_separated" in res:
+        print(f"\nthe block: {res['block_not_separated']}")
     if args.save or args.export_imu_tk:
         from ..io import calibration
         for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):

@@ -28,26 +28,29 @@ def calibration(mod, q, e, premises):
     bounded = np.array([k in ("stand", "gravity", "mounting", "effect") and np.isfinite(x) for k, x in zip(kinds, b)])
     col_lo = np.where(bounded, -b, -highs.INF)
     col_hi = np.where(bounded, b, highs.INF)
-    value, half = {}, {}
+    value, half, confounded = {}, {}, {}
     for name in BLOCK:
         k = names.index(name)
-        ends = []
+        ends, active = [], set()
         for sign in (1.0, -1.0):
             c = np.zeros(len(names))
             c[k] = sign
             try:
                 x, _, _ = highs.minimize(c, M, lo_rows, hi_rows, col_lo, col_hi, f"range of {name}")
-            except LPFailed:
+            except LPFailed as err:
+                if "nfeasible" in str(err):
+                    raise DataError("no unit within the a-priori bounds has q within the guaranteed errors: the "
+                                    "data contradict a premise (a stand error or the mounting beyond its stated "
+                                    "bound?): no calibration of the block") from None
                 raise DataError(f"this stand does not separate the block's {name} (its range over the premises "
                                 "is unbounded): no calibration of the block from it") from None
             ends.append(x[k])
+            active |= {j for j in np.flatnonzero(bounded) if b[j] > 0 and abs(x[j]) >= b[j] * (1 - 1e-9)}
         lo_k, hi_k = ends
         value[name], half[name] = 0.5 * (lo_k + hi_k), 0.5 * (hi_k - lo_k) * (1 + 1e-9) + 1e-15
-    confounded = {}
-    for name in BLOCK:
-        k = names.index(name)
-        partners = {j for nu in np.flatnonzero(M[:, k]) for j in np.flatnonzero(M[nu]) if bounded[j]}
-        confounded[name] = [(names[j], float(b[j]), premises.sources[j]) for j in sorted(partners) if b[j] > 0]
+        # the bounded parameters the range reaches the bounds of: the block parameter carries theirs
+        partners = {j for nu in np.flatnonzero(M[:, k]) for j in np.flatnonzero(M[nu]) if bounded[j]} & active
+        confounded[name] = [(names[j], float(b[j]), premises.sources[j]) for j in sorted(partners)]
     G = np.array([[value[f"Gamma{i}{j}"] for j in (1, 2, 3)] for i in (1, 2, 3)])
     GB = np.array([[half[f"Gamma{i}{j}"] for j in (1, 2, 3)] for i in (1, 2, 3)])
     return {"Gamma": G, "Gamma_bound": GB, "bias": np.array([value[f"bias{i}"] for i in (1, 2, 3)]),

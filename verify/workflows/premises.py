@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import DataError
+
 #: The gravity assumed when none is given, m/s^2 (with the uncertainty G_UNCERTAINTY_DEFAULT).
 G_DEFAULT = 9.81
 #: Defaults where the description states no bound (rad, or dimensionless).
@@ -59,8 +61,13 @@ class Premises:
         if not self.absorbed:
             return ""
         gravity = [n for n, k in zip(self.names, self.kinds) if k == "gravity" and n in self.absorbed]
+        offset = [n for n, k in zip(self.names, self.kinds) if k == "stand" and n in self.absorbed]
+        mount = [n for n, k in zip(self.names, self.kinds) if k == "mounting" and n in self.absorbed]
+        how = ("absorbed into Gamma exactly" if not offset else
+               f"{mount[0]} taken by the offset {offset[0]}, and that by a turn about the mountings' common axis "
+               "that Gamma and the mounting take, exactly")
         out = (f"The bounded q are those of the unit that reads the same with {', '.join(self.absorbed)} = 0, "
-               "absorbed into Gamma exactly (no data tell the two apart)")
+               f"{how} (no data tell the two apart)")
         if gravity:
             out += (f": scale factors relative to g = {self.g:g} m/s^2 (the true g within {self.g_uncertainty:g} of "
                     f"it, {self.g_source})")
@@ -109,6 +116,34 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
             split[name] = (float(bound), src)
             bound, src = 0.0, "absorbed into Gamma: no premise"
         bounds.append(bound), sources.append(src)
+    if getattr(mod, "TURN_AXIS", None) is not None:
+        _turned(mod.TURN_AXIS, list(mod.PARAMETER_NAMES), kinds, split, bounds, sources)
     return Premises(sigma=sigma, sigma_source=sigma_source, g=g, g_uncertainty=g_unc, g_source=g_src,
                     names=tuple(mod.PARAMETER_NAMES), kinds=tuple(kinds), bounds=np.array(bounds, float),
                     sources=tuple(sources), absorbed=absorbed, split=split)
+
+
+def _turned(axis, names, kinds, split, bounds, sources):
+    """The a-priori bounds of the mounting that stays when a turn about the mountings' axis n is absorbed
+    (derive/model.py, `Turn`): those of the equivalent unit's theta2', theta3', set in place with their source.
+
+    N = C3(theta3) C2(theta2) C1(theta1 - s offset) turns by at most w, the sum of the four bounds, and the
+    absorbed turn R(n, a) is the root of g(a) = e3^T R N e2 nearest 0. |g(0)| = |e3 . (N e2 - e2)| <= w;
+    R^T e3 runs on a circle of radius r0 = |n x e3| at unit rate, so g'(a) is within r0 (w + |a|) of
+    (n x e3) . e2 = -n1 (k0 = |n1|). With A = 2 w / (k0 - r0 w) and r0 A <= (k0 - r0 w) / 2, |g'| >= (k0 - r0 w) / 2
+    on [-A, A], which carries g across 0 there: |a| <= A. The turned mounting C3(theta3') C2(theta2') = R N
+    turns by at most A + w, and each of theta2', theta3' (within pi/2) by at most its turn."""
+    n = np.asarray(axis, float)
+    k0, r0 = abs(n[0]), float(np.hypot(n[0], n[1]))
+    gone = [name for name in split if kinds[names.index(name)] != "gravity"]
+    kept = [k for k, kind in enumerate(kinds) if kind == "mounting" and names[k] not in split]
+    w = sum(split[name][0] for name in gone) + sum(bounds[k] for k in kept)
+    A = 2 * w / (k0 - r0 * w) if k0 > r0 * w else np.inf
+    if not r0 * A <= (k0 - r0 * w) / 2:
+        raise DataError(f"the a-priori bounds of the mounting and {', '.join(gone)} (their sum {w:g} rad) are too "
+                        "wide to bound the turn about the mountings' axis: state smaller ones (description or --prior)")
+    given = ", ".join(f"|{names[k]}| <= {bounds[k]:g}" for k in kept)
+    given += "".join(f", |{name}| <= {split[name][0]:g}" for name in gone)
+    for k in kept:
+        bounds[k] = (A + w) * (1 + 1e-12)
+        sources[k] = f"the equivalent unit's, turned about the mountings' axis: from {given}"
