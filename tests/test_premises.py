@@ -10,59 +10,10 @@ from conftest import write_csv
 from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.io.positions import Positions
+from garant.verify.power import (G, SIGMA, estimator_weights as _weights, mems_grid as grid,
+                                 mems_readings as readings, mems_run as run, mems_truth as truth)
 from garant.verify.workflows.estimate import estimate
 from garant.verify.workflows.premises import premises
-
-G = 9.81
-SIGMA = 1e-5
-#: A MEMS-size block (issue 23, item 0): scale errors to 2e-2, misalignments to 1e-2 rad, biases to 0.1 g.
-MEMS = {"scale": 2e-2, "misalignment": 1e-2, "bias": 0.1}
-
-
-def truth(mod, rng, block=MEMS, vertex=False):
-    """Physical errors: the block's of the given size, the stand's, mounting's and Delta_g/g within the
-    bounds the premises state (uniform inside, or at a vertex of the box: where worst cases live)."""
-    prem = premises(mod, SIGMA, G)
-    draw = (lambda b: b * rng.choice([-1.0, 1.0])) if vertex else (lambda b: rng.uniform(-b, b))
-    p = np.zeros(len(mod.PARAMETER_NAMES))
-    for k, (name, kind) in enumerate(zip(mod.PARAMETER_NAMES, prem.kinds)):
-        if kind == "block":
-            p[k] = draw(block["scale"] if name[-1] == name[-2] else block["misalignment"])
-        elif kind == "bias":
-            p[k] = draw(block["bias"])
-        else:
-            p[k] = draw(prem.bounds[k])
-    return p
-
-
-def grid(mod):
-    """The 30 x 45 degree grid on two angles (issue 23), 45 degrees on three, 30 on one (all mountings)."""
-    names, mounts = models.layout(mod)
-    steps = {1: 30, 2: None, 3: 90}[len(names)]
-    if len(names) == 2:
-        axes = [np.arange(0, 360, 30.0), np.arange(0, 360, 45.0)]
-    else:
-        axes = [np.arange(0, 360, steps)] * len(names)
-    P = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(names), -1).T
-    m = None
-    if len(mounts) > 1:
-        m = np.repeat(np.arange(len(mounts)), len(P))
-        P = np.tile(P, (len(mounts), 1))
-    return P, m
-
-
-def readings(mod, P, m, p, noise):
-    kw = {"mount": m} if m is not None else {}
-    return mod.readings(*np.deg2rad(P).T, p, G, **kw).T + G * noise
-
-
-def run(mod, P, m, f):
-    r = estimate(mod, Positions("mems", P, f, m), SIGMA, G)
-    if not r["consistent"]:
-        return r, None, None
-    return r, np.array(list(r["q"].values())), np.array(list(r["guaranteed_error"].values()))
-
-
 @pytest.mark.parametrize("name", ["two-axis", "single-axis", "three-axis"])
 def test_mems_unit_bounds_contain_the_truth_and_stay_useful(name):
     # Monte Carlo and adversarial: truths at box vertices, noise at +-sigma with the signs of an
@@ -88,18 +39,6 @@ def test_mems_unit_bounds_contain_the_truth_and_stay_useful(name):
         # the turn about its mountings' axis, |Gamma| times theta's a-priori bound stayed open there (2.9-4.3x).
         _, _, e_small = run(mod, P, m, readings(mod, P, m, truth(mod, rng, small), noise))
         assert np.all(e <= 3 * e_small), (name, trial, (e / e_small).max())
-
-
-def _weights(mod, P, m, f, nu):
-    """The weights of q_nu's estimator on these readings (z = f/g - u): by linearity, the response of
-    the estimate to a unit change of each reading is the estimator itself, which we read off the LP."""
-    from garant.verify.solve import lp
-    from garant.verify.workflows import estimate as workflow, guarantee
-    pos = Positions("mems", P, f, m)
-    z = workflow.residuals_table_axes(mod, pos, G, np.eye(3)).reshape(-1)
-    A = lp.measurement_matrix(mod, np.deg2rad(P), m)
-    lin = guarantee.linearise(mod, pos, z, A, premises(mod, SIGMA, G))
-    return lp.primal(lin.A)[0].T[nu]
 
 
 def test_the_mems_case_of_the_issue_through_the_command(tmp_path):

@@ -16,6 +16,8 @@ chosen (indistinguishable on the plan); a spurious effect is one chosen that is 
     python -m verify.power --pairs [--sets N] [--net]         two effects at 2 sigma: exactly those two named
     python -m verify.power --clean N                          false alarms of diagnose on N clean sets
     python -m verify.power --mems                             issue 23, item 0: MEMS-size units, estimate
+    python -m verify.power --mems-stands [--sets N]           issue 23: MEMS-size truths on every built-in stand,
+                                                              random and adversarial: soundness, non-vacuity
 """
 import sys
 
@@ -194,6 +196,100 @@ def mems_sets(sets=10, mounting=5e-3, stand=2e-5):
     return rows
 
 
+#: A MEMS-size block (issue 23, item 0): scale errors to 2e-2, misalignments to 1e-2 rad, biases to 0.1 g.
+MEMS_BLOCK = {"scale": 2e-2, "misalignment": 1e-2, "bias": 0.1}
+#: The 3-axis MEMS sweep's stands.
+MEMS_STANDS = ("two-axis", "single-axis", "three-axis")
+
+
+def mems_truth(mod, rng, block=MEMS_BLOCK, vertex=False):
+    """Physical errors: the block's of the given size, the stand's, the mounting's and Delta_g/g within the bounds
+    the premises state for the unit itself (`Premises.physical`: also where the block absorbs them), uniform
+    inside or at a vertex of the box (where worst cases live)."""
+    from ..workflows.premises import premises
+    prem = premises(mod, SIGMA, G)
+    bounds = prem.physical()
+    draw = (lambda b: b * rng.choice([-1.0, 1.0])) if vertex else (lambda b: rng.uniform(-b, b))
+    p = np.zeros(len(mod.PARAMETER_NAMES))
+    for k, (name, kind) in enumerate(zip(mod.PARAMETER_NAMES, prem.kinds)):
+        if kind == "block":
+            p[k] = draw(block["scale"] if name[-1] == name[-2] else block["misalignment"])
+        else:
+            p[k] = draw(block["bias"] if kind == "bias" else bounds[k])
+    return p
+
+
+def mems_grid(mod):
+    """(positions in degrees, mounting index per row or None): the 30 x 45 degree grid on two angles (issue 23),
+    90 degrees on three, 30 on one (in every mounting)."""
+    from .. import models
+    names, mounts = models.layout(mod)
+    steps = {1: [30.0], 2: [30.0, 45.0], 3: [90.0] * 3}[len(names)]
+    P = np.array(np.meshgrid(*[np.arange(0, 360, s) for s in steps], indexing="ij")).reshape(len(names), -1).T
+    if len(mounts) == 1:
+        return P, None
+    return np.tile(P, (len(mounts), 1)), np.repeat(np.arange(len(mounts)), len(P))
+
+
+def mems_readings(mod, P, m, p, noise):
+    """Readings (m/s^2) of the unit p at P (mountings m) plus noise (units of g)."""
+    kw = {"mount": m} if m is not None else {}
+    return mod.readings(*np.deg2rad(P).T, p, G, **kw).T + G * noise
+
+
+def mems_run(mod, P, m, f):
+    """(result, q, guaranteed errors) of estimate on these readings with a local g; q and errors None if refuted."""
+    from ..io.positions import Positions
+    from ..workflows.estimate import estimate
+    r = estimate(mod, Positions("mems", P, f, m), SIGMA, G)
+    if not r["consistent"]:
+        return r, None, None
+    return r, np.array(list(r["q"].values())), np.array(list(r["guaranteed_error"].values()))
+
+
+def estimator_weights(mod, P, m, f, nu):
+    """The weights of q_nu's estimator on these readings: by linearity, the response of the estimate to a
+    unit change of each reading is the estimator itself, read off the LP at the relinearised model."""
+    from ..io.positions import Positions
+    from ..solve import lp
+    from ..workflows import estimate as workflow, guarantee
+    from ..workflows.premises import premises
+    pos = Positions("mems", P, f, m)
+    z = workflow.residuals_table_axes(mod, pos, G, np.eye(3)).reshape(-1)
+    A = lp.measurement_matrix(mod, np.deg2rad(P), m)
+    return lp.primal(guarantee.linearise(mod, pos, z, A, premises(mod, SIGMA, G)).A)[0].T[nu]
+
+
+def mems_sweep(name, sets=20, seed=2311):
+    """Issue 23's Monte Carlo plus adversarial check on one stand: MEMS-size truths (`mems_truth`), the first half
+    of the sets drawn inside the box, the rest at its vertices, noise at +-sigma with random signs, then with
+    the signs of the estimator of the largest bound (its worst case). Returns (runs, consistent, truths
+    outside a printed bound, ratios of each run's largest bound over the same run's with block errors of
+    1e-4, the largest over the q: not vacuous)."""
+    from .. import models
+    mod = models.load(name)
+    P, m = mems_grid(mod)
+    rng = np.random.default_rng(seed)
+    small = {"scale": 1e-4, "misalignment": 1e-4, "bias": 1e-4}
+    runs = consistent = outside = 0
+    ratios = []
+    for k in range(sets):
+        p = mems_truth(mod, rng, vertex=k >= sets // 2)
+        noise = rng.choice([-1.0, 1.0], (len(P), 3)) * SIGMA
+        cases = [mems_run(mod, P, m, mems_readings(mod, P, m, p, noise))]
+        if cases[0][0]["consistent"]:
+            W = estimator_weights(mod, P, m, mems_readings(mod, P, m, p, 0 * noise), int(np.argmax(cases[0][2])))
+            cases.append(mems_run(mod, P, m, mems_readings(mod, P, m, p, SIGMA * np.sign(W).reshape(-1, 3))))
+        e_small = mems_run(mod, P, m, mems_readings(mod, P, m, mems_truth(mod, rng, small), noise))[2]
+        for r, q, e in cases:
+            runs += 1
+            if r["consistent"]:
+                consistent += 1
+                outside += int(np.any(np.abs(q - models.q_of(mod, p)) > e))
+                ratios.append(float((e / e_small).max()))
+    return runs, consistent, outside, ratios
+
+
 def pairs(sets, a=2.0, stand="two-axis", plan="grid:30x45", progress=print, net=False):
     """Two effects at a x sigma each: per pair, the % of sets where exactly those two are named (or tied)."""
     import itertools
@@ -226,6 +322,17 @@ def main():
         print("  set  verdict     largest guaranteed error  largest |q - q_true| / bound")
         for k, (ok, worst, ratio) in enumerate(mems_sets()):
             print(f"  {k:3d}  " + (f"consistent  {worst:24.2e}  {ratio:.4f}" if ok else "refuted"))
+        return 0
+    if "--mems-stands" in sys.argv:
+        sets = _option("--sets", 20)
+        print(f"MEMS-size blocks (scale errors to 2e-2, misalignments to 1e-2 rad, biases to 0.1 g), stand, mounting "
+              f"and Delta_g/g within their stated bounds, {sets} sets per stand (half at the box's vertices), noise "
+              f"at +-sigma = {SIGMA:g}, then at the largest bound's estimator's own signs; a local --g")
+        for name in MEMS_STANDS:
+            runs, ok, out, ratios = mems_sweep(name, sets)
+            print(f"  {name:12s} {runs} runs, {ok} consistent, {out} truths outside a printed bound; each q's bound "
+                  f"over its bound with block errors of 1e-4, largest per run: {min(ratios):.2f}-{max(ratios):.2f}x",
+                  flush=True)
         return 0
     if "--clean" in sys.argv:
         n = _option("--clean", 200)

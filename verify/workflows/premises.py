@@ -42,6 +42,13 @@ class Premises:
     absorbed: tuple = ()     # parameters the block absorbs exactly (the model's ABSORBED): bound 0, no premise
     split: dict = field(default_factory=dict)   # their bounds (value, source): a premise only of splitting them
                                                 # from Gamma again (the block's physical errors, (29) of 000)
+    turned: dict = field(default_factory=dict)  # the stated bounds (value, source) of the mounting an absorbed
+                                                # turn leaves, where `bounds` holds the equivalent unit's
+
+    def physical(self):
+        """The a-priori bound of each physical parameter of the unit itself, as stated: `bounds` where nothing
+        is absorbed, else the bound an absorbed parameter would have (`split`) or the stated one (`turned`)."""
+        return np.array([(self.split.get(n) or self.turned.get(n) or (b,))[0] for n, b in zip(self.names, self.bounds)])
 
     def statement(self):
         """One line: the bounds hold if ..."""
@@ -79,6 +86,7 @@ class Premises:
         """The premises as the JSON results carry them: statement, meaning, each bound and its source."""
         return {"statement": self.statement(), "meaning": self.meaning(), "absorbed": list(self.absorbed),
                 "split": {n: {"bound": b, "source": src} for n, (b, src) in self.split.items()},
+                "turned": {n: {"bound": b, "source": src} for n, (b, src) in self.turned.items()},
                 "sigma": self.sigma, "sigma_source": self.sigma_source,
                 "g": self.g, "g_uncertainty": self.g_uncertainty, "g_source": self.g_source,
                 "a_priori": {n: {"kind": k, "bound": (float(b) if np.isfinite(b) else None), "source": s}
@@ -116,11 +124,12 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
             split[name] = (float(bound), src)
             bound, src = 0.0, "absorbed into Gamma: no premise"
         bounds.append(bound), sources.append(src)
+    turned = {}
     if getattr(mod, "TURN_AXIS", None) is not None:
-        _turned(mod.TURN_AXIS, list(mod.PARAMETER_NAMES), kinds, split, bounds, sources)
+        turned = _turned(mod.TURN_AXIS, list(mod.PARAMETER_NAMES), kinds, split, bounds, sources)
     return Premises(sigma=sigma, sigma_source=sigma_source, g=g, g_uncertainty=g_unc, g_source=g_src,
                     names=tuple(mod.PARAMETER_NAMES), kinds=tuple(kinds), bounds=np.array(bounds, float),
-                    sources=tuple(sources), absorbed=absorbed, split=split)
+                    sources=tuple(sources), absorbed=absorbed, split=split, turned=turned)
 
 
 def _turned(axis, names, kinds, split, bounds, sources):
@@ -132,7 +141,8 @@ def _turned(axis, names, kinds, split, bounds, sources):
     R^T e3 runs on a circle of radius r0 = |n x e3| at unit rate, so g'(a) is within r0 (w + |a|) of
     (n x e3) . e2 = -n1 (k0 = |n1|). With A = 2 w / (k0 - r0 w) and r0 A <= (k0 - r0 w) / 2, |g'| >= (k0 - r0 w) / 2
     on [-A, A], which carries g across 0 there: |a| <= A. The turned mounting C3(theta3') C2(theta2') = R N
-    turns by at most A + w, and each of theta2', theta3' (within pi/2) by at most its turn."""
+    turns by at most A + w, and each of theta2', theta3' (within pi/2) by at most its turn. Returns the stated
+    bounds replaced, {name: (bound, source)}."""
     n = np.asarray(axis, float)
     k0, r0 = abs(n[0]), float(np.hypot(n[0], n[1]))
     gone = [name for name in split if kinds[names.index(name)] != "gravity"]
@@ -144,6 +154,8 @@ def _turned(axis, names, kinds, split, bounds, sources):
                         "wide to bound the turn about the mountings' axis: state smaller ones (description or --prior)")
     given = ", ".join(f"|{names[k]}| <= {bounds[k]:g}" for k in kept)
     given += "".join(f", |{name}| <= {split[name][0]:g}" for name in gone)
+    stated = {names[k]: (float(bounds[k]), sources[k]) for k in kept}
     for k in kept:
         bounds[k] = (A + w) * (1 + 1e-12)
         sources[k] = f"the equivalent unit's, turned about the mountings' axis: from {given}"
+    return stated
