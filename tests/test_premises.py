@@ -67,7 +67,7 @@ def test_the_mems_case_of_the_issue_through_the_command(tmp_path):
     assert prem["absorbed"] == ["theta1", "theta2", "theta3", "Delta_g"]
     assert prem["a_priori"]["theta2"]["bound"] == 0 and "absorbed" in prem["a_priori"]["theta2"]["source"]
     assert "scale factors relative to g = 9.81" in prem["meaning"]
-    assert prem["a_priori"]["Gamma11"]["source"] == "default for a block error"
+    assert prem["a_priori"]["Gamma11"]["source"] == "default for a block error, on the equivalent unit's Gamma'"
     assert prem["statement"].startswith("the bounds hold if every residual component of (5) is within sigma")
 
 

@@ -123,6 +123,8 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
         if name in absorbed:                      # no premise of q; only splitting Gamma from it needs one
             split[name] = (float(bound), src)
             bound, src = 0.0, "absorbed into Gamma: no premise"
+        elif kind == "block" and absorbed:        # the box is that of the q bounded: the equivalent unit's
+            src += ", on the equivalent unit's Gamma'"
         bounds.append(bound), sources.append(src)
     turned = {}
     if getattr(mod, "TURN_AXIS", None) is not None:
