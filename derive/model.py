@@ -266,22 +266,20 @@ def absorbed(model):
         turn = _turn(model)
         if turn is not None:
             names = tuple(p.name for p in model.parameters if p.name in (turn.offset, st.theta[0], st.gravity_error))
-            R = _turn_matrix(turn)
-            Gp = (1 - dg) * EG * R.T - sp.eye(3)
+            Gp = (1 - dg) * EG * _turn_matrix(turn.axis, turn.c, turn.s).T - sp.eye(3)
             links = st.chain[1:]
     angles = {a.name: a.symbol for a in st.angles}
-    rest = set().union(set(), *(C(l.axis, link_angle(l, s, angles)).free_symbols for l in links))
+    rest = set().union(*(C(l.axis, link_angle(l, s, angles)).free_symbols for l in links))
     gone = {s[n] for n in names} | ({s[n] for n in st.theta} if turn is not None else set())
     if not same or rest & gone:
         return (), None, None
     return names, Gp, turn
 
 
-def _turn_matrix(turn):
-    """R(n, a) = c E + (1 - c) n n^T - s [n x], the passive turn about n (rotations.C) in c, s."""
-    n = sp.Matrix(turn.axis)
-    cross = sp.Matrix([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
-    return turn.c * sp.eye(3) + (1 - turn.c) * n * n.T - turn.s * cross
+def _turn_matrix(axis, c, s):
+    """R(n, a) of rotations.C about the axis n, written in c = cos a and s = sin a."""
+    a = sp.Symbol("a", real=True)
+    return C(tuple(axis), a).xreplace({sp.cos(a): c, sp.sin(a): s})
 
 
 def _turn(model):
@@ -302,8 +300,7 @@ def _turn(model):
     if any(sp.simplify(v - n) != sp.zeros(3, 1) and sp.simplify(v + n) != sp.zeros(3, 1) for v in axes):
         return None
     c, sn = sp.Symbol("turn_c", real=True), sp.Symbol("turn_s", real=True)
-    turn = Turn(tuple(n), link.error, c, sn, (), ())
-    R = _turn_matrix(turn)
+    R = _turn_matrix(n, c, sn)
     if any(sp.expand(R * Q - Q * R) != sp.zeros(3, 3) for Q in mount_matrices(model)):
         return None
     theta = [s[x] for x in st.theta]
