@@ -35,10 +35,17 @@ def test_mems_unit_bounds_contain_the_truth_and_stay_useful(name):
             r, q, e = run(mod, P, m, readings(mod, P, m, p, SIGMA * np.sign(W).reshape(-1, 3)))
             assert r["consistent"]
         assert np.all(np.abs(q - models.q_of(mod, p)) <= e), (name, trial)
-        # Not vacuous: within 3x of a block 200 times smaller. Before the single-axis stand absorbed theta1 and
-        # the turn about its mountings' axis, |Gamma| times theta's a-priori bound stayed open there (2.9-4.3x).
-        _, _, e_small = run(mod, P, m, readings(mod, P, m, truth(mod, rng, small), noise))
-        assert np.all(e <= 3 * e_small), (name, trial, (e / e_small).max())
+        # Not vacuous: what the plan guarantees (the a-priori bound, data-independent up to the remainder) within
+        # 3x of a block 200 times smaller. Before the single-axis stand absorbed theta1 and the turn about its
+        # mountings' axis, |Gamma| times theta's a-priori bound stayed open there (2.9-4.3x). What the readings
+        # prove (printed) never exceeds it.
+        r_small, _, _ = run(mod, P, m, readings(mod, P, m, truth(mod, rng, small), noise))
+        e_ap, e_ap_small = a_priori(r), a_priori(r_small)
+        assert np.all(e <= e_ap) and np.all(e_ap <= 3 * e_ap_small), (name, trial, (e_ap / e_ap_small).max())
+
+
+def a_priori(r):
+    return np.array(list(r["a_priori"]["guaranteed_error"].values()))
 
 
 def test_the_mems_case_of_the_issue_through_the_command(tmp_path):

@@ -115,6 +115,15 @@ def print_verdict(res, mod, path):
     return EXIT_INCONSISTENT
 
 
+BOUNDS_LEGEND = (
+    "guaranteed error: what these readings prove, the half-width of the set of q that fit every reading within sigma "
+    "plus the proven remainder (the information set; estimate: its midpoint); a priori: what this plan guarantees for "
+    "any readings within sigma, the optimal estimator's sigma sum |Phi| plus its remainder ((7)-(8) of 000; the "
+    "guaranteed error never exceeds it); {wider}: the guaranteed error had sigma been that much larger (a "
+    "sensitivity, the remainder as proven for sigma). The data fit "
+    "within sigma >= {fit:.3g} ({ratio:.2f} sigma): the smaller the set, the more it rests on sigma being right")
+
+
 def print_estimate(res, mod, args):
     """The consistent result: the premises, q with guaranteed errors, the block's errors, the files written."""
     from ..io import report
@@ -135,13 +144,15 @@ def print_estimate(res, mod, args):
           "bias q is over g)")
     human = args.units == "human"
     bias = {q: d.split()[0].startswith("bias") for q, d in res["definitions"].items()}
-    report.table(("q", "definition", "estimate", "guaranteed error", "= linear", "+ remainder", "unit")
+    wider = f"sigma x{res['sigma_wider'] / res['sigma']:g}"
+    report.table(("q", "definition", "estimate", "guaranteed error", "a priori", wider, "unit")
                  + (("estimate", "guaranteed error") if human else ()),
                  [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
-                   f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
+                   f"{res['a_priori']['guaranteed_error'][q]:.3e}", f"{res['guaranteed_error_sigma_wider'][q]:.3e}",
                    res["units"][q]) + ((report.human(res["q"][q], res["units"][q], bias[q]),
                                         report.human(res["guaranteed_error"][q], res["units"][q], bias[q]).lstrip("+"))
                                        if human else ()) for q in mod.Q_NAMES])
+    print(BOUNDS_LEGEND.format(wider=wider, fit=res["sigma_fit"], ratio=res["sigma_fit"] / res["sigma"]))
     for line in res["warnings"]:
         print(f"note: {line}")
     print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {res['g']:g} m/s^2, "

@@ -3,14 +3,15 @@
 garant-calibration-1 (every number in SI units unless the field says otherwise):
 
     format        "garant-calibration-1"
-    kind          "norm" (a static log through (2.2) of 001)
+    kind          "norm" (a static log through (2.2) of 001) or "stand" (an estimate on a stand, 000)
     model         "a = M (raw - b)": corrected specific force a in m/s^2 from the raw reading
     raw_unit      what `raw` is measured in ("m/s^2", or "count" for a raw-count log)
     M             3 x 3, m/s^2 per raw unit, lower-triangular (garant's convention)
     b             3, raw units
-    bound_matrix  3 x 3 B >= 0, dimensionless, lower-triangular: the worst-case residual scale and
-                  misalignment errors [[lambda1, 0, 0], [alpha, lambda2, 0], [beta, gamma, lambda3]]
-    bound_bias    3, m/s^2: the worst-case residual biases (eps_i)
+    bound_matrix  3 x 3 B >= 0, dimensionless: |A| <= B for the residual errors A of a corrected sample,
+                  a = (E + A) a_true + eps (norm: lower-triangular, [[lambda1, 0, 0], [alpha, lambda2, 0],
+                  [beta, gamma, lambda3]]; stand: `through_M`)
+    bound_bias    3, m/s^2: |eps| <= bound_bias, the worst-case residual biases
     bound_delta   3, dimensionless (x g): the worst-case nonlinearity of the 12-parameter model, or zeros
     pendulosity_axes  the axes (i, j, k) of the nonlinearity terms delta_l n_axis(l) n_l
     g             m/s^2, the gravity the calibration used
@@ -18,7 +19,8 @@ garant-calibration-1 (every number in SI units unless the field says otherwise):
 
 A corrected sample a is within (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|) of the
 true specific force, component-wise (n = a / |a|): with the residual errors A (|A| <= B) the truth is
-(E + A)^-1 (a - eps), and |(E + A)^-1 v| <= (I - B)^-1 |v| for the lower-triangular B of norm < 1.
+(E + A)^-1 (a - eps), and |(E + A)^-1 v| <= sum_k B^k |v| = (I - B)^-1 |v| for B >= 0 whose rows sum
+below 1 (the reader checks it).
 
 imu_tk (CalibratedTriad::save/load): 9 numbers of T (row-major), 9 of K, 3 of B, for
 X' = T K (X - B). garant writes T = M diag(M)^-1 (unit diagonal, the general form of imu_tk's T),
@@ -51,39 +53,57 @@ def from_norm(res, axes):
             "premises": res["premises"]}
 
 
+def through_M(G, B, bias_bound):
+    """(M, bound_matrix, bound_bias) of a stand calibration from the block's Gamma estimate G (3 x 3), the
+    entrywise bound B of Gamma - G and the bound of the biases (m/s^2). With f = (E + Gamma) a + bias
+    and the file's M = (E + G)^-1 (as rounded), a corrected sample is M (f - b) = (E + A) a + eps with
+        A = M (E + G) - E + M (Gamma - G),   eps = M (bias - b),
+    so |A| <= |M (E + G) - E| + |M| B and |eps| <= |M| bias_bound: the factor M (about 1 / (1 + Gamma_ii))
+    is in the bound, not left out."""
+    G, B = np.asarray(G, float), np.asarray(B, float)
+    M = np.linalg.inv(np.eye(3) + G)
+    absM = np.abs(M)
+    left = np.abs(M @ (np.eye(3) + G) - np.eye(3)) + 8 * np.finfo(float).eps * (absM @ (1 + np.abs(G)))
+    bound = (left + absM @ B) * (1 + 1e-12)
+    return M, bound, (absM @ np.asarray(bias_bound, float)) * (1 + 1e-12)
+
+
 def from_stand(res):
     """The calibration dictionary of a consistent stand estimate with the block's physical errors
-    ((28)-(29) of 000): a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2. Delta_g, which the stand
-    cannot separate from the scale factors, is bounded by the uncertainty of g (a premise) on the diagonal
-    of the bound; the premises travel with the file."""
+    ((28)-(29) of 000): a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2. The bounds of Gamma hold
+    Delta_g/g on its diagonal (a premise: the stand cannot separate it from the scale factors); they reach
+    the sample through M (`through_M`); the premises travel with the file."""
     G, eG = np.array(res["physical"]["Gamma"]), np.array(res["physical_bound"]["Gamma"])
-    B = np.abs(eG) + res["premises"]["g_uncertainty"] * np.eye(3)
+    M, B, eb = through_M(G, np.abs(eG), res["physical_bound"]["bias"])
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
-            "M": np.linalg.inv(np.eye(3) + G).tolist(), "b": list(res["physical"]["bias"]), "bound_matrix": B.tolist(),
-            "bound_bias": list(res["physical_bound"]["bias"]), "bound_delta": [0.0, 0.0, 0.0],
+            "M": M.tolist(), "b": list(res["physical"]["bias"]), "bound_matrix": B.tolist(),
+            "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
             "pendulosity_axes": [2, 3, 1], "g": res["g"], "source": f"{res['model']} estimate, mounting {res['mount']}",
-            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B holds the bounds of Gamma and, on its "
-                    "diagonal, the uncertainty of g (Delta_g/g)", "premises": res["premises"]["statement"]}
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = |M (E + Gamma) - E| + |M| (the bounds of "
+                    "Gamma, Delta_g/g on its diagonal), bound_bias = |M| (the bounds of the biases)",
+            "premises": res["premises"]["statement"]}
 
 
 def from_block(res):
-    """The calibration dictionary of a consistent estimate on any stand: the block's Gamma and biases from
-    the q's and the premises (workflows/block.py); a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2.
+    """The calibration dictionary of a consistent estimate on any stand: the block's Gamma and biases over
+    the information set (workflows/block.py); a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2.
     Each bound already holds the a-priori bounds of what the parameter is confounded with (Delta_g on the
     diagonal); where the block absorbs Delta_g (its Gamma is relative to the g given) the uncertainty of g
-    is added to the diagonal, so the per-sample bound is one in m/s^2."""
+    is added to the diagonal, so the per-sample bound is one in m/s^2; both reach the sample through M
+    (`through_M`)."""
     blk, prem = res["block"], res["premises"]
     G, g = np.asarray(blk["Gamma"]), res["g"]
     gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
-    B = np.asarray(blk["Gamma_bound"]) + (prem["g_uncertainty"] * np.eye(3) if gravity else 0.0)
+    M, B, eb = through_M(G, np.asarray(blk["Gamma_bound"]) + (prem["g_uncertainty"] * np.eye(3) if gravity else 0.0),
+                         g * np.asarray(blk["bias_bound"]))
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
-            "M": np.linalg.inv(np.eye(3) + G).tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
-            "bound_matrix": B.tolist(),
-            "bound_bias": (g * np.asarray(blk["bias_bound"])).tolist(), "bound_delta": [0.0, 0.0, 0.0],
+            "M": M.tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
+            "bound_matrix": B.tolist(), "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
             "pendulosity_axes": [2, 3, 1], "g": g, "source": f"{res['model']} estimate",
-            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B holds the bounds of Gamma, each with the "
-                    "a-priori bounds of what it is confounded with" + (" and, on its diagonal, the uncertainty of g"
-                                                                       if gravity else ""),
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = |M (E + Gamma) - E| + |M| (the bounds of "
+                    "Gamma, each with the a-priori bounds of what it is confounded with" + (
+                        ", and on its diagonal the uncertainty of g)" if gravity else ")")
+                    + ", bound_bias = |M| (the bounds of the biases)",
             "premises": " ".join(filter(None, (prem["statement"] + ".", prem.get("meaning"))))}
 
 

@@ -148,34 +148,49 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
             for k in v.disagree]
         return out
     y = z.reshape(-1) - lin.z0
-    q = lin.q0 + W @ y
-    e = v.guaranteed_error
+    q_apriori, e_apriori = lin.q0 + W @ y, v.guaranteed_error
+    q, e = _midpoint(*v.interval, q_apriori, e_apriori)
+    q_wider, e_wider = _midpoint(*v.interval_wider, q_apriori, guarantee.SIGMA_WIDER * e_apriori)
     out.update({
         "method": method,
         "q": dict(zip(mod.Q_NAMES, q.tolist())),
         "guaranteed_error": dict(zip(mod.Q_NAMES, e.tolist())),
+        "a_priori": {"q": dict(zip(mod.Q_NAMES, q_apriori.tolist())),
+                     "guaranteed_error": dict(zip(mod.Q_NAMES, e_apriori.tolist()))},
         "guaranteed_error_linear": dict(zip(mod.Q_NAMES, v.error_linear.tolist())),
         "guaranteed_error_remainder": dict(zip(mod.Q_NAMES, v.error_remainder.tolist())),
+        "sigma_wider": guarantee.SIGMA_WIDER * sigma,
+        "guaranteed_error_sigma_wider": dict(zip(mod.Q_NAMES, e_wider.tolist())),
+        "sigma_fit": max(float(v.minimax_less_remainder), 0.0),
         "remainder_parts": {k: dict(zip(mod.Q_NAMES, x.tolist())) for k, x in v.parts.items()},
-        "residual": (y - lin.A.T @ (W @ y)).reshape(-1, 3),
+        "residual": (y - lin.A.T @ (q - lin.q0)).reshape(-1, 3),
         "warnings": near_prior(lin, q, e) + unrefutable(lin.A, W, mod),
     })
-    out.update(block_errors(mod, q, W, v, sigma, g, premises, remount, mount, gamma))
+    out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
     return out
 
 
-def block_errors(mod, q, W, v, sigma, g, premises, remount=None, mount=None, gamma="lower"):
-    """The block's errors from the estimate q (weights W, verdict v): its physical errors in `mount` by
+def _midpoint(lo, hi, q, e):
+    """(midpoint, half-width) of intervals, the half-width rounded up so that mid +- half holds [lo, hi];
+    the a-priori q +- e where that is no wider (the printed bound never exceeds it)."""
+    mid = 0.5 * (lo + hi)
+    half = np.maximum(hi - mid, mid - lo) * (1 + 4 * guarantee.EPS) + 1e-300
+    wider = half >= e
+    return np.where(wider, q, mid), np.where(wider, e, half)
+
+
+def block_errors(mod, v, g, premises, remount=None, mount=None, gamma="lower"):
+    """The block's errors over the information set of the verdict v: its physical errors in `mount` by
     the remount formulas (28)-(29) of 000 when the model has them, else the block's calibration (Gamma,
     biases) where the stand separates it, else why not."""
-    e = v.guaranteed_error
     if remount is not None:
         gap = 0.0
         if premises.absorbed:                    # the split into Gamma and theta_k is linear in the literal q
-            cal = block.calibration(mod, q, e, premises)
+            cal = block.calibration(mod, v.info, premises)
             gap = mounting.literal_gap(mod, premises, np.abs(cal["Gamma"]) + cal["Gamma_bound"])
-        phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, q, W, sigma + v.remainder, g,
-                                             v.q_shift + gap)
+        own = dict(zip(premises.names, premises.physical()))
+        phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, v.info, g, gap,
+                                             {n: own[n] for n in ("Delta_g", "Delta_beta") if n in own})
         if premises.absorbed:
             note += "; the split of Gamma and theta_k assumes " + ", ".join(
                 f"|{n}| <= {b:g} ({src})" for n, (b, src) in premises.split.items())
@@ -183,7 +198,7 @@ def block_errors(mod, q, W, v, sigma, g, premises, remount=None, mount=None, gam
     if not all(n in mod.PARAMETER_NAMES for n in block.BLOCK):
         return {}
     try:
-        return {"block": block.calibration(mod, q, e, premises)}
+        return {"block": block.calibration(mod, v.info, premises)}
     except DataError as err:                     # the estimate stands; only a calibration of the block cannot
         return {"block_not_separated": str(err)}
 

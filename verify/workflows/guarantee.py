@@ -27,8 +27,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..solve import highs, taylor
+from ..solve import highs, hull, taylor
 from .premises import Premises
+
+EPS = np.finfo(float).eps
 
 ROUNDING = 1e-13           # absolute, on z of size 1: the float value and Jacobian of the exact model at p0
 
@@ -279,6 +281,90 @@ class Remainder:
                 ) * (1 + taylor.SUM_ERROR)
 
 
+class InformationSet:
+    """What the readings prove: every q whose linearised readings fit each reading within its bound,
+        Q = {q = q0 + w - u : |y_k - a_k^T w| <= s_k for every k, |u| <= shift},
+    s_k = sigma + the proven remainder left at reading k, u what q absorbs (the curvature C(dv) and the
+    first-order t term G t, bounded per q). Any function of q is bounded over Q by LPs whose ends are
+    proven by weak duality (solve/hull.py); w lies in a box the estimator W proves (|w - W y| <=
+    |W| s + |W A^T - I| |w|), which the proofs multiply their rounding by. Adding readings adds rows:
+    Q can only shrink."""
+
+    def __init__(self, lin, y, s, shift, W):
+        self.lin, self.A, self.y, self.s, self.shift = lin, lin.A, y, s, shift
+        m = self.A.shape[0]
+        absW = np.abs(W)
+        Wy = W @ y
+        E = np.abs(W @ self.A.T - np.eye(m)) + taylor.SUM_ERROR * (absW @ np.abs(self.A.T))
+        e = absW @ s + taylor.SUM_ERROR * (absW @ np.abs(y))
+        e_max = (e.max() + (E @ np.abs(Wy)).max()) / max(1 - E.sum(axis=1).max(), 1e-3)
+        e = (e + E @ (np.abs(Wy) + e_max)) * (1 + 1e-9) + 1e-300
+        self.w_lo, self.w_hi = Wy - e, Wy + e
+        self._q = None
+
+    def ranges(self, C):
+        """(lo, hi) of each c^T q (rows of C) over Q, proven."""
+        C = np.atleast_2d(np.asarray(C, float))
+        try:
+            lo, hi = hull.ranges(self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, C)
+        except hull.Empty:                       # the verdict found a fit: empty only to HiGHS's tolerance
+            lo = np.minimum(C, 0) @ self.w_hi + np.maximum(C, 0) @ self.w_lo
+            hi = np.maximum(C, 0) @ self.w_hi + np.minimum(C, 0) @ self.w_lo
+            pad = 4 * EPS * np.abs(C) @ (np.abs(self.w_lo) + np.abs(self.w_hi))
+            lo, hi = lo - pad, hi + pad
+        c0 = C @ self.lin.q0
+        pad = np.abs(C) @ self.shift + taylor.SUM_ERROR * (np.abs(C) @ np.abs(self.lin.q0) + np.abs(c0)) + 4 * EPS * (
+            np.abs(lo) + np.abs(hi))
+        return c0 + lo - pad, c0 + hi + pad
+
+    @property
+    def q(self):
+        """(lo, hi) of each q over Q."""
+        if self._q is None:
+            self._q = self.ranges(np.eye(self.A.shape[0]))
+        return self._q
+
+    def physical(self, R, col_lo, col_hi, targets):
+        """(lo, hi, points) of each physical parameter p_j (j in targets) over {p : R p in Q, col_lo <= p <=
+        col_hi}: one LP pair each in (w, p), rows A^T w within y +- s and R p - w within q0 +- shift.
+        Unbounded columns (inf) are first enclosed through a row of R whose other entries are bounded
+        (q_nu over Q); one that no row encloses is not separated (ValueError names it). points: the
+        p at each end (min, max), for what the range reaches. hull.Empty when no such p exists."""
+        R = np.asarray(R, float)
+        m, n = R.shape
+        lo, hi = np.array(col_lo, float), np.array(col_hi, float)
+        ql, qh = self.q
+        for _ in range(n):
+            free = ~(np.isfinite(lo) & np.isfinite(hi))
+            if not free.any():
+                break
+            for j in np.flatnonzero(free):
+                for nu in np.flatnonzero(R[:, j]):
+                    others = np.flatnonzero(R[nu]) != j
+                    ks = np.flatnonzero(R[nu])[others]
+                    if not (np.all(np.isfinite(lo[ks])) and np.all(np.isfinite(hi[ks]))):
+                        continue
+                    reach = np.abs(R[nu, ks]) @ np.maximum(np.abs(lo[ks]), np.abs(hi[ks]))
+                    a, b = (ql[nu] - reach) / R[nu, j], (qh[nu] + reach) / R[nu, j]
+                    a, b = min(a, b), max(a, b)
+                    pad = 8 * EPS * (abs(a) + abs(b)) + 1e-300
+                    lo[j], hi[j] = max(lo[j], a - pad), min(hi[j], b + pad)
+            if np.array_equal(free, ~(np.isfinite(lo) & np.isfinite(hi))):
+                break
+        free = ~(np.isfinite(lo) & np.isfinite(hi))
+        if free[list(targets)].any():
+            raise ValueError(int(np.flatnonzero(free[list(targets)])[0]))
+        lo, hi = np.where(free, -1.0, lo), np.where(free, 1.0, hi)   # never a target: only holds the solve
+        B = np.block([[self.A.T, np.zeros((self.A.shape[1], n))], [-np.eye(m), R]])
+        row_lo = np.r_[self.y - self.s, self.lin.q0 - self.shift]
+        row_hi = np.r_[self.y + self.s, self.lin.q0 + self.shift]
+        C = np.zeros((len(targets), m + n))
+        C[np.arange(len(targets)), m + np.asarray(targets)] = 1.0
+        out_lo, out_hi, pts = hull.ranges(B, row_lo, row_hi, np.r_[self.w_lo, lo], np.r_[self.w_hi, hi], C,
+                                          points=True)
+        return out_lo, out_hi, [tuple(None if x is None else x[m:] for x in ends) for ends in pts]
+
+
 def _weighted_minimax(A, z, rb):
     """min over q of max_k (|z_k - a_k^T q| - rb_k): (value, q, residual)."""
     q, t, r = highs.chebyshev_fit(A, z, slack=rb, what="minimax fit with remainder")
@@ -302,6 +388,9 @@ class Verdict:
     parts: dict = field(default_factory=dict)   # the remainder part's terms, per q
     q_shift: np.ndarray = None           # per q: the part not carried by W's readings (absorbed, unseparable)
     box: tuple = None                    # (lo, hi) of v = (kept q, t): the last box the truth is proven in
+    info: "InformationSet" = None        # the information set: what these readings prove (with an estimator)
+    interval: tuple = None               # (lo, hi) per q printed: the information set's hull within the a-priori bound
+    interval_wider: tuple = None         # the same had sigma been SIGMA_WIDER times larger (the remainder as for sigma)
 
     @property
     def guaranteed_error(self):
@@ -310,6 +399,7 @@ class Verdict:
 
 
 SIGMA_TOLERANCE = 0.01     # relative: the smallest supported sigma is bracketed this closely
+SIGMA_WIDER = 1.1          # the information set is also bounded for sigma this much larger: how much it leans on sigma
 #: No further a posteriori box once each q's remainder part that the box sets (left after absorption,
 #: absorbed) is within this fraction of its linear part: a smaller box lowers no bound by more.
 BOX_GAIN = 0.001
@@ -327,6 +417,7 @@ def verdict(lin, z, sigma, W=None, steps=8):
         WA = W @ lin.A.T
         E = np.abs(WA - np.eye(m)) + taylor.SUM_ERROR * (np.abs(W) @ np.abs(lin.A.T))
         unseparable = np.abs(WA @ rem.G) @ lin.t_bound * (1 + taylor.SUM_ERROR)
+        unseparable_q = np.abs(rem.G) @ lin.t_bound * (1 + taylor.SUM_ERROR)
         dq = W @ y
 
     def errors(s, rb, cb, functional):
@@ -377,9 +468,26 @@ def verdict(lin, z, sigma, W=None, steps=8):
             t_res = np.abs(W @ (lin.Jt - lin.A.T @ rem.G)) @ lin.t_bound
             t_res += taylor.SUM_ERROR * (np.abs(W) @ (np.abs(lin.Jt) + np.abs(lin.A.T) @ np.abs(rem.G))) @ lin.t_bound
             functional = rem.functional(W, lo, hi, support) + t_res + np.abs(W).sum(axis=1) * ROUNDING
-        return rb_all + rem.t_residual, cb, (errors(s, rb_all + rem.t_residual, cb, functional), (lo, hi))
+        errs = errors(s, rb_all + rem.t_residual, cb, functional)
+        # what these readings prove: the information set, its box contracting the remainder in turn
+        info = InformationSet(lin, y, s + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q, W)
+        for _ in range(steps):
+            ql, qh = info.q
+            half = 0.5 * (qh - ql)
+            if np.all(np.abs(W) @ (rb_all + rem.t_residual) + cb <= BOX_GAIN * half):
+                break                                # a smaller box would lower no bound by BOX_GAIN
+            lo2, hi2 = box(lin, 0.5 * (ql + qh), half)
+            lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
+            nq = len(lin.keep)
+            if np.min((hi2 - lo2)[:nq] / np.maximum(hi - lo, 1e-300)[:nq], initial=1.0) > 0.9:
+                break
+            lo, hi = lo2, hi2
+            rb_n, cb_n = rem(lo, hi)
+            rb_all, cb = np.minimum(rb_all, rb_n), np.minimum(cb, cb_n)
+            info = InformationSet(lin, y, s + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q, W)
+        return rb_all + rem.t_residual, cb, (errs, (lo, hi), info)
     rb, cb, out = proven(sigma)
-    errs, last_box = out if out is not None else (None, None)
+    errs, last_box, info = out if out is not None else (None, None, None)
     t, _, r = _weighted_minimax(lin.A, y, rb)
     t_lin = highs.chebyshev_fit(lin.A, y)[1]
     consistent = bool(t <= sigma)
@@ -389,8 +497,23 @@ def verdict(lin, z, sigma, W=None, steps=8):
                 remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
     if W is not None:
         v.error_linear, v.error_remainder, v.parts, v.q_shift = errs
-        v.box = last_box
+        v.box, v.info = last_box, info
+        q_apriori = lin.q0 + dq
+        v.interval = _printed(q_apriori, v.guaranteed_error, info)
+        if consistent:                               # a sensitivity: sigma larger, the remainder as proven for sigma
+            wider = InformationSet(lin, y, info.s + (SIGMA_WIDER - 1) * sigma, info.shift, W)
+            v.interval_wider = _printed(q_apriori, v.guaranteed_error + (SIGMA_WIDER - 1) * v.error_linear, wider)
     return v
+
+
+def _printed(q, e, info):
+    """(lo, hi) per q: the information set's hull within the a-priori interval q +- e of the estimator
+    (both hold; where they do not meet, a premise fails, and the a-priori interval is kept)."""
+    pad = 4 * EPS * (np.abs(q) + e)
+    lo, hi = info.q
+    lo2, hi2 = np.maximum(lo, q - e - pad), np.minimum(hi, q + e + pad)
+    bad = lo2 > hi2
+    return np.where(bad, q - e - pad, lo2), np.where(bad, q + e + pad, hi2)
 
 
 def _smallest_sigma(A, y, refuted, supported, proven):

@@ -24,31 +24,32 @@ def mounted_readings(mod, remount, alpha, beta, stand, Gamma, bias, theta_k, mou
     return np.einsum("ij,j...->i...", Q, mod.readings(alpha, beta, physical, g))
 
 
-def recover(remount, mount, gamma, q, weights, noise, g, q_shift=0.0):
-    """Physical errors in block axes from q, with guaranteed bounds sum_k |K Phi|_k noise_k.
-
-    weights: m x K estimator matrix (q = weights @ z); noise: the bound of each residual component
-    (sigma, plus the remainder when it is known), a number or (K,); q_shift bounds a shift of q the
-    estimate carries (the absorbed curvature, workflows/guarantee.py); biases are returned in m/s^2.
-    """
+def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None):
+    """Physical errors in block axes, each K_row q bounded over the information set `info`
+    (guarantee.InformationSet: an LP pair each, proven); q_shift bounds a further shift of q (the gap of
+    the literal q, `literal_gap`); biases are returned in m/s^2. `neglected` {name: bound}: the a-priori
+    bounds of what (29) of 000 leaves out, Delta_g/g (on the diagonal of Gamma) and Delta_beta (in the
+    theta_k of the axis along the table's), added to those bounds: a premise, printed with them."""
     K = remount.recovery_matrix(mount, gamma)
-    value = K @ q
-    used = np.flatnonzero(np.any(weights != 0, axis=0))         # the estimator's own measurements
-    bound = (np.abs(K @ weights[:, used]) @ np.broadcast_to(noise, weights.shape[1])[used]
-             + np.abs(K) @ np.broadcast_to(q_shift, len(q)))
-    out, err = {}, {}
+    lo, hi = info.ranges(K)
+    value = 0.5 * (lo + hi)
+    bound = np.maximum(hi - value, value - lo) * (1 + 1e-15) + np.abs(K) @ np.broadcast_to(q_shift, K.shape[1])
     names = list(remount.OUTPUTS)
+    neglected = neglected or {}
+    dg, db = neglected.get("Delta_g", 0.0), neglected.get("Delta_beta", 0.0)
+    bound = (bound + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
+             + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db) * (1 + 1e-15)
+    out, err = {}, {}
     for key in PHYSICAL_KEYS:
         out[key], err[key] = float(value[names.index(key)]), float(bound[names.index(key)])
     sl = [names.index(f"bias{i}") for i in (1, 2, 3)]
-    out["bias"], err["bias"] = (g * value[sl]).tolist(), (g * bound[sl]).tolist()
+    out["bias"], err["bias"] = (g * value[sl]).tolist(), (g * bound[sl] * (1 + 1e-15)).tolist()
     sl = [names.index(f"Gamma{i}{j}") for i in (1, 2, 3) for j in (1, 2, 3)]
     out["Gamma"], err["Gamma"] = value[sl].reshape(3, 3).tolist(), bound[sl].reshape(3, 3).tolist()
     sl = [names.index(f"theta_k{i}") for i in (1, 2, 3)]
     out["theta_k"], err["theta_k"] = value[sl].tolist(), bound[sl].tolist()
-    axis = int(np.flatnonzero(remount.MOUNTS[mount] @ np.array([0, 0, 1]))[0]) + 1
-    note = (f"neglected in (29): Delta_g/g on the diagonal of Gamma, and Delta_beta in theta_k{axis} "
-            "(not identifiable on this stand)")
+    note = ("(29) of 000 leaves out Delta_g/g and Delta_beta (not identifiable on this stand): the bounds include "
+            f"what their a-priori bounds move the outputs by, |Delta_g/g| <= {dg:g} and |Delta_beta| <= {db:g}")
     return out, err, note
 
 
