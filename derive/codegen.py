@@ -138,7 +138,9 @@ def _absorbed_context(m, names, subs):
     if not gone:
         return none
     dg, theta = m.stand.gravity_error, ", ".join(m.stand.theta)
-    formula = f"(1 - {dg})(E + Gamma) Q C({theta}) Q^T - E" if len(gone) > 1 else f"(1 - {dg})(E + Gamma) - E"
+    offset = [n for n in gone if n not in m.stand.theta and n != dg]
+    turn_text = f"C({theta})" + "".join(f" C_link(-{n})" for n in offset)
+    formula = f"(1 - {dg})(E + Gamma) Q {turn_text} Q^T - E" if len(gone) > 1 else f"(1 - {dg})(E + Gamma) - E"
     exprs = [Gp[i, j].xreplace(subs) for i in range(3) for j in range(3)]
     if turn is None:
         code = _cse_code(exprs)

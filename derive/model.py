@@ -245,7 +245,9 @@ def absorbed(model):
     and with one mounting Q also theta only through (1 - Delta_g)(E + Gamma) Q C(theta) = (E + Gamma') Q,
     Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta) Q^T - E: a unit and the one with Gamma' and these at 0
     read the same at every position, so data tell only Gamma' (the q of (4) of 000 taken literally,
-    Gamma13 - theta2, are known only to about |Gamma| |theta| whatever the plan). With several mountings
+    Gamma13 - theta2, are known only to about |Gamma| |theta| whatever the plan). The instrument-side
+    link's encoder offset (Delta_beta of the two-axis stand) is one more fixed turn beside the mounting,
+    C_k(s (read - offset)) = C_k(-s offset) C_k(s read), and goes into Gamma' with it. With several mountings
     about one axis, theta1 and the first link's offset go instead (`Turn`): Gamma' = (1 - Delta_g)(E + Gamma)
     R^T - E, in `turn.c`, `turn.s`. Checked here, not assumed: the identities exactly, and the absorbed
     parameters nowhere else in the readings."""
@@ -260,7 +262,20 @@ def absorbed(model):
     if len(model.mountings) == 1:
         Q = mount_matrices(model)[0]
         turn_m = small_turn([s[n] for n in st.theta])
-        names, Gp = (*st.theta, st.gravity_error), (1 - dg) * EG * Q * turn_m * Q.T - sp.eye(3)
+        gone_names = {*st.theta, st.gravity_error}
+        first = links[0]
+        angles = {a.name: a.symbol for a in st.angles}
+        if first.angle is not None and first.error and not first.harmonic and first.fixed_deg is None:
+            # the instrument-side link's offset is one more fixed turn beside the mounting:
+            # C_k(s (read - offset)) = C_k(-s offset) C_k(s read), checked exactly below
+            offset = C(first.axis, -first.sign * s[first.error])
+            at_zero = C(first.axis, link_angle(first, s, angles).subs(s[first.error], 0))
+            split = (offset * at_zero - C(first.axis, link_angle(first, s, angles))).applyfunc(
+                lambda e: sp.expand(sp.expand_trig(e)))
+            if split == sp.zeros(3, 3):
+                turn_m, gone_names, links = turn_m * offset, gone_names | {first.error}, links[1:]
+        names = tuple(p.name for p in model.parameters if p.name in gone_names)
+        Gp = (1 - dg) * EG * Q * turn_m * Q.T - sp.eye(3)
         same = sp.expand((sp.eye(3) + Gp) * Q - (1 - dg) * EG * Q * turn_m) == sp.zeros(3, 3)
     else:
         turn = _turn(model)

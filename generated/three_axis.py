@@ -118,8 +118,8 @@ UNSEPARABLE = np.array([
 ])
 
 #: Parameters the block absorbs exactly: the readings depend on them and Gamma only through
-#: Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta1, theta2, theta3) Q^T - E (derive/model.py, `absorbed`).
-ABSORBED = ("theta1", "theta2", "theta3", "Delta_g")
+#: Gamma' = (1 - Delta_g)(E + Gamma) Q C(theta1, theta2, theta3) C_link(-Delta_phi) Q^T - E (derive/model.py, `absorbed`).
+ABSORBED = ("Delta_phi", "theta1", "theta2", "theta3", "Delta_g")
 #: The axis n all mountings turn about when a turn about it is absorbed (derive/model.py, `Turn`), else None.
 TURN_AXIS = None
 
@@ -130,46 +130,51 @@ def equivalent(physical):
     out = np.array(physical, dtype=float)
     (tilt_x, tilt_y, eps_om, Delta_theta, eps_mi, Delta_phi, theta1, theta2, theta3, Delta_g, Gamma11, Gamma12, Gamma13, Gamma21, Gamma22, Gamma23, Gamma31, Gamma32, Gamma33, bias1, bias2, bias3) = out
     t0 = np.sin(theta2)
-    t1 = 1 - Delta_g
-    t2 = Gamma12*t1
-    t3 = np.sin(theta3)
+    t1 = np.cos(Delta_phi)
+    t2 = np.cos(theta1)
+    t3 = np.sin(Delta_phi)
     t4 = np.cos(theta2)
     t5 = t3*t4
-    t6 = np.cos(theta3)
-    t7 = Gamma11 + 1
-    t8 = np.sin(theta1)
-    t9 = t1*t4
-    t10 = Gamma13*t9
-    t11 = np.cos(theta1)
-    t12 = t3*t8
-    t13 = -t0*t12 + t11*t6
-    t14 = t11*t3
-    t15 = t6*t8
-    t16 = t0*t15 + t14
-    t17 = t1*t7
-    t18 = t0*t14 + t15
-    t19 = -t0*t11*t6 + t12
-    t20 = t0*t1
-    t21 = Gamma21*t1
-    t22 = t4*t6
-    t23 = t1*(Gamma22 + 1)
-    t24 = Gamma23*t9
-    t25 = Gamma33 + 1
-    t26 = Gamma31*t1
-    t27 = Gamma32*t1
-    t28 = t25*t9
+    t6 = t0*t1 - t2*t5
+    t7 = 1 - Delta_g
+    t8 = Gamma13*t7
+    t9 = np.sin(theta3)
+    t10 = t1*t4
+    t11 = np.sin(theta1)
+    t12 = np.cos(theta3)
+    t13 = t11*t12
+    t14 = t2*t9
+    t15 = t0*t14 + t13
+    t16 = -t10*t9 - t15*t3
+    t17 = Gamma12*t7
+    t18 = t11*t9
+    t19 = -t0*t12*t2 + t18
+    t20 = t1*t12*t4 - t19*t3
+    t21 = t7*(Gamma11 + 1)
+    t22 = t11*t4
+    t23 = -t0*t18 + t12*t2
+    t24 = t0*t13 + t14
+    t25 = t0*t3 + t10*t2
+    t26 = t1*t15 - t5*t9
+    t27 = t1*t19 + t12*t5
+    t28 = Gamma23*t7
+    t29 = Gamma21*t7
+    t30 = t7*(Gamma22 + 1)
+    t31 = t7*(Gamma33 + 1)
+    t32 = Gamma31*t7
+    t33 = Gamma32*t7
     out[[10, 11, 12, 13, 14, 15, 16, 17, 18]] = [
-        Gamma13*t0*t1 + t1*t4*t6*t7 - t2*t5 - 1,
-        -t10*t8 + t13*t2 + t16*t17,
-        t10*t11 + t17*t19 + t18*t2,
-        Gamma23*t20 + t21*t22 - t23*t5,
-        t13*t23 + t16*t21 - t24*t8 - 1,
-        t11*t24 + t18*t23 + t19*t21,
-        t20*t25 + t22*t26 - t27*t5,
-        t13*t27 + t16*t26 - t28*t8,
-        t11*t28 + t18*t27 + t19*t26 - 1,
+        t16*t17 + t20*t21 + t6*t8 - 1,
+        t17*t23 + t21*t24 - t22*t8,
+        t17*t26 + t21*t27 + t25*t8,
+        t16*t30 + t20*t29 + t28*t6,
+        -t22*t28 + t23*t30 + t24*t29 - 1,
+        t25*t28 + t26*t30 + t27*t29,
+        t16*t33 + t20*t32 + t31*t6,
+        -t22*t31 + t23*t33 + t24*t32,
+        t25*t31 + t26*t33 + t27*t32 - 1,
     ]
-    out[[6, 7, 8, 9]] = 0.0
+    out[[5, 6, 7, 8, 9]] = 0.0
     return out
 
 

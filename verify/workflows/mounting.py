@@ -67,9 +67,8 @@ def literal_gap(mod, premises, gamma_bound):
     theta and u = |Delta_g/g| are those `premises.split` holds: premises of the split alone. gamma_bound:
     entrywise bound of Gamma' (3 x 3)."""
     names, kinds = list(premises.names), dict(zip(premises.names, premises.kinds))
-    theta = max((premises.split[n][0] for n in premises.absorbed if kinds[n] == "mounting"), default=0.0)
+    t = sum(premises.split[n][0] for n in premises.absorbed if kinds[n] in ("mounting", "stand"))
     u = max((premises.split[n][0] for n in premises.absorbed if kinds[n] == "gravity"), default=0.0)
-    t = 3 * theta
     r1, r2 = np.expm1(t), np.expm1(t) - t
     B = np.asarray(gamma_bound, float)
     D = (2 * r2 + u * r1 + B.sum(axis=1, keepdims=True) * r1 + u * (B + u * np.eye(3))) / (1 - u) + r2

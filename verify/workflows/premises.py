@@ -70,9 +70,14 @@ class Premises:
         gravity = [n for n, k in zip(self.names, self.kinds) if k == "gravity" and n in self.absorbed]
         offset = [n for n, k in zip(self.names, self.kinds) if k == "stand" and n in self.absorbed]
         mount = [n for n, k in zip(self.names, self.kinds) if k == "mounting" and n in self.absorbed]
-        how = ("absorbed into Gamma exactly" if not offset else
-               f"{mount[0]} taken by the offset {offset[0]}, and that by a turn about the mountings' common axis "
-               "that Gamma and the mounting take, exactly")
+        if not offset:
+            how = "absorbed into Gamma exactly"
+        elif not self.turned:
+            how = (f"absorbed into Gamma exactly, the encoder offset {', '.join(offset)} of the instrument-side axis "
+                   "as one more fixed turn beside the mounting")
+        else:
+            how = (f"{mount[0]} taken by the offset {offset[0]}, and that by a turn about the mountings' common axis "
+                   "that Gamma and the mounting take, exactly")
         out = (f"The bounded q are those of the unit that reads the same with {', '.join(self.absorbed)} = 0, "
                f"{how} (no data tell the two apart)")
         if gravity:
