@@ -81,14 +81,15 @@ def test_a_target_below_the_optimum_is_refused_and_a_looser_one_is_reached(tmp_p
 
 
 def test_a_session_for_the_block_parameters_reaches_their_targets(tmp_path, capsys):
-    """next --mount: the targets bound the block's parameters of (28)-(29) of 000 in one mounting; each
-    'at least' of positions still needed is a true lower bound (never more than the session then took)."""
+    """next --mount: the targets bound the block's parameters of (28)-(29) of 000 in the mounting the readings
+    are in; each 'at least' of positions still needed is a true lower bound (never more than the session then
+    took)."""
     header, rows = _readings(tmp_path, "two-axis")
     session = tmp_path / "s.csv"
     session.write_text(header + "\n")
     lower = []
     for _ in range(len(rows) + 1):
-        res = garant.next_position("two-axis", str(session), SIGMA, mount="+y+z+x")
+        res = garant.next_position("two-axis", str(session), SIGMA, mount="+x+y+z")
         if res.done:
             break
         assert "Gamma12" not in res.names and "theta_k3" in res.names    # zero by the split: no target
@@ -98,3 +99,34 @@ def test_a_session_for_the_block_parameters_reaches_their_targets(tmp_path, caps
     assert all(lb <= len(lower) - k for k, lb in enumerate(lower))
     assert main(["next", "--model", "two-axis", str(session), "--sigma", str(SIGMA), "--mount", "+y+z+q"]) == 2
     assert "--mount needs" in capsys.readouterr().err
+
+
+def test_done_means_estimate_prints_every_bound_at_its_target(tmp_path):
+    # Issue 40: next said "done" on 10 positions where estimate on the same readings printed a q9 bound 1.22x the
+    # target (next planned with the nominal H; estimate linearises where the unit is and adds the remainder). A
+    # MEMS-size unit (issue 23) at a vertex of its bounds, noise at +-sigma with the signs of the estimator whose
+    # bound the unit moves most on the plan next led to before (there estimate printed 1.036x its target): a
+    # session led by next to "done", and estimate on that file prints every bound at or below next's target.
+    from conftest import write_csv
+    from garant.verify import power
+    from garant.verify.workflows import next as nx
+    mod = models.load("two-axis")
+    p = power.mems_truth(mod, np.random.default_rng(5), vertex=True)
+    P = np.array([(a, b) for a in range(0, 360, 90) for b in range(0, 360, 90)], float)
+    f = power.mems_readings(mod, P, None, p, np.zeros((len(P), 3)))
+    plan = []                                   # where next at the nominal H alone says done
+    while not (r := nx.next_position(mod, "two-axis", P[plan], np.zeros(len(plan), int), SIGMA)).done:
+        plan.append(int(np.flatnonzero(np.all(np.abs(P - np.array(r.position[:2])) < 1e-9, axis=1))[0]))
+    clean = garant.estimate("two-axis", str(write_csv(tmp_path / "c.csv", P[plan], f[plan])), SIGMA, g=power.G)
+    nu = int(np.argmax([clean.a_priori["guaranteed_error"][n] / t for n, t in zip(mod.Q_NAMES, r.target)]))
+    f[plan] += power.G * SIGMA * np.sign(power.estimator_weights(mod, P[plan], None, f[plan], nu)).reshape(-1, 3)
+    taken = []
+    for _ in range(len(P) + 1):
+        res = garant.next_position("two-axis", str(write_csv(tmp_path / "s.csv", P[taken], f[taken])), SIGMA, g=power.G)
+        if res.done:
+            break
+        taken.append(int(np.flatnonzero(np.all(np.abs(P - np.array(res.next[:2])) < 1e-9, axis=1))[0]))
+    assert res.done and res.consistent and "estimate" in res.bounds_from
+    est = garant.estimate("two-axis", str(tmp_path / "s.csv"), SIGMA, g=power.G)
+    printed = np.array([est.guaranteed_error[n] for n in mod.Q_NAMES])
+    assert np.all(printed <= np.array(res.target) * (1 + 1e-7)), printed / np.array(res.target)

@@ -59,7 +59,8 @@ def _print(res):
                  [(q, f"{t:.3e}", fmt(b), "-" if res["done"] else fmt(a))
                   for q, t, b, a in zip(res["names"], res["target"], res["guaranteed_error_before"], after)])
     print(f"{res['of']}; units: dimensionless or rad; target: {res['target_source']}; sigma = {res['sigma']:g}; "
-          f"{len(res['measured'])} distinct position(s) measured, {res['candidates']} reachable candidates")
+          f"{len(res['measured'])} distinct position(s) measured, {res['candidates']} reachable candidates; "
+          f"bounds now: {res['bounds_from']}")
     if res["consistent"] is False:
         print("the data so far refute sigma (as `garant estimate` says): find the cause before measuring more")
         return

@@ -78,9 +78,15 @@ class Estimate(Result):
               "sigma": "the noise bound, dimensionless (units of g)",
               "sigma_min_supported": "the smallest sigma the data support",
               "q": "estimate of each q, in its unit (`units`)",
-              "guaranteed_error": "guaranteed error of each q (linear + remainder part)",
-              "guaranteed_error_linear": "sigma sum |W| of each q",
-              "guaranteed_error_remainder": "the proven linearisation remainder part of each q",
+              "guaranteed_error": "guaranteed error of each q: what these readings prove, the half-width of the "
+                                  "information set (every q that fits each reading within sigma plus the proven "
+                                  "remainder), never above the a-priori one",
+              "a_priori": "q and guaranteed_error of the optimal estimator ((7)-(8) of 000): what the plan guarantees "
+                          "for any readings within sigma (= guaranteed_error_linear + guaranteed_error_remainder)",
+              "guaranteed_error_linear": "sigma sum |W| of each q (the a-priori bound's linear part)",
+              "guaranteed_error_remainder": "the proven linearisation remainder part of each q's a-priori bound",
+              "guaranteed_error_sigma_wider": "each q's guaranteed error had sigma been sigma_wider (a sensitivity)",
+              "sigma_fit": "the smallest noise bound these readings fit within (minimax residual less the remainder)",
               "units": "unit of each q (1: dimensionless; a bias q is over g)",
               "definitions": "each q in the physical parameters ((4) of 000)",
               "calibration": "the block's garant-calibration-1 dictionary `garant.apply` takes (when consistent and "
@@ -133,4 +139,6 @@ class NextPosition(Result):
               "target": "per q, units of q", "target_source": "where the target comes from",
               "measured": "the distinct positions measured so far", "angles": "the stand's angle names",
               "consistent": "whether the data so far are "
-              "consistent with sigma (None while some q has no estimator)"}
+              "consistent with sigma (None while some q has no estimator)",
+              "bounds_from": "what guaranteed_error_before is: estimate's printed bounds on the readings so far "
+                             "(done is decided on them), or the nominal optimal estimators before an estimate"}

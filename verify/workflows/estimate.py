@@ -189,12 +189,13 @@ def block_errors(mod, v, g, premises, remount=None, mount=None, gamma="lower"):
             cal = block.calibration(mod, v.info, premises)
             gap = mounting.literal_gap(mod, premises, np.abs(cal["Gamma"]) + cal["Gamma_bound"])
         own = dict(zip(premises.names, premises.physical()))
-        phys, bound, note = mounting.recover(remount, mount or "+x+y+z", gamma, v.info, g, gap,
+        phys, bound, note, premised = mounting.recover(remount, mount or "+x+y+z", gamma, v.info, g, gap,
                                              {n: own[n] for n in ("Delta_g", "Delta_beta") if n in own})
         if premises.absorbed:
             note += "; the split of Gamma and theta_k assumes " + ", ".join(
                 f"|{n}| <= {b:g} ({src})" for n, (b, src) in premises.split.items())
-        return dict(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound, physical_note=note)
+        return dict(mount=mount or "+x+y+z", gamma=gamma, physical=phys, physical_bound=bound, physical_note=note,
+                    physical_bound_premises=premised)
     if not all(n in mod.PARAMETER_NAMES for n in block.BLOCK):
         return {}
     try:

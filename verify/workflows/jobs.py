@@ -112,18 +112,25 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     a header alone at the start, or an array; see `positions_of`): next.py's suggestion, and once every
     q has an estimator the verdict of `estimate` on the data (`consistent`; its `disagreements` when
     the data refute sigma)."""
-    from .next import next_position as suggest
+    from ..solve import lp
+    from .next import next_position as suggest, printed_bounds, target_names
     mod = models.load(model)
     pos = positions_of(mod, data, empty_ok=True)
     mounts = pos.mounts if pos.mounts is not None else np.zeros(len(pos.angles_deg), int)
-    out = results.NextPosition(suggest(mod, model, pos.angles_deg, mounts, sigma, target, grid,
-                                       search_seconds, max_candidates, mount, gamma).to_dict())
-    out["consistent"] = None
-    if all(e is not None for e in out["guaranteed_error_before"]):
-        verdict = estimate(model, data, sigma, g, g_uncertainty, prior)
-        out["consistent"] = verdict["consistent"]
-        if not verdict["consistent"]:
-            out["disagreements"] = verdict.get("disagreements")
+    verdict, printed = None, None
+    if len(pos.angles_deg) and not lp.unidentifiable(
+            lp.measurement_matrix(mod, np.deg2rad(pos.angles_deg), pos.mounts)):    # every q has an estimator
+        verdict = estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma)
+    floor = None
+    if verdict is not None and verdict["consistent"]:
+        printed, floor = printed_bounds(verdict, target_names(mod, model, mount, gamma))
+    out = results.NextPosition(suggest(mod, model, pos.angles_deg, mounts, sigma, target, grid, search_seconds,
+                                       max_candidates, mount, gamma, printed=printed, floor=floor).to_dict())
+    out["consistent"] = None if verdict is None else verdict["consistent"]
+    out["bounds_from"] = ("estimate on the readings so far (what `garant estimate` prints)" if printed is not None
+                          else "the plan's optimal estimators at nominal H (no estimate yet)")
+    if verdict is not None and not verdict["consistent"]:
+        out["disagreements"] = verdict.get("disagreements")
     return out
 
 

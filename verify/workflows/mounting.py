@@ -29,28 +29,29 @@ def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None):
     (guarantee.InformationSet: an LP pair each, proven); q_shift bounds a further shift of q (the gap of
     the literal q, `literal_gap`); biases are returned in m/s^2. `neglected` {name: bound}: the a-priori
     bounds of what (29) of 000 leaves out, Delta_g/g (on the diagonal of Gamma) and Delta_beta (in the
-    theta_k of the axis along the table's), added to those bounds: a premise, printed with them."""
+    theta_k of the axis along the table's), added to those bounds: a premise, printed with them. Returns
+    (values, bounds, note, the part of each bound the premises alone set: no readings reduce it)."""
     K = remount.recovery_matrix(mount, gamma)
     lo, hi = info.ranges(K)
     value = 0.5 * (lo + hi)
-    bound = np.maximum(hi - value, value - lo) * (1 + 1e-15) + np.abs(K) @ np.broadcast_to(q_shift, K.shape[1])
-    names = list(remount.OUTPUTS)
     neglected = neglected or {}
     dg, db = neglected.get("Delta_g", 0.0), neglected.get("Delta_beta", 0.0)
-    bound = (bound + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
-             + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db) * (1 + 1e-15)
-    out, err = {}, {}
-    for key in PHYSICAL_KEYS:
-        out[key], err[key] = float(value[names.index(key)]), float(bound[names.index(key)])
-    sl = [names.index(f"bias{i}") for i in (1, 2, 3)]
-    out["bias"], err["bias"] = (g * value[sl]).tolist(), (g * bound[sl] * (1 + 1e-15)).tolist()
-    sl = [names.index(f"Gamma{i}{j}") for i in (1, 2, 3) for j in (1, 2, 3)]
-    out["Gamma"], err["Gamma"] = value[sl].reshape(3, 3).tolist(), bound[sl].reshape(3, 3).tolist()
-    sl = [names.index(f"theta_k{i}") for i in (1, 2, 3)]
-    out["theta_k"], err["theta_k"] = value[sl].tolist(), bound[sl].tolist()
+    premised = (np.abs(K) @ np.broadcast_to(q_shift, K.shape[1]) + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
+                + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db)
+    bound = (np.maximum(hi - value, value - lo) * (1 + 1e-15) + premised) * (1 + 1e-15)
     note = ("(29) of 000 leaves out Delta_g/g and Delta_beta (not identifiable on this stand): the bounds include "
             f"what their a-priori bounds move the outputs by, |Delta_g/g| <= {dg:g} and |Delta_beta| <= {db:g}")
-    return out, err, note
+    return _by_kind(remount, value, g), _by_kind(remount, bound, g, 1 + 1e-15), note, _by_kind(remount, premised, g)
+
+
+def _by_kind(remount, x, g, up=1.0):
+    """Outputs in the order of OUTPUTS as {kappa, dalpha_plus_astar, epsilon, bias (m/s^2), Gamma, theta_k}."""
+    names = list(remount.OUTPUTS)
+    out = {key: float(x[names.index(key)]) for key in PHYSICAL_KEYS}
+    out["bias"] = (g * x[[names.index(f"bias{i}") for i in (1, 2, 3)]] * up).tolist()
+    out["Gamma"] = x[[names.index(f"Gamma{i}{j}") for i in (1, 2, 3) for j in (1, 2, 3)]].reshape(3, 3).tolist()
+    out["theta_k"] = x[[names.index(f"theta_k{i}") for i in (1, 2, 3)]].tolist()
+    return out
 
 
 def literal_gap(mod, premises, gamma_bound):

@@ -93,13 +93,56 @@ def block_functionals(mod, model, mount, gamma="lower"):
     return remount.recovery_matrix(mount, gamma), list(remount.OUTPUTS)
 
 
+def target_names(mod, model, mount=None, gamma="lower"):
+    """What the targets bound: the q's, or with `mount` the block's parameters the split does not set to zero."""
+    if mount is None:
+        return list(mod.Q_NAMES)
+    C, labels = block_functionals(mod, model, mount, gamma)
+    return [n for n, k in zip(labels, np.any(C != 0, axis=1)) if k]
+
+
+def printed_bounds(res, labels):
+    """(bounds, floor): the bounds `garant estimate` printed (its result `res`, consistent) in the order of
+    `labels`, the q's or with --mount the block's parameters of (28)-(29) of 000 (biases over g), nan for one it
+    has not; floor, the part of each that the premises alone set (no readings reduce it: Delta_g/g, Delta_beta
+    and the split's second order), 0 for the q's."""
+    if labels and labels[0] in res["guaranteed_error"]:
+        return np.array([res["guaranteed_error"].get(n, np.nan) for n in labels], float), np.zeros(len(labels))
+    g = res["g"]
+
+    def pick(bound):
+        out = []
+        for n in labels:
+            if n in bound and not isinstance(bound[n], list):
+                out.append(bound[n])
+            elif n.startswith("bias"):
+                out.append(bound["bias"][int(n[-1]) - 1] / g)
+            elif n.startswith("Gamma"):
+                out.append(bound["Gamma"][int(n[-2]) - 1][int(n[-1]) - 1])
+            elif n.startswith("theta_k"):
+                out.append(bound["theta_k"][int(n[-1]) - 1])
+            else:
+                out.append(np.nan)
+        return np.array(out, float)
+    return pick(res.get("physical_bound", {})), np.nan_to_num(pick(res.get("physical_bound_premises", {})))
+
+
+#: The default target is sigma x the stand's optimal errors, widened by this much: room for the estimate's
+#: own bound, the model linearised where the unit is (H moves by the size of its errors: a MEMS-size unit's
+#: scale errors of 2e-2 move a minimal plan's bounds by 1.5-3.6 % at the noise's worst signs) plus the remainder.
+TARGET_SLACK = 0.05
+
+
 def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None, search_seconds=None,
-                  max_candidates=None, mount=None, gamma="lower"):
+                  max_candidates=None, mount=None, gamma="lower", printed=None, floor=None):
     """The Next of a session whose distinct measured positions are `angles_deg` (N, angles; degrees)
     in mountings `mounts` (N,): target None is sigma times the stand's optimal errors on its reachable
     positions (then, for the q's, the suggestion completes a plan of the fewest positions, which the
     measured ones are part of), a number is one target for every q (units of q). With `mount` the targets
-    bound the block's parameters in that mounting ((28)-(29) of 000) instead of the q's."""
+    bound the block's parameters in that mounting ((28)-(29) of 000) instead of the q's. `printed`: the
+    bounds `estimate` prints on the readings so far (`printed_bounds`), where it gives them: "done" is
+    decided on them (remainder included, linearised where the unit is), not on the plan's nominal H; the
+    default target then holds TARGET_SLACK for that and `floor`, what the premises alone set."""
     from ..models import layout
     from ..solve import plans
     from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates
@@ -114,15 +157,20 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         optimal = np.array([float(lam[nu]) for nu, lam in enumerate(lams)])       # units of sigma
     else:
         C, labels = block_functionals(mod, model, mount, gamma)
-        keep = np.any(C != 0, axis=1)              # an entry the split sets to zero is no target
+        keep = np.any(C != 0, axis=1)              # an entry the split sets to zero is no target (`target_names`)
         C, labels = C[keep], [n for n, k in zip(labels, keep) if k]
         of = f"the block's parameters in mounting {mount}, (28)-(29) of 000 (biases over g)"
         optimal = errors_on(mod, P, M, C)
         if not np.all(np.isfinite(optimal)):
             raise DataError(f"--mount {mount}: this stand does not separate "
                             + ", ".join(n for n, o in zip(labels, optimal) if not np.isfinite(o)))
-    if target is None:
+    if target is None and printed is None:
         goal, source = sigma * optimal, "sigma x the stand's optimal errors on its reachable positions"
+    elif target is None:
+        goal = sigma * optimal * (1 + TARGET_SLACK) + (0.0 if floor is None else floor)
+        source = (f"sigma x the stand's optimal errors on its reachable positions, +{TARGET_SLACK:.0%} for the estimate "
+                  "linearised where the unit is" + (", plus what the premises alone set (estimate's bound)"
+                                                     if floor is not None and np.any(floor > 0) else ""))
     else:
         goal, source = np.full(len(labels), float(target)), "--target"
         short = [f"{q} ({sigma * o:.3g})" for q, o in zip(labels, optimal) if sigma * o > target * (1 + AT_TARGET)]
@@ -130,15 +178,18 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
             raise DataError(f"--target {target:g} is below the stand's optimal error of {', '.join(short)}: no plan "
                             "of its reachable positions reaches it")
     before = sigma * errors_on(mod, P[fixed], M[fixed], C)
+    nominal_done = bool(np.all(before <= goal * (1 + AT_TARGET)))
+    if printed is not None:                       # what estimate prints where it has a bound
+        before = np.where(np.isfinite(printed), printed, before)
     position = lambda s: [*(float(v) for v in P[s]), *([mount_names[M[s]]] if len(mount_names) > 1 else [])]  # noqa: E731
     common = dict(model=model, angles=list(names), names=labels, of=of, sigma=sigma, target=goal, target_source=source,
                   measured=[position(s) for s in fixed], before=before, candidates=len(P))
     if np.all(before <= goal * (1 + AT_TARGET)):
         return Next(**common, position=None, after=None, still_needed=0, still_needed_proven=True)
-    if target is None and mount is None:
+    if target is None and mount is None and not nominal_done:
         n, found, _, floor = plans.covering_plans(cols, lams, 1, 1.0, search_seconds or SEARCH_SECONDS, fixed)
         pool, needed, proven = [s for s in found[0] if s not in fixed], n - len(fixed), floor is None
-    else:
+    else:                                         # (nominal_done: the plan would be, what estimate prints is not)
         pool = [s for s in range(len(P)) if s not in fixed]
         needed = max(1, rank_still_needed(mod, P[fixed], M[fixed], np.eye(m) if C is None else C))
         proven = False
