@@ -209,3 +209,34 @@ def test_the_instrument_side_offset_is_no_premise(name, offset):
         same = mod.equivalent(p)
         Gamma = np.array([[same[mod.PARAMETER_NAMES.index(f"Gamma{i}{j}")] for j in (1, 2, 3)] for i in (1, 2, 3)])
         assert np.all(np.abs(np.array(r["block"]["Gamma"]) - Gamma) <= np.array(r["block"]["Gamma_bound"]))
+
+
+def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
+    # Issue 40's done-when: the MEMS example's calibration file (issue 23: two-axis, the 30 x 45 grid, --g) has
+    # Gamma bounds within 1.5x of the bounds of the q they are made of. Before, the linear split (29) of 000 paid
+    # |Gamma'| times the mounting's a-priori bound for its second-order gap: 6.7e-4 against q bounds of 1.6e-6.
+    # Now Gamma is the lower-triangular factor of E + Gamma' (LQ, exact), enclosed in interval arithmetic; the
+    # truth (Gamma lower-triangular, the unit at a vertex of its bounds) inside every entry.
+    from garant.verify import power
+    mod = models.load("two-axis")
+    P, _ = power.mems_grid(mod)
+    rng = np.random.default_rng(0)
+    p = power.mems_truth(mod, rng, vertex=True)
+    p[[mod.PARAMETER_NAMES.index(n) for n in ("Gamma12", "Gamma13", "Gamma23")]] = 0.0
+    data = write_csv(tmp_path / "d.csv", P, power.mems_readings(mod, P, None, p, rng.uniform(-SIGMA, SIGMA, (len(P), 3))))
+    out, cal = tmp_path / "e.json", tmp_path / "c.json"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G), "--mount",
+                 "+x+y+z", "--json", str(out), "--save", str(cal)]) == 0
+    d = json.loads(out.read_text())
+    e = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
+    from garant.verify.models import load_remount
+    idx = load_remount("two-axis").G_INDEX
+    B = np.array(calibration.read(cal)["bound_matrix"])
+    floor = np.array(d["physical_bound_premises"]["Gamma"])
+    made_of = {(0, 0): [idx[0][0]], (1, 1): [idx[1][1]], (2, 2): [idx[2][2]],           # lower: S_ij + S_ji below
+               (1, 0): [idx[1][0], idx[0][1]], (2, 0): [idx[2][0], idx[0][2]], (2, 1): [idx[2][1], idx[1][2]]}
+    for (i, j), nus in made_of.items():
+        assert B[i, j] <= 1.5 * e[nus].sum() + floor[i, j] * 1.01, (i, j, B[i, j], e[nus].sum(), floor[i, j])
+    Gamma = np.array([[p[mod.PARAMETER_NAMES.index(f"Gamma{i}{j}")] for j in (1, 2, 3)] for i in (1, 2, 3)])
+    got, bound = np.array(d["physical"]["Gamma"]), np.array(d["physical_bound"]["Gamma"])
+    assert np.all(np.abs(got - Gamma) <= bound), np.abs(got - Gamma) / np.maximum(bound, 1e-300)

@@ -190,7 +190,8 @@ def block_errors(mod, v, g, premises, remount=None, mount=None, gamma="lower"):
             gap = mounting.literal_gap(mod, premises, np.abs(cal["Gamma"]) + cal["Gamma_bound"])
         own = dict(zip(premises.names, premises.physical()))
         phys, bound, note, premised = mounting.recover(remount, mount or "+x+y+z", gamma, v.info, g, gap,
-                                             {n: own[n] for n in ("Delta_g", "Delta_beta") if n in own})
+                                                       {n: own[n] for n in ("Delta_g", "Delta_beta") if n in own},
+                                                       v.interval)
         if premises.absorbed:
             note += "; the split of Gamma and theta_k assumes " + ", ".join(
                 f"|{n}| <= {b:g} ({src})" for n, (b, src) in premises.split.items())

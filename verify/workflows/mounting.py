@@ -24,7 +24,7 @@ def mounted_readings(mod, remount, alpha, beta, stand, Gamma, bias, theta_k, mou
     return np.einsum("ij,j...->i...", Q, mod.readings(alpha, beta, physical, g))
 
 
-def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None):
+def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None, q_box=None):
     """Physical errors in block axes, each K_row q bounded over the information set `info`
     (guarantee.InformationSet: an LP pair each, proven); q_shift bounds a further shift of q (the gap of
     the literal q, `literal_gap`); biases are returned in m/s^2. `neglected` {name: bound}: the a-priori
@@ -39,6 +39,13 @@ def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None):
     premised = (np.abs(K) @ np.broadcast_to(q_shift, K.shape[1]) + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
                 + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db)
     bound = (np.maximum(hi - value, value - lo) * (1 + 1e-15) + premised) * (1 + 1e-15)
+    if gamma == "lower" and q_box is not None:   # Gamma exactly (LQ), not through the linear split and its gap
+        names = list(remount.OUTPUTS)
+        G, GB, GP = exact_gamma(remount, mount, *q_box, dg)
+        for i in range(3):
+            for j in range(3):
+                k = names.index(f"Gamma{i + 1}{j + 1}")
+                value[k], bound[k], premised[k] = G[i, j], GB[i, j], GP[i, j]
     note = ("(29) of 000 leaves out Delta_g/g and Delta_beta (not identifiable on this stand): the bounds include "
             f"what their a-priori bounds move the outputs by, |Delta_g/g| <= {dg:g} and |Delta_beta| <= {db:g}")
     return _by_kind(remount, value, g), _by_kind(remount, bound, g, 1 + 1e-15), note, _by_kind(remount, premised, g)
@@ -52,6 +59,51 @@ def _by_kind(remount, x, g, up=1.0):
     out["Gamma"] = x[[names.index(f"Gamma{i}{j}") for i in (1, 2, 3) for j in (1, 2, 3)]].reshape(3, 3).tolist()
     out["theta_k"] = x[[names.index(f"theta_k{i}") for i in (1, 2, 3)]].tolist()
     return out
+
+
+def exact_gamma(remount, mount, q_lo, q_hi, u):
+    """(value, bound, premised) of the block's Gamma (3 x 3, block axes, lower-triangular) over the box of q and
+    |Delta_g/g| <= u, without the second-order gap of (29) of 000 taken linearly. The equivalent unit's
+    E + Gamma' in block axes, M = Q (E + G(q)) Q^T, is s (E + Gamma) R with s = 1 - Delta_g/g and R a rotation
+    (the mounting and Delta_beta): a lower-triangular factor with a positive diagonal times a rotation is
+    unique (LQ; L the Cholesky factor of M M^T), so Gamma = L / s - E exactly. Each entry is enclosed by the
+    mean-value form in interval arithmetic (solve/interval.py) over the box; `premised` is the enclosure with
+    q at its centre: the part |Delta_g/g| <= u alone sets."""
+    from ..solve import interval
+    Q = np.asarray(remount.MOUNTS[mount], float)
+    idx = np.asarray(remount.G_INDEX)
+    pairs = [(i, j) for i in range(3) for j in range(3)]
+
+    def split(*x):
+        G, s = x[:9], x[9]
+        EG = [[G[3 * i + j] + (1.0 if i == j else 0.0) for j in range(3)] for i in range(3)]
+        M = [[sum(EG[i][j] * (Q[a, i] * Q[b, j]) for i, j in pairs if Q[a, i] and Q[b, j]) for b in range(3)]
+             for a in range(3)]
+        A = [[M[a][0] * M[b][0] + M[a][1] * M[b][1] + M[a][2] * M[b][2] for b in range(3)] for a in range(3)]
+        L11 = A[0][0].sqrt()
+        r11 = L11.recip()
+        L21, L31 = A[1][0] * r11, A[2][0] * r11
+        L22 = (A[1][1] - L21 * L21).sqrt()
+        L32 = (A[2][1] - L31 * L21) * L22.recip()
+        L33 = (A[2][2] - L31 * L31 - L32 * L32).sqrt()
+        r = s.recip()
+        return [L11 * r + (-1.0), L21 * r, L31 * r, L22 * r + (-1.0), L32 * r, L33 * r + (-1.0)]
+
+    def enclose(lo, hi):
+        bounds = [v for k in range(10) for v in (np.atleast_1d(lo[k]), np.atleast_1d(hi[k]))]
+        return interval.mean_value_enclosure(split, *bounds)
+    g_lo = [q_lo[idx[i, j]] for i, j in pairs]
+    g_hi = [q_hi[idx[i, j]] for i, j in pairs]
+    whole = enclose(g_lo + [1 - u], g_hi + [1 + u])
+    mid = [0.5 * (a + b) for a, b in zip(g_lo, g_hi)]
+    alone = enclose(mid + [1 - u], mid + [1 + u])
+    value, bound, premised = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
+    for (i, j), w, a in zip([(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)], whole, alone):
+        lo, hi = float(w.lo[0]), float(w.hi[0])
+        value[i, j] = 0.5 * (lo + hi)
+        bound[i, j] = max(hi - value[i, j], value[i, j] - lo) * (1 + 1e-15)
+        premised[i, j] = min(0.5 * float(a.hi[0] - a.lo[0]), bound[i, j])
+    return value, bound, premised
 
 
 def literal_gap(mod, premises, gamma_bound):
