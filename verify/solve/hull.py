@@ -39,10 +39,11 @@ def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
     return float(total + 1.01 * (len(terms) + 2) * EPS * np.abs(terms).sum())
 
 
-def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False):
+def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False):
     """(lo, hi): the least and largest value over X of c^T x for each row c of C, each end proven
     (`upper`); with `points`, also the solver's x at each end ((x_min, x_max) per row; None where it
-    gave none). HiGHS solves on X shifted to the centre of its column box and scaled to rows and columns
+    gave none); with `multipliers`, the lambda that proves each end ((for -c, for c) per row), which
+    prove a bound on any other set with the same B and columns (`upper`). HiGHS solves on X shifted to the centre of its column box and scaled to rows and columns
     of width 2 (its tolerances are absolute); the multipliers it returns are mapped back and proven on X."""
     B = np.asarray(B, float)
     C = np.atleast_2d(np.asarray(C, float))
@@ -60,9 +61,9 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False):
     lo_s, hi_s = (row_lo - shift) / r, (row_hi - shift) / r
     h = _model(Bs, np.where(np.isfinite(lo_s), lo_s, -highs.INF), np.where(np.isfinite(hi_s), hi_s, highs.INF))
     idx = np.arange(cols, dtype=np.int32)
-    out_lo, out_hi, pts = np.empty(len(C)), np.empty(len(C)), []
+    out_lo, out_hi, pts, lams = np.empty(len(C)), np.empty(len(C)), [], []
     for k, c in enumerate(C):
-        ends, xs = [], []
+        ends, xs, used = [], [], []
         for sign in (1.0, -1.0):                  # max of sign c^T x: HiGHS minimises -sign c
             h.changeColsCost(cols, idx, -sign * c * dc)
             h.run()
@@ -80,10 +81,13 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False):
                 raise Empty()
             else:                                 # stalled: the box stands
                 xs.append(None)
-            ends.append(min(upper(sign * c, B, row_lo, row_hi, col_lo, col_hi, lam) for lam in cands))
+            bounds = [upper(sign * c, B, row_lo, row_hi, col_lo, col_hi, lam) for lam in cands]
+            ends.append(min(bounds))
+            used.append(cands[int(np.argmin(bounds))])
         out_hi[k], out_lo[k] = ends[0], -ends[1]
         pts.append((xs[1], xs[0]))
-    return (out_lo, out_hi, pts) if points else (out_lo, out_hi)
+        lams.append((used[1], used[0]))
+    return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
 
 
 def _model(B, row_lo, row_hi):

@@ -209,16 +209,12 @@ def variables(s_lo, s_hi, t_lo, t_hi):
 
 def mean_value_enclosure(f, *bounds):
     """Enclosure of f over boxes given as lo1, hi1, lo2, hi2, ...: the naive one intersected with the
-    mean-value form f(c) + grad f(box) . (box - c). f may return a list of values: a list of enclosures."""
+    mean-value form f(c) + grad f(box) . (box - c)."""
     lo, hi = list(bounds[0::2]), list(bounds[1::2])
-    boxes = f(*box_variables(lo, hi))
+    box = f(*box_variables(lo, hi))
     c = [(a + b) / 2 for a, b in zip(lo, hi)]
-    centres = f(*box_variables(c, c))
-    single = isinstance(boxes, Grad)
-    out = []
-    for box, centre in ([(boxes, centres)] if single else zip(boxes, centres)):
-        mv = centre.v
-        for d, a, b, ci in zip(box.d, lo, hi, c):
-            mv = mv + d * Iv(*_out(a - ci, b - ci))          # the offsets rounded outward too
-        out.append(box.v.intersect(mv))
-    return out[0] if single else out
+    centre = f(*box_variables(c, c)).v
+    mv = centre
+    for d, a, b, ci in zip(box.d, lo, hi, c):
+        mv = mv + d * Iv(*_out(a - ci, b - ci))          # the offsets rounded outward too
+    return box.v.intersect(mv)

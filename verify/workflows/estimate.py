@@ -186,8 +186,7 @@ def block_errors(mod, v, g, premises, remount=None, mount=None, gamma="lower"):
     if remount is not None:
         gap = 0.0
         if premises.absorbed:                    # the split into Gamma and theta_k is linear in the literal q
-            cal = block.calibration(mod, v.info, premises)
-            gap = mounting.literal_gap(mod, premises, np.abs(cal["Gamma"]) + cal["Gamma_bound"])
+            gap = mounting.literal_gap(mod, premises, _gamma_prime_bound(mod, premises, remount, v))
         own = dict(zip(premises.names, premises.physical()))
         phys, bound, note, premised = mounting.recover(remount, mount or "+x+y+z", gamma, v.info, g, gap,
                                                        {n: own[n] for n in ("Delta_g", "Delta_beta") if n in own},
@@ -203,6 +202,23 @@ def block_errors(mod, v, g, premises, remount=None, mount=None, gamma="lower"):
         return {"block": block.calibration(mod, v.info, premises)}
     except DataError as err:                     # the estimate stands; only a calibration of the block cannot
         return {"block_not_separated": str(err)}
+
+
+def _gamma_prime_bound(mod, premises, remount, v):
+    """Entrywise bound of the equivalent unit's Gamma' (3 x 3): where each q of G(q) ((29) of 000) is its Gamma'
+    entry plus absorbed parameters only (0 in the equivalent unit), |q| over the printed interval; else the
+    block's calibration over the information set."""
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    names = list(mod.PARAMETER_NAMES)
+    idx = np.asarray(remount.G_INDEX)
+    lo, hi = v.interval
+    pure = all(set(np.flatnonzero(R[idx[i, j]])) <= {names.index(f"Gamma{i + 1}{j + 1}")}
+               | {names.index(n) for n in premises.absorbed} and R[idx[i, j], names.index(f"Gamma{i + 1}{j + 1}")] == 1
+               for i in range(3) for j in range(3))
+    if pure:
+        return np.maximum(np.abs(lo), np.abs(hi))[idx] * (1 + 1e-15)
+    cal = block.calibration(mod, v.info, premises)
+    return np.abs(cal["Gamma"]) + cal["Gamma_bound"]
 
 
 def refuted_by_repeats(mod, positions, spread, bad, sigma, g, premises, rows):

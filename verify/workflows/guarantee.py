@@ -300,18 +300,52 @@ class InformationSet:
         e_max = (e.max() + (E @ np.abs(Wy)).max()) / max(1 - E.sum(axis=1).max(), 1e-3)
         e = (e + E @ (np.abs(Wy) + e_max)) * (1 + 1e-9) + 1e-300
         self.w_lo, self.w_hi = Wy - e, Wy + e
+        self._reach = absW.sum(axis=1) / max(1 - E.sum(axis=1).max(), 1e-3) * (1 + 1e-9)   # w's box per unit of s
         self._q = None
 
-    def ranges(self, C):
-        """(lo, hi) of each c^T q (rows of C) over Q, proven."""
+    def ranges(self, C, keep=False):
+        """(lo, hi) of each c^T q (rows of C) over Q, proven; `keep`: the multipliers that prove them are
+        kept (for `widened`). A row that is a multiple of one e_nu is that q's range, scaled (no LP)."""
         C = np.atleast_2d(np.asarray(C, float))
+        single = (np.count_nonzero(C, axis=1) == 1) if self._q is not None and not keep else np.zeros(len(C), bool)
+        if single.any():
+            lo, hi = np.empty(len(C)), np.empty(len(C))
+            nu = np.argmax(C[single] != 0, axis=1)
+            a = C[single, nu]
+            ql, qh = self._q
+            lo[single] = np.minimum(a * ql[nu], a * qh[nu])
+            hi[single] = np.maximum(a * ql[nu], a * qh[nu])
+            pad = 4 * EPS * (np.abs(lo[single]) + np.abs(hi[single]))
+            lo[single], hi[single] = lo[single] - pad, hi[single] + pad
+            if (~single).any():
+                lo[~single], hi[~single] = self.ranges(C[~single])
+            return lo, hi
         try:
-            lo, hi = hull.ranges(self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, C)
+            lo, hi, lams = hull.ranges(self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, C,
+                                       multipliers=True)
         except hull.Empty:                       # the verdict found a fit: empty only to HiGHS's tolerance
-            lo = np.minimum(C, 0) @ self.w_hi + np.maximum(C, 0) @ self.w_lo
-            hi = np.maximum(C, 0) @ self.w_hi + np.minimum(C, 0) @ self.w_lo
-            pad = 4 * EPS * np.abs(C) @ (np.abs(self.w_lo) + np.abs(self.w_hi))
-            lo, hi = lo - pad, hi + pad
+            zero = np.zeros(len(self.y))
+            lams = [(zero, zero)] * len(C)
+            lo = np.array([-hull.upper(-c, self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, zero)
+                           for c in C])
+            hi = np.array([hull.upper(c, self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, zero)
+                           for c in C])
+        if keep:
+            self._lams = (C, lams)
+        return self._shifted(C, lo, hi)
+
+    def widened(self, extra):
+        """(lo, hi) of each q over the set with every reading's bound s + extra: the multipliers that proved
+        `q` prove these too (weak duality holds for any lambda): at most the wider set's own hull."""
+        C, lams = self._lams
+        rows_lo, rows_hi = self.y - self.s - extra, self.y + self.s + extra
+        w_lo, w_hi = self.w_lo - self._reach * extra, self.w_hi + self._reach * extra
+        lo = np.array([-hull.upper(-c, self.A.T, rows_lo, rows_hi, w_lo, w_hi, a) for c, (a, _) in zip(C, lams)])
+        hi = np.array([hull.upper(c, self.A.T, rows_lo, rows_hi, w_lo, w_hi, b) for c, (_, b) in zip(C, lams)])
+        return self._shifted(C, lo, hi)
+
+    def _shifted(self, C, lo, hi):
+        """c^T q = c^T (q0 + w - u): the ranges of c^T w moved by c^T q0 and widened by |c|^T shift."""
         c0 = C @ self.lin.q0
         pad = np.abs(C) @ self.shift + taylor.SUM_ERROR * (np.abs(C) @ np.abs(self.lin.q0) + np.abs(c0)) + 4 * EPS * (
             np.abs(lo) + np.abs(hi))
@@ -321,7 +355,7 @@ class InformationSet:
     def q(self):
         """(lo, hi) of each q over Q."""
         if self._q is None:
-            self._q = self.ranges(np.eye(self.A.shape[0]))
+            self._q = self.ranges(np.eye(self.A.shape[0]), keep=True)
         return self._q
 
     def physical(self, R, col_lo, col_hi, targets):
@@ -403,6 +437,9 @@ SIGMA_WIDER = 1.1          # the information set is also bounded for sigma this 
 #: No further a posteriori box once each q's remainder part that the box sets (left after absorption,
 #: absorbed) is within this fraction of its linear part: a smaller box lowers no bound by more.
 BOX_GAIN = 0.001
+#: No further box of the information set once what the box sets (the remainder left at each reading, through
+#: the estimator's weights, and the absorbed curvature) is within this fraction of each q's half-width.
+INFO_GAIN = 0.01
 
 
 def verdict(lin, z, sigma, W=None, steps=8):
@@ -474,8 +511,8 @@ def verdict(lin, z, sigma, W=None, steps=8):
         for _ in range(steps):
             ql, qh = info.q
             half = 0.5 * (qh - ql)
-            if np.all(np.abs(W) @ (rb_all + rem.t_residual) + cb <= BOX_GAIN * half):
-                break                                # a smaller box would lower no bound by BOX_GAIN
+            if np.all(np.abs(W) @ rb_all + cb <= INFO_GAIN * half):
+                break                                # a smaller box would lower no bound by INFO_GAIN
             lo2, hi2 = box(lin, 0.5 * (ql + qh), half)
             lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
             nq = len(lin.keep)
@@ -501,16 +538,17 @@ def verdict(lin, z, sigma, W=None, steps=8):
         q_apriori = lin.q0 + dq
         v.interval = _printed(q_apriori, v.guaranteed_error, info)
         if consistent:                               # a sensitivity: sigma larger, the remainder as proven for sigma
-            wider = InformationSet(lin, y, info.s + (SIGMA_WIDER - 1) * sigma, info.shift, W)
+            wider = info.widened((SIGMA_WIDER - 1) * sigma)
             v.interval_wider = _printed(q_apriori, v.guaranteed_error + (SIGMA_WIDER - 1) * v.error_linear, wider)
     return v
 
 
 def _printed(q, e, info):
-    """(lo, hi) per q: the information set's hull within the a-priori interval q +- e of the estimator
-    (both hold; where they do not meet, a premise fails, and the a-priori interval is kept)."""
+    """(lo, hi) per q: the information set's hull (`info`, or its (lo, hi)) within the a-priori interval
+    q +- e of the estimator (both hold; where they do not meet, a premise fails, and the a-priori interval
+    is kept)."""
     pad = 4 * EPS * (np.abs(q) + e)
-    lo, hi = info.q
+    lo, hi = info.q if isinstance(info, InformationSet) else info
     lo2, hi2 = np.maximum(lo, q - e - pad), np.minimum(hi, q + e + pad)
     bad = lo2 > hi2
     return np.where(bad, q - e - pad, lo2), np.where(bad, q + e + pad, hi2)

@@ -32,15 +32,18 @@ def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None, q_box=N
     theta_k of the axis along the table's), added to those bounds: a premise, printed with them. Returns
     (values, bounds, note, the part of each bound the premises alone set: no readings reduce it)."""
     K = remount.recovery_matrix(mount, gamma)
-    lo, hi = info.ranges(K)
+    names = list(remount.OUTPUTS)
+    exact = gamma == "lower" and q_box is not None
+    rows = [k for k, n in enumerate(names) if not (exact and n.startswith("Gamma"))]
+    lo, hi = np.zeros(len(K)), np.zeros(len(K))
+    lo[rows], hi[rows] = info.ranges(K[rows])
     value = 0.5 * (lo + hi)
     neglected = neglected or {}
     dg, db = neglected.get("Delta_g", 0.0), neglected.get("Delta_beta", 0.0)
     premised = (np.abs(K) @ np.broadcast_to(q_shift, K.shape[1]) + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
                 + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db)
     bound = (np.maximum(hi - value, value - lo) * (1 + 1e-15) + premised) * (1 + 1e-15)
-    if gamma == "lower" and q_box is not None:   # Gamma exactly (LQ), not through the linear split and its gap
-        names = list(remount.OUTPUTS)
+    if exact:                                    # Gamma exactly (LQ), not through the linear split and its gap
         G, GB, GP = exact_gamma(remount, mount, *q_box, dg)
         for i in range(3):
             for j in range(3):
@@ -66,9 +69,9 @@ def exact_gamma(remount, mount, q_lo, q_hi, u):
     |Delta_g/g| <= u, without the second-order gap of (29) of 000 taken linearly. The equivalent unit's
     E + Gamma' in block axes, M = Q (E + G(q)) Q^T, is s (E + Gamma) R with s = 1 - Delta_g/g and R a rotation
     (the mounting and Delta_beta): a lower-triangular factor with a positive diagonal times a rotation is
-    unique (LQ; L the Cholesky factor of M M^T), so Gamma = L / s - E exactly. Each entry is enclosed by the
-    mean-value form in interval arithmetic (solve/interval.py) over the box; `premised` is the enclosure with
-    q at its centre: the part |Delta_g/g| <= u alone sets."""
+    unique (LQ; L the Cholesky factor of M M^T), so Gamma = L / s - E exactly. Each entry is enclosed in
+    interval arithmetic (solve/interval.py: every operation rounded outward) over the box; `premised` is the part
+    |Delta_g/g| <= u alone sets, |L| u / (1 - u)."""
     from ..solve import interval
     Q = np.asarray(remount.MOUNTS[mount], float)
     idx = np.asarray(remount.G_INDEX)
@@ -89,20 +92,18 @@ def exact_gamma(remount, mount, q_lo, q_hi, u):
         r = s.recip()
         return [L11 * r + (-1.0), L21 * r, L31 * r, L22 * r + (-1.0), L32 * r, L33 * r + (-1.0)]
 
-    def enclose(lo, hi):
-        bounds = [v for k in range(10) for v in (np.atleast_1d(lo[k]), np.atleast_1d(hi[k]))]
-        return interval.mean_value_enclosure(split, *bounds)
+    def enclose(lo, hi):                  # the box is a few sigma wide: the natural enclosure is tight enough
+        return split(*(interval.Iv(np.atleast_1d(a), np.atleast_1d(b)) for a, b in zip(lo, hi)))
     g_lo = [q_lo[idx[i, j]] for i, j in pairs]
     g_hi = [q_hi[idx[i, j]] for i, j in pairs]
     whole = enclose(g_lo + [1 - u], g_hi + [1 + u])
-    mid = [0.5 * (a + b) for a, b in zip(g_lo, g_hi)]
-    alone = enclose(mid + [1 - u], mid + [1 + u])
     value, bound, premised = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
-    for (i, j), w, a in zip([(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)], whole, alone):
+    for (i, j), w in zip([(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)], whole):
         lo, hi = float(w.lo[0]), float(w.hi[0])
         value[i, j] = 0.5 * (lo + hi)
         bound[i, j] = max(hi - value[i, j], value[i, j] - lo) * (1 + 1e-15)
-        premised[i, j] = min(0.5 * float(a.hi[0] - a.lo[0]), bound[i, j])
+        # s alone moves L / s by at most |L| u / (1 - u): what no readings reduce
+        premised[i, j] = min(abs(value[i, j] + (i == j)) * u / (1 - u), bound[i, j])
     return value, bound, premised
 
 
