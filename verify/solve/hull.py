@@ -26,25 +26,33 @@ class Empty(Exception):
 
 def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
     """A proven upper bound of c^T x over X from the multipliers lam (a multiplier on a side that is
-    infinite is dropped: it would bound nothing)."""
+    infinite is dropped: it would bound nothing; rows without a multiplier cost nothing)."""
     lam = np.where((lam > 0) & ~np.isfinite(row_hi) | (lam < 0) & ~np.isfinite(row_lo), 0.0, lam)
-    n = B.shape[0] + 2
+    on = np.flatnonzero(lam)
+    lam, B, row_lo, row_hi = lam[on], B[on], row_lo[on], row_hi[on]
+    n = len(on) + 2
     mu = c - B.T @ lam
     slack = 1.01 * n * EPS * (np.abs(c) + np.abs(B).T @ np.abs(lam))          # |mu_true - mu| (rounding of B^T lam)
-    with np.errstate(invalid="ignore"):
-        rows = np.where(lam > 0, lam * row_hi, np.where(lam < 0, lam * row_lo, 0.0))
+    rows = np.where(lam > 0, lam * row_hi, lam * row_lo)
     cols = np.maximum(mu * col_lo, mu * col_hi) + slack * np.maximum(np.abs(col_lo), np.abs(col_hi))
     terms = np.r_[rows, cols]
     total = terms.sum()
     return float(total + 1.01 * (len(terms) + 2) * EPS * np.abs(terms).sum())
 
 
-def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False):
+GENERATE_ABOVE = highs.GENERATE_ABOVE     # rows: above this, the LPs start on the tightest rows and add violated ones
+TOLERANCE = 1e-9                          # a row violated by less (relative to its width) counts as met
+
+
+def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False, start=()):
     """(lo, hi): the least and largest value over X of c^T x for each row c of C, each end proven
     (`upper`); with `points`, also the solver's x at each end ((x_min, x_max) per row; None where it
     gave none); with `multipliers`, the lambda that proves each end ((for -c, for c) per row), which
-    prove a bound on any other set with the same B and columns (`upper`). HiGHS solves on X shifted to the centre of its column box and scaled to rows and columns
-    of width 2 (its tolerances are absolute); the multipliers it returns are mapped back and proven on X."""
+    prove a bound on any other set with the same B and columns (`upper`). HiGHS solves on X shifted to
+    the centre of its column box and scaled to columns and rows of width 2 (its tolerances are absolute); the multipliers it returns are mapped back and proven on X. Many
+    rows: the LPs are solved on the rows tightest at the box's centre (and `start`: rows known to bind, e.g.
+    a previous set's), and rows an optimum violates are added until none is (the optimum over them is then the optimum over all; any subset's multipliers
+    prove a bound on X, which lies inside the subset's polytope)."""
     B = np.asarray(B, float)
     C = np.atleast_2d(np.asarray(C, float))
     row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)
@@ -54,40 +62,90 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     rows, cols = B.shape
     xc, dc = 0.5 * (col_lo + col_hi), np.maximum(0.5 * (col_hi - col_lo), 1e-300)
     both = np.isfinite(row_lo) & np.isfinite(row_hi)
-    r = np.maximum(np.where(both, 0.5 * (row_hi - row_lo), 0.0), np.abs(B) @ dc)   # rows of width <= 2, entries <= 1
+    r = np.where(both, 0.5 * (row_hi - row_lo), 0.0)
+    r = np.where(r > 0, r, np.abs(B) @ dc)          # rows of width 2 (one-sided: entries at most 1)
     r = np.where(r > 0, r, 1.0)
     Bs = B * dc / r[:, None]
     shift = B @ xc
-    lo_s, hi_s = (row_lo - shift) / r, (row_hi - shift) / r
-    h = _model(Bs, np.where(np.isfinite(lo_s), lo_s, -highs.INF), np.where(np.isfinite(hi_s), hi_s, highs.INF))
-    idx = np.arange(cols, dtype=np.int32)
+    lo_s = np.where(np.isfinite(row_lo), (row_lo - shift) / r, -highs.INF)
+    hi_s = np.where(np.isfinite(row_hi), (row_hi - shift) / r, highs.INF)
+    if rows <= GENERATE_ABOVE:
+        S = np.arange(rows)
+    else:                                          # the rows closest to binding at the centre first
+        S = np.union1d(np.argpartition(np.minimum(-lo_s, hi_s), GENERATE_ABOVE // 6)[:GENERATE_ABOVE // 6],
+                       np.asarray(start, int))
+    h = _model(Bs[S], lo_s[S], hi_s[S])
+    Cs = C * dc
+    ends = [(k, sign) for k in range(len(C)) for sign in (1.0, -1.0)]
+    found = {}                                     # (k, sign) -> (row duals over S as it then was, x), or None
+    todo = ends
+    for _ in range(100):
+        for k, sign in todo:
+            found[k, sign] = _solve(h, -sign * Cs[k])
+        if len(S) == rows:
+            break
+        pts_ = {e: v[1] for e, v in found.items() if v is not None}
+        if not pts_:
+            break
+        keys = list(pts_)
+        X = np.array([pts_[e] for e in keys]).T
+        BX = Bs @ X
+        V = np.maximum(lo_s[:, None] - BX, BX - hi_s[:, None])
+        V[S] = -np.inf
+        if not (V > TOLERANCE).any():
+            break
+        per_end = max(1, GENERATE_ABOVE // 9 // V.shape[1])    # each violated end's worst rows
+        top = np.argpartition(-V, min(per_end, rows - 1), axis=0)[:per_end]
+        new = np.unique(top[V[top, np.arange(V.shape[1])] > TOLERANCE])
+        _add_rows(h, Bs[new], lo_s[new], hi_s[new])
+        S = np.r_[S, new]                          # in the model's row order
+        todo = [e for e, col in zip(keys, V[new].T) if col.max() > TOLERANCE] + [e for e in ends if found[e] is None]
     out_lo, out_hi, pts, lams = np.empty(len(C)), np.empty(len(C)), [], []
+    zero = np.zeros(rows)
     for k, c in enumerate(C):
-        ends, xs, used = [], [], []
-        for sign in (1.0, -1.0):                  # max of sign c^T x: HiGHS minimises -sign c
-            h.changeColsCost(cols, idx, -sign * c * dc)
-            h.run()
-            status = h.getModelStatus()
-            if status not in (highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible):
-                h.clearSolver()                   # a warm start that stalls: once more from scratch
-                h.run()
-                status = h.getModelStatus()
-            cands = [np.zeros(rows)]              # lambda = 0: the column box, always valid
-            if status == highspy.HighsModelStatus.kOptimal:
-                sol = h.getSolution()
-                cands.append(-np.array(sol.row_dual) / r)
-                xs.append(xc + dc * np.array(sol.col_value))
-            elif status == highspy.HighsModelStatus.kInfeasible:
-                raise Empty()
-            else:                                 # stalled: the box stands
-                xs.append(None)
-            bounds = [upper(sign * c, B, row_lo, row_hi, col_lo, col_hi, lam) for lam in cands]
-            ends.append(min(bounds))
-            used.append(cands[int(np.argmin(bounds))])
-        out_hi[k], out_lo[k] = ends[0], -ends[1]
+        bound, used, xs = [], [], []
+        for sign in (1.0, -1.0):
+            cands = [zero]                            # lambda = 0: the column box, always valid
+            got = found[k, sign]
+            if got is not None:
+                y = got[0]
+                lam = zero.copy()
+                lam[S[:len(y)]] = -y / r[S[:len(y)]]
+                cands.append(lam)
+            b = [upper(sign * c, B, row_lo, row_hi, col_lo, col_hi, lam) for lam in cands]
+            bound.append(min(b))
+            used.append(cands[int(np.argmin(b))])
+            xs.append(None if got is None else xc + dc * got[1])
+        out_hi[k], out_lo[k] = bound[0], -bound[1]
         pts.append((xs[1], xs[0]))
         lams.append((used[1], used[0]))
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
+
+
+def _solve(h, cost):
+    """(row duals, x) of the model h minimising cost^T x from its last basis; None where HiGHS gives no
+    optimum (Empty when it finds the set empty)."""
+    cols = len(cost)
+    h.changeColsCost(cols, np.arange(cols, dtype=np.int32), cost)
+    h.run()
+    status = h.getModelStatus()
+    if status not in (highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible):
+        h.clearSolver()                           # a warm start that stalls: once more from scratch
+        h.run()
+        status = h.getModelStatus()
+    if status == highspy.HighsModelStatus.kInfeasible:
+        raise Empty()
+    if status != highspy.HighsModelStatus.kOptimal:
+        return None                               # stalled: the box stands
+    sol = h.getSolution()
+    return np.array(sol.row_dual), np.array(sol.col_value)
+
+
+def _add_rows(h, B, lo, hi):
+    """Append dense rows to the model."""
+    rows, cols = B.shape
+    h.addRows(rows, lo, hi, rows * cols, np.arange(0, rows * cols, cols, dtype=np.int32),
+              np.tile(np.arange(cols, dtype=np.int32), rows), np.ascontiguousarray(B).ravel())
 
 
 def _model(B, row_lo, row_hi):

@@ -290,8 +290,9 @@ class InformationSet:
     |W| s + |W A^T - I| |w|), which the proofs multiply their rounding by. Adding readings adds rows:
     Q can only shrink."""
 
-    def __init__(self, lin, y, s, shift, W):
+    def __init__(self, lin, y, s, shift, W, start=()):
         self.lin, self.A, self.y, self.s, self.shift = lin, lin.A, y, s, shift
+        self.start = start                      # rows that bound a previous set's hull: where this one starts
         m = self.A.shape[0]
         absW = np.abs(W)
         Wy = W @ y
@@ -322,7 +323,7 @@ class InformationSet:
             return lo, hi
         try:
             lo, hi, lams = hull.ranges(self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, C,
-                                       multipliers=True)
+                                       multipliers=True, start=self.start)
         except hull.Empty:                       # the verdict found a fit: empty only to HiGHS's tolerance
             zero = np.zeros(len(self.y))
             lams = [(zero, zero)] * len(C)
@@ -352,6 +353,11 @@ class InformationSet:
         return c0 + lo - pad, c0 + hi + pad
 
     @property
+    def binding(self):
+        """The readings whose multipliers prove q's ranges (after `q`)."""
+        return np.flatnonzero(np.any([np.abs(a) + np.abs(b) for a, b in self._lams[1]], axis=0))
+
+    @property
     def q(self):
         """(lo, hi) of each q over Q."""
         if self._q is None:
@@ -360,7 +366,7 @@ class InformationSet:
 
     def physical(self, R, col_lo, col_hi, targets):
         """(lo, hi, points) of each physical parameter p_j (j in targets) over {p : R p in Q, col_lo <= p <=
-        col_hi}: one LP pair each in (w, p), rows A^T w within y +- s and R p - w within q0 +- shift.
+        col_hi}: one LP pair each in (p, u), w = R p - q0 + u with |u| <= shift, rows A^T w within y +- s.
         Unbounded columns (inf) are first enclosed through a row of R whose other entries are bounded
         (q_nu over Q); one that no row encloses is not separated (ValueError names it). points: the
         p at each end (min, max), for what the range reaches. hull.Empty when no such p exists."""
@@ -389,14 +395,16 @@ class InformationSet:
         if free[list(targets)].any():
             raise ValueError(int(np.flatnonzero(free[list(targets)])[0]))
         lo, hi = np.where(free, -1.0, lo), np.where(free, 1.0, hi)   # never a target: only holds the solve
-        B = np.block([[self.A.T, np.zeros((self.A.shape[1], n))], [-np.eye(m), R]])
-        row_lo = np.r_[self.y - self.s, self.lin.q0 - self.shift]
-        row_hi = np.r_[self.y + self.s, self.lin.q0 + self.shift]
-        C = np.zeros((len(targets), m + n))
-        C[np.arange(len(targets)), m + np.asarray(targets)] = 1.0
-        out_lo, out_hi, pts = hull.ranges(B, row_lo, row_hi, np.r_[self.w_lo, lo], np.r_[self.w_hi, hi], C,
-                                          points=True)
-        return out_lo, out_hi, [tuple(None if x is None else x[m:] for x in ends) for ends in pts]
+        # w = R p - q0 + u, |u| <= shift: the rows A^T (R p + u) within y + A^T q0 +- s (its rounding in s)
+        At = self.A.T
+        base = At @ self.lin.q0
+        s = self.s + taylor.SUM_ERROR * (np.abs(At) @ np.abs(self.lin.q0) + np.abs(base))
+        B = np.hstack([At @ R, At])
+        C = np.zeros((len(targets), n + m))
+        C[np.arange(len(targets)), np.asarray(targets)] = 1.0
+        out_lo, out_hi, pts = hull.ranges(B, self.y + base - s, self.y + base + s, np.r_[lo, -self.shift],
+                                          np.r_[hi, self.shift], C, points=True)
+        return out_lo, out_hi, [tuple(None if x is None else x[:n] for x in ends) for ends in pts]
 
 
 def _weighted_minimax(A, z, rb):
@@ -521,7 +529,8 @@ def verdict(lin, z, sigma, W=None, steps=8):
             lo, hi = lo2, hi2
             rb_n, cb_n = rem(lo, hi)
             rb_all, cb = np.minimum(rb_all, rb_n), np.minimum(cb, cb_n)
-            info = InformationSet(lin, y, s + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q, W)
+            info = InformationSet(lin, y, s + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q, W,
+                                  info.binding)
         return rb_all + rem.t_residual, cb, (errs, (lo, hi), info)
     rb, cb, out = proven(sigma)
     errs, last_box, info = out if out is not None else (None, None, None)
