@@ -240,3 +240,25 @@ def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
     Gamma = np.array([[p[mod.PARAMETER_NAMES.index(f"Gamma{i}{j}")] for j in (1, 2, 3)] for i in (1, 2, 3)])
     got, bound = np.array(d["physical"]["Gamma"]), np.array(d["physical_bound"]["Gamma"])
     assert np.all(np.abs(got - Gamma) <= bound), np.abs(got - Gamma) / np.maximum(bound, 1e-300)
+
+
+def test_a_premise_no_data_can_check_is_named():
+    # Issue 40, item 3: where a premise remains that the data cannot refute, the premises line names it. On the
+    # 90-degree wedge (only Delta_g absorbed: its instrument-side link turns about z, which the mounting's theta1
+    # does not join) the mounting's theta1 moves the readings with q held and no plan separates it: named. On
+    # the two-axis stand Delta_alpha, the one parameter no plan separates that is not absorbed, enters only with
+    # alpha_star: it moves nothing, and nothing is named.
+    from pathlib import Path
+    from garant.verify.solve import plans
+    wedge = models.load(str(Path(__file__).resolve().parent / "data" / "stands" / "wedge90.toml"))
+    names, mounts = models.layout(wedge)
+    P, M = plans.grid(wedge)
+    p = np.zeros(len(wedge.PARAMETER_NAMES))
+    f = wedge.readings(*np.deg2rad(P).T, p, G, **({"mount": M} if len(mounts) > 1 else {})).T
+    r = estimate(wedge, Positions("wedge", P, f, M if len(mounts) > 1 else None), SIGMA, G)
+    assert "theta1" in r["premises"]["unrefutable"]
+    assert "no data can check the bounds of " + ", ".join(r["premises"]["unrefutable"]) in r["premises"]["statement"]
+    mod = models.load("two-axis")
+    f = mod.readings(*np.deg2rad(GRID96).T, np.zeros(len(mod.PARAMETER_NAMES)), G).T
+    r = estimate(mod, Positions("grid", GRID96, f, None), SIGMA, G)
+    assert r["premises"]["unrefutable"] == [] and "no data can check" not in r["premises"]["statement"]

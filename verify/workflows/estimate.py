@@ -130,7 +130,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     v = guarantee.verdict(lin, z.reshape(-1), sigma, W)
     out = {                                    # arrays stay arrays until a JSON file is written
         "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma,
-        "premises": premises.to_dict(),
+        "premises": unrefutable_premises(lin, premises.to_dict()),
         "positions": rows, "distinct_positions": distinct, "consistent": v.consistent,
         "sigma_min_supported": v.sigma_min_supported, "sigma_min_tolerance": guarantee.SIGMA_TOLERANCE,
         "remainder_left_bound": float(v.remainder.max()),
@@ -168,6 +168,33 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     })
     out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
     return out
+
+
+def unrefutable_premises(lin, stated):
+    """The premises dictionary with `unrefutable`: the parameters no plan separates (t of the linearisation)
+    whose a-priori bound the bounds use, since they move the readings with q held (a parameter that enters
+    only with another, as Delta_alpha with alpha_star, moves nothing and is not named); the statement names
+    them, for no data can check them."""
+    names = [lin.premises.names[k] for j, (k, b) in enumerate(zip(lin.T, lin.t_bound)) if b > 0 and _moves(lin, j)]
+    out = dict(stated, unrefutable=names)
+    if names:
+        out["statement"] += (f"; no data can check the bounds of {', '.join(names)} (they move the readings beyond what "
+                             "q absorbs, and no plan separates them): these bounds rest on them")
+    return out
+
+
+def _moves(lin, j, size=1e-2, count=24):
+    """Whether t_j moves the readings with q held, anywhere: readings of units with errors of `size` at `count`
+    positions of the data, t_j at its bound and at 0 (an exact invariance, such as a sum, moves nothing)."""
+    mod, pos = lin.mod, lin.positions
+    rng = np.random.default_rng(0)
+    rows = rng.choice(len(pos.f), min(count, len(pos.f)), replace=False)
+    sub = Positions(pos.path, pos.angles_deg[rows], pos.f[rows], None if pos.mounts is None else pos.mounts[rows],
+                    {k: np.asarray(v)[rows] for k, v in pos.extra.items()})
+    p = rng.uniform(-size, size, lin.L.shape[0])
+    step = lin.L[:, lin.A.shape[0] + j] * lin.t_bound[j]
+    return bool(np.abs(guarantee._z_exact(mod, sub, p + step, lin.premises.g)
+                       - guarantee._z_exact(mod, sub, p, lin.premises.g)).max() > 1e-12)
 
 
 def _midpoint(lo, hi, q, e):
