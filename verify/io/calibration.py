@@ -13,6 +13,8 @@ garant-calibration-1 (every number in SI units unless the field says otherwise):
                   [beta, gamma, lambda3]]; stand: `through_M`)
     bound_bias    3, m/s^2: |eps| <= bound_bias, the worst-case residual biases
     bound_delta   3, dimensionless (x g): the worst-case nonlinearity of the 12-parameter model, or zeros
+    delta         3, dimensionless (x g), optional: the estimated nonlinearity of the 12-parameter model,
+                  taken out of each sample by apply (zeros, or absent, for 9 parameters and a stand)
     pendulosity_axes  the axes (i, j, k) of the nonlinearity terms delta_l n_axis(l) n_l
     g             m/s^2, the gravity the calibration used
     source        the log it was made from; note: how the bound of a sample follows (below)
@@ -48,6 +50,7 @@ def from_norm(res, axes):
     return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": res["raw_unit"],
             "M": res["matrix"], "b": res["bias"], "bound_matrix": B,
             "bound_bias": [res["g"] * e[f"eps{i}/g"] for i in (1, 2, 3)], "bound_delta": delta,
+            "delta": list(res.get("nonlinearity_delta_g") or [0.0, 0.0, 0.0]),
             "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
             "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",
             "premises": res["premises"]}
@@ -137,6 +140,7 @@ def checked(data, path="calibration"):
     out = dict(data)
     for key in ("M", "b", "bound_matrix", "bound_bias", "bound_delta", "pendulosity_axes"):
         out[key] = np.array(data[key], dtype=float)
+    out["delta"] = np.array(data.get("delta", [0.0, 0.0, 0.0]), dtype=float)
     cond = np.linalg.cond(out["M"])
     if not np.isfinite(cond) or cond > MAX_CONDITION:
         raise DataError(f"{path}: M is singular or ill-conditioned (condition number {cond:.3g}, at most "
@@ -174,13 +178,23 @@ def check_units(cal, log_path, raw, cal_path):
 
 def apply(cal, raw):
     """Corrected specific force (N, 3) in m/s^2 and its worst-case error per sample (N, 3). Computed
-    axis by axis ((3, N), each axis contiguous): |n_i n_j| = |a_i a_j| / |a|^2."""
+    axis by axis ((3, N), each axis contiguous): |n_i n_j| = |a_i a_j| / |a|^2. The nonlinearity the file
+    states (`delta`, of the 12-parameter model) is taken out as calibrate-norm fitted it, g delta_l n_axis(l)
+    n_l with n the direction of M (raw - b); its bound `bound_delta` stays in the bound, and so does what the
+    error of n moves the estimated term by: |n_i n_j - m_i m_j| <= 2 |n - m| <= 4 |a - a_true| / |a|."""
     a = cal["M"] @ (np.asarray(raw, float) - cal["b"]).T
     inv2 = 1.0 / np.maximum((a * a).sum(axis=0), 1e-300)
     axes = cal["pendulosity_axes"].astype(int) - 1
-    nonlinear = (cal["g"] * cal["bound_delta"])[:, None] * (np.abs(a[axes] * a) * inv2)
-    v = cal["bound_matrix"] @ np.abs(a) + cal["bound_bias"][:, None] + nonlinear
-    bound = np.linalg.inv(np.eye(3) - cal["bound_matrix"]) @ v
+    nn = np.abs(a[axes] * a) * inv2
+    delta = np.asarray(cal.get("delta", np.zeros(3)), float)
+    if np.any(delta):
+        a = a - (cal["g"] * delta)[:, None] * (a[axes] * a) * inv2
+    inverse = np.linalg.inv(np.eye(3) - cal["bound_matrix"])
+    v = cal["bound_matrix"] @ np.abs(a) + cal["bound_bias"][:, None] + (cal["g"] * cal["bound_delta"])[:, None] * nn
+    bound = inverse @ v
+    if np.any(delta):
+        moved = 4 * np.sqrt((bound * bound).sum(axis=0) * inv2)          # bounds |n - m| twice over
+        bound = bound + inverse @ ((cal["g"] * np.abs(delta))[:, None] * moved)
     return a.T, (bound * (1 + 1e-12)).T
 
 

@@ -179,7 +179,13 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     rule = noise_rule(stills, res["M"], res["n"], g, quantum)
     dsig = float(rule.max()) if delta_sigma is None else delta_sigma
     source = "--delta-sigma" if delta_sigma is not None else noise_rule_name(stills, quantum)
-    noise = np.minimum(rule, dsig) if delta_sigma is None else np.full(len(stills), dsig)
+    si = raw_unit(raw, g) == "m/s^2"
+    if delta_sigma is None:
+        noise = np.minimum(rule, dsig)
+    elif si:      # a raw error of norm D g moves the calibrated reading along n by at most |M^T n| D g
+        noise = dsig * np.linalg.norm(res["M"].T @ res["n"], axis=0) * (1 + 1e-12)
+    else:
+        noise = np.full(len(stills), dsig)
     err, missing = guaranteed(mod, res["n"], params, noise)
     if missing:
         raise DataError(f"{path}: the {len(stills)} orientations cannot identify "
@@ -187,14 +193,15 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     rb = linearisation_remainder(mod, err, params)
     rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb)[0], params)
     consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
+    info = information(mod, res, params, noise + rb) if consistent else None
     out = {
         "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
         "start": res["note"], "raw_unit": raw_unit(raw, g), "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
         "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
         "consistent": bool(consistent), "minimax_residual": fit_residual, "delta_sigma_max": dsig,
         "delta_sigma_source": source, "remainder_bound": rb,
-        "premises": (f"the bounds hold if each still interval's mean is within delta_sigma_max = {dsig:.3e} "
-                     f"(units of g) of the truth along its direction ({source}); the gravity is g = {g:g} m/s^2 "
+        "premises": ("the bounds hold if " + _noise_premise(dsig, source, delta_sigma is not None, si, g)
+                     + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
                      "of (2.3) takes g and delta_f as exact); the orientations are still"),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
@@ -206,36 +213,97 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     if not consistent:
         out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > noise + rb)]
         return out
-    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err))
+    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err, info))
     return out
 
 
-def bounds(mod, res, raw, g, params, noise, rb, dsig, err):
-    """For data consistent with the noise bound: the estimate (the LP estimator's correction folded into
-    the fit `res`), its parameters with guaranteed errors (noise + remainder rb per interval; `err` the
-    linear part), those of the optimal plan, and the orientations worth adding."""
+def _noise_premise(dsig, source, stated, si, g):
+    """The noise premise as the bound uses it. A stated --delta-sigma on a log in m/s^2 bounds the raw mean's
+    error in norm, carried through the calibration (|M^T n| D per interval: a unit with scale errors of -5e-2
+    reads 5 % more noise once calibrated); the noise rule bounds each axis's raw error and is carried through M
+    component by component; on a log in counts a stated bound is one of the calibrated reading."""
+    if stated and si:
+        return (f"each still interval's mean is within delta_sigma_max = {dsig:.3e} (units of g; {g * dsig:.3e} m/s^2, "
+                f"Euclidean norm) of the truth in the raw readings ({source}), carried through M to each interval "
+                "(|M^T n| delta_sigma_max)")
+    if stated:
+        return (f"each still interval's mean, as this fit calibrates it, is within delta_sigma_max = {dsig:.3e} (units "
+                f"of g) of the truth along its direction ({source})")
+    return (f"each axis of each still interval's raw mean is within its noise rule of the truth, carried through M "
+            f"to the interval's direction (at most delta_sigma_max = {dsig:.3e}, units of g; {source})")
+
+
+def information(mod, res, params, bound):
+    """(lo, hi) of the corrections q of (2.2) around the fit over the information set: every q with
+    |sigma_k - H(n_k)^T q| <= bound_k (each interval's noise plus the remainder the verdict proves) for every
+    interval; LPs, each end proven by duality (solve/hull.py), within the LP estimator's interval (which
+    holds the set, and is the column box the proofs need)."""
+    from ..solve import hull
+    A = mod.H(res["n"])[:params]
+    s = res["sigma"]
+    Phi, e, _ = estimator(mod, res["n"], params, bound)
+    centre = Phi.T @ s
+    box = (centre - e * (1 + 1e-9) - 1e-15, centre + e * (1 + 1e-9) + 1e-15)
+    try:
+        lo, hi = hull.ranges(A.T, s - bound, s + bound, *box, np.eye(params))
+    except hull.Empty:                           # the verdict found a fit: empty only to HiGHS's tolerance
+        return box
+    return np.maximum(lo, box[0]), np.minimum(hi, box[1])
+
+
+def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
+    """For data consistent with the noise bound: the estimate (the midpoint of the information set `info`,
+    (lo, hi) of q, folded into the fit `res`), its parameters with guaranteed errors over the same set (each a
+    linear function of q: an LP pair, proven), the a-priori ones of the LP estimator (noise + remainder rb per
+    interval; `err` the linear part), those of the optimal plan, and the orientations worth adding."""
+    from ..solve import hull
     plan = mod.PLAN[:18] if params == 9 else mod.PLAN
     _, best = lp.primal(mod.H(plan.T)[:params])
-    # The estimate the bound is for: the LP estimator's correction Phi^T sigma folded into the fit (the
-    # minimax fit itself is only within twice the bound).
     Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
-    M, b, delta = fold(res["M"], res["b"], res["delta"], Phi.T @ res["sigma"], g)
+    lo, hi = info
+    dq = 0.5 * (lo + hi)
+    half = np.maximum(hi - dq, dq - lo) * (1 + 1e-12)
+    M, b, delta = fold(res["M"], res["b"], res["delta"], dq, g)
     si = raw_unit(raw, g) == "m/s^2"
     q = parameters(M, b, g).tolist() + delta.tolist()[: params - 9] if si else None
+    if si:                                   # each printed parameter is affine in q: its range over the set
+        J = parameter_map(res["M"], params)
+        A = mod.H(res["n"])[:params]
+        s = res["sigma"]
+        p_lo, p_hi = hull.ranges(A.T, s - noise - rb, s + noise + rb, lo, hi, J)
+        p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + 1e-12),
+                            parameter_bounds(res["M"], half))
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
         "parameters": None if q is None else dict(zip(PARAM_LABELS, q)),
-        # the printed parameters' bounds (relative to the raw axes: carried through inv(M) exactly); for a
-        # log in raw units, those of (1.3)'s parameters of the calibrated block, as q itself
-        "guaranteed_error": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], bound) if si else bound).tolist())),
+        # the printed parameters' bounds over the information set (relative to the raw axes, affine in q); for
+        # a log in raw units, those of (1.3)'s parameters of the calibrated block, as q itself
+        "guaranteed_error": dict(zip(PARAM_LABELS, (p_half if si else half).tolist())),
+        "guaranteed_error_a_priori": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], bound) if si
+                                                             else bound).tolist())),
         "guaranteed_error_linear": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], err) if si else err).tolist())),
         "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], best * dsig) if si
                                                                  else best * dsig).tolist())),
-        "guaranteed_error_q": dict(zip(PARAM_LABELS, bound.tolist())),
+        "guaranteed_error_q": dict(zip(PARAM_LABELS, half.tolist())),
+        "guaranteed_error_q_a_priori": dict(zip(PARAM_LABELS, bound.tolist())),
         "directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
         "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN},
     }
+
+
+def parameter_map(M_fit, params):
+    """J (params x params): the printed parameters' change for a correction q of the fit M_fit, exactly linear
+    (P = inv(M) moves by P_fit dA, b/g by P_fit dq_b, delta by dq_delta: `fold`)."""
+    P = np.linalg.inv(M_fit)
+    J = np.zeros((params, params))
+    for j in range(params):
+        e = np.zeros(params)
+        e[j] = 1.0
+        A = np.array([[e[0], 0, 0], [e[3], e[1], 0], [e[4], e[5], e[2]]])
+        PA = P @ A
+        J[:, j] = [PA[0, 0], PA[1, 1], PA[2, 2], PA[1, 0], PA[2, 0], PA[2, 1], *(P @ e[6:9]), *e[9:params]]
+    return J
 
 
 def parameter_bounds(M_fit, e):
