@@ -139,9 +139,13 @@ def noise_rule(stills, M, n, g, quantum=0.0):
     |n^T M (k se + quantum/2)| / g, component-wise bounded. A stated statistical rule (99.73 % per
     interval and axis when the batch means are independent and normal), not the fit's own residual."""
     rows = np.abs(n.T @ M)                                    # (K, 3)
-    per = np.array([(K_BATCH * st.batch_error if st.batch_error is not None else K_SE * st.std_error)
-                    + quantum / 2 for st in stills])
-    return (rows * per).sum(axis=1) / g
+    return (rows * noise_axes(stills, quantum)).sum(axis=1) / g
+
+
+def noise_axes(stills, quantum=0.0):
+    """The noise rule's bound of each axis of each interval's raw mean (K, 3), raw units."""
+    return np.array([(K_BATCH * st.batch_error if st.batch_error is not None else K_SE * st.std_error)
+                     + quantum / 2 for st in stills])
 
 
 def noise_rule_name(stills, quantum=0.0):
@@ -193,7 +197,16 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     rb = linearisation_remainder(mod, err, params)
     rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb)[0], params)
     consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
-    info = information(mod, res, params, noise + rb) if consistent else None
+    info = premise = None
+    if consistent and params == 9 and (delta_sigma is None or si):
+        nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(stills, quantum).T, axis=0) / g if delta_sigma is None
+              else np.full(len(stills), np.linalg.norm(res["M"], 2) * dsig))
+        found = exact_information(mod, res, noise, nu)
+        if found is not None:
+            info, rb_k, premise = found
+            rb = float(rb_k.max())
+    if consistent and info is None:
+        info = information(mod, res, params, noise + rb)
     out = {
         "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
         "start": res["note"], "raw_unit": raw_unit(raw, g), "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
@@ -203,7 +216,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "premises": ("the bounds hold if " + _noise_premise(dsig, source, delta_sigma is not None, si, g)
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
-                     "of (2.3) takes g and delta_f as exact); the orientations are still"),
+                     "of (2.3) takes g and delta_f as exact); the orientations are still" + _premise_box(premise)),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "residual_before_ms2": float(g * sb),
@@ -231,6 +244,101 @@ def _noise_premise(dsig, source, stated, si, g):
                 f"of g) of the truth along its direction ({source})")
     return (f"each axis of each still interval's raw mean is within its noise rule of the truth, carried through M "
             f"to the interval's direction (at most delta_sigma_max = {dsig:.3e}, units of g; {source})")
+
+
+def _premise_box(X):
+    """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used)."""
+    if X is None:
+        return ""
+    return ("; the truth's correction to this fit is within " + ", ".join(
+        f"{x.max():.2g} ({name})" for name, x in (("scale", X[:3]), ("misalignment, rad", X[3:6]), ("bias over g", X[6:9])))
+        + f" (the box each interval's remainder is proven from, at most {PREMISE_FACTORS[0]:g}x the information set's "
+        "own box)")
+
+
+STEPS = 12                                            # boxes at most, each way
+PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0)    # the premise box tried, in multiples of the set's own box
+
+
+def remainder_per_interval(F, A_box, e_box, nu):
+    """A proven bound of the second-order remainder of (2.2), per interval, in the units of sigma. With
+    B = (E + A)^-1, d = eps/g + u (u the noise of the calibrated mean) and y = F - d, the exact identity
+    c = |B y|^2 / 2 - 1/2 = 0 at the truth, and B = E - A + A^2 B, give
+        c - c(0) + F^T (A F + d) = |d + A F|^2 / 2 + (F - d - A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2,
+    bounded with a = |A|_F (>= the spectral norm), |A F| <= | |A| |F| |, |d| <= |eps/g| + |u|, |B| <= 1/(1 - a);
+    so sigma_k = H'(n_k)^T q + n_k^T u / |F_k| - R_k / |F_k|^2 (H' is H of (2.2) with the bias columns over
+    |F_k|). F (K, 3): the readings calibrated by the fit, units of g; A_box (3, 3) and e_box (3) bound |A|,
+    |eps/g|; nu (K,) bounds |u|."""
+    a = float(np.linalg.norm(A_box))
+    if a >= 0.5:
+        return np.full(len(F), np.inf)
+    f = np.linalg.norm(F, axis=1)
+    aF = np.linalg.norm(np.abs(F) @ A_box.T, axis=1)
+    d = np.linalg.norm(e_box) + nu
+    tail = a * d + a * a * (f + d) / (1 - a)
+    R = 0.5 * (d + aF) ** 2 + (f + d + aF) * tail + 0.5 * tail ** 2
+    return R / f ** 2 * (1 + 1e-12) + 1e-16
+
+
+def exact_information(mod, res, noise, nu):
+    """The information set of the 9 corrections q of (2.2) around the fit with the remainder of each interval
+    (`remainder_per_interval`) instead of the sphere-wide (2.3): every q with |sigma_k - H'_k^T q| <= noise_k /
+    |F_k| + R_k(box). The remainder needs a box to start from, so it is a premise, stated: the truth's correction
+    to this fit is within X, the widest of PREMISE_FACTORS times the set's own box (the smallest box the
+    remainder is consistent with) from which the set contracts (its hull over that remainder lies in X). From
+    X each box is the set's hull (LPs, each end proven by duality) within the last, and the remainder is
+    bounded on it again, while it shrinks: each holds the truth when X does. Returns ((lo, hi) of q, the
+    remainder per interval, X), or None when no premise box contracts."""
+    s, n = res["sigma"], res["n"]
+    f = 1.0 / np.sqrt(1.0 - 2.0 * s)                        # |F_k|: sigma = (|F|^2 - 1) / (2 |F|^2)
+    F = (n * f).T
+    A = mod.H(n)[:9].copy()
+    A[6:9] /= f
+    base = noise / f
+
+    def rem(reach):
+        A_box = np.array([[reach[0], 0, 0], [reach[3], reach[1], 0], [reach[4], reach[5], reach[2]]])
+        return remainder_per_interval(F, A_box, reach[6:9], nu)
+
+    own, rb = None, np.zeros(len(s))
+    for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
+        lo, hi = _hull(A, s, base + rb)
+        own = np.maximum(np.abs(lo), np.abs(hi))
+        rb_new = rem(own)
+        if not np.all(np.isfinite(rb_new)):
+            return None
+        if np.all(rb_new <= rb * 1.01):
+            break
+        rb = rb_new
+    for factor in PREMISE_FACTORS:
+        X = factor * own
+        rb = rem(X)
+        if not np.all(np.isfinite(rb)):
+            continue
+        lo, hi = _hull(A, s, base + rb, X)
+        if np.all(np.maximum(np.abs(lo), np.abs(hi)) <= X):
+            break
+    else:
+        return None
+    for _ in range(STEPS):                                   # from the premise down: each box proven, inside the last
+        rb_new = np.minimum(rb, rem(np.maximum(np.abs(lo), np.abs(hi))))
+        if np.all(rb_new >= rb * 0.99):
+            break
+        rb = rb_new
+        lo2, hi2 = _hull(A, s, base + rb, X)
+        lo, hi = np.maximum(lo, lo2), np.minimum(hi, hi2)
+    return (lo, hi), rb, X
+
+
+def _hull(A, s, bound, X=None):
+    """(lo, hi) of each q over |s_k - a_k^T q| <= bound_k and |q| <= X (default 1: no correction of a fit is as
+    large), proven (solve/hull.py)."""
+    from ..solve import hull
+    box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
+    try:
+        return hull.ranges(A.T, s - bound, s + bound, -box, box, np.eye(A.shape[0]))
+    except hull.Empty:
+        return -box, box
 
 
 def information(mod, res, params, bound):
