@@ -307,7 +307,7 @@ def exact_information(mod, res, noise, nu):
         rb_new = rem(own)
         if not np.all(np.isfinite(rb_new)):
             return None
-        if np.all(rb_new <= rb * 1.01):
+        if np.all(rb_new <= rb * 1.1):                        # it only sets the premise's scale
             break
         rb = rb_new
     for factor in PREMISE_FACTORS:
@@ -322,7 +322,7 @@ def exact_information(mod, res, noise, nu):
         return None
     for _ in range(STEPS):                                   # from the premise down: each box proven, inside the last
         rb_new = np.minimum(rb, rem(np.maximum(np.abs(lo), np.abs(hi))))
-        if np.all(rb_new >= rb * 0.99):
+        if np.all(rb_new >= rb * 0.95):                       # a smaller box would move no bound by much
             break
         rb = rb_new
         lo2, hi2 = _hull(A, s, base + rb, X)
