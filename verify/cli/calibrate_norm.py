@@ -148,31 +148,39 @@ def _save(res, args):
             print(f"wrote {path}")
 
 
+UNITS = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
+
+
+def _unit(k):
+    return next(u for p, u in UNITS.items() if k.startswith(p))
+
+
+def _side(k, x):
+    """A parameter's value in ppm, mrad or mg (the nonlinearity as it is)."""
+    from ..io import report
+    return report.human(x, "1" if k.startswith(("lambda", "eps")) else _unit(k), bias=k.startswith("eps")) \
+        if not k.startswith("delta") else f"{x:+.4g} {_unit(k)}"
+
+
 def _print_bounds(res, args=None):
     from ..io import report
     pars = res["parameters"]
     if pars is None:
         print("parameters of (1.3): the log is in raw units, so only M and b above are estimated; the "
               "guaranteed errors below are those of (1.3)'s parameters of the calibrated block")
-    units = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
     print("model of 001, (1.1)-(1.3): f = (E + A) w + eps + B(w) w, A = [[lambda1, 0, 0], [alpha, lambda2, 0], "
           "[beta, gamma, lambda3]], w the specific force in block axes; the calibration inverts it, a = M (raw - b) "
           "with M ~ E - A: lambda1 > 0 means accelerometer 1 reads high, and M11 < 1")
     human = getattr(args, "units", "si") == "human"
-
-    def unit(k):
-        return next(u for p, u in units.items() if k.startswith(p))
-
-    def side(k, x):
-        u = unit(k)
-        return report.human(x, "1" if k.startswith(("lambda", "eps")) else u, bias=k.startswith("eps")) \
-            if not k.startswith("delta") else f"{x:+.4g} {u}"
-    report.table(("parameter", "estimate", "guaranteed error", "on the optimal plan", "unit")
+    report.table(("parameter", "estimate", "guaranteed error", "a priori", "on the optimal plan", "unit")
                  + (("estimate", "guaranteed error") if human else ()),
                  [(k, f"{pars[k]:+.4e}" if pars else "(raw units)", f"{v:.3e}",
-                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}", unit(k))
-                  + ((side(k, pars[k]) if pars else "", side(k, v).lstrip("+")) if human else ())
+                   f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
+                   _unit(k)) + ((_side(k, pars[k]) if pars else "", _side(k, v).lstrip("+")) if human else ())
                   for k, v in res["guaranteed_error"].items()])
+    print("guaranteed error: over the information set (every correction of the fit that meets each interval's noise "
+          "bound plus its remainder); a priori: the LP estimator's, what these orientations guarantee for any data "
+          "within the noise bound")
     gain = res["directions_gain"]
     if res["directions_to_add"]:
         print(f"\nadding {len(res['directions_to_add'])} orientation(s) would shrink the bound of {gain['parameter']} "
@@ -205,9 +213,12 @@ def _report(res, args):
                  [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
     if res["consistent"]:
         pars = res.get("parameters") or {}
-        sections.append(("Parameters of (1.3) and their guaranteed errors", report.Table(
-            ("parameter", "estimate", "guaranteed error", "on the optimal plan"),
-            [(k, f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
+        sections.append(("Parameters of (1.3) and their guaranteed errors (over the information set; a priori: the "
+                         "LP estimator's)", report.Table(
+            ("parameter", "estimate", "guaranteed error", "estimate", "guaranteed error", "a priori", "on the optimal plan"),
+            [(k, f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}",
+              _side(k, pars[k]) if k in pars else "", _side(k, v).lstrip("+"),
+              f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
              for k, v in res["guaranteed_error"].items()])))
     sections += [("Residual per still interval", report.Image("residuals.png")),
                  ("Residual against the direction of gravity", report.Image("directions.png"))]

@@ -216,7 +216,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "premises": ("the bounds hold if " + _noise_premise(dsig, source, delta_sigma is not None, si, g)
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
-                     "of (2.3) takes g and delta_f as exact); the orientations are still" + _premise_box(premise)),
+                     + ("takes g as exact" if premise is not None else "of (2.3) takes g and delta_f as exact")
+                     + "); the orientations are still" + _premise_box(premise)),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "residual_before_ms2": float(g * sb),
