@@ -262,34 +262,47 @@ PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0)    # the premise box tried, 
 
 
 def remainder_per_interval(F, A_box, e_box, nu):
-    """A proven bound of the second-order remainder of (2.2), per interval, in the units of sigma. With
-    B = (E + A)^-1, d = eps/g + u (u the noise of the calibrated mean) and y = F - d, the exact identity
-    c = |B y|^2 / 2 - 1/2 = 0 at the truth, and B = E - A + A^2 B, give
-        c - c(0) + F^T (A F + d) = |d + A F|^2 / 2 + (F - d - A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2,
-    bounded with a = |A|_F (>= the spectral norm), |A F| <= | |A| |F| |, |d| <= |eps/g| + |u|, |B| <= 1/(1 - a);
-    so sigma_k = H'(n_k)^T q + n_k^T u / |F_k| - R_k / |F_k|^2 (H' is H of (2.2) with the bias columns over
-    |F_k|). F (K, 3): the readings calibrated by the fit, units of g; A_box (3, 3) and e_box (3) bound |A|,
-    |eps/g|; nu (K,) bounds |u|."""
+    """What is left of the remainder of (2.2) per interval once q absorbs its part in the span of H', in the
+    units of sigma, and the bound of that absorbed shift per q. With B = (E + A)^-1, d = eps/g + u (u the noise of
+    the calibrated mean, |u| <= nu) and y = F - d, the truth has |B y| = 1, and B = E - A + A^2 B gives exactly
+        c - c(0) + F^T (A F + d) = |d + A F|^2 / 2 + (F - d - A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2 = R,
+        sigma_k = H'(n_k)^T q + n_k^T u / |F_k| - R_k / |F_k|^2,
+    H' being H of (2.2) with the bias columns over |F_k|. R's second-order part without u,
+    |e|^2/2 + |A F|^2/2 + e^T A F + F^T A e + F^T A^2 F, is over |F|^2 a quadratic form in n plus a linear one over
+    |F| (n^T n = 1 carries the constant): H'^T s for a shift s of q that the set absorbs, |s| bounded from the box
+    (`shift`); left are the terms in u, |u|^2/2 + e^T u + u^T A F + F^T A u, the third order,
+        F^T A^2 (B y - F) - (d + A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2,   B y - F = -B (A F + d),
+    and |e|^2/2 (1/|F|^2 - 1), bounded with a = |A|_F (>= the spectral norm), |A F| <= | |A| |F| |,
+    |B| <= 1/(1 - a). F (K, 3): the readings calibrated by the fit, units of g; A_box (3, 3) and e_box (3)
+    bound |A| and |eps/g| entrywise. Returns (left per interval (K,), shift bound per q (9,))."""
     a = float(np.linalg.norm(A_box))
     if a >= 0.5:
-        return np.full(len(F), np.inf)
+        return np.full(len(F), np.inf), np.full(9, np.inf)
+    b = 1.0 / (1.0 - a)
     f = np.linalg.norm(F, axis=1)
     aF = np.linalg.norm(np.abs(F) @ A_box.T, axis=1)
-    d = np.linalg.norm(e_box) + nu
-    tail = a * d + a * a * (f + d) / (1 - a)
-    R = 0.5 * (d + aF) ** 2 + (f + d + aF) * tail + 0.5 * tail ** 2
-    return R / f ** 2 * (1 + 1e-12) + 1e-16
+    aFt = np.linalg.norm(np.abs(F) @ A_box, axis=1)
+    e = float(np.linalg.norm(e_box))
+    d = e + nu
+    in_u = 0.5 * nu ** 2 + e * nu + nu * (aF + aFt)
+    tail = a * d + a * a * b * (f + d)
+    third = a * a * b * f * (aF + d) + (d + aF) * tail + 0.5 * tail ** 2
+    left = (in_u + third) / f ** 2 + 0.5 * e * e * np.abs(1.0 / f ** 2 - 1.0)
+    P = 0.5 * A_box.T @ A_box + A_box @ A_box                 # |n^T (A^T A / 2 + A^2) n|: coefficients bounded by P
+    shift = np.r_[np.diag(P) + 0.5 * e * e, P[0, 1] + P[1, 0], P[0, 2] + P[2, 0], P[1, 2] + P[2, 1],
+                  A_box.T @ e_box + A_box @ e_box]
+    return left * (1 + 1e-12) + 1e-16, shift * (1 + 1e-12) + 1e-16
 
 
 def exact_information(mod, res, noise, nu):
-    """The information set of the 9 corrections q of (2.2) around the fit with the remainder of each interval
-    (`remainder_per_interval`) instead of the sphere-wide (2.3): every q with |sigma_k - H'_k^T q| <= noise_k /
-    |F_k| + R_k(box). The remainder needs a box to start from, so it is a premise, stated: the truth's correction
-    to this fit is within X, the widest of PREMISE_FACTORS times the set's own box (the smallest box the
-    remainder is consistent with) from which the set contracts (its hull over that remainder lies in X). From
+    """The information set of the 9 corrections q of (2.2) around the fit with each interval's own remainder
+    (`remainder_per_interval`) instead of the sphere-wide (2.3): q = w + s, every w with |sigma_k - H'_k^T w| <=
+    noise_k / |F_k| + left_k(box), |s| <= shift(box). The remainder needs a box to start from, so it is a premise,
+    stated: the truth's correction to this fit is within X, the widest of PREMISE_FACTORS times the set's own box
+    (the smallest box the remainder is consistent with) from which the set contracts (its hull lies in X). From
     X each box is the set's hull (LPs, each end proven by duality) within the last, and the remainder is
-    bounded on it again, while it shrinks: each holds the truth when X does. Returns ((lo, hi) of q, the
-    remainder per interval, X), or None when no premise box contracts."""
+    bounded on it again, while it shrinks: each holds the truth when X does. Returns ((lo, hi) of q, what is
+    left of the remainder per interval, X), or None when no premise box contracts."""
     s, n = res["sigma"], res["n"]
     f = 1.0 / np.sqrt(1.0 - 2.0 * s)                        # |F_k|: sigma = (|F|^2 - 1) / (2 |F|^2)
     F = (n * f).T
@@ -297,38 +310,41 @@ def exact_information(mod, res, noise, nu):
     A[6:9] /= f
     base = noise / f
 
-    def rem(reach):
+    def step(reach, X=None):
+        """(lo, hi) of q and the remainder left, on the box |q| <= reach (and X), or None."""
         A_box = np.array([[reach[0], 0, 0], [reach[3], reach[1], 0], [reach[4], reach[5], reach[2]]])
-        return remainder_per_interval(F, A_box, reach[6:9], nu)
-
-    own, rb = None, np.zeros(len(s))
-    for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
-        lo, hi = _hull(A, s, base + rb)
-        own = np.maximum(np.abs(lo), np.abs(hi))
-        rb_new = rem(own)
-        if not np.all(np.isfinite(rb_new)):
+        left, shift = remainder_per_interval(F, A_box, reach[6:9], nu)
+        if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
             return None
-        if np.all(rb_new <= rb * 1.1):                        # it only sets the premise's scale
+        lo, hi = _hull(A, s, base + left, None if X is None else X + shift)
+        return lo - shift, hi + shift, left
+
+    lo, hi = _hull(A, s, base)
+    own = np.maximum(np.abs(lo), np.abs(hi))
+    for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
+        got = step(own)
+        if got is None:
+            return None
+        grown = np.maximum(np.abs(got[0]), np.abs(got[1]))
+        if np.all(grown <= own * 1.1):                        # it only sets the premise's scale
             break
-        rb = rb_new
+        own = grown
     for factor in PREMISE_FACTORS:
         X = factor * own
-        rb = rem(X)
-        if not np.all(np.isfinite(rb)):
-            continue
-        lo, hi = _hull(A, s, base + rb, X)
-        if np.all(np.maximum(np.abs(lo), np.abs(hi)) <= X):
+        got = step(X, X)
+        if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X):
             break
     else:
         return None
+    lo, hi, left = np.maximum(got[0], -X), np.minimum(got[1], X), got[2]
     for _ in range(STEPS):                                   # from the premise down: each box proven, inside the last
-        rb_new = np.minimum(rb, rem(np.maximum(np.abs(lo), np.abs(hi))))
-        if np.all(rb_new >= rb * 0.95):                       # a smaller box would move no bound by much
+        got = step(np.maximum(np.abs(lo), np.abs(hi)), X)
+        lo2, hi2 = np.maximum(lo, got[0]), np.minimum(hi, got[1])
+        shrunk = np.all(hi2 - lo2 >= 0.95 * (hi - lo))
+        lo, hi, left = lo2, hi2, np.minimum(left, got[2])
+        if shrunk:                                           # a smaller box would move no bound by much
             break
-        rb = rb_new
-        lo2, hi2 = _hull(A, s, base + rb, X)
-        lo, hi = np.maximum(lo, lo2), np.minimum(hi, hi2)
-    return (lo, hi), rb, X
+    return (lo, hi), left, X
 
 
 def _hull(A, s, bound, X=None):
