@@ -299,3 +299,30 @@ def test_each_intervals_remainder_holds_at_the_vertices():
         assert np.all(left <= bound), (left / bound).max()
         worst = max(worst, (left / bound).max())
     assert worst > 0.02, worst
+
+
+@needs_real
+@pytest.mark.parametrize("name", ["repeat_session2_acc.txt", "repeat_session3_acc.txt", "repeat_session4_acc.txt",
+                                  "imu_tk_xsens_acc.txt"])
+def test_real_log_bounds_are_the_information_sets(name):
+    # Issue 41, done when: on sessions 2-4 and the Xsens log every q's printed bound is within 1.25x of an LP over
+    # the information set computed independently (cvxpy: the intervals' fitted directions, the noise rule per
+    # interval, linearised at the fit, no remainder), and the remainder is at most 0.1 x delta_sigma_max. Before,
+    # the printed bounds were 1.8x (session 2), 14x (3), 5.7x (4) and 25x (Xsens) that LP, the remainder up to
+    # 3.6x delta_sigma_max (session 3).
+    import cvxpy as cp
+    log = recordings.read_log(str(REAL / name), "imu_tk")
+    stills, _ = recordings.still_intervals(log)
+    res = calibrate_norm.run(N, stills, G, 9, log.path, quantum=recordings.quantum(log))
+    assert res["consistent"] and res["remainder_bound"] <= 0.1 * res["delta_sigma_max"]
+    n = np.array([r["direction"] for r in res["per_interval"]]).T
+    rule = np.array([r["noise_rule"] for r in res["per_interval"]])
+    s = np.array([r["residual_after_ms2"] for r in res["per_interval"]]) / G
+    H = N.H(n)[:9]
+    q = cp.Variable(9)
+    half = []
+    for k in range(9):
+        ends = [cp.Problem(sense(q[k]), [cp.abs(s - H.T @ q) <= rule]).solve() for sense in (cp.Maximize, cp.Minimize)]
+        half.append(0.5 * (ends[0] - ends[1]))
+    printed = np.array(list(res["guaranteed_error_q"].values()))
+    assert np.all(printed <= 1.25 * np.array(half)), printed / np.array(half)

@@ -45,11 +45,18 @@ MAX_CONDITION = 1e3
 def from_norm(res, axes):
     """The calibration dictionary of a consistent `calibrate-norm` result."""
     e = res["guaranteed_error_q"]                 # bounds of the correction (I + A) of the calibrated block
-    B = [[e["lambda1"], 0.0, 0.0], [e["alpha"], e["lambda2"], 0.0], [e["beta"], e["gamma"], e["lambda3"]]]
+    B = np.array([[e["lambda1"], 0.0, 0.0], [e["alpha"], e["lambda2"], 0.0], [e["beta"], e["gamma"], e["lambda3"]]])
+    eps = res["g"] * np.array([e[f"eps{i}/g"] for i in (1, 2, 3)])
     delta = [e.get(f"delta{i}*g", 0.0) for i in (1, 2, 3)]
+    # The file's M is (E + A_mid)^-1 M_fit (the information set's midpoint folded into the fit), the truth's
+    # (E + A)^-1 M_fit: a sample's residual errors are (E + A_mid)^-1 (A - A_mid) and (E + A_mid)^-1 g dq_eps,
+    # so the bounds of the correction reach it through |(E + A_mid)^-1| = |M M_fit^-1|.
+    K = np.abs(np.asarray(res["matrix"]) @ np.linalg.inv(np.asarray(res["matrix_fit"]))) if "matrix_fit" in res \
+        else np.eye(3)
+    B, eps = (K @ B) * (1 + 1e-12), (K @ eps) * (1 + 1e-12)
     return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": res["raw_unit"],
-            "M": res["matrix"], "b": res["bias"], "bound_matrix": B,
-            "bound_bias": [res["g"] * e[f"eps{i}/g"] for i in (1, 2, 3)], "bound_delta": delta,
+            "M": res["matrix"], "b": res["bias"], "bound_matrix": B.tolist(),
+            "bound_bias": eps.tolist(), "bound_delta": delta,
             "delta": list(res.get("nonlinearity_delta_g") or [0.0, 0.0, 0.0]),
             "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
             "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",

@@ -401,6 +401,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
+        "matrix_fit": res["M"].tolist(),
         "parameters": None if q is None else dict(zip(PARAM_LABELS, q)),
         # the printed parameters' bounds over the information set (relative to the raw axes, affine in q); for
         # a log in raw units, those of (1.3)'s parameters of the calibrated block, as q itself
