@@ -60,9 +60,10 @@ def from_description(path):
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     import hashlib
     key = hashlib.sha256(raw + generator_version().encode()).hexdigest()
-    hit = next(iter(sorted(cache_dir().glob(f"{key}-*.py"))), None) if cache_dir().is_dir() else None
+    folder = _cache_folder()
+    hit = _entry(folder / f"{key}.py") if folder is not None else None
     if hit is not None:
-        name, text = hit.stem.split("-", 1)[1], hit.read_text()
+        name, text = hit
     else:
         from garant.derive import codegen, description
         try:
@@ -71,21 +72,76 @@ def from_description(path):
         except description.DescriptionError as e:
             raise DataError(str(e)) from None
         name, text = model.stand.name, files[f"generated/{model.stand.name}.py"]
-        _keep(cache_dir(), f"{key}-{name}.py", text)
+        _keep(cache_dir(), f"{key}.py", name, text)
     return _execute(text, name, Path(path).resolve())
 
 
-def _keep(folder, name, text):
-    """Write a cache entry atomically (a reader sees all of it or none), or nothing if it cannot be
-    written: without a cache the next command derives again."""
+ENTRY_BYTES = 4_000_000       # a cache entry larger than this is not one garant wrote
+
+
+def _cache_folder():
+    """The cache folder when it exists, after the checks that keep others' code out of it: a directory (not a
+    link) owned by this user and writable by no one else; None when it does not exist yet. DataError naming
+    it otherwise: anyone who can write there could plant a module that garant would run."""
+    folder = cache_dir()
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        st = os.lstat(folder)
+    except FileNotFoundError:
+        return None
+    except OSError as e:
+        raise DataError(f"{folder}: the cache folder cannot be read ({e.strerror}); set $GARANT_CACHE") from None
+    import stat
+    if not stat.S_ISDIR(st.st_mode):
+        raise DataError(f"{folder}: the cache folder is not a directory (or is a link); set $GARANT_CACHE to one")
+    if st.st_uid != os.geteuid() or st.st_mode & 0o022:
+        raise DataError(f"{folder}: the cache folder is owned by someone else or writable by others, so its modules "
+                        "could be anyone's code; make it yours and private (chmod 700) or set $GARANT_CACHE")
+    return folder
+
+
+def _entry(path):
+    """(stand name, module text) of a cache entry garant wrote, or None (then it is derived again and replaced):
+    a regular file (no link, FIFO or device) owned by this user, of bounded size, whose first line records the
+    stand's name and the SHA-256 of the rest, which must match."""
+    import hashlib
+    import stat
+    try:
+        st = os.lstat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_uid != os.geteuid() or st.st_size > ENTRY_BYTES:
+            return None
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        with os.fdopen(fd, "rb") as fh:
+            data = fh.read(ENTRY_BYTES + 1)
+    except OSError:
+        return None
+    head, _, body = data.partition(b"\n")
+    parts = head.decode("ascii", "replace").split()
+    if len(parts) != 4 or parts[:2] != ["#", "garant-cache"] or not parts[2].isidentifier():
+        return None
+    if hashlib.sha256(body).hexdigest() != parts[3]:
+        return None
+    try:
+        return parts[2], body.decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+
+
+def _keep(folder, name, stand, text):
+    """Write a cache entry atomically (a reader sees all of it or none), its first line the stand's name and
+    the SHA-256 of the module, or nothing if it cannot be written: without a cache the next command derives
+    again. A new cache folder is private to this user."""
+    import hashlib
+    body = text.encode("utf-8")
+    try:
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        if _cache_folder() is None:
+            return
         import tempfile
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=".", suffix=".part")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(f"# garant-cache {stand} {hashlib.sha256(body).hexdigest()}\n".encode("ascii") + body)
         os.replace(tmp, folder / name)
-    except OSError:
+    except (OSError, DataError):
         pass
 
 
