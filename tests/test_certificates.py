@@ -96,6 +96,36 @@ def test_certificate_not_of_its_model_is_rejected(two_axis, tamper, reason):
     assert not steps[0][1] and reason in steps[0][2]
 
 
+@pytest.mark.parametrize("definition, holds", [
+    (None, True),                                   # the claim as built
+    ("bias1 + bias2 + bias3", False),               # issue 42: another definition for q1 "held"
+    ("kappa + 0", True),                            # the same definition, written otherwise
+    ("kappa + epsilon", False), ("Gamma11", False), ("kappa + pi", False)])
+def test_a_claim_must_state_its_q_as_the_model_defines_it(two_axis, definition, holds):
+    # Issue 42: the definition in a claim was never compared with the model's: two-axis q1 claiming
+    # "q1 = bias1 + bias2 + bias3" held. Both are parsed (whitelist grammar) and compared exactly.
+    cert = copy.deepcopy(two_axis[0])
+    if definition is not None:
+        cert["claim"] = cert["claim"].replace("= kappa on", f"= {definition} on")
+    steps = check.check(cert)
+    assert all(ok for _, ok, _ in steps) == holds and (holds or "definition" in steps[0][2]), steps[0]
+
+
+def test_a_sphere_certificate_must_sit_on_the_sphere_and_keep_its_domain(norm):
+    # Issue 42: a norm certificate whose estimator sat at n = (+-2, 0, 0) "proved" an optimal error of 1/4 for
+    # lambda1_star (the optimum is 1); one relabelled to a finite domain crashed the checker (KeyError).
+    cert = copy.deepcopy(norm[0])
+    assert all(ok for _, ok, _ in check.check(cert))
+    for p in cert["primal"]:
+        p["at"] = [str(2 * check.exact(x)) for x in p["at"]]
+    steps = check.check(cert)
+    assert not all(ok for _, ok, _ in steps) and any("off the unit sphere" in d for _, ok, d in steps if not ok)
+    cert = copy.deepcopy(norm[0])
+    cert["domain"] = {"kind": "positions", "names": ["n1", "n2", "n3"], "positions": [["1", "0", "0"]]}
+    steps = check.check(cert)
+    assert not steps[0][1] and "finite domain" in steps[0][2]
+
+
 @pytest.mark.parametrize("text", ["10**10**10", "__import__('os').system('touch pwned')", "(" * 60 + "1" + ")" * 60,
                                   "((10**16)**16)**16", "1e5", "alpha.__class__", "9" * 50, "lambda: 1"])
 def test_hostile_certificate_strings_are_refused_not_run(two_axis, tmp_path, capsys, text):

@@ -26,7 +26,7 @@ import sympy as sp
 
 from ..solve.interval import mean_value_enclosure
 from .parse import GRAMMAR_NAMES, exact
-from .reference import reference
+from .reference import definitions, reference
 
 ETA = 1e-9
 FORMAT = "garant-certificate-1"
@@ -138,6 +138,7 @@ def tied_to_model(cert, c, base=None):
         if path is not None and hashlib.sha256(path.read_bytes()).hexdigest() != cert.get("model_sha256"):
             return False, f"{cert['model']} is not the description the certificate was made for (SHA-256 differs)"
         H_ref, dom_ref, q_names = reference(cert["model"], base)
+        defs = definitions(cert["model"], base)
     except ValueError as e:
         return False, str(e)
     kind = cert["domain"]["kind"]
@@ -147,11 +148,13 @@ def tied_to_model(cert, c, base=None):
         return False, f"domain kind {kind!r} is not that of {cert['model']} ({dom_ref['kind']!r})"
     if kind == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
         return False, "the domain is not the whole box of angles of the model"
+    if kind == "positions" and "detents_deg" not in dom_ref:
+        return False, f"a finite domain is not one of {cert['model']}'s (its domain is the {dom_ref['kind']})"
     if kind == "positions":
         bad = _unreachable(c["positions"], dom_ref) or _missing(c["positions"], cert["domain"], dom_ref)
         if bad:
             return False, bad
-    bad = _claim_mismatch(cert, c, q_names)
+    bad = _claim_mismatch(cert, c, q_names) or _definition_mismatch(cert, q_names, defs)
     if bad:
         return False, bad
     syms = {s.name: s for s in c["syms"]}
@@ -218,6 +221,30 @@ def _claim_mismatch(cert, c, q_names):
     return None
 
 
+def _definition_mismatch(cert, q_names, defs):
+    """Why the definition the claim states for its q is not the one the model derives (compared exactly, after
+    parsing both by the whitelist grammar), or None. The norm model's claims state none."""
+    m = CLAIM.fullmatch(cert["claim"])
+    q, stated = m.group(1), m.group(2)
+    if defs is None:
+        return f"the claim states a definition of {q}, which {cert['model']}'s claims do not" if stated else None
+    if not stated:
+        return f"the claim states no definition of {q}"
+    want = defs[q_names.index(q)]
+    try:
+        got = exact(stated[3:], sorted(want.free_symbols | _names(stated[3:]), key=str))
+    except (MalformedCertificate, ValueError):
+        return f"the claim's definition of {q} is not an expression in the model's parameters"
+    if sp.expand(got - want) != 0:
+        return f"the claim's definition {q} = {stated[3:]} is not the model's, {q} = {want}"
+    return None
+
+
+def _names(text):
+    """Real symbols of the plain names in a definition (the parser refuses any other)."""
+    return {sp.Symbol(n, real=True) for n in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text) if n not in GRAMMAR_NAMES}
+
+
 def _missing(positions, dom, dom_ref):
     """Why a finite domain is not the stand's whole reachable set (every combination of detents, and on an
     angle without detents every multiple of the domain's `grid_step_deg` in its range), or None. A domain
@@ -271,6 +298,12 @@ def check(cert, base=None):
     out = [("(0) model", *tied_to_model(cert, c, base))]
     if not out[0][1]:
         return out
+    if cert["domain"]["kind"] == "sphere":               # the estimator's directions are unit vectors, exactly
+        for at, _, _ in c["primal"]:
+            if not _zero(sum((at[x] ** 2 for x in syms), sp.Integer(0)) - 1):
+                out.append(("(a) unbiased", False, f"a primal position, ({', '.join(str(at[x]) for x in syms)}), "
+                                                   "is off the unit sphere"))
+                return out
     image = [sp.Integer(0)] * m
     for at, row, w in c["primal"]:
         image = [sp.expand(i + w * h.subs(at)) for i, h in zip(image, H[row])]

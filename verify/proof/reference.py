@@ -25,6 +25,18 @@ def stand_file(key, base=None):
 def reference(key, base=None):
     """(H rows as SymPy expressions, domain dict, names of q) of the model a certificate names: a
     built-in stand, the norm model, or a stand description file (read by the safe loader, re-derived)."""
+    return _reference(key, base)[:3]
+
+
+def definitions(key, base=None):
+    """Each q's definition as a SymPy expression in the model's parameters (real symbols), or None for the
+    norm model, whose claims state none."""
+    return _reference(key, base)[3]
+
+
+def _reference(key, base=None):
+    """reference() and definitions() at once: (H rows, domain, names of q, definitions or None)."""
+    import sympy as sp
     path = stand_file(key, base)
     if path is not None:
         from garant.derive import description
@@ -34,35 +46,36 @@ def reference(key, base=None):
         except description.DescriptionError as e:
             raise UnknownModel(str(e)) from None
         H = d.ident.H
+        params = [sp.Symbol(p.name, real=True) for p in d.model.parameters]
+        defs = [sp.expand(sum((v * x for v, x in zip(d.ident.R.row(nu), params)), sp.Integer(0)))
+                for nu in range(d.ident.R.rows)]
         return ([list(H.row(r)) for r in range(H.rows)],
                 {"kind": "positions", "names": [a.name for a in d.model.stand.angles], **_reach(d)},
-                [f"q{nu + 1}" for nu in range(H.cols)])
+                [f"q{nu + 1}" for nu in range(H.cols)], defs)
     if key == "norm":
         # H of (2.2) entry by entry is n1^a n2^b n3^c with the exponents the generated module carries
         # (derive stops unless every entry is such a monomial; `python -m derive --check` proves the module).
-        import sympy as sp
-
         from garant.generated import norm as mod
         n = sp.symbols("n1 n2 n3", real=True)
         return ([[sp.Mul(*(x**e for x, e in zip(n, exps))) for exps in mod.H_EXPONENTS]],
-                {"kind": "sphere", "names": ["n1", "n2", "n3"]}, list(mod.Q_NAMES))
+                {"kind": "sphere", "names": ["n1", "n2", "n3"]}, list(mod.Q_NAMES), None)
     stand = MODELS.get(key) or (key if key in MODELS.values() else None)
     if stand is None:
         raise UnknownModel(f"unknown model {key!r} (certificates exist for {', '.join(MODELS)})")
     # A built-in model's H is the one its generated module carries (H_EXACT): `python -m derive --check`
     # (run by a test) proves that module equal to a fresh derivation, so nothing is re-derived here.
     import importlib
-    import sympy as sp
 
     from .parse import exact
     mod = importlib.import_module(f"garant.generated.{stand}")
     names = list(mod.ANGLES)
     syms = [sp.Symbol(n, real=True) for n in names]
     H = [[exact(e, syms) for e in row] for row in mod.H_EXACT]
+    params = [sp.Symbol(p, real=True) for p in mod.PARAMETER_NAMES]
     return (H, {"kind": "angles", "names": names, "ranges": [["0", "2*pi"]] * len(names),
                 "ranges_deg": [list(r) for r in mod.ANGLE_RANGES_DEG],
                 "detents_deg": [list(d) for d in mod.ANGLE_DETENTS_DEG]},
-            list(mod.Q_NAMES))
+            list(mod.Q_NAMES), [sp.expand(exact(t, params)) for t in mod.Q_DEFINITIONS])
 
 
 def _reach(d):
