@@ -12,8 +12,7 @@ that bound, and says so; one the set leaves unbounded is not separated by this s
 import numpy as np
 
 from ..errors import DataError
-from ..solve import hull
-from . import guarantee
+from ..solve import hull, taylor
 
 BLOCK = [f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)] + [f"bias{i}" for i in (1, 2, 3)]
 
@@ -42,9 +41,7 @@ def calibration(mod, info, premises):
         raise DataError(_CONTRADICT)
     value, half, confounded = {}, {}, {}
     for name, k, lo_k, hi_k, ends in zip(BLOCK, targets, lo, hi, points):
-        mid = 0.5 * (lo_k + hi_k)
-        value[name] = mid
-        half[name] = max(hi_k - mid, mid - lo_k) * (1 + 4 * guarantee.EPS) + 1e-300
+        value[name], half[name] = (float(x) for x in taylor.midrad(lo_k, hi_k))
         active = {j for x in ends if x is not None for j in np.flatnonzero(bounded)
                   if b[j] > 0 and abs(x[j]) >= b[j] * (1 - 1e-9)}
         # the bounded parameters the range reaches the bounds of: the block parameter carries theirs

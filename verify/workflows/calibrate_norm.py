@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..io.recordings import BATCHES, median, raw_unit
-from ..solve import highs, lp
+from ..solve import highs, lp, taylor
 
 MAX_ITER = 60
 
@@ -386,8 +386,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
     _, best = lp.primal(mod.H(plan.T)[:params])
     Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
     lo, hi = info
-    dq = 0.5 * (lo + hi)
-    half = np.maximum(hi - dq, dq - lo) * (1 + 1e-12)
+    dq, half = taylor.midrad(lo, hi)
     M, b, delta = fold(res["M"], res["b"], res["delta"], dq, g)
     si = raw_unit(raw, g) == "m/s^2"
     q = parameters(M, b, g).tolist() + delta.tolist()[: params - 9] if si else None
@@ -396,7 +395,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
         A = mod.H(res["n"])[:params]
         s = res["sigma"]
         p_lo, p_hi = hull.ranges(A.T, s - noise - rb, s + noise + rb, lo, hi, J)
-        p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + 1e-12),
+        p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + taylor.SUM_ERROR),
                             parameter_bounds(res["M"], half))
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
     return {

@@ -3,7 +3,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..io.positions import Positions
-from ..solve import lp
+from ..solve import lp, taylor
 from . import block, guarantee, mounting, nearby
 from .premises import NEAR_EDGE, premises as make_premises
 
@@ -200,8 +200,7 @@ def _moves(lin, j, size=1e-2, count=24):
 def _midpoint(lo, hi, q, e):
     """(midpoint, half-width) of intervals, the half-width rounded up so that mid +- half holds [lo, hi];
     the a-priori q +- e where that is no wider (the printed bound never exceeds it)."""
-    mid = 0.5 * (lo + hi)
-    half = np.maximum(hi - mid, mid - lo) * (1 + 4 * guarantee.EPS) + 1e-300
+    mid, half = taylor.midrad(lo, hi)
     wider = half >= e
     return np.where(wider, q, mid), np.where(wider, e, half)
 

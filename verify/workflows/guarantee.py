@@ -394,7 +394,9 @@ class InformationSet:
         free = ~(np.isfinite(lo) & np.isfinite(hi))
         if free[list(targets)].any():
             raise ValueError(int(np.flatnonzero(free[list(targets)])[0]))
-        lo, hi = np.where(free, -1.0, lo), np.where(free, 1.0, hi)   # never a target: only holds the solve
+        # a column no row encloses is never a target (refused above); it gets the box |p| <= 1, a premise that
+        # binds nothing on the built-in stands (every parameter is bounded or enclosed there)
+        lo, hi = np.where(free, -1.0, lo), np.where(free, 1.0, hi)
         # w = R p - q0 + u, |u| <= shift: the rows A^T (R p + u) within y + A^T q0 +- s (its rounding in s)
         At = self.A.T
         base = At @ self.lin.q0

@@ -1,6 +1,8 @@
 """The block in any mounting Q: exact simulation, and recovery of its physical errors with bounds."""
 import numpy as np
 
+from ..solve import taylor
+
 PHYSICAL_KEYS = ("kappa", "dalpha_plus_astar", "epsilon")
 
 
@@ -37,12 +39,12 @@ def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None, q_box=N
     rows = [k for k, n in enumerate(names) if not (exact and n.startswith("Gamma"))]
     lo, hi = np.zeros(len(K)), np.zeros(len(K))
     lo[rows], hi[rows] = info.ranges(K[rows])
-    value = 0.5 * (lo + hi)
+    value, half = taylor.midrad(lo, hi)
     neglected = neglected or {}
     dg, db = neglected.get("Delta_g", 0.0), neglected.get("Delta_beta", 0.0)
     premised = (np.abs(K) @ np.broadcast_to(q_shift, K.shape[1]) + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
                 + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db)
-    bound = (np.maximum(hi - value, value - lo) * (1 + 1e-15) + premised) * (1 + 1e-15)
+    bound = (half + premised) * (1 + 1e-15)
     if exact:                                    # Gamma exactly (LQ), not through the linear split and its gap
         G, GB, GP = exact_gamma(remount, mount, *q_box, dg)
         for i in range(3):
@@ -99,9 +101,7 @@ def exact_gamma(remount, mount, q_lo, q_hi, u):
     whole = enclose(g_lo + [1 - u], g_hi + [1 + u])
     value, bound, premised = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
     for (i, j), w in zip([(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)], whole):
-        lo, hi = float(w.lo[0]), float(w.hi[0])
-        value[i, j] = 0.5 * (lo + hi)
-        bound[i, j] = max(hi - value[i, j], value[i, j] - lo) * (1 + 1e-15)
+        value[i, j], bound[i, j] = (float(x) for x in taylor.midrad(w.lo[0], w.hi[0]))
         # s alone moves L / s by at most |L| u / (1 - u): what no readings reduce
         premised[i, j] = min(abs(value[i, j] + (i == j)) * u / (1 - u), bound[i, j])
     return value, bound, premised
