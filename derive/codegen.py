@@ -226,18 +226,25 @@ def outputs():
     return out
 
 
-def write_files(files, root="."):
-    """Write {relative path: text} under root; returns the paths written, sorted."""
+def write(root=ROOT):
+    """Write every generated file under `root` (the repository's generated/ and docs/): each made beside
+    its name and renamed over it, so an interrupted run leaves the old file whole. Returns the paths."""
+    import os
+    import tempfile
+    files = outputs()
     for rel, text in files.items():
         path = Path(root) / rel
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+        try:
+            with os.fdopen(fd, "w") as fh:
+                fh.write(text)
+            os.chmod(tmp, 0o644)
+            os.replace(tmp, path)
+        except BaseException:
+            os.unlink(tmp)
+            raise
     return sorted(files)
-
-
-def write(root=ROOT):
-    """Write every generated file under `root` (only those whose text changed)."""
-    return write_files(outputs(), root)
 
 
 def drift(root=ROOT, files=None):

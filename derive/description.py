@@ -169,17 +169,20 @@ def _angle(path, where, a):
             _fail(path, f"{where}.detents_deg", f"{d} is outside the range [{lo}, {hi}]")
     return Angle(name, _text(path, f"{where}.latex", a.get("latex"), name),
                  _text(path, f"{where}.meaning", a.get("meaning"), f"{name}, as read"), (lo, hi), tuple(detents),
-                 _motion(path, f"{where}.speed_deg_s", a.get("speed_deg_s"), 1e4, "deg/s"),
-                 _motion(path, f"{where}.acceleration_deg_s2", a.get("acceleration_deg_s2"), 1e6, "deg/s^2"))
+                 _motion(path, f"{where}.speed_deg_s", a.get("speed_deg_s"), 1e4, "deg/s", 1e-3),
+                 _motion(path, f"{where}.acceleration_deg_s2", a.get("acceleration_deg_s2"), 1e6, "deg/s^2",
+                         1e-3))
 
 
-def _motion(path, where, value, most, unit):
-    """A speed, acceleration or time of the stand's motion (for `plan --route`): a number > 0 and below
+def _motion(path, where, value, most, unit, least=0.0):
+    """A speed, acceleration or time of the stand's motion (for `plan --route`): a number > `least` (at
+    least `least` when that is not 0: a speed of 1e-3 deg/s already takes 100 hours a turn) and below
     `most` in `unit`, or absent."""
     if value is None:
         return None
-    if not _is_number(value) or not 0 < value < most:
-        _fail(path, where, f"{_short(value)} is not a {unit} figure: give a number > 0 and < {most:g}")
+    if not _is_number(value) or not (least <= value if least else 0 < value) or not value < most:
+        _fail(path, where, f"{_short(value)} is not a {unit} figure: give a number "
+                           f"{f'>= {least:g}' if least else '> 0'} and < {most:g}")
     return float(value)
 
 

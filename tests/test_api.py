@@ -46,7 +46,7 @@ def test_estimate_takes_an_array_or_a_file_alike(tmp_path):
     assert from_file["q"] == pytest.approx(from_array["q"], rel=1e-12, abs=1e-15)
     with pytest.raises(garant.DataError, match=r"data: expected an array of shape \(N, 5\)"):
         garant.estimate("two-axis", np.zeros((4, 3)), 1e-5)
-    with pytest.raises(garant.DataError, match="sigma must be a finite number > 0"):
+    with pytest.raises(garant.DataError, match="sigma: -1.0 must be a finite number > 0"):
         garant.estimate("two-axis", np.column_stack([P, f]), -1.0)
 
 

@@ -5,9 +5,12 @@ as attributes, with numpy arrays, `to_dict()`, `to_json()` and a short repr; err
 DataError.
 """
 
-from . import models
+import os
+
+from . import models, options as checks
 from .errors import DataError
 from .io import results
+from .io.recordings import FORMATS, SENSORS
 from .workflows import jobs
 from .workflows.premises import G_DEFAULT
 
@@ -20,22 +23,46 @@ ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--stil
              "--max-candidates": "max_candidates", "--target": "target"}
 
 
-def _api_names(fn):
-    """Re-raise a DataError with each command option in its text replaced by the API's argument name."""
+#: The check of each argument (verify/options.py: the same function as the command's option type).
+CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravity, "g_uncertainty": checks.small,
+          "prior": checks.small, "grid": checks.positive, "target": checks.positive,
+          "count_seconds": checks.positive, "search_seconds": checks.positive, "max_candidates": checks.positive_int,
+          "window": checks.positive, "k": checks.positive, "min_still": checks.positive,
+          "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
+          "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
+          "trust_units": checks.flag, "diagnose": checks.flag}
+
+
+def _api(fn):
+    """The API's form of a job: each argument checked as the command checks its option (CHECKS), a
+    DataError's option names rewritten to the API's (ARGUMENTS), and the input files the result came
+    from remembered, so that `result.to_json(path)` never writes over one of them."""
     import functools
+    import inspect
     import re
+    signature = inspect.signature(fn)
 
     @functools.wraps(fn)
     def call(*args, **kwargs):
+        bound = signature.bind(*args, **kwargs)
+        for name, value in bound.arguments.items():
+            if name in CHECKS:
+                bound.arguments[name] = checks.check(name, value, CHECKS[name])
+            elif name == "imu" and value != "all":
+                bound.arguments[name] = checks.check(name, value, checks.positive_int)
         try:
-            return fn(*args, **kwargs)
+            out = fn(*bound.args, **bound.kwargs)
         except DataError as e:
             text = re.sub(r"--[a-z][a-z-]*", lambda m: ARGUMENTS.get(m.group(0), m.group(0)), str(e))
             raise DataError(text) from None
+        if isinstance(out, results.Result):
+            out._inputs = tuple(str(v) for v in bound.arguments.values()
+                               if isinstance(v, (str, os.PathLike)) and os.path.isfile(v))
+        return out
     return call
 
 
-@_api_names
+@_api
 def plan(model, grid=None, count_seconds=5.0, max_candidates=None, search_seconds=None):
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
     as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
@@ -49,7 +76,7 @@ def plan(model, grid=None, count_seconds=5.0, max_candidates=None, search_second
                                     search_seconds or SEARCH_SECONDS).to_dict())
 
 
-@_api_names
+@_api
 def positions(model_module, data):
     """Positions from a CSV path, a pandas DataFrame (columns as in the CSV) or an array (N, angles + 3):
     the stand's angles in degrees, then f1, f2, f3 in m/s^2 (and, for a stand with several mountings,
@@ -57,7 +84,7 @@ def positions(model_module, data):
     return jobs.positions_of(model_module, data)
 
 
-@_api_names
+@_api
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
              imu=None, which_run=None):
     """The verdict, q and guaranteed errors from positions, as `garant estimate --json` (the same
@@ -80,7 +107,7 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     return jobs.estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, imu, which_run)
 
 
-@_api_names
+@_api
 def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigma=None, imu=None, window=1.0,
                    k=10.0, min_still=2.0, diagnose=False):
     """Calibrate a static log through the norm relation (2.2) of 001, as `garant calibrate-norm --json`.
@@ -101,7 +128,7 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigm
     return jobs.calibrate_norm(log, g, params, fmt, sensor, imu, window, k, min_still, delta_sigma, diagnose)
 
 
-@_api_names
+@_api
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
                   search_seconds=None, max_candidates=None, mount=None, gamma="lower"):
     """The position to measure next, as `garant next --json` (the same function: workflows/jobs.py).
@@ -124,7 +151,7 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
                               max_candidates, mount, gamma)
 
 
-@_api_names
+@_api
 def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):
     """The missing-effect workflow on positions (a CSV path, a DataFrame or an array: see `positions`),
     as `garant diagnose --json`.
@@ -142,7 +169,7 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):
     return jobs.diagnose(model, data, sigma, g, prior, g_uncertainty)
 
 
-@_api_names
+@_api
 def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False):
     """Correct a raw log with a calibration, as `garant apply`.
 

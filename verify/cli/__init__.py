@@ -6,6 +6,7 @@ not pay for SymPy, cvxpy or matplotlib.
 import argparse
 import importlib
 import os
+import signal
 import sys
 import warnings
 
@@ -53,10 +54,14 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser(argv[0] if argv else None).parse_args(argv)
     warnings.simplefilter("ignore", RuntimeWarning)     # inputs are checked; a failure is one line
+    if hasattr(signal, "SIGXFSZ"):                     # `ulimit -f`: a write fails (one line), not the process
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    from ..io import files
     try:
         _check_paths(args)
         args.argv = argv                               # the command line, for the reports that reproduce it
-        return args.run(args)
+        with files.staged():                           # every output placed only if the command succeeds
+            return args.run(args)
     except LPFailed as e:
         print(f"garant: error: {_plain(e)}", file=sys.stderr)
         return 2
@@ -74,10 +79,9 @@ def main(argv=None):
         sys.stderr.close()
         return 0
     except OSError as e:
-        print(f"garant: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
+        print(f"garant: error: {(e.filename or 'a file') if e.strerror else ''}: {e.strerror or e}", file=sys.stderr)
         return 2
     finally:
-        from ..io import files
         files.check_inputs([])                         # the API after a command protects nothing stale
 
 

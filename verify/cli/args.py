@@ -1,7 +1,5 @@
 """Arguments several commands share, stated once with their units."""
-import argparse
-import math
-
+from .. import options as checks
 from ..models import STANDS
 from ..workflows.premises import G_DEFAULT
 
@@ -9,47 +7,10 @@ from ..workflows.premises import G_DEFAULT
 EXIT_INCONSISTENT = 3
 
 
-def positive(text):
-    """An argparse type: a finite number > 0 (nan, inf, 0 and negatives refused)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be a finite number > 0")
-    return value
-
-
-def positive_int(text):
-    """An argparse type: a whole number >= 1 written in decimal digits (at most 18 of them)."""
-    if not text.isdigit() or len(text) > 18 or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be a whole number >= 1 (at most 18 digits)")
-    return int(text)
-
-
-def seed(text):
-    """An argparse type: a random seed, a whole number >= 0 written in decimal digits (at most 18 of them)."""
-    if not text.isdigit() or len(text) > 18:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be a whole number >= 0 (at most 18 digits)")
-    return int(text)
-
-
-def gravity(text):
-    """An argparse type: gravity in m/s^2, between 0.1 and 100 (9.78-9.83 on the Earth's surface; 1 for
-    readings in units of g)."""
-    value = positive(text)
-    if not 0.1 <= value <= 100:
-        raise argparse.ArgumentTypeError(f"{text!r} must be a gravity in m/s^2 between 0.1 and 100 (9.78 to 9.83 "
-                                         "on the Earth's surface; 1 for readings in units of g)")
-    return value
-
-
-def rate(text):
-    """An argparse type: a sample rate in Hz, between 0.01 and 1e6."""
-    value = positive(text)
-    if not 0.01 <= value <= 1e6:
-        raise argparse.ArgumentTypeError(f"{text!r} must be a sample rate in Hz between 0.01 and 1e6")
-    return value
+#: The argparse types of the shared checks (verify/options.py: the API checks its arguments with the same).
+positive, small, noise, positive_int, seed, gravity, rate = (
+    checks.argtype(k) for k in (checks.positive, checks.small, checks.noise, checks.positive_int, checks.seed,
+                                checks.gravity, checks.rate))
 
 
 def model(p, *, positional=False):
@@ -63,7 +24,7 @@ def model(p, *, positional=False):
 
 def sigma(p, help_="bound on each residual component, dimensionless (units of g), (5) of 000"):
     """--sigma: the noise bound (5) of 000, dimensionless (units of g)."""
-    p.add_argument("--sigma", type=small, required=True, help=help_)
+    p.add_argument("--sigma", type=noise, required=True, help=help_)
 
 
 def g(p, help_="model gravity, m/s^2 (default 9.81)", default=G_DEFAULT):
@@ -74,15 +35,6 @@ def g(p, help_="model gravity, m/s^2 (default 9.81)", default=G_DEFAULT):
 def json(p):
     """--json FILE: the result as JSON too."""
     p.add_argument("--json", metavar="FILE", help="also write the result as JSON")
-
-
-def small(text):
-    """An argparse type: a bound of a small error, a finite number > 0 and < 1 (rad, dimensionless, units of
-    g, or m/s^2 for a count): a bound of 1 or more is no premise the linearised model can use."""
-    value = positive(text)
-    if value >= 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be < 1 (the bound of a small error)")
-    return value
 
 
 def units(p):

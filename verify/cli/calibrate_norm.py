@@ -21,7 +21,7 @@ def add(sub):
     p.add_argument("--still-factor", "--k", dest="k", type=options.positive, default=10.0,
                    help="still when the moving variance is below this factor times that of the first 5 s")
     p.add_argument("--min-still", type=options.positive, default=2.0, help="shortest still interval kept, s")
-    p.add_argument("--delta-sigma", type=options.small, metavar="D",
+    p.add_argument("--delta-sigma", type=options.noise, metavar="D",
                    help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; default: the "
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
@@ -197,9 +197,8 @@ def _report(res, args):
 
     import numpy as np
 
-    from ..io import plots, report
-    folder = Path(args.report)
-    folder.mkdir(parents=True, exist_ok=True)
+    from ..io import files, plots, report
+    folder = files.make_folder(args.report)
     plots.norm_residuals(res, folder / "residuals.png")
     rows = res["per_interval"]
     M, b = np.array(res["matrix"]), np.array(res["bias"])

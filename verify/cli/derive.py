@@ -17,13 +17,14 @@ def run(args):
     from garant.derive import codegen, description
 
     from .. import models
+    from ..io import report
     try:
         model = description.load(args.stand)
         t0 = time.perf_counter()
         files = codegen.model_files(model, module_dir=args.out, docs_dir=args.out)
     except description.DescriptionError as e:
         raise DataError(str(e)) from None
-    for rel in codegen.write_files(files):
+    for rel in report.write_files(files):
         print(f"wrote {rel}")
     mod = models.from_description(args.stand)
     print(f"{model.stand.title}: {len(model.parameters)} physical parameters, {len(mod.Q_NAMES)} "

@@ -58,12 +58,11 @@ def _plots(res, mod, args):
 
     import numpy as np
 
-    from ..io import report
-    from ..io import plots
+    from ..io import files, plots, report
     title = f"{args.data}: residuals of the minimax fit, " + ("consistent" if res["consistent"] else "INCONSISTENT")
     targets = [p for p in (args.plot, args.report and str(Path(args.report) / "residuals.png")) if p]
     if args.report:
-        Path(args.report).mkdir(parents=True, exist_ok=True)
+        files.make_folder(args.report)
     for path in targets:
         plots.residuals_by_angle(np.array(res["positions_deg"]), list(mod.ANGLES), res["residual_minimax"],
                                  args.sigma, path, title)

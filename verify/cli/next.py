@@ -40,11 +40,14 @@ def run(args):
     if args.json:
         report.write_json(args.json, res)
     _print(res)
-    if args.plot and not res["done"] and res["consistent"] is not False:
+    if args.plot:
         from ..io import plots
-        plots.bounds_before_after(res["names"], res["guaranteed_error_before"], res["guaranteed_error_after"],
+        state = ("done" if res["done"] else "the data refute sigma" if res["consistent"] is False else
+                 "next: " + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in res["next"]))
+        plots.bounds_before_after(res["names"], res["guaranteed_error_before"],
+                                  res["guaranteed_error_after"] if res["next"] is not None else None,
                                   res["target"], args.plot, f"{args.data}: {len(res['measured'])} position(s) measured, "
-                                  "next: " + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in res["next"]))
+                                  + state)
         print(f"wrote {args.plot}")
     if res["consistent"] is False:
         return options.EXIT_INCONSISTENT

@@ -37,10 +37,11 @@ def add(sub):
 def run(args):
     """`garant plan`: parse, call the job, print; the exit status."""
     if args.model == "norm":
-        given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates)) if v is not None]
+        given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates),
+                                    ("--route", args.route or None)) if v is not None]
         if given:
-            raise DataError(f"{' and '.join(given)} apply to a stand with angles; `plan norm` gives the orientations "
-                            "of 001 on the sphere (their certificates: garant verify --certificates DIR)")
+            raise DataError(f"{' and '.join(given)} {'apply' if len(given) > 1 else 'applies'} to a stand with angles; `plan norm` gives the orientations "
+                            "of 001 on the sphere, held by hand (their certificates: garant verify --certificates DIR)")
         return run_norm(args)
     from .. import models
     from ..io import report
@@ -144,10 +145,9 @@ def _certificates(mod, args, r, plan):
 
 def _write_certificates(mod, folder, certs):
     """Write the certificates built by `_certificates` and say which q have none."""
-    from pathlib import Path
-
+    from ..io import files
     from ..proof import check
-    Path(folder).mkdir(parents=True, exist_ok=True)
+    files.make_folder(folder)
     for path, _, cert in certs:
         check.write(cert, path)
     missing = [q for q in mod.Q_NAMES if q not in {q for _, q, _ in certs}]
@@ -178,6 +178,14 @@ def run_norm(args):
         report.write_text(args.csv, "n1,n2,n3\n" + "\n".join(",".join(f"{v:.17g}" for v in n)
                                                               for n in d["directions"]["12"]) + "\n")
         print(f"wrote {args.csv}")
+    if args.plot:
+        import numpy as np
+
+        from ..io import plots
+        U = np.array(d["directions"]["12"], float)
+        plots.plan_directions(U, args.plot, f"garant plan norm: the {len(U)} orientations optimal for all 12 "
+                                            "parameters (-gravity in sensor axes)")
+        print(f"wrote {args.plot}")
     return 0
 
 

@@ -99,7 +99,9 @@ def run(args):
         print(f"wrote {args.markdown}", file=sys.stderr)
     if args.report:
         from pathlib import Path
-        Path(args.report).mkdir(parents=True, exist_ok=True)
+
+        from ..io import files
+        files.make_folder(args.report)
         plots.repeatability(results, Path(args.report) / "runs.png")
         page = sections(results) + [("Each parameter per run with its bound; dashed: the envelope", report.Image("runs.png"))]
         print(f"wrote {report.write_page(args.report, _title(args), command, page, args.logs)}", file=sys.stderr)

@@ -129,7 +129,7 @@ def read(path):
     files.regular(path, "the calibration file", MAX_BYTES)
     try:
         with open(path, "rb") as fh:
-            data = json.loads(fh.read(MAX_BYTES).decode("utf-8"), parse_int=_int, parse_constant=_constant)
+            data = files.json_text(fh.read(MAX_BYTES).decode("utf-8"), parse_int=_int)
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     except (UnicodeDecodeError, ValueError, RecursionError) as e:
@@ -143,6 +143,9 @@ def checked(data, path="calibration"):
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise DataError(f"{path}: not a {FORMAT} file (its \"format\" must be \"{FORMAT}\")")
     data = json.loads(json.dumps(data, default=json_value))      # numpy arrays and numbers as JSON has them
+    where = _nan(data)
+    if where is not None:                                       # NaN passes every minimum and maximum
+        raise DataError(f"{path}: {where}: NaN is not a number a calibration may hold")
     schemas.validate(data, "calibration", path)
     out = dict(data)
     for key in ("M", "b", "bound_matrix", "bound_bias", "bound_delta", "pendulosity_axes"):
@@ -157,13 +160,21 @@ def checked(data, path="calibration"):
     return out
 
 
+def _nan(value, where=""):
+    """The place of the first NaN in a JSON value (e.g. "bound_bias[0]"), or None."""
+    if isinstance(value, float) and value != value:
+        return where or "the value"
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for k, v in items:
+        found = _nan(v, f"{where}.{k}" if isinstance(k, str) and where else k if isinstance(k, str) else f"{where}[{k}]")
+        if found is not None:
+            return found
+    return None
+
+
 def _int(text):
     """JSON integers: exact up to 18 digits, else a float (inf beyond 1e308; the schema refuses both)."""
     return int(text) if len(text.lstrip("-")) <= 18 else float(text)
-
-
-def _constant(name):
-    raise ValueError(f"{name} is not a number JSON allows")
 
 
 def _short(e):

@@ -1,14 +1,27 @@
-"""Which paths a command may read and write: inputs are regular files within a size, outputs never name
-an input, a device, a FIFO or each other. Checked before any work, so a command that fails writes nothing
-and no command ever writes over what it reads (symlinks resolved: the same device and inode)."""
+"""Which paths a command may read and write, and the one writer of every output.
+
+Inputs are regular files within a size; outputs never name an input, a device, a FIFO, a symbolic link or
+each other, and no file output lies inside a folder output. All are checked before any work. `write` makes
+each file beside its name (flushed to disk) and renames it over the name only when the whole command has
+succeeded (`staged`), so a command that fails writes nothing and leaves every old file as it was, no
+command writes over what it reads (the same device and inode: hard links and symlinks alike), and none
+writes through or replaces a link, even one planted in an output folder during the run."""
+import contextlib
 import os
 import stat
+import tempfile
 from pathlib import Path
 
 from ..errors import DataError
 
 #: (device, inode) of every input of the running command: the writers refuse to replace them.
 _INPUTS = set()
+#: The outputs of the running command (None outside `staged`): path -> its complete temporary file.
+_STAGED = None
+#: Output folders made by the running command (removed again, when empty, if it fails).
+_MADE = []
+#: Output folders checked or made -> their (device, inode): a folder swapped during the run is refused.
+_FOLDERS = {}
 
 
 def _kind(mode):
@@ -54,6 +67,24 @@ def header_line(fh, path):
     return line
 
 
+def json_text(text, parse_int=None):
+    """Strict JSON of a user's file: a key given twice in one object, NaN and Infinity refused (ValueError
+    naming it), never silently one of two values or a number no comparison can bound."""
+    import json
+
+    def unique(pairs):
+        seen = set()
+        for k, _ in pairs:
+            if k in seen:
+                raise ValueError(f"the key {k[:60]!r} appears twice in one object")
+            seen.add(k)
+        return dict(pairs)
+
+    def constant(name):
+        raise ValueError(f"{name} is not a number JSON allows")
+    return json.loads(text, parse_int=parse_int, parse_constant=constant, object_pairs_hook=unique)
+
+
 def _identity(path):
     try:
         st = os.stat(path)
@@ -79,18 +110,29 @@ def check_inputs(paths):
 
 def check_outputs(outputs):
     """Each (path, what, 'file' or 'folder') before any work: a file's folder exists and is writable, the
-    name has no trailing slash, it is not an input, a device, a FIFO or a folder, and no two outputs
-    name the same file; a folder can be made."""
+    name has no trailing slash, it is not an input, a link, a device, a FIFO or a folder, no two outputs
+    name the same file and none lies inside an output folder (where the folder's own files could take its
+    name); a folder can be made."""
     seen = {}
+    folders = [(os.path.realpath(path), path, what) for path, what, kind in outputs if kind == "folder"]
+    for i, (real, path, what) in enumerate(folders):
+        _check_folder(path, what)
+        for real2, path2, what2 in folders[:i]:
+            if _within(real, real2) or _within(real2, real):
+                raise DataError(f"{path}: {what} and {what2} ({path2}) overlap; give each its own folder")
     for path, what, kind in outputs:
         if kind == "folder":
-            _check_folder(path, what)
             continue
         text = str(path)
         if text.endswith(("/", os.sep)):
             raise DataError(f"{text}: {what} is a file name; remove the trailing slash")
         p = Path(path)
         parent = p.parent if str(p.parent) else Path(".")
+        for real, folder, folder_what in folders:
+            if _within(os.path.realpath(p), real):
+                raise DataError(f"{p}: {what} lies inside {folder_what} ({folder}), whose files could take its "
+                                "name; write it elsewhere")
+        _refuse_link(p, what)
         if os.path.lexists(p):
             st = os.stat(p) if p.exists() else None
             if st is not None and not stat.S_ISREG(st.st_mode):
@@ -105,6 +147,17 @@ def check_outputs(outputs):
         if key in seen:
             raise DataError(f"{p}: {what} and {seen[key]} name the same file; give each its own")
         seen[key] = what
+
+
+def _within(path, folder):
+    """True when the real path `path` is `folder` or lies under it."""
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def _refuse_link(path, what="the output"):
+    if os.path.islink(path):
+        raise DataError(f"{path}: {what} is a symbolic link; garant neither writes through a link nor replaces one: "
+                        "remove it or choose another name")
 
 
 def _can_create(folder):
@@ -127,6 +180,20 @@ def _check_folder(path, what):
         up = os.path.dirname(up)
     if not os.path.isdir(up) or not os.access(up, os.W_OK):
         raise DataError(f"{path}: {what} cannot be made: {up} is not a writable folder")
+    if os.path.isdir(path):
+        for entry in os.scandir(path):             # what the folder's writers could replace, file by file
+            if not entry.name.endswith(FOLDER_OUTPUTS):
+                continue
+            if entry.is_symlink():
+                raise DataError(f"{entry.path}: a symbolic link in {what}; garant neither writes through a link "
+                                "nor replaces one: remove it or choose another folder")
+            if _identity(entry.path) in _INPUTS:
+                raise DataError(f"{entry.path}: an input of this command lies in {what}, where an output could "
+                                "take its name; choose another folder")
+
+
+#: The endings of the files an output folder receives (reports, plots, generated modules, certificates).
+FOLDER_OUTPUTS = (".md", ".html", ".png", ".py", ".json")
 
 
 def refuse_input(path):
@@ -134,3 +201,124 @@ def refuse_input(path):
     replaces a file: a folder output may hold an input of the same name)."""
     if _identity(path) in _INPUTS:
         raise DataError(f"{path}: would be written over an input of this command; nothing written there")
+
+
+def make_folder(path):
+    """An output folder, made with its parents if missing (and removed again if the command fails); a
+    folder given as a symbolic link is followed once, here, and the folder it names is the one written to."""
+    path = Path(path)
+    missing = [p for p in [path, *path.parents] if not os.path.lexists(p)]
+    path.mkdir(parents=True, exist_ok=True)
+    if _STAGED is not None:
+        _MADE.extend(missing)                       # deepest first: removed in this order
+    st = os.stat(path)
+    if not stat.S_ISDIR(st.st_mode):
+        raise DataError(f"{path}: an output folder must be a folder, not {_kind(st.st_mode)}")
+    _FOLDERS[os.path.abspath(path)] = (st.st_dev, st.st_ino)
+    return path
+
+
+def _check_place(path):
+    """Before a file is made or renamed into place: not a link, not an input, and its folder the one
+    checked when the command began (a folder swapped for a link during the run is refused)."""
+    _refuse_link(path)
+    refuse_input(path)
+    folder = os.path.abspath(path.parent if str(path.parent) else ".")
+    if folder in _FOLDERS and _identity_nofollow(folder) != _FOLDERS[folder]:
+        raise DataError(f"{path.parent}: the output folder changed during the run (replaced or made a link); "
+                        "nothing written there")
+
+
+def _identity_nofollow(path):
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino) if stat.S_ISDIR(st.st_mode) else None
+
+
+def _umask():
+    """The process's umask (read by setting it, then restoring it)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write(path, chunks, mode="wb"):
+    """Write the pieces `chunks` yields (text or bytes, as `mode` says) as the file `path`: made beside it,
+    flushed to disk, then renamed over it (at once, or when the command succeeds inside `staged`). The file
+    gets the permissions open() would give it (0666 less the umask), not the temporary file's 0600. A
+    write that fails (a full disk, `ulimit -f`) leaves the old file as it was."""
+    path = Path(path)
+    _check_place(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",
+                               suffix=".part")
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+        with os.fdopen(fd, mode) as fh:
+            for chunk in chunks:
+                fh.write(chunk)
+            fh.flush()
+            os.fsync(fh.fileno())
+    except OSError as e:
+        os.unlink(tmp)
+        raise DataError(f"{path}: cannot be written ({e.strerror}); the old file, if any, is unchanged") from None
+    except BaseException:
+        os.unlink(tmp)
+        raise
+    if _STAGED is None:
+        _place(tmp, path)
+        return
+    old = _STAGED.pop(path, None)
+    if old is not None:
+        os.unlink(old)
+    _STAGED[path] = tmp
+
+
+def written(path):
+    """The bytes of an output written by this command (still staged, or in place)."""
+    path = Path(path)
+    source = _STAGED.get(path, path) if _STAGED is not None else path
+    with open(source, "rb") as fh:
+        return fh.read()
+
+
+def _place(tmp, path):
+    try:
+        _check_place(path)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def staged():
+    """The outputs of one command: each `write` is held complete beside its name and renamed into place
+    only when the block ends without an exception; otherwise every one is removed (and the folders the
+    command made, when empty), so a command that fails writes nothing."""
+    global _STAGED
+    _STAGED, _MADE[:], before = {}, [], dict(_FOLDERS)
+    try:
+        yield
+        pending = list(_STAGED.items())
+        _STAGED = None
+        for i, (path, tmp) in enumerate(pending):
+            try:
+                _place(tmp, path)
+            except BaseException:
+                for _, rest in pending[i + 1:]:
+                    os.unlink(rest)
+                raise
+    except BaseException:
+        for tmp in (_STAGED or {}).values():
+            os.unlink(tmp)
+        for folder in _MADE:
+            with contextlib.suppress(OSError):
+                os.rmdir(folder)
+        raise
+    finally:
+        _STAGED = None
+        _MADE.clear()
+        _FOLDERS.clear()
+        _FOLDERS.update(before)

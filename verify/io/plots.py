@@ -5,12 +5,20 @@ import numpy as np
 from .report import save_figure
 
 
+def _pyplot():
+    """matplotlib's pyplot, drawing off-screen, with text drawn as written: a `$...$` in a title (a file
+    name) is never read as mathtext, which a hostile name could make recurse without end."""
+    import matplotlib
+    matplotlib.use("Agg")
+    matplotlib.rcParams["text.parse_math"] = False
+    import matplotlib.pyplot as plt
+    return plt
+
+
 def residuals_by_angle(angles_deg, names, residual, sigma, path, title):
     """One panel per stand angle: the three residual components (units of sigma) against the angle as
     read, with the +-sigma band."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     r = np.asarray(residual, float) / sigma
     fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names), 3.6), squeeze=False)
     for ax, k, name in zip(axes[0], range(len(names)), names):
@@ -31,9 +39,7 @@ def residuals_by_angle(angles_deg, names, residual, sigma, path, title):
 def residuals_by_direction(n, residual_ms2, noise_ms2, path, title):
     """The norm residual of each still interval against the direction of gravity in sensor axes
     (elevation and azimuth), with each interval's noise bound."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     n = np.asarray(n, float)
     elevation = np.degrees(np.arcsin(np.clip(n[2], -1, 1)))
     azimuth = np.degrees(np.arctan2(n[1], n[0]))
@@ -55,9 +61,7 @@ def residuals_by_direction(n, residual_ms2, noise_ms2, path, title):
 def norm_residuals(result, path):
     """PNG of the norm residual per still interval: before (the starting map) and after the
     calibration, each at its own scale, with the noise bound band after."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     rows = result["per_interval"]
     k = np.arange(1, len(rows) + 1)
     g = result["g"]
@@ -86,9 +90,7 @@ def norm_residuals(result, path):
 def diagnosis(res, path, title):
     """Residuals of the minimax fit before and after the effects are added, each panel at its own
     scale, against the position (three components each), with +-sigma and the proven remainder."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     s = res["sigma"]
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     added = "with " + (", ".join(res["effects"]) if res["effects"] else "no effect added")
@@ -112,9 +114,7 @@ def diagnosis(res, path, title):
 def repeatability(results, path):
     """PNG: each parameter per run with its guaranteed bound, and the envelope band; one colour per
     sensor when several are given (results: {label: run() output})."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     first = next(iter(results.values()))
     names = first["parameters"]
     cols = 3
@@ -147,9 +147,7 @@ def repeatability(results, path):
 def realised_plan(s, path):
     """PNG: guaranteed error (units of sigma) against the position error, (23) vs the LP optimum: the rows
     of nearby.sweep (miss in degrees, (23) mean and worst, LP mean and worst)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     ax.plot(s[:, 0], s[:, 2], "o-", color="C1", label="estimator (23), worst of 20 plans")
     ax.plot(s[:, 0], s[:, 1], "o--", color="C1", alpha=0.6, label="estimator (23), mean")
@@ -176,9 +174,7 @@ def plan_directions(U, path, title):
     """PNG: the up-direction in block axes at each position of a plan (U: (S, 3) unit vectors, in the
     plan's order), as arrows on the unit sphere and on the two hemispheres seen from outside (equal-area),
     each labelled with its number and the face of the block nearest to pointing up."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     U = np.asarray(U, float)
     groups = {}                                        # positions with one up-direction share a label
     for k, u in enumerate(U, 1):
@@ -221,17 +217,17 @@ def plan_directions(U, path, title):
 
 def bounds_before_after(q_names, before, after, target, path, title):
     """PNG: each q's guaranteed error over its target before the next position and after it (log scale),
-    the target at 1; a q without an estimator yet drawn at the top, hatched."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    the target at 1; a q without an estimator yet drawn at the top, hatched; `after` None: no next position
+    (done, or the data refute sigma), the errors now alone."""
+    plt = _pyplot()
     t = np.asarray(target, float)
-    ratios = [np.asarray([np.inf if v is None else v for v in x], float) / t for x in (before, after)]
+    bars = [(-0.2, before, "C3", "now"), (0.2, after, "C0", "after the next position")] if after else [(0, before, "C3", "now")]
+    ratios = [np.asarray([np.inf if v is None else v for v in x], float) / t for _, x, _, _ in bars]
     finite = np.concatenate([r[np.isfinite(r)] for r in ratios])
     top = 2 * max(finite.max() if finite.size else 1.0, 1.0)
     fig, ax = plt.subplots(figsize=(max(6, 0.55 * len(q_names)), 4))
     x = np.arange(len(q_names))
-    for shift, r, colour, label in ((-0.2, ratios[0], "C3", "now"), (0.2, ratios[1], "C0", "after the next position")):
+    for (shift, _, colour, label), r in zip(bars, ratios):
         none = ~np.isfinite(r)
         if (~none).any():
             ax.bar(x[~none] + shift, r[~none], 0.4, color=colour, label=label)

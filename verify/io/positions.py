@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import DataError
+from ..options import real_array
 from . import files
 
 
@@ -129,8 +130,15 @@ def _lines(path, chunk=1 << 24):
     return n
 
 
+#: The largest angle as read, degrees (ten turns): a stand's encoder reads within a turn or a few.
+MAX_DEGREES = 3600.0
+
+
 def _check_degrees(path, angle_cols, pos):
     for c, v in zip(angle_cols, pos.angles_deg.T):
+        if len(v) and np.abs(v).max() > MAX_DEGREES:
+            raise DataError(f"{path}: column {c} holds {v[np.argmax(np.abs(v))]:g} degrees, beyond ten turns "
+                            f"(+-{MAX_DEGREES:g}); an angle as read lies within a turn or a few")
         if len(v) > 2 and np.abs(v).max() <= 2 * math.pi + 1e-9 and np.any(np.abs(v) > 1e-9):
             raise DataError(f"{path}: column {c} lies within +-2pi ({v.min():g} to {v.max():g}): "
                             "these look like radians; the column is in degrees")
@@ -207,20 +215,22 @@ def from_columns(data, names, mounts):
         missing = [c for c in cols + (["mount"] * multi) if c not in data.columns]
         if missing:
             raise DataError(f"data: missing column(s) {', '.join(missing)}")
-        values = np.column_stack([np.asarray(data[c], float) for c in cols])
+        values = np.column_stack([real_array(data[c], f"data: column {c}") for c in cols])
         m = None if not multi else np.array([mounts.index(v) if v in mounts else -1 for v in data["mount"]])
     else:
-        try:
-            arr = np.asarray(data, float)
-        except (TypeError, ValueError):
-            raise DataError("data: expected a CSV path, a DataFrame or an array of numbers") from None
+        arr = real_array(data, "data")
         width = len(cols) + multi
         if arr.ndim != 2 or arr.shape[1] != width:
             raise DataError(f"data: expected an array of shape (N, {width}): {', '.join(cols)}"
                             + (", mounting index" if multi else "") + f"; got shape {arr.shape}")
-        values, m = arr[:, :len(cols)], (arr[:, -1].astype(int) if multi else None)
+        values, m = arr[:, :len(cols)], (arr[:, -1] if multi else None)
     if not np.all(np.isfinite(values)):
         raise DataError("data: every angle and reading must be a finite number")
+    if m is not None and not np.all(m == np.round(m)):
+        raise DataError("data: a mounting index must be a whole number")
+    m = None if m is None else np.asarray(m, float).astype(int)
     if m is not None and (np.any(m < 0) or np.any(m >= len(mounts))):
         raise DataError(f"data: a mounting is not one of the stand's ({', '.join(mounts)})")
-    return Positions("data", values[:, :len(names)], values[:, len(names):], m)
+    pos = Positions("data", values[:, :len(names)], values[:, len(names):], m)
+    _check_degrees("data", cols[:len(names)], pos)
+    return pos

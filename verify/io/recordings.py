@@ -1,4 +1,5 @@
 """Raw accelerometer logs: reading the supported formats and finding the still intervals."""
+import os
 import warnings
 from typing import NamedTuple      # loaded with numpy anyway; dataclasses would add inspect to a small log's run
 
@@ -98,10 +99,17 @@ def _load(path, delimiter, usecols, skip):
 def _load_npy(path):
     """A NumPy .npy array of shape (N, 4), float: t (s), x, y, z (binary: no text parsing, for large logs).
     Never unpickled: an object array is refused like any other file that is not numbers."""
+    fmt = np.lib.format
     try:
+        with open(path, "rb") as fh:               # the header first: its shape must fit the file's bytes
+            version = fmt.read_magic(fh)
+            shape, _, dtype = (fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0)(fh)
+            room = os.fstat(fh.fileno()).st_size - fh.tell()
+        if len(shape) != 2 or not all(0 <= n <= 2 ** 40 for n in shape) or shape[0] * shape[1] * dtype.itemsize > room:
+            raise ValueError(f"its header says shape {str(shape)[:60]}, which the file's bytes do not hold")
         data = np.load(path, mmap_mode="r", allow_pickle=False)
-    except ValueError as e:
-        raise DataError(f"{path}: not a NumPy array of numbers ({e})") from None
+    except (ValueError, OverflowError, TypeError) as e:
+        raise DataError(f"{path}: not a NumPy array of numbers ({str(e)[:200]})") from None
     if data.ndim != 2 or data.shape[1] != 4 or data.dtype.kind not in "fiu":
         raise DataError(f"{path}: a .npy log must be an array of numbers of shape (N, 4): t (s), x, y, z; "
                         f"this one is {data.dtype} of shape {data.shape}")

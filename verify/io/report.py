@@ -1,8 +1,6 @@
 """Plain-text tables and JSON files for the command line; every file is written whole or not at all."""
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 from ..errors import DataError
@@ -50,34 +48,24 @@ def json_value(x):
     raise TypeError(f"{type(x).__name__} is not JSON serialisable")
 
 
-def _umask():
-    """The process's umask (read by setting it, then restoring it)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def write_text(path, text, mode="w"):
-    """Write a file atomically: a temporary file beside it, renamed over it when complete. The file gets
-    the permissions open() would give it (0666 less the umask), not the temporary file's 0600."""
-    write_chunks(path, [text], mode)
+    """Write a file whole or not at all (io/files.py: beside it, then renamed; never through a link)."""
+    files.write(path, [text], mode)
 
 
 def write_chunks(path, chunks, mode="wb"):
-    """Write the pieces `chunks` yields (text or bytes, as `mode` says) into one file, atomically as
-    write_text: a large output is made piece by piece, never whole in memory."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".part")
-    try:
-        os.fchmod(fd, 0o666 & ~_umask())
-        with os.fdopen(fd, mode) as fh:
-            for chunk in chunks:
-                fh.write(chunk)
-        files.refuse_input(path)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    """Write the pieces `chunks` yields into one file, as write_text: a large output is made piece by
+    piece, never whole in memory."""
+    files.write(path, chunks, mode)
+
+
+def write_files(texts):
+    """Write {path: text} (a generated module and its report), each folder made and each file written as
+    write_text; returns the paths, sorted."""
+    for path, text in texts.items():
+        files.make_folder(Path(path).parent)
+        write_text(path, text)
+    return sorted(texts)
 
 
 def save_figure(fig, path):
@@ -117,8 +105,7 @@ def write_page(folder, title, command, sections, inputs=()):
     sections, a body being text (with **bold**), a Table or an Image; the HTML is one self-contained file
     (plots embedded, no request to the network, A4 print styles) that also states garant's version and
     the SHA-256 of each input file. Returns the path of index.html."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = files.make_folder(folder)
     write_text(folder / "report.md", markdown_page(title, command, sections))
     write_text(folder / "index.html", _html(folder, title, command, sections, inputs))
     return folder / "index.html"
@@ -175,14 +162,14 @@ def _html(folder, title, command, sections, inputs):
                        + "".join("<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
                        + "</table>")
         elif isinstance(body, Image):
-            data = base64.b64encode((folder / body).read_bytes()).decode()
+            data = base64.b64encode(files.written(folder / body)).decode()
             out.append(f'<img alt="{escape(Path(body).stem)}" src="data:image/png;base64,{data}">')
         else:
             out.append(f"<p>{bold(body)}</p>")
-    files = [(p, hashlib.sha256(Path(p).read_bytes()).hexdigest()) for p in inputs if Path(p).is_file()]
+    digests = [(p, hashlib.sha256(Path(p).read_bytes()).hexdigest()) for p in inputs if Path(p).is_file()]
     out.append(f"<h2>Provenance</h2><p>garant {escape(__version__)}</p>"
                + ("<table><tr><th>input</th><th>SHA-256</th></tr>" + "".join(
-                   f"<tr><td>{escape(str(p))}</td><td><code>{h}</code></td></tr>" for p, h in files) + "</table>"
-                  if files else ""))
+                   f"<tr><td>{escape(str(p))}</td><td><code>{h}</code></td></tr>" for p, h in digests) + "</table>"
+                  if digests else ""))
     out.append("</body></html>")
     return "\n".join(out) + "\n"

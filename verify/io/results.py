@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 
+from . import files
 from .report import json_value, write_text
 
 
@@ -27,6 +28,8 @@ class Result(dict):
     """A result: its keys are also attributes; FIELDS documents them (name: meaning and unit)."""
 
     FIELDS = {}
+    #: The input files the result was computed from (set by the API): `to_json` never writes over one.
+    _inputs = ()
 
     def __getattr__(self, name):
         try:
@@ -46,7 +49,12 @@ class Result(dict):
         text = json.dumps(self, default=json_value, indent=1) + "\n"
         if path is None:
             return text
-        write_text(path, text)
+        files.check_inputs(self._inputs)
+        try:
+            files.check_outputs([(path, "the JSON output", "file")])
+            write_text(path, text)
+        finally:
+            files.check_inputs([])
         return None
 
     def __repr__(self):
@@ -138,7 +146,7 @@ class NextPosition(Result):
               "guaranteed_error_after": "per q, once the next position is measured, units of q",
               "target": "per q, units of q", "target_source": "where the target comes from",
               "measured": "the distinct positions measured so far", "angles": "the stand's angle names",
-              "consistent": "whether the data so far are "
-              "consistent with sigma (None while some q has no estimator)",
+              "consistent": "whether the data so far are consistent with sigma (None while some q has no estimator, "
+                            "unless readings repeated at one position already refute it)",
               "bounds_from": "what guaranteed_error_before is: estimate's printed bounds on the readings so far "
                              "(done is decided on them), or the nominal optimal estimators before an estimate"}

@@ -2,6 +2,7 @@
 from pathlib import Path
 
 from .. import models
+from ..io import files
 from ..proof import build, check
 from ..proof.reference import MODELS
 from .row import Check
@@ -11,7 +12,7 @@ def certificates(write_dir=None):
     """Re-check the committed certificate of every optimal value of the built-in models, independently
     of the solvers that built them (verify/proof/certificates/; `python -m verify.proof` rebuilds them)."""
     if write_dir:
-        Path(write_dir).mkdir(parents=True, exist_ok=True)
+        files.make_folder(write_dir)
     for name in MODELS:
         mod = models.load(name)
         done = set()

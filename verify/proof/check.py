@@ -32,7 +32,7 @@ ETA = 1e-9
 FORMAT = "garant-certificate-1"
 MAX_ITEMS = 10_000           # rows, entries, primal terms, dual entries
 MAX_BOX_ANGLES = 4           # interval branch and bound starts from 8^n boxes
-MAX_BYTES = 50_000_000
+MAX_BYTES = 2_000_000
 
 
 class MalformedCertificate(ValueError):
@@ -508,7 +508,7 @@ def read(path):
     if len(data) > MAX_BYTES:
         raise MalformedCertificate(f"larger than {MAX_BYTES} bytes")
     try:
-        cert = json.loads(data.decode("utf-8"), parse_int=_json_int)
+        cert = files.json_text(data.decode("utf-8"), parse_int=_json_int)
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MalformedCertificate(f"not JSON ({e})") from None
     except ValueError as e:

@@ -14,7 +14,7 @@ import re
 
 import sympy as sp
 
-MAX_CHARS = 20_000
+MAX_CHARS = 2_000
 MAX_DIGITS = 40
 MAX_DEPTH = 40
 MAX_EXPONENT = 16
@@ -78,23 +78,23 @@ class _Parser:
         return out
 
     def expr(self):
-        """expr := term (('+' | '-') term)*"""
-        value = self.term()
+        """expr := term (('+' | '-') term)*, summed once (a long sum costs its length, not its square)"""
+        terms = [self.term()]
         while self.peek() in (("op", "+"), ("op", "-")):
             sign = self.take()[1]
-            value = value + self.term() if sign == "+" else value - self.term()
-        return value
+            terms.append(self.term() if sign == "+" else -self.term())
+        return sp.Add(*terms) if len(terms) > 1 else terms[0]
 
     def term(self):
-        """term := unary (('*' | '/') unary)*"""
-        value = self.unary()
+        """term := unary (('*' | '/') unary)*, multiplied once"""
+        factors = [self.unary()]
         while self.peek() in (("op", "*"), ("op", "/")):
             op = self.take()[1]
             rhs = self.unary()
             if op == "/" and rhs == 0:
                 raise ParseError(f"division by zero in {self.text[:60]!r}")
-            value = value * rhs if op == "*" else value / rhs
-        return value
+            factors.append(rhs if op == "*" else 1 / rhs)
+        return sp.Mul(*factors) if len(factors) > 1 else factors[0]
 
     def unary(self):
         """unary := '-' unary | power"""
@@ -175,4 +175,23 @@ def exact(text, symbols=()):
         raise ParseError(f"unexpected {p.toks[p.k][1]!r} in {text[:60]!r}")
     if value.is_number and value.is_real is False:
         raise ParseError(f"{text[:60]!r} is not a real number")
+    _in_field(value, text)
     return value
+
+
+#: The radicands a certificate's numbers may hold: garant certifies in Q(sqrt2, sqrt3) (multiples of 15
+#: degrees), where exact comparisons are quick; any other root (nested, cubic, of a large prime) is refused
+#: before a comparison could take unbounded time.
+RADICANDS = (2, 3, 6)
+
+
+def _in_field(value, text):
+    """ParseError unless every root in `value` is sqrt(2), sqrt(3) or sqrt(6) and every sine or cosine has
+    an angle symbol in its argument (a sine of a number SymPy cannot write in radicals is refused)."""
+    for p in value.atoms(sp.Pow):
+        if not p.exp.is_Integer and not (abs(p.exp) == sp.Rational(1, 2) and p.base in RADICANDS):
+            raise ParseError(f"{text[:60]!r}: the root {str(p)[:40]} is not sqrt(2), sqrt(3) or sqrt(6) (certificates "
+                             "hold numbers of Q(sqrt2, sqrt3))")
+    for f in value.atoms(sp.sin, sp.cos):
+        if f.args[0].is_number:
+            raise ParseError(f"{text[:60]!r}: {str(f)[:40]} is not a number of Q(sqrt2, sqrt3)")

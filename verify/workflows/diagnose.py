@@ -271,4 +271,6 @@ def effect_estimates(study, chosen, A, noise):
 def write_module(study, chosen, directory):
     """The extended model's generated module and report, written to `directory`."""
     from garant.derive import codegen
-    return codegen.write_files(codegen.model_files(study.model(chosen), str(directory), str(directory)))
+
+    from ..io import report
+    return report.write_files(codegen.model_files(study.model(chosen), str(directory), str(directory)))

@@ -8,6 +8,7 @@ import numpy as np
 
 from .. import models
 from ..errors import DataError
+from ..options import real_array
 from ..io import results
 from .premises import G_DEFAULT, premises as make_premises
 
@@ -94,10 +95,7 @@ def _log(log, fmt, sensor, imu):
     from ..io import recordings
     if isinstance(log, (str, bytes)) or hasattr(log, "__fspath__"):
         return recordings.read_log(log, fmt, sensor or "adxl355", imu)
-    try:
-        arr = np.asarray(log, float)
-    except (TypeError, ValueError):
-        raise DataError("log: expected a path or an array of numbers (N, 4): time in s, x, y, z") from None
+    arr = real_array(log, "log")
     if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) < recordings.MIN_SAMPLES:
         raise DataError(f"log: expected an array of shape (N, 4), N >= {recordings.MIN_SAMPLES}: time in s, x, y, z; "
                         f"got shape {arr.shape}")
@@ -118,8 +116,8 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     pos = positions_of(mod, data, empty_ok=True)
     mounts = pos.mounts if pos.mounts is not None else np.zeros(len(pos.angles_deg), int)
     verdict, printed = None, None
-    if len(pos.angles_deg) and not lp.unidentifiable(
-            lp.measurement_matrix(mod, np.deg2rad(pos.angles_deg), pos.mounts)):    # every q has an estimator
+    if len(pos.angles_deg) and (_repeats_refute(pos, sigma, g) or not lp.unidentifiable(
+            lp.measurement_matrix(mod, np.deg2rad(pos.angles_deg), pos.mounts))):    # a verdict is possible
         verdict = estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma)
     floor = None
     if verdict is not None and verdict["consistent"]:
@@ -130,8 +128,16 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     out["bounds_from"] = ("estimate on the readings so far (what `garant estimate` prints)" if printed is not None
                           else "the plan's optimal estimators at nominal H (no estimate yet)")
     if verdict is not None and not verdict["consistent"]:
-        out["disagreements"] = verdict.get("disagreements")
+        out["disagreements"] = verdict.get("disagreements") or verdict.get("repeated_disagree")
+        out["next"] = None                           # no position helps until the cause is found
     return out
+
+
+def _repeats_refute(pos, sigma, g):
+    """Whether readings repeated at one position already refute sigma (no estimator needed for that)."""
+    from .estimate import distinct_positions, repeated_disagree
+    distinct, spread = distinct_positions(pos)
+    return len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g)) > 0
 
 
 def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):

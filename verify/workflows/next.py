@@ -199,15 +199,24 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
 
 def _with_measured(P, M, measured, mounts):
     """The candidates with the measured positions among them (appended where the grid lacks one), and
-    the indices of the measured ones."""
-    fixed = []
+    the indices of the measured ones (a position matches a candidate to 1e-7 degree: one look-up each)."""
+    def key(x, k):
+        return (*np.round(np.asarray(x, float), 7).tolist(), int(k))
+    index = {}
+    for i, (x, k) in enumerate(zip(P, M)):
+        index.setdefault(key(x, k), i)
+    fixed, seen, extra = [], set(), []
     for x, k in zip(measured, mounts):
-        hit = np.flatnonzero(np.all(np.abs(P - x) < 1e-9, axis=1) & (M == k))
-        if not len(hit):
-            P, M = np.vstack([P, x[None]]), np.r_[M, k]
-            hit = [len(P) - 1]
-        if int(hit[0]) not in fixed:
-            fixed.append(int(hit[0]))
+        hit = index.get(key(x, k))
+        if hit is None:
+            hit = index[key(x, k)] = len(P) + len(extra)
+            extra.append((x, k))
+        if hit not in seen:
+            seen.add(hit)
+            fixed.append(hit)
+    if extra:
+        P = np.vstack([P, np.array([x for x, _ in extra], float)])
+        M = np.r_[M, np.array([k for _, k in extra], M.dtype if len(M) else int)]
     return P, M, fixed
 
 

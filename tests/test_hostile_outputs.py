@@ -1,0 +1,292 @@
+"""Hostile inputs, round three (issue 42): one writer for every output (never through a link, never over
+an input, nothing left by a failing command), the API checking its arguments as the command checks its
+options, and the silent, hanging and traceback cases of the round, each one line and exit status 2."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_hostile import _calibration, _log_file, _plan_rows, _positions, refused, run
+
+import garant
+from garant.derive.builtin import STANDS_DIR
+from garant.verify.cli import main
+from garant.verify.io import files
+
+
+def _untouched(paths):
+    return {Path(p): Path(p).read_bytes() for p in paths}
+
+
+# ---------------------------------------------------------------- outputs: links, inputs, collisions
+
+@pytest.mark.parametrize("make", ["data named as the module", "symlink", "hard link"])
+def test_a_report_folder_never_replaces_an_input_or_follows_a_link(tmp_path, capsys, make, monkeypatch):
+    # Issue 42: diagnose --report wrote the generated module two_axis.py in place, over the data file of
+    # that name, through a symlink or a hard link to the data: refused now before any work, data unchanged.
+    monkeypatch.chdir(tmp_path)
+    data = _positions(tmp_path)
+    if make == "data named as the module":
+        data = data.rename(tmp_path / "two_axis.py")
+        folder, words = ".", "an input of this command lies in the report folder"
+    else:
+        folder = "rep"
+        (tmp_path / "rep").mkdir()
+        if make == "symlink":
+            (tmp_path / "rep" / "two_axis.py").symlink_to(data)
+            words = "a symbolic link in the report folder"
+        else:
+            os.link(data, tmp_path / "rep" / "two_axis.py")
+            words = "an input of this command lies in the report folder"
+    before = _untouched([data])
+    refused(["diagnose", "--model", "two-axis", data.name, "--sigma", "1e-5", "--report", folder], capsys, words)
+    assert _untouched([data]) == before
+
+
+def test_derive_never_writes_over_its_description_through_a_hard_link(tmp_path, capsys):
+    # Issue 42: `derive s.toml --out out` with out/single_axis.py hard-linked to s.toml replaced it.
+    stand = tmp_path / "s.toml"
+    stand.write_text((STANDS_DIR / "single_axis.toml").read_text())
+    (tmp_path / "out").mkdir()
+    os.link(stand, tmp_path / "out" / "single_axis.py")
+    before = _untouched([stand])
+    refused(["derive", stand, "--out", tmp_path / "out"], capsys, "an input of this command")
+    assert _untouched([stand]) == before
+
+
+def test_an_output_that_is_a_link_is_refused_even_one_to_standard_output(tmp_path, capsys):
+    # Issue 42: --json dev/stdout, dev/stdout a link to /proc/self/fd/1, replaced the link.
+    data = _positions(tmp_path)
+    (tmp_path / "dev").mkdir()
+    (tmp_path / "dev" / "stdout").symlink_to("/proc/self/fd/1")
+    refused(["estimate", "--model", "two-axis", data, "--sigma", "1e-5", "--json", tmp_path / "dev" / "stdout"],
+            capsys, "is a symbolic link")
+    assert (tmp_path / "dev" / "stdout").is_symlink()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["diagnose", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--report", "{t}/rep", "--json",
+      "{t}/rep/index.html"], "lies inside the report folder"),
+    (["plan", "two-axis", "--certificates", "{t}/c", "--json", "{t}/c/two-axis_plan_q1.json"],
+     "lies inside the certificate folder"),
+    (["verify", "--certificates", "{t}/certs", "--json", "{t}/certs/two-axis_q1.json"],
+     "lies inside the certificate folder"),
+    (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--report", "{t}/rep", "--plot",
+      "{t}/rep/residuals.png"], "lies inside the report folder"),
+])
+def test_two_outputs_of_one_command_never_collide(tmp_path, capsys, argv, words):
+    # Issue 42: an output inside another's folder was overwritten by the folder's own file, exit 0.
+    data = _positions(tmp_path)
+    for sub in ("rep", "c", "certs"):
+        (tmp_path / sub).mkdir()
+    refused([a.format(t=tmp_path, data=data) for a in argv], capsys, words)
+    assert not any(any((tmp_path / sub).iterdir()) for sub in ("rep", "c", "certs"))
+
+
+def test_a_folder_swapped_for_a_link_during_the_run_is_not_written_through(tmp_path):
+    # Issue 42: swapping rep/ for a symlink while the command ran sent the report elsewhere.
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    with pytest.raises(garant.DataError, match="changed during the run"):
+        with files.staged():
+            folder = files.make_folder(tmp_path / "rep")
+            folder.rmdir()
+            folder.symlink_to(elsewhere)
+            files.write(folder / "report.md", ["text"], "w")
+    assert not any(elsewhere.iterdir())
+
+
+def test_a_result_never_writes_over_the_file_it_was_computed_from(tmp_path):
+    # Issue 42: garant.estimate(...).to_json("d.csv") replaced the data; the result remembers its inputs.
+    data = _positions(tmp_path)
+    before = _untouched([data])
+    res = garant.estimate("two-axis", str(data), 1e-5)
+    with pytest.raises(garant.DataError, match="over an input"):
+        res.to_json(str(data))
+    assert _untouched([data]) == before
+    res.to_json(tmp_path / "r.json")
+    assert json.loads((tmp_path / "r.json").read_text())["consistent"] is True
+
+
+# ---------------------------------------------------------------- a failing command writes nothing
+
+def test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one(tmp_path, capsys, monkeypatch):
+    # Issue 42: estimate wrote r.json and residuals.png, then failed on the report, leaving them (and the
+    # report folder) behind. Now each output is held complete beside its name until the command succeeds.
+    from garant.verify.io import report
+    data = _positions(tmp_path)
+    (tmp_path / "r.json").write_text("old\n")
+
+    def broken(*args, **kwargs):
+        raise garant.DataError("the report failed")
+    monkeypatch.setattr(report, "write_page", broken)
+    refused(["estimate", "--model", "two-axis", data, "--sigma", "1e-5", "--json", tmp_path / "r.json", "--plot",
+             tmp_path / "p.png", "--report", tmp_path / "rep"], capsys, "the report failed")
+    assert (tmp_path / "r.json").read_text() == "old\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv", "r.json"]     # no p.png, rep/, .part
+
+
+def test_a_write_past_ulimit_f_keeps_the_old_file(tmp_path):
+    # Issue 42: `ulimit -f` truncated an output in place (and killed the process with SIGXFSZ).
+    import resource
+    data = _positions(tmp_path)
+    out = tmp_path / "r.json"
+    out.write_text("old\n")
+    limit = lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048))      # noqa: E731
+    r = subprocess.run([sys.executable, "-c", "import sys; from garant.verify.cli import main; sys.exit(main())",
+                        "estimate", "--model", "two-axis", str(data),
+                        "--sigma", "1e-5", "--json", str(out)], capture_output=True, text=True, preexec_fn=limit,
+                       env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"})
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "r.json: cannot be written (File too large)" in r.stderr
+    assert out.read_text() == "old\n" and sorted(p.name for p in tmp_path.iterdir()) == ["d.csv", "r.json"]
+
+
+# ---------------------------------------------------------------- calibration files
+
+def test_a_calibration_with_a_key_twice_is_refused(tmp_path, capsys):
+    # Issue 42: duplicate keys were accepted, the last one winning.
+    text = json.dumps(_calibration(tmp_path))
+    path = tmp_path / "c.json"
+    path.write_text(text.replace('"g": 9.81', '"g": 9.81, "g": 1.0'))
+    refused(["apply", path, _log_file(tmp_path), "-o", tmp_path / "o.csv"], capsys,
+            "the key 'g' appears twice in one object", outputs=[tmp_path / "o.csv"])
+
+
+def test_nan_in_a_calibrations_bounds_is_refused_by_name(tmp_path):
+    # Issue 42: NaN passed the schema (it compares false against minimum and maximum) and gave NaN bounds.
+    cal = _calibration(tmp_path)
+    cal["bound_bias"][1] = float("nan")
+    t = np.arange(3000) * 0.01
+    with pytest.raises(garant.DataError, match=r"bound_bias\[1\]: NaN"):
+        garant.apply(cal, np.column_stack([t, np.zeros((3000, 2)), np.full(3000, 9.81)]))
+
+
+# ---------------------------------------------------------------- the API checks as the command does
+
+_P, _F = _plan_rows()
+_DATA = np.column_stack([_P, _F])
+_LOG = np.column_stack([np.arange(3000) * 0.01, np.zeros((3000, 2)), np.full(3000, 9.81)])
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: garant.estimate("two-axis", _DATA.astype(complex), 1e-5), "complex numbers are not readings"),
+    (lambda: garant.estimate("two-axis", _DATA.astype(object).tolist()[:3] + [[0, 0, "x", 0, 9.81]], 1e-5),
+     "every value must be a real number"),
+    (lambda: garant.estimate("two-axis", _DATA, float("nan")), "sigma: nan must be a finite number > 0"),
+    (lambda: garant.estimate("two-axis", _DATA, -1e-5), "sigma: -1e-05 must be a finite number > 0"),
+    (lambda: garant.estimate("two-axis", _DATA, "1e-5"), "sigma: must be a number, not the text '1e-5'"),
+    (lambda: garant.estimate("two-axis", _DATA, True), "sigma: must be a real number, not bool"),
+    (lambda: garant.estimate("two-axis", _DATA, 5e-324), "sigma: 5e-324 must be at least 1e-12"),
+    (lambda: garant.estimate("two-axis", _DATA, 1e-5, g_uncertainty=float("nan")), "g_uncertainty: nan"),
+    (lambda: garant.estimate("two-axis", _DATA, 1e-5, prior=2), "prior: 2 must be < 1"),
+    (lambda: garant.estimate("two-axis", _DATA, 1e-5, gamma="x"), "gamma: 'x' is not one of lower, symmetric"),
+    (lambda: garant.estimate("two-axis", _DATA[:0], 1e-5), "0 distinct positions cannot identify"),
+    (lambda: garant.plan("two-axis", count_seconds=float("nan")), "count_seconds: nan"),
+    (lambda: garant.plan("two-axis", search_seconds=-1), "search_seconds: -1 must be a finite number > 0"),
+    (lambda: garant.plan("two-axis", grid=30, max_candidates=0), "max_candidates: 0 must be a whole number >= 1"),
+    (lambda: garant.plan("two-axis", grid=5e-324), "more than 1e18 positions"),
+    (lambda: garant.next_position("two-axis", _DATA[:10], 1e-5, grid=2), "over the limit of 10,000"),
+    (lambda: garant.calibrate_norm(_LOG, window=float("nan")), "window: nan must be a finite number > 0"),
+    (lambda: garant.calibrate_norm(_LOG, delta_sigma=float("nan")), "delta_sigma: nan"),
+    (lambda: garant.calibrate_norm(_LOG, sensor="../../etc"), "sensor: '../../etc' is not one of"),
+    (lambda: garant.calibrate_norm(_LOG, params=7), "params: 7 is not one of 9, 12"),
+    (lambda: garant.apply({}, _LOG, sensor="../../etc"), "sensor: '../../etc' is not one of"),
+])
+def test_the_api_refuses_what_the_command_refuses_with_a_data_error(call, words):
+    # Issue 42: the API accepted complex arrays (imaginary part dropped), NaN or negative sigma and
+    # seconds, max_candidates=0, a sensor "../../etc", sigma as text, and ended in TypeError,
+    # ZeroDivisionError or a hang; the same check (verify/options.py) now serves the option and the argument.
+    with pytest.raises(garant.DataError, match=words.replace("(", r"\(").replace(")", r"\)")
+                       .replace("[", r"\[").replace("]", r"\]")):
+        call()
+
+
+# ---------------------------------------------------------------- silent, hanging and traceback cases
+
+def test_a_route_at_a_speed_of_5e_324_is_refused(tmp_path, capsys):
+    # Issue 42: a speed of 5e-324 deg/s gave a 1-position route and "total 0 s".
+    text = (STANDS_DIR / "two_axis.toml").read_text().replace("[[angle]]\n", "[[angle]]\nspeed_deg_s = 5e-324\n", 1)
+    (tmp_path / "s.toml").write_text(text)
+    refused(["plan", tmp_path / "s.toml", "--route"], capsys, "speed_deg_s: 5e-324 is not a deg/s figure")
+
+
+def test_plan_norm_draws_its_plot_and_refuses_a_route(tmp_path, capsys):
+    # Issue 42: `plan norm --route --plot` ignored both options.
+    refused(["plan", "norm", "--route"], capsys, "--route applies to a stand with angles")
+    assert main(["plan", "norm", "--plot", str(tmp_path / "n.png")]) == 0
+    assert (tmp_path / "n.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_next_draws_its_plot_when_done(tmp_path, capsys):
+    # Issue 42: `next` at "done" ignored --plot.
+    data = _positions(tmp_path)
+    assert main(["next", "--model", "two-axis", str(data), "--sigma", "1e-5", "--target", "1",
+                 "--plot", str(tmp_path / "n.png")]) == 0
+    assert "done" in capsys.readouterr().out
+    assert (tmp_path / "n.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_next_stops_when_repeated_readings_already_refute_sigma(tmp_path, capsys):
+    # Issue 42: readings repeated 2000 sigma apart, before every q has an estimator, still gave a position.
+    P, f = _plan_rows()
+    rows = np.column_stack([P[:5], f[:5]])
+    rows = np.vstack([rows, rows[:1] + [0, 0, 0, 0, 2000 * 1e-5 * 9.81]])
+    data = tmp_path / "d.csv"
+    np.savetxt(data, rows, delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="")
+    code, _ = run(["next", "--model", "two-axis", data, "--sigma", "1e-5", "--json", tmp_path / "n.json"], capsys)
+    res = json.loads((tmp_path / "n.json").read_text())
+    assert code == 3 and res["consistent"] is False and res["next"] is None
+
+
+def test_next_finds_20000_measured_positions_among_the_candidates_in_one_pass():
+    # Issue 42: `next` on 20,000 positions ran past 30 s: each measured position was looked for by a scan
+    # of every candidate and appended one vstack at a time. Now one look-up each (workflows/next.py).
+    from garant.verify.workflows.next import _with_measured
+    grid = np.array([(a, b) for a in np.arange(0, 360, 2.5) for b in np.arange(0, 360, 2.5)])
+    measured = np.vstack([grid[::2], [[1.25, 1.25], [1.25, 1.25]]])
+    P, M, fixed = _with_measured(grid, np.zeros(len(grid), int), measured, np.zeros(len(measured), int))
+    assert len(P) == len(grid) + 1 and fixed[:3] == [0, 2, 4] and fixed[-1] == len(grid)
+    assert len(fixed) == len(set(fixed)) == len(grid[::2]) + 1
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["plan", "two-axis", "--grid", "5e-324"], "more than 1e18 positions"),
+    (["next", "--model", "two-axis", "{huge}", "--sigma", "1e-5"], "alpha_deg holds 1e+300 degrees"),
+    (["calibrate-norm", "{npy}"], "which the file's bytes do not hold"),
+    (["check-certificate", "{radical}"], "the root sqrt(5) is not sqrt(2), sqrt(3) or sqrt(6)"),
+    (["check-certificate", "{sine}"], "sin(1) is not a number of Q(sqrt2, sqrt3)"),
+])
+def test_each_case_of_round_three_is_one_line(tmp_path, capsys, argv, words):
+    # Issue 42: OverflowError (a 5e-324 grid; a .npy header with a 30-digit dimension), a hang (sigma
+    # 5e-324), AssertionError (an angle of 1e300), a certificate with heavy radicals checked for 30 s.
+    data = _positions(tmp_path)
+    (tmp_path / "huge.csv").write_text("alpha_deg,beta_deg,f1,f2,f3\n1e300,0,0,0,9.81\n")
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': (100000000000000000000000000000, 4), }"
+    header += " " * (118 - len(header)) + "\n"
+    (tmp_path / "x.npy").write_bytes(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode())
+    cert = json.loads(next(Path(garant.__file__).parent.glob("verify/proof/certificates/two-axis_q1.json"))
+                      .read_text())
+    for name, value in (("radical", "sqrt(5)"), ("sine", "sin(1)")):
+        (tmp_path / f"{name}.json").write_text(json.dumps({**cert, "value": value}))
+    refused([a.format(data=data, huge=tmp_path / "huge.csv", npy=tmp_path / "x.npy", radical=tmp_path / "radical.json",
+                      sine=tmp_path / "sine.json") for a in argv], capsys, words)
+
+
+def test_a_noise_bound_below_what_doubles_resolve_is_refused(tmp_path, capsys):
+    # Issue 42: `estimate --sigma 5e-324` hung; the floor is options.SIGMA_MIN (1e-12 of g).
+    with pytest.raises(SystemExit) as e:
+        main(["estimate", "--model", "two-axis", str(_positions(tmp_path)), "--sigma", "5e-324"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1 and "'5e-324' must be at least 1e-12" in err
+
+
+def test_a_file_name_of_nested_mathtext_draws_as_written(tmp_path, capsys):
+    # Issue 42: a file name with nested $\sqrt{...}$ ended every plot in RecursionError.
+    name = "a$" + "\\sqrt{" * 30 + "x" + "}" * 30 + "$.csv"
+    data = _positions(tmp_path).rename(tmp_path / name)
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--plot", str(tmp_path / "p.png")]) == 0
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
