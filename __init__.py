@@ -7,7 +7,7 @@
 The names below are the notebook API (docs/api.md); each is imported on first use, so
 `import garant` is light.
 """
-from importlib import import_module
+from importlib import import_module as _import_module
 
 __version__ = "0.1.0"
 
@@ -24,8 +24,13 @@ _API = {
 __all__ = list(_API)
 
 
+def __dir__():
+    """The API beside the module's own names: what `dir(garant)` and tab completion show."""
+    return sorted(set(globals()) | set(_API))
+
+
 def __getattr__(name):
     if name not in _API:
         raise AttributeError(f"module 'garant' has no attribute {name!r}")
     module, attr = _API[name]
-    return getattr(import_module(module), attr)
+    return getattr(_import_module(module), attr)

@@ -247,6 +247,11 @@ def _angles(path, data):
     return angles
 
 
+#: The units a stand parameter may state: the model computes angles in rad and other errors as
+#: dimensionless numbers; a unit such as mrad would only relabel a value computed in rad.
+UNITS = ("rad", "1")
+
+
 def _parameters(path, data, angles):
     """The [[parameter]] tables, names unique among parameters and angles."""
     params = []
@@ -256,8 +261,12 @@ def _parameters(path, data, angles):
         pname = _new_name(path, f"{where}.name", p.get("name"))
         if pname in {q.name for q in params} or pname in {a.name for a in angles}:
             _fail(path, f"{where}.name", f"{pname!r} is declared twice")
-        params.append(Parameter(pname, _text(path, f"{where}.latex", p.get("latex"), pname),
-                                _text(path, f"{where}.unit", p.get("unit"), "rad"),
+        unit = _text(path, f"{where}.unit", p.get("unit"), "rad")
+        if unit not in UNITS:
+            _fail(path, f"{where}.unit", f"{unit!r} is not a unit the model computes in: give one of "
+                                         f"{', '.join(map(repr, UNITS))} (an angle in rad, a dimensionless error "
+                                         "in 1; no other unit is converted)")
+        params.append(Parameter(pname, _text(path, f"{where}.latex", p.get("latex"), pname), unit,
                                 _text(path, f"{where}.meaning", p.get("meaning"), pname),
                                 _bound(path, f"{where}.bound", p.get("bound"))))
     return params

@@ -47,8 +47,10 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     old_unit = 'unit = "rad"\nmeaning = "encoder offset (read - true)"'
     old_title = 'title = "Single-axis indexing table, block in three mountings"'
     assert old_unit in BASE and old_title in BASE
-    meaning, title = 'a """ b \\ end\\', 'Tri"""ple \\ quoted """'
-    text = BASE.replace(old_unit, f"unit = {json.dumps(HOSTILE_UNIT)}\nmeaning = {json.dumps(meaning)}", 1)
+    title = 'Tri"""ple \\ quoted """'
+    # a unit is one of a whitelist (issue 43), so the hostile text goes where free text may: the meaning
+    hostile = HOSTILE_UNIT + ' a """ b end'
+    text = BASE.replace(old_unit, 'unit = "rad"\nmeaning = ' + json.dumps(hostile), 1)
     text = text.replace(old_title, f"title = {json.dumps(title)}", 1)
     (tmp_path / "s.toml").write_text(text)
     code, err = run(["derive", "s.toml", "--out", "out"], capsys, limit_s=60)
@@ -57,8 +59,8 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     from garant.verify import models
     mod = models.load(str(tmp_path / "s.toml"))
     assert not (tmp_path / "pwned").exists()
-    units = dict((n, u) for n, u, _ in mod.PARAMETERS)
-    assert units["Delta_phi"] == HOSTILE_UNIT                       # a string, round-tripped
+    meanings = dict((n, m) for n, _, m in mod.PARAMETERS)
+    assert meanings["Delta_phi"] == hostile                         # a string, round-tripped
     assert 'Tri"""ple \\ quoted' in mod.__doc__
 
 
@@ -73,6 +75,7 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     ('title = "Single-axis indexing table, block in three mountings"', 'title = "two\\nlines"', "stand.title"),
     ('name = "phi"', 'name = "lambda"', "reserved"),
     ('name = "phi"', 'name = "None"', "reserved"),
+    ('unit = "rad"', f"unit = {json.dumps(HOSTILE_UNIT)}", "is not a unit the model computes in"),
     ('name = "phi"', 'name = "time_s"', "reserved"),
     ('name = "kappa"', 'name = "Gamma11"', "reserved"),
     ('detents_deg = [0, 90, 180, 270]', 'detents_deg = [1e-300, 90, 180, 270]', "to at most 6 decimals"),
@@ -312,7 +315,7 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
     (["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--seed", "-1", "-o", "{tmp}/d.csv"],
      "--seed: '-1' must be a whole number >= 0"),
     (["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--size", "1e308", "-o",
-      "{tmp}/d.csv"], "--size: '1e308' must be < 1"),
+      "{tmp}/d.csv"], "--size: the bound '1e308' must be a number >= 0 and < 1"),
     (["simulate", "--model", "two-axis", "--plan", "grid:0.0009765625", "--sigma", "1e-5", "-o", "{tmp}/d.csv"],
      "--plan grid:0.0009765625 has 1.36e+11 positions, over the limit of 1,000,000"),
     (["plan", "two-axis", "--grid", "0.0009765625", "--json", "{tmp}/p.json"],

@@ -112,8 +112,12 @@ def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path,
     assert np.all(np.abs(q - models.q_of(mod, p)) <= e)
     p[mod.PARAMETER_NAMES.index("kappa")] = 5e-3
     data = write_csv(tmp_path / "d.csv", P, readings(mod, P, None, p, 0.0))
+    # --prior 6e-3 bounds Gamma21 (2e-2) too: the readings refute it (issue 43) and name q9 and its parameters
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81",
-                 "--prior", "6e-3", "--json", str(out)]) == 0
+                 "--prior", "6e-3"]) == 3
+    assert "q9 = Gamma21 + Delta_beta - theta3 = +2.49" in capsys.readouterr().out
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81", "--prior", "6e-3",
+                 "--bound", "Gamma12=3e-2", "--bound", "Gamma21=3e-2", "--json", str(out)]) == 0
     d = json.loads(out.read_text())
     q = np.array([d["q"][n] for n in mod.Q_NAMES])
     e = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
@@ -343,16 +347,17 @@ def _single_axis_csv(path, mod, p):
 
 
 def test_an_estimate_that_contradicts_the_premises_says_so_instead_of_a_block(tmp_path, capsys):
-    # The table's tilt kappa at 5e-4 against its stated bound of 1e-4: the readings fit (exit 0), but no unit
-    # within the a-priori bounds has q within the guaranteed errors, so the block's calibration is refused
-    # with that reason (it once said "unbounded"), in the JSON and the text; kappa at 5e-5 gives the block.
+    # The table's tilt kappa at 5e-4 against its stated bound of 1e-4: the readings fit, but put q1 = kappa
+    # beyond it, so no bound is guaranteed and no block is calibrated: the premise is named with its source
+    # and how to widen it, exit 3 (issue 43; it once said "unbounded", then "contradict a premise" without a
+    # name); kappa at 5e-5 gives the block.
     mod = models.load("single-axis")
     for kappa, block in ((5e-4, False), (5e-5, True)):
         p = np.zeros(len(mod.PARAMETER_NAMES))
         p[mod.PARAMETER_NAMES.index("kappa")] = kappa
         data, out = _single_axis_csv(tmp_path / "d.csv", mod, p), tmp_path / "e.json"
         assert main(["estimate", "--model", "single-axis", str(data), "--sigma", "1e-5", "--g", "9.81",
-                     "--json", str(out)]) == 0
+                     "--json", str(out)]) == (0 if block else 3)
         d, text = json.loads(out.read_text()), capsys.readouterr().out
-        assert ("block" in d) == block and ("contradict a premise" in d.get("block_not_separated", "")) != block
-        assert ("the block: no unit within the a-priori bounds" in text) != block
+        assert ("block" in d) == block and bool(d["premises_refuted"]) != block
+        assert ("|kappa| <= 0.0001 (stand description)" in text and "--bound kappa=" in text) != block

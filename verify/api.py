@@ -12,7 +12,6 @@ from .errors import DataError
 from .io import results
 from .io.recordings import FORMATS, SENSORS
 from .workflows import jobs
-from .workflows.premises import G_DEFAULT
 
 
 #: The commands' options by the API's argument names: an error raised below names what the caller wrote.
@@ -20,7 +19,7 @@ ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--stil
              "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
              "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid",
              "--search-seconds": "search_seconds", "--count-seconds": "count_seconds",
-             "--max-candidates": "max_candidates", "--target": "target"}
+             "--max-candidates": "max_candidates", "--target": "target", "--bound": "bound"}
 
 
 #: The check of each argument (verify/options.py: the same function as the command's option type).
@@ -30,7 +29,7 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "window": checks.positive, "k": checks.positive, "min_still": checks.positive,
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
-          "trust_units": checks.flag, "diagnose": checks.flag}
+          "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds}
 
 
 def _api(fn):
@@ -86,7 +85,7 @@ def positions(model_module, data):
 
 @_api
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None):
+             imu=None, which_run=None, bound=None):
     """The verdict, q and guaranteed errors from positions, as `garant estimate --json` (the same
     function: workflows/jobs.py).
 
@@ -97,25 +96,30 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     sigma : the noise bound (5) of 000, dimensionless (units of g).
     g : local gravity, m/s^2 (None: 9.81, with the uncertainty of an assumed g).
     g_uncertainty : the bound on Delta_g/g. prior : one a-priori bound for every stand, mounting and block
-        error (an override of the description's bounds). mount : a mounting like "+y+z+x" (two-axis):
-        also the block's physical errors, (28)-(29) of 000. gamma : "lower" or "symmetric", (29).
+        error (an override of the description's bounds). bound : {parameter: a-priori bound} (rad or
+        dimensionless), over the description's and `prior`, as --bound NAME=VALUE. mount : a mounting like
+        "+y+z+x" (two-axis): also the block's physical errors, (28)-(29) of 000. gamma : "lower" or
+        "symmetric", (29).
 
     Returns
     -------
-    Estimate; its "premises" say what the bounds assume.
+    Estimate; its "premises" say what the bounds assume, and "premises_refuted" lists each q the readings
+    put beyond what those a-priori bounds allow (then no bound is guaranteed and no calibration given).
     """
-    return jobs.estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, imu, which_run)
+    return jobs.estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, imu, which_run, bound=bound)
 
 
 @_api
-def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigma=None, imu=None, window=1.0,
-                   k=10.0, min_still=2.0, diagnose=False):
+def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, delta_sigma=None, imu=None, window=1.0,
+                   k=10.0, min_still=2.0, diagnose=False, g_uncertainty=None):
     """Calibrate a static log through the norm relation (2.2) of 001, as `garant calibrate-norm --json`.
 
     Parameters
     ----------
     log : a log path (formats of docs/formats.md) or an array (N, 4): time in s, then x, y, z raw.
-    g : local gravity, m/s^2. params : 9 (scale, misalignment, bias) or 12 (also the nonlinearity).
+    g : local gravity, m/s^2 (None: 9.81 assumed, |Delta_g/g| <= 5e-3 in the calibration's bounds).
+    g_uncertainty : the bound on |Delta_g/g| (default 1e-5 with g, 5e-3 without).
+    params : 9 (scale, misalignment, bias) or 12 (also the nonlinearity).
     fmt, sensor, imu : the log's format, an OpenAXES accelerometer, an IMU of a multi-IMU stream.
     delta_sigma : a guaranteed bound on |delta_sigma| of (2.2), units of g (None: the noise rule).
     window, k, min_still : still when the moving variance over `window` s is below k times the first
@@ -125,12 +129,13 @@ def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, delta_sigm
     -------
     NormCalibration; when consistent its "calibration" is the dictionary `apply` takes.
     """
-    return jobs.calibrate_norm(log, g, params, fmt, sensor, imu, window, k, min_still, delta_sigma, diagnose)
+    return jobs.calibrate_norm(log, g, params, fmt, sensor, imu, window, k, min_still, delta_sigma, diagnose,
+                               g_uncertainty)
 
 
 @_api
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
-                  search_seconds=None, max_candidates=None, mount=None, gamma="lower"):
+                  search_seconds=None, max_candidates=None, mount=None, gamma="lower", bound=None):
     """The position to measure next, as `garant next --json` (the same function: workflows/jobs.py).
 
     Parameters
@@ -139,7 +144,7 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     header alone at the start, a DataFrame or an array (0 or more rows): see `positions`). sigma : the
     noise bound (units of g). target : the guaranteed error wanted for every q (units of q); None: sigma
     times the stand's optimal errors. grid : candidate step in degrees (at most `max_candidates`
-    positions; None: the command's default). g, g_uncertainty, prior : the
+    positions; None: the command's default). g, g_uncertainty, prior, bound : the
     premises of the verdict on the data, as in `estimate`. mount, gamma : target the block's parameters
     in this mounting ((28)-(29) of 000, two-axis) instead of the q's, as `estimate --mount`.
 
@@ -148,25 +153,25 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     NextPosition: `next` (None when `done`), `still_needed`, the errors before and after.
     """
     return jobs.next_position(model, data, sigma, target, grid, g, g_uncertainty, prior, search_seconds,
-                              max_candidates, mount, gamma)
+                              max_candidates, mount, gamma, bound)
 
 
 @_api
-def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):
+def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=None):
     """The missing-effect workflow on positions (a CSV path, a DataFrame or an array: see `positions`),
     as `garant diagnose --json`.
 
     Parameters
     ----------
     model : a built-in stand's name or a STAND.toml. data : positions. sigma : the noise bound (units of g).
-    g : gravity, m/s^2 (None: 9.81 with the uncertainty of an assumed g). prior, g_uncertainty : premises as in
-    `estimate`.
+    g : gravity, m/s^2 (None: 9.81 with the uncertainty of an assumed g). prior, g_uncertainty, bound : premises
+    as in `estimate`.
 
     Returns
     -------
     Diagnosis.
     """
-    return jobs.diagnose(model, data, sigma, g, prior, g_uncertainty)
+    return jobs.diagnose(model, data, sigma, g, prior, g_uncertainty, bound)
 
 
 @_api

@@ -236,10 +236,11 @@ def layout(mod):
     return list(mod.ANGLES), list(getattr(mod, "MOUNTINGS", ("+x+y+z",)))
 
 
-def H_at(mod, angles_rad, mounts=None):
-    """H at positions: angles (S, n_angles) in radians, mounts (S,) indices -> (3, m, S)."""
+def H_at(mod, angles_rad, mounts=None, variables=()):
+    """H at positions: angles (S, n_angles) in radians, mounts (S,) indices, and the values (S,) of the
+    model's VARIABLES (time, temperature) -> (3, m, S)."""
     angles_rad = np.atleast_2d(np.asarray(angles_rad, float))
-    cols = [angles_rad[:, i] for i in range(angles_rad.shape[1])]
+    cols = [angles_rad[:, i] for i in range(angles_rad.shape[1])] + [np.asarray(v, float) for v in variables]
     if hasattr(mod, "MOUNTINGS"):
         return mod.H(*cols, mount=np.zeros(len(angles_rad), int) if mounts is None else np.asarray(mounts))
     return mod.H(*cols)

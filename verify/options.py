@@ -148,6 +148,16 @@ def real_array(value, what):
     return arr.astype(float)
 
 
+def bounds(value):
+    """A-priori bounds by parameter name ({"kappa": 3e-4}): each a small error (the --bound NAME=VALUE)."""
+    if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+        raise Bad(f"{_shown(value)} must be a dictionary of parameter names and bounds, e.g. {{'kappa': 3e-4}}")
+    try:
+        return {k: small(v) for k, v in value.items()}
+    except Bad as e:
+        raise Bad(f"a bound {e}") from None
+
+
 def check(name, value, kind):
     """The API's check of argument `name`: `kind` (one of the checks above) or DataError naming it; None
     passes (the default)."""

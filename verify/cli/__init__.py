@@ -4,6 +4,7 @@ A command module imports what its work needs inside `run`, so `garant --help` an
 not pay for SymPy, cvxpy or matplotlib.
 """
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -41,7 +42,9 @@ class _Parser(argparse.ArgumentParser):
 
 def parser(only=None):
     """The argument parser: every subcommand, or only the one named (its module alone is imported)."""
+    from garant import __version__
     ap = _Parser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
+    ap.add_argument("--version", action="version", version=f"garant {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
     for name in ([only] if only in COMMANDS else COMMANDS):
         command = importlib.import_module(f".{COMMANDS[name]}", __name__)
@@ -60,7 +63,7 @@ def main(argv=None):
     try:
         _check_paths(args)
         args.argv = argv                               # the command line, for the reports that reproduce it
-        with files.staged():                           # every output placed only if the command succeeds
+        with files.staged(), _reader_may_stop():       # every output placed only if the command succeeds
             return args.run(args)
     except LPFailed as e:
         print(f"garant: error: {_plain(e)}", file=sys.stderr)
@@ -75,7 +78,7 @@ def main(argv=None):
     except KeyboardInterrupt:                          # Ctrl-C: outputs are written atomically, none half
         print("garant: interrupted; no output was written after the interruption", file=sys.stderr)
         return 130
-    except BrokenPipeError:                            # output piped into a reader that stopped (head)
+    except BrokenPipeError:                            # (flushing at exit, after the command)
         sys.stderr.close()
         return 0
     except OSError as e:
@@ -83,6 +86,46 @@ def main(argv=None):
         return 2
     finally:
         files.check_inputs([])                         # the API after a command protects nothing stale
+
+
+class _Output:
+    """Standard output that, once its reader stops (`garant ... | head`), drops what is printed after: the
+    command still finishes its work and writes its files."""
+
+    def __init__(self, stream):
+        self.stream, self.stopped = stream, False
+
+    def write(self, text):
+        """Write to the stream while its reader reads; afterwards, drop the text."""
+        if not self.stopped:
+            try:
+                return self.stream.write(text)
+            except BrokenPipeError:
+                self.stopped = True
+        return len(text)
+
+    def flush(self):
+        """Flush while the reader reads."""
+        if not self.stopped:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                self.stopped = True
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+
+@contextlib.contextmanager
+def _reader_may_stop():
+    """sys.stdout as _Output for the command; a stopped reader's pipe closed quietly at the end."""
+    out = sys.stdout = _Output(sys.stdout)
+    try:
+        yield
+    finally:
+        sys.stdout = out.stream
+        if out.stopped:                                # no flush of what the reader will never read
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _plain(e):

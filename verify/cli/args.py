@@ -49,10 +49,30 @@ def premises(p):
     p.add_argument("--g-uncertainty", type=small, metavar="REL",
                    help="relative uncertainty of g, the bound on Delta_g/g (default 1e-5 with a local --g, "
                         "5e-3 without: 9.81 m/s^2 is off by up to 3e-3 at sea level)")
+    p.add_argument("--bound", action="append", type=named_bound, metavar="NAME=VALUE", default=[],
+                   help="the a-priori bound of one parameter (rad, or dimensionless), over the description's and "
+                        "--prior; repeatable, e.g. --bound kappa=3e-4")
     p.add_argument("--prior", type=small,
                    help="override: one a-priori bound for every stand, mounting and block error (rad, or "
                         "dimensionless); default: each parameter's bound from the stand description, else "
                         "the default of its kind (stand 1e-3, mounting 1e-2, block 0.1)")
+
+
+def named_bound(text):
+    """An argparse type: NAME=VALUE, a parameter's name and its a-priori bound (a small error)."""
+    import argparse
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"{text[:40]!r}: give NAME=VALUE, e.g. kappa=3e-4")
+    return name.strip(), small(value)
+
+
+def say_gravity(g_given, premises):
+    """The gravity line (workflows/premises.gravity_line) on a line of its own, when --g was not given."""
+    from ..workflows.premises import gravity_line
+    line = gravity_line(g_given, premises["g_uncertainty"], premises["g_source"])
+    if line:
+        print(line)
 
 
 def premises_of(args, mod):
@@ -60,4 +80,4 @@ def premises_of(args, mod):
     --prior)."""
     from ..workflows.premises import premises as make
     return make(mod, args.sigma, args.g if args.g is not None else G_DEFAULT, g_given=args.g is not None,
-                g_uncertainty=args.g_uncertainty, prior=args.prior)
+                g_uncertainty=args.g_uncertainty, prior=args.prior, bound=dict(args.bound))

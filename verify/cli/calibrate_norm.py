@@ -14,7 +14,9 @@ def add(sub):
     p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or all of them "
                    "in turn (then --json holds one result per IMU)")
-    options.g(p, "local gravity, m/s^2 (default 9.81)")
+    options.g(p, "local gravity, m/s^2 (default: 9.81 assumed, with |Delta_g/g| <= 5e-3 in the bounds)", default=None)
+    p.add_argument("--g-uncertainty", type=options.small, metavar="REL",
+                   help="the bound on |Delta_g/g| (default 1e-5 with a local --g, 5e-3 without)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
     p.add_argument("--window", type=options.positive, default=1.0, help="moving-variance window, s")
@@ -67,7 +69,7 @@ def _run(args, into=None):
     from ..io import report
     from ..workflows import jobs
     res = jobs.calibrate_norm(args.log, args.g, args.params, args.format, args.sensor, args.imu, args.window, args.k,
-                              args.min_still, args.delta_sigma, args.diagnose)
+                              args.min_still, args.delta_sigma, args.diagnose, args.g_uncertainty)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)
@@ -110,9 +112,10 @@ def _print(res, args):
     print("the same in imu_tk's form X' = T K (X - B): T = M diag(M)^-1 (unit diagonal), K = diag(M) = "
           + "  ".join(f"{v:.6e}" for v in np.diag(np.array(res["matrix"]))) + ", B = b")
     dsig = res["delta_sigma_max"]
-    print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * args.g:.3e} m/s^2), from the "
+    print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * res['g']:.3e} m/s^2), from the "
           f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
     print(f"premises: {res['premises']}")
+    options.say_gravity(res["g_given"], res)
     print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
           + ("consistent" if res["consistent"] else
              f"INCONSISTENT: the data refute this noise bound (they support delta_sigma >= "
@@ -221,5 +224,5 @@ def _report(res, args):
              for k, v in res["guaranteed_error"].items()])))
     sections += [("Residual per still interval", report.Image("residuals.png")),
                  ("Residual against the direction of gravity", report.Image("directions.png"))]
-    command = report.command_line(args, f"garant calibrate-norm {args.log} --g {args.g:g} --params {args.params}")
+    command = report.command_line(args, f"garant calibrate-norm {args.log} --params {args.params}")
     print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections, [args.log])}")

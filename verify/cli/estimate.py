@@ -40,17 +40,20 @@ def run(args):
     from ..workflows import jobs
     res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
                         args.gamma, args.imu, args.which_run,
-                        progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
+                        progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True),
+                        bound=dict(args.bound))
     mod = models.load(args.model)
     wanted = args.save or args.export_imu_tk
-    if wanted and res["consistent"] and "calibration" not in res:
+    if wanted and res["consistent"] and "calibration" not in res and not res.get("premises_refuted"):
         why = res.get("block_not_separated", "this model has no block parameters")
         raise DataError(f"--save/--export-imu-tk: {why}; nothing written")
     if args.json:
         report.write_json(args.json, res)
     if (args.plot or args.report) and "residual_minimax" in res:
         _plots(res, mod, args)
-    return print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
+    code = print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
+    options.say_gravity(args.g is not None, res["premises"])
+    return code
 
 
 def _plots(res, mod, args):
@@ -156,6 +159,9 @@ def print_estimate(res, mod, args):
         print(f"note: {line}")
     print(f"\n{res['positions']} positions ({res['distinct_positions']} distinct), g = {res['g']:g} m/s^2, "
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
+    if res.get("premises_refuted"):
+        print_refuted(res["premises_refuted"], "estimate")
+        return options.EXIT_INCONSISTENT
     if args.mount:
         print_physical(res)
     elif "block" in res:
@@ -169,6 +175,27 @@ def print_estimate(res, mod, args):
                 write(path, res["calibration"])
                 print(f"wrote {path}")
     return 0
+
+
+def print_refuted(refuted, command):
+    """The premises the data refute: each q wholly beyond what its parameters' stated bounds allow, with
+    the parameters, their bounds and sources, and the option that states a wider bound."""
+    print(f"\nPREMISE REFUTED: the readings fit sigma, but put these q beyond what the a-priori bounds allow; the "
+          "bounds above assume those bounds and are not guaranteed (no calibration is given):")
+    for r in refuted:
+        named = ", ".join(f"|{p['name']}| <= {p['bound']:g} ({p['source']})" for p in r["parameters"])
+        print(f"  {r['q']} = {r['definition']} = {r['estimate']:+.4e} +- {r['guaranteed_error']:.1e}, beyond "
+              f"{r['allowed']:.3g} allowed by {named}")
+    wider = " ".join(f"--bound {p['name']}={_wider(abs(r['estimate']) + r['guaranteed_error'])}"
+                     for r in refuted for p in r["parameters"][:1])
+    print(f"if the unit (or the stand) is that far off, state a wider bound and run again: garant {command} ... {wider}")
+
+
+def _wider(x):
+    """A round bound above x: 1, 2 or 5 times a power of ten."""
+    import math
+    e = math.floor(math.log10(2 * x))
+    return next(f"{m * 10.0 ** e:.0e}".replace("e-0", "e-") for m in (1, 2, 5, 10) if m * 10.0 ** e >= 2 * x)
 
 
 def print_block(res, human=False):

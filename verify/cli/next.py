@@ -36,10 +36,11 @@ def run(args):
     from ..io import report
     from ..workflows import jobs
     res = jobs.next_position(args.model, args.data, args.sigma, args.target, args.grid, args.g, args.g_uncertainty,
-                             args.prior, args.search_seconds, args.max_candidates, args.mount, args.gamma)
+                             args.prior, args.search_seconds, args.max_candidates, args.mount, args.gamma,
+                             dict(args.bound))
     if args.json:
         report.write_json(args.json, res)
-    _print(res)
+    _print(res, args)
     if args.plot:
         from ..io import plots
         state = ("done" if res["done"] else "the data refute sigma" if res["consistent"] is False else
@@ -49,12 +50,12 @@ def run(args):
                                   res["target"], args.plot, f"{args.data}: {len(res['measured'])} position(s) measured, "
                                   + state)
         print(f"wrote {args.plot}")
-    if res["consistent"] is False:
+    if res["consistent"] is False or res.get("premises_refuted"):
         return options.EXIT_INCONSISTENT
     return 0
 
 
-def _print(res):
+def _print(res, args):
     from ..io import report
     fmt = (lambda v: "no estimator yet" if v is None else f"{v:.3e}")          # noqa: E731
     after = res["guaranteed_error_after"] or [None] * len(res["names"])
@@ -67,8 +68,21 @@ def _print(res):
     if res["consistent"] is False:
         print("the data so far refute sigma (as `garant estimate` says): find the cause before measuring more")
         return
+    if res.get("premises_refuted"):
+        from .estimate import print_refuted
+        print_refuted(res["premises_refuted"], "next")
+        return
     if res["done"]:
-        print("done: every guaranteed error is at or below its target")
+        import shlex
+        verdict = ("the readings are consistent with sigma" if res["consistent"] else
+                   "no verdict yet (some q has no estimator)" if res["consistent"] is None else "")
+        more = [x for k, v in (("g", args.g), ("g_uncertainty", args.g_uncertainty), ("prior", args.prior))
+                if v is not None for x in (f"--{k.replace('_', '-')}", f"{v:g}")]
+        more += [x for name, v in args.bound for x in ("--bound", f"{name}={v:g}")]
+        print(f"done: every guaranteed error is at or below its target; {verdict}")
+        print("calibrate: " + shlex.join(["garant", "estimate", "--model", str(args.model), str(args.data), "--sigma",
+                                          f"{args.sigma:g}", *more, *(["--mount", args.mount] if args.mount else []),
+                                          "--save", "CAL.json"]))
         return
     pos = res["next"]
     print("next position: " + ", ".join(f"{a} = {v:g} deg" for a, v in zip(res["angles"], pos))

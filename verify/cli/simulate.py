@@ -13,7 +13,12 @@ def add(sub):
     options.sigma(p, "noise bound, units of g")
     p.add_argument("--seed", type=options.seed, default=0, help="random seed, a whole number >= 0 (default 0)")
     options.g(p)
-    p.add_argument("--size", type=options.small, default=1e-4, help="bound of the random stand and block errors")
+    p.add_argument("--size", metavar="B|KIND=B,...",
+                   help="bound of the random errors: one for all (default 1e-4), or per kind, e.g. "
+                        "stand=1e-4,mounting=3e-3,block=1e-2,bias=0.05 (kinds not named: 0; a bias over g)")
+    p.add_argument("--truth", metavar="FILE.json",
+                   help='the stand\'s errors by name instead of random ones, e.g. {"kappa": 5e-5, "Gamma11": 1.2e-2, '
+                        '"bias1": 0.05} (rad, dimensionless, a bias over g); the others 0')
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
 
@@ -31,8 +36,12 @@ def run(args):
     base = models.stand_model(args.model)
     mod = models.load(args.model)
     effects = [simulate.parse_effect(e, CATALOGUE, [a.name for a in base.stand.angles]) for e in args.effect]
+    if args.truth and args.size:
+        raise DataError("--truth sets every error of the stand; --size draws them at random: give one")
+    given = simulate.read_truth(args.truth, mod) if args.truth else None
+    sizes = simulate.parse_sizes(args.size or "1e-4")
     P, f, t, T, values, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
-                                                   args.size)
+                                                   sizes, given)
     names, mount_names = models.layout(mod)
     if not np.all(np.isfinite(f)):
         raise DataError("the simulated readings are not finite (an effect or option too large); nothing written")
@@ -44,6 +53,8 @@ def run(args):
     print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}")
     report.write_json(truth, {"model": args.model, "plan": args.plan, "sigma": args.sigma, "g": args.g,
                               "seed": args.seed, "effects": {n: list(v) for n, v in effects},
+                              "drawn": ({"from": args.truth} if given is not None else
+                                        {"uniform_within": sizes, "seed": args.seed}),
                               "parameters": {n: float(v) for n, v in values.items()},
                               "units": {n: units.get(n, "see the effect catalogue") for n in values},
                               "q": dict(zip(mod.Q_NAMES, models.q_of(mod, [values.get(n, 0.0) for n in

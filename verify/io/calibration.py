@@ -54,6 +54,10 @@ def from_norm(res, axes):
     K = np.abs(np.asarray(res["matrix"]) @ np.linalg.inv(np.asarray(res["matrix_fit"]))) if "matrix_fit" in res \
         else np.eye(3)
     B, eps = (K @ B) * (1 + 1e-12), (K @ eps) * (1 + 1e-12)
+    # M holds g = res["g"]; a true g_t moves a corrected sample by the factor g / g_t, within 1 +- u
+    # (u, the bound of |Delta_g/g|): E + A becomes (1 + d)(E + A), so |A| <= B + u (E + B), |eps| scales alike
+    u = res.get("g_uncertainty", 0.0)
+    B, eps = (B + u * (np.eye(3) + B)) * (1 + 1e-12), eps * (1 + u) * (1 + 1e-12)
     return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": res["raw_unit"],
             "M": res["matrix"], "b": res["bias"], "bound_matrix": B.tolist(),
             "bound_bias": eps.tolist(), "bound_delta": delta,

@@ -61,17 +61,17 @@ def chebyshev(A):
     return L, Y
 
 
-def measurement_matrix(H, positions, mounts=None):
+def measurement_matrix(H, positions, mounts=None, variables=()):
     """Columns H^(p) at the positions, ordered (s, p); positions in radians, shape (S, n_angles).
 
     H is a model's H function (or a module, for stands with several mountings: then `mounts`
-    gives each position's mounting index)."""
+    gives each position's mounting index; `variables`, the values (S,) of the module's VARIABLES)."""
     positions = np.atleast_2d(np.asarray(positions, float))
     if callable(H):
         Hs = H(*[positions[:, i] for i in range(positions.shape[1])])          # (rows, m, S)
     else:
         from ..models import H_at
-        Hs = H_at(H, positions, mounts)
+        Hs = H_at(H, positions, mounts, variables)
     return np.transpose(Hs, (1, 2, 0)).reshape(Hs.shape[1], -1)
 
 

@@ -51,13 +51,17 @@ def _square(a):
 class Jet2:
     """Value (S,), gradient (n, S) and the upper triangle of the symmetric Hessian (n (n + 1) / 2, S),
     all intervals. S is 1 for what depends on the parameters alone (numpy broadcasts it to the
-    positions where an angle enters), so the stand's own constants are computed once, not per position."""
+    positions where an angle enters), so the stand's own constants are computed once, not per position.
 
-    __slots__ = ("v", "g", "h")
+    `e` (None: 0), a bound (S,) on |f - phi| over the box: the jet is that of a smooth phi, and the
+    function f it stands for may differ from phi by at most e (|x| where x may be 0: see __abs__).
+    Each operation carries e, so the Taylor remainder of phi plus e bounds f's."""
+
+    __slots__ = ("v", "g", "h", "e")
     __array_ufunc__ = None            # ndarray * jet defers to the jet's own __rmul__
 
-    def __init__(self, v, g, h):
-        self.v, self.g, self.h = v, g, h
+    def __init__(self, v, g, h, e=None):
+        self.v, self.g, self.h, self.e = v, g, h, e
 
     @staticmethod
     def variables(lo, hi, shape):
@@ -81,13 +85,14 @@ class Jet2:
 
     def __add__(self, o):
         if isinstance(o, Jet2):
-            return Jet2(self.v + o.v, self.g + o.g, self.h + o.h)
-        return Jet2(self.v + o, self.g, self.h)
+            e = None if self.e is None and o.e is None else _up(_zero(self.e), _zero(o.e))
+            return Jet2(self.v + o.v, self.g + o.g, self.h + o.h, e)
+        return Jet2(self.v + o, self.g, self.h, self.e)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return Jet2(-self.v, -self.g, -self.h)
+        return Jet2(-self.v, -self.g, -self.h, self.e)
 
     def __sub__(self, o):
         return self + (-o)
@@ -98,25 +103,75 @@ class Jet2:
     def __mul__(self, o):
         if not isinstance(o, Jet2):
             c = Iv(np.asarray(o, float))
-            return Jet2(self.v * c, self.g * c, self.h * c)
+            return Jet2(self.v * c, self.g * c, self.h * c, None if self.e is None else _up(self.e * c.mag()))
+        e = None                                  # (phi1 + d1)(phi2 + d2) - phi1 phi2 = phi1 d2 + phi2 d1 + d1 d2
+        if self.e is not None or o.e is not None:
+            e1, e2 = _zero(self.e), _zero(o.e)
+            e = _up(self.v.mag() * e2, o.v.mag() * e1, e1 * e2)
         return Jet2(self.v * o.v, self.g * o.v + o.g * self.v,
-                    self.h * o.v + o.h * self.v + _sym(self.g, o.g))
+                    self.h * o.v + o.h * self.v + _sym(self.g, o.g), e)
 
     __rmul__ = __mul__
 
-    def _chain(self, f1, f2):
-        """f(self) from f = value, f1 = f', f2 = f'' (intervals over the value's box)."""
-        return lambda f0: Jet2(f0, self.g * f1, _square(self.g) * f2 + self.h * f1)
+    def _chain(self, f1, f2, e=None):
+        """f(self) from f = value, f1 = f', f2 = f'' (intervals over the value's box); `e`, f's own error
+        bound (self's carried through f by the caller)."""
+        return lambda f0: Jet2(f0, self.g * f1, _square(self.g) * f2 + self.h * f1, e)
 
     def sin(self):
-        """sin of the jet (value, first and second derivatives by the chain rule)."""
+        """sin of the jet (value, first and second derivatives by the chain rule; |sin'| <= 1 carries e)."""
         s, c = self.v.sin(), self.v.cos()
-        return self._chain(c, -s)(s)
+        return self._chain(c, -s, self.e)(s)
 
     def cos(self):
-        """cos of the jet (value, first and second derivatives by the chain rule)."""
+        """cos of the jet (value, first and second derivatives by the chain rule; |cos'| <= 1 carries e)."""
         s, c = self.v.sin(), self.v.cos()
-        return self._chain(-s, -c)(c)
+        return self._chain(-s, -c, self.e)(c)
+
+    def __pow__(self, n):
+        """The jet to a whole power n >= 0 (a quadratic scale factor's w^2): n v^(n-1), n (n-1) v^(n-2);
+        e becomes n (|v| + e)^(n-1) e (the mean value theorem)."""
+        if not float(n).is_integer() or n < 0:
+            raise TypeError(f"a jet to the power {n}: the generated readings take whole powers only")
+        n = int(n)
+        if n < 2:
+            return self if n == 1 else 1.0
+        e = None if self.e is None else _up(n * (self.v.mag() + self.e) ** (n - 1) * self.e)
+        return self._chain(_power(self.v, n - 1) * n, _power(self.v, n - 2) * (n * (n - 1)), e)(_power(self.v, n))
+
+    def __abs__(self):
+        """|x|, position by position. Where the sign of x is proven over the whole box (its value interval
+        excludes 0) it is the jet or its negative. Where x may be 0, |x| has no second derivative: the
+        jet is that of phi = s x for a sign s in [-1, 1] (the linearisation's own, sign(x) at the centre,
+        whatever it is), and |x| - s x, at most 2 |x|, joins the error bound e. Exact at the centre, so
+        the remainder of the readings stays that of phi plus e."""
+        pos, neg = self.v.lo > 0, self.v.hi < 0
+        cross = ~pos & ~neg
+        sign = Iv(np.where(pos, 1.0, -1.0), np.where(neg, -1.0, 1.0))
+        e = None
+        if cross.any() or self.e is not None:
+            e = np.where(cross, _up(2 * self.v.mag(), 2 * _zero(self.e)), _zero(self.e))
+        return Jet2(self.v * sign, self.g * sign, self.h * sign, e)
+
+
+def _zero(e):
+    return 0.0 if e is None else e
+
+
+def _up(*parts):
+    """A sum of nonnegative bounds, rounded up."""
+    total = sum(parts[1:], parts[0])
+    return np.asarray(total, float) * (1 + SUM_ERROR) + 1e-300
+
+
+def _power(v, k):
+    """The interval v^k, k >= 0, by squaring (an even power's lower end 0 where v straddles 0)."""
+    if k == 0:
+        return Iv(np.ones_like(v.lo))
+    if k == 1:
+        return v
+    half = _power(v, k // 2).square()
+    return half if k % 2 == 0 else half * v
 
 
 class _Vector(list):
@@ -161,7 +216,8 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=(), centre=Non
     (`triangle`): (lower, upper), each (N, 3, P). The physical parameters are p = L v (L: n x nv),
     coordinates in which the directions no data can see are variables of their own, so that their
     exact invariances cost nothing. lo and hi are (nv,), one box for all positions, or (nv, N), a box
-    per position."""
+    per position. Also E (N, 3): the jets' error bounds e (0 where the readings are smooth over the box),
+    to be added to the remainder."""
     c = np.zeros(np.shape(lo)[:1]) if centre is None else np.asarray(centre, float)
     c = c.reshape((-1,) + (1,) * (np.ndim(lo) - 1))
     lo, hi = np.minimum(lo, c), np.maximum(hi, c)
@@ -170,7 +226,7 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=(), centre=Non
     angles = [np.atleast_1d(np.asarray(a, float)) for a in angles]
     N, nv = len(angles[0]), L.shape[1]
     P = nv * (nv + 1) // 2
-    H_lo, H_hi = np.zeros((N, 3, P)), np.zeros((N, 3, P))
+    H_lo, H_hi, E = np.zeros((N, 3, P)), np.zeros((N, 3, P)), np.zeros((N, 3))
     groups = [(None, np.arange(N))] if mounts is None else [(k, np.flatnonzero(mounts == k))
                                                               for k in np.unique(mounts)]
     chunks = [(k, rows[c:c + CHUNK]) for k, rows in groups for c in range(0, len(rows), CHUNK)]
@@ -185,7 +241,9 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=(), centre=Non
             if isinstance(fi, Jet2):
                 H_lo[rows, i] = fi.h.lo.T
                 H_hi[rows, i] = fi.h.hi.T
-    return H_lo, H_hi
+                if fi.e is not None:
+                    E[rows, i] = fi.e
+    return H_lo, H_hi, E
 
 
 def midrad(lo, hi):
@@ -204,9 +262,9 @@ def pair_weights(P_abs):
 def remainder_bound(mod, angles, L, lo, hi, mounts=None, variables=()):
     """Proven bound of |z_exact(L v) - H^T R L v| for every v in the box, per position and component,
     shape (N, 3): by Taylor's theorem (Lagrange form) around v = 0, 1/2 sum_kj |v_k| |v_j| sup |H_kj|."""
-    H_lo, H_hi = packed_hessian(mod, angles, L, lo, hi, mounts, variables)
+    H_lo, H_hi, E = packed_hessian(mod, angles, L, lo, hi, mounts, variables)
     P = np.maximum(-np.minimum(lo, 0.0), np.maximum(hi, 0.0))
-    return (np.maximum(-H_lo, H_hi) @ pair_weights(P)) * (1 + SUM_ERROR)
+    return (np.maximum(-H_lo, H_hi) @ pair_weights(P) + E) * (1 + SUM_ERROR)
 
 
 class Interpolation:
@@ -259,8 +317,9 @@ class Interpolation:
         M, B = len(self.nodes[0]), len(boxes)
         lo = np.repeat(np.stack([b[0] for b in boxes], axis=1), M, axis=1)
         hi = np.repeat(np.stack([b[1] for b in boxes], axis=1), M, axis=1)
-        H_lo, H_hi = packed_hessian(mod, [np.tile(x, B) for x in self.nodes], L, lo, hi,
-                                    None if mount is None else np.full(M * B, mount), centre=centre)
+        H_lo, H_hi, E = packed_hessian(mod, [np.tile(x, B) for x in self.nodes], L, lo, hi,
+                                       None if mount is None else np.full(M * B, mount), centre=centre)
+        assert not E.any(), "a trigonometric polynomial is smooth: no jet error"
         mid, rad = midrad(H_lo, H_hi)
         mid, rad = mid.reshape(B, M, -1), rad.reshape(B, M, -1)
         return [(m, r, (np.abs(m) + r).sum(axis=0)) for m, r in zip(mid, rad)]
@@ -300,6 +359,12 @@ def _complex_namespace():
 
 
 COMPLEX_NUMPY = _complex_namespace()
+
+
+def _complex_abs(x):
+    """|x| for the complex step: x sign(Re x), whose imaginary part carries the derivative sign(x) x'
+    (the modulus would drop it); 0 at x = 0, a subgradient, as the jets' |x| allows (Jet2.__abs__)."""
+    return x * np.sign(np.real(x))
 BLOCK = 2048          # positions per evaluation of the Jacobian: (3, nv, BLOCK) complex arrays stay small
 
 
@@ -318,7 +383,8 @@ def jacobian(mod, angles, L, p0, mounts=None, variables=()):
                                                               for k in np.unique(mounts)]
     for k, rows in groups:
         fn = mod.readings if k is None else getattr(mod, f"_readings_{k}")
-        fn = types.FunctionType(fn.__code__, {**fn.__globals__, "np": COMPLEX_NUMPY}, fn.__name__, fn.__defaults__)
+        fn = types.FunctionType(fn.__code__, {**fn.__globals__, "np": COMPLEX_NUMPY, "abs": _complex_abs},
+                                fn.__name__, fn.__defaults__)
         for b in range(0, len(rows), BLOCK):
             sel = rows[b:b + BLOCK]
             f = fn(*[a[sel] for a in angles], physical, 1.0, *[np.asarray(v, float)[sel] for v in variables])

@@ -54,4 +54,5 @@ def calibration(mod, info, premises):
 
 
 _CONTRADICT = ("no unit within the a-priori bounds has q within the guaranteed errors: the data contradict a premise "
-               "(a stand error or the mounting beyond its stated bound?): no calibration of the block")
+               "(a stand error or the mounting beyond its stated bound: compare each q printed with the bounds of "
+               "its parameters, and state a wider one with --bound NAME=VALUE): no calibration of the block")

@@ -15,6 +15,14 @@ from ..io.recordings import BATCHES, median, raw_unit
 from ..solve import highs, lp, taylor
 
 MAX_ITER = 60
+#: The largest correction one step of the fit may make (a scale of 50 %, half a radian): a larger one is
+#: a fit running away on orientations that do not hold the parameters apart, stopped and said.
+MAX_STEP = 0.5
+#: A still interval's direction within this angle (degrees) of a sensor axis is taken as the axis when
+#: asking what the orientations identify (six faces held by hand are axes to within it).
+ON_AXIS_DEG = 1.0
+#: Still intervals whose directions lie within this angle (degrees) hold one orientation.
+SAME_ORIENTATION_DEG = 5.0
 
 
 def chebyshev_fit(Hk, s):
@@ -72,11 +80,52 @@ def fit(mod, raw, g, params=9):
     for it in range(1, MAX_ITER + 1):
         s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
         q, _ = chebyshev_fit(mod.H(n)[:params], s)
+        if not np.all(np.isfinite(q)) or np.abs(q).max() > MAX_STEP:
+            k = int(np.nanargmax(np.where(np.isfinite(q), np.abs(q), np.inf)))
+            raise DataError(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to {PARAM_LABELS[k]}): "
+                            "the orientations do not hold the parameters apart; record orientations between the "
+                            "axes (garant plan norm)")
         M, b, delta = fold(M, b, delta, q, g)
         if np.abs(q).max() < 1e-12:
             break
     s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
     return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note)
+
+
+def orientations(n, within_deg=SAME_ORIENTATION_DEG):
+    """The distinct orientations among directions n (3, K): a representative of each group of directions
+    within `within_deg` of it (greedy, in order)."""
+    reps = []
+    for d in n.T:
+        if all(np.degrees(np.arccos(np.clip(d @ r, -1, 1))) > within_deg for r in reps):
+            reps.append(d)
+    return np.array(reps)
+
+
+def _identifiable(mod, stills, n, params, path):
+    """Before the fit: the parameters the orientations present identify, structurally: each direction
+    within ON_AXIS_DEG of a sensor axis taken as that axis (six faces, each axis up and down, are axes
+    to within a degree), an exact rank test of (2.2) of 001 on them. The parameters they cannot identify
+    are named with the orientations to add, and nothing is fitted (a fit on them runs away)."""
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    snapped = np.array([axes[np.argmax(axes @ d)] if np.degrees(np.arccos(np.clip((axes @ d).max(), -1, 1)))
+                        <= ON_AXIS_DEG else d for d in n.T]).T
+    unseen = lp.unidentifiable(mod.H(snapped)[:params])
+    if not unseen:
+        return
+    distinct = orientations(n)
+    on_axes = all(np.abs(d).max() > np.cos(np.radians(ON_AXIS_DEG)) for d in distinct)
+    seen = [PARAM_LABELS[k] for k in range(params) if k not in unseen]
+    add = [p for p in (mod.PLAN[:18] if params == 9 else mod.PLAN)
+           if np.degrees(np.arccos(np.clip(distinct @ p, -1, 1))).min() > 10.0][:6]
+    raise DataError(f"{path}: {len(stills)} still intervals in {len(distinct)} distinct orientation(s)"
+                    + (f", each along an axis (within {ON_AXIS_DEG:g} degree)" if on_axes else "")
+                    + ": they cannot identify " + ", ".join(PARAM_LABELS[k] for k in unseen)
+                    + (" (a misalignment enters the norm only at second order when every orientation lies along an "
+                       "axis)" if on_axes and any(3 <= k < 6 for k in unseen) else "")
+                    + (f"; they would identify {', '.join(seen)}" if seen else "")
+                    + "; add orientations such as " + ", ".join("(" + ", ".join(f"{v:+.3f}" for v in p) + ")" for p in add)
+                    + " (garant plan norm lists them all)")
 
 
 def guaranteed(mod, n, params, noise):
@@ -177,7 +226,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
                         f"calibration needs at least {need} (record more orientations, or lower --k)")
     raw = np.array([s.mean for s in stills])
     M0, b0, _ = initial_map(raw, g)
-    before, _ = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
+    before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
+    _identifiable(mod, stills, n0, params, path)
     res = fit(mod, raw, g, params)
     fit_residual = float(np.abs(res["sigma"]).max())
     rule = noise_rule(stills, res["M"], res["n"], g, quantum)

@@ -25,21 +25,44 @@ def residuals_table_axes(mod, positions, g, Q):
     return (Q.T @ z_block).T
 
 
-def distinct_positions(positions, decimals=6):
+def variable_columns(mod, positions):
+    """{name: values (N,)} of the columns the model's VARIABLES need (an extended model's time_s in s or
+    temp_c in degrees C), as numbers; DataError naming a column that is missing or not a number."""
+    out = {}
+    for v in map(str, getattr(mod, "VARIABLES", ())):
+        if v not in positions.extra:
+            raise DataError(f"{positions.path}: the model needs the column {v} ({'s' if v == 'time_s' else 'degrees C'}) "
+                            "on every row")
+        try:
+            out[v] = np.asarray(positions.extra[v], float)
+        except ValueError:
+            raise DataError(f"{positions.path}: column {v} must hold a number on every row") from None
+        if not np.all(np.isfinite(out[v])):
+            raise DataError(f"{positions.path}: column {v} must hold a finite number on every row")
+    return out
+
+
+def distinct_positions(positions, decimals=6, variables=None):
     """Rows at the same position (angles equal to 1e-6 degree, same mounting) averaged into one, and the
     spread (largest less smallest reading, m/s^2, per component) of the rows averaged: (positions, spread).
 
     The average of readings whose noise is within +-sigma is within +-sigma too: the bound (5) holds
     for each averaged residual (worst case; no independence of the noise is assumed), and the LP and
     the remainder are then solved once per distinct position. Averaging is sound only for readings
-    that agree: `repeated_disagree` checks the spread first. Other columns are dropped."""
+    that agree: `repeated_disagree` checks the spread first. The model's `variables` ({name: values}, see
+    `variable_columns`) are part of a position (rows at other times are other positions) and kept; other
+    columns are dropped."""
+    variables = variables or {}
     key = np.round(positions.angles_deg, decimals)
     if positions.mounts is not None:
         key = np.column_stack([key, positions.mounts])
+    if variables:
+        key = np.column_stack([key, *variables.values()])
     order = np.lexsort(key.T[::-1])                       # rows sorted by position: groups are runs
     new = np.r_[True, np.any(key[order[1:]] != key[order[:-1]], axis=1)]
     if new.all():
-        return positions, np.zeros((len(key), 3))
+        return Positions(positions.path, positions.angles_deg, positions.f, positions.mounts,
+                         dict(variables)), np.zeros((len(key), 3))
     starts = np.flatnonzero(new)
     counts = np.diff(np.r_[starts, len(key)])
     inverse = np.empty(len(key), int)
@@ -51,8 +74,10 @@ def distinct_positions(positions, decimals=6):
     for i in range(3):
         column = positions.f[order, i]
         spread[:, i] = np.maximum.reduceat(column, starts) - np.minimum.reduceat(column, starts)
-    mounts = None if positions.mounts is None else key[order[starts], -1].astype(int)
-    return Positions(positions.path, angles, f, mounts), spread
+    n = positions.angles_deg.shape[1]
+    mounts = None if positions.mounts is None else key[order[starts], n].astype(int)
+    kept = {v: np.asarray(x)[order[starts]] for v, x in variables.items()}
+    return Positions(positions.path, angles, f, mounts, kept), spread
 
 
 def repeated_disagree(positions, spread, sigma, g, decimals=6):
@@ -109,13 +134,14 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     premises = premises or make_premises(mod, sigma, g)
     Q = remount.MOUNTS[mount] if mount else np.eye(3)
     rows, all_rows = len(positions.f), positions
-    positions, spread = distinct_positions(positions)
+    positions, spread = distinct_positions(positions, variables=variable_columns(mod, positions))
     distinct = len(positions.f)
     bad = repeated_disagree(positions, spread, sigma, g)
     if len(bad):
         return refuted_by_repeats(mod, positions, spread, bad, sigma, g, premises, rows)
     z = residuals_table_axes(mod, positions, g, Q)
-    A = lp.measurement_matrix(mod, np.column_stack(positions.radians), positions.mounts)
+    A = lp.measurement_matrix(mod, np.column_stack(positions.radians), positions.mounts,
+                              list(positions.extra.values()))
     missing = lp.unidentifiable(A)
     if missing:
         raise DataError(f"{positions.path}: the {distinct} distinct positions cannot identify "
@@ -165,8 +191,10 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         "remainder_parts": {k: dict(zip(mod.Q_NAMES, x.tolist())) for k, x in v.parts.items()},
         "residual": (y - lin.A.T @ (q - lin.q0)).reshape(-1, 3),
         "warnings": near_prior(lin, q, e) + unrefutable(lin.A, W, mod),
+        "premises_refuted": beyond_prior(lin, q, e),
     })
-    out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
+    if not out["premises_refuted"]:                # else no block split: it rests on the refuted bounds
+        out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
     return out
 
 
@@ -263,19 +291,41 @@ def refuted_by_repeats(mod, positions, spread, bad, sigma, g, premises, rows):
              "component": int(c) + 1, "spread": float(spread[k, c] / g)} for k, c in worst]}
 
 
+def beyond_prior(lin, q, e):
+    """Every q whose whole interval q +- e lies beyond what the a-priori bounds allow: the data refute a
+    premise (a stand error or the mounting past its stated bound), so no printed bound is guaranteed.
+    Each: the q, its definition, estimate and bound, what the premises allow and the parameters (name,
+    bound, source) whose bounds to widen (--bound NAME=VALUE)."""
+    mod, prem = lin.mod, lin.premises
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    biases = R[:, guarantee.linear_parameters(mod)].any(axis=1)
+    stated = lin.stated_bounds
+    source = [prem.split[n][1] if n in prem.split else s for n, s in zip(prem.names, prem.sources)]
+    out = []
+    for nu in np.flatnonzero((np.abs(q) - e > lin.q_prior * (1 + 1e-9)) & ~biases):
+        out.append({"q": mod.Q_NAMES[nu], "definition": mod.Q_DEFINITIONS[nu], "estimate": float(q[nu]),
+                    "guaranteed_error": float(e[nu]), "allowed": float(lin.q_prior[nu]),
+                    "parameters": [{"name": prem.names[k], "bound": float(stated[k]), "source": source[k]}
+                                   for k in np.flatnonzero(R[nu]) if 0 < stated[k] < np.inf]})
+    return out
+
+
 def near_prior(lin, q, e):
     """Lines for every q whose estimate plus its bound comes within NEAR_EDGE of what the a-priori
-    bounds allow: the premise may not hold; say which parameters and what to raise."""
+    bounds allow (and not wholly beyond: `beyond_prior`): the premise may not hold; say which parameters
+    and what to raise."""
     mod, prem = lin.mod, lin.premises
     allowed = lin.q_prior
     R = np.asarray(mod.PHYSICAL_TO_Q, float)
     out = []
     biases = np.asarray(mod.PHYSICAL_TO_Q, float)[:, guarantee.linear_parameters(mod)].any(axis=1)
-    for nu in np.flatnonzero((np.abs(q) + e > NEAR_EDGE * allowed) & ~biases):
-        names = [prem.names[k] for k in np.flatnonzero(R[nu]) if 0 < prem.bounds[k] < np.inf]
+    for nu in np.flatnonzero((np.abs(q) + e > NEAR_EDGE * allowed) & (np.abs(q) - e <= allowed * (1 + 1e-9))
+                             & ~biases):
+        names = [prem.names[k] for k in np.flatnonzero(R[nu]) if 0 < lin.stated_bounds[k] < np.inf]
         out.append(f"{mod.Q_NAMES[nu]} = {q[nu]:+.3e} +- {e[nu]:.1e} is beyond {NEAR_EDGE:g} of what the a-priori "
                    f"bounds allow ({allowed[nu]:.2e}, from {', '.join(names)}): if the unit may be larger, raise "
-                   "their bounds (the description's `bound`, --prior, or --g-uncertainty for Delta_g)")
+                   "their bounds (--bound NAME=VALUE, the description's `bound`, --prior, or --g-uncertainty for "
+                   "Delta_g)")
     return out
 
 

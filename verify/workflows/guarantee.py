@@ -85,11 +85,19 @@ class Linearisation:
         return self.premises.bounds[self.T]
 
     @property
+    def stated_bounds(self):
+        """Each physical parameter's a-priori bound as stated (an absorbed one's own, from the split; a bias,
+        which needs no bound, 0): what a unit within the premises has."""
+        b = np.where(linear_parameters(self.mod), 0.0, self.premises.bounds)
+        for name, (bound, _) in self.premises.split.items():
+            b[self.premises.names.index(name)] = bound
+        return b
+
+    @property
     def q_prior(self):
-        """What the a-priori bounds of the parameters that enter nonlinearly allow for each q (a bias, which
-        needs no bound, counts 0; a q of biases alone is not in the remainder's box)."""
-        R = np.abs(np.asarray(self.mod.PHYSICAL_TO_Q, float))
-        return R @ np.where(linear_parameters(self.mod), 0.0, self.premises.bounds)
+        """What the a-priori bounds of the parameters that enter nonlinearly allow for each q, the absorbed
+        parameters' own bounds included (a bias counts 0; a q of biases alone is not in the remainder's box)."""
+        return np.abs(np.asarray(self.mod.PHYSICAL_TO_Q, float)) @ self.stated_bounds
 
 
 def _extra(mod, positions):
@@ -181,7 +189,7 @@ class Remainder:
         self._direct_box, self._direct = None, {}
         self.prepare([(self.centre, self.centre), *boxes])
         fit_rows = highs.spread(n, self.FIT_ROWS)
-        mid, _ = self._enclosure(self.centre, self.centre, fit_rows, direct=self.interp is None)
+        mid, _, _ = self._enclosure(self.centre, self.centre, fit_rows, direct=self.interp is None)
         At = lin.A[:, _columns(fit_rows)].T
         self.C = np.linalg.lstsq(At, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
         self.G = np.linalg.lstsq(At, lin.Jt[_columns(fit_rows)], rcond=None)[0] if len(lin.T) else np.zeros((m, 0))
@@ -201,7 +209,8 @@ class Remainder:
 
     def _enclosure(self, lo, hi, rows, direct):
         """(midpoints, radii) of the packed Hessian enclosure at the given positions: (rows, 3, P),
-        position by position (`direct`) or interpolated from the nodes."""
+        position by position (`direct`) or interpolated from the nodes; and the jets' error bounds
+        (rows, 3), 0 where the readings are smooth over the box (taylor.Jet2: |x| where x may be 0)."""
         if direct:
             return self._direct_enclosure(lo, hi, rows)
         mounts = None if self.mounts is None else self.mounts[rows]
@@ -213,7 +222,7 @@ class Remainder:
                 self._nodes[key, k] = self.interp.at_nodes(self.mod, self.Lv, [(lo, hi)], k, self.centre)[0]
             sel = slice(None) if k is None else mounts == k
             mid[sel], rad[sel] = self.interp.enclose(W[sel], *self._nodes[key, k])
-        return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1)
+        return mid.reshape(len(rows), 3, -1), rad.reshape(len(rows), 3, -1), np.zeros((len(rows), 3))
 
     def _direct_enclosure(self, lo, hi, rows):
         """`_enclosure` position by position, reusing what is kept for the last box: it is asked for at
@@ -224,17 +233,18 @@ class Remainder:
             self._direct_box, self._direct = key, {}
         have = np.array([r in self._direct for r in rows.tolist()], dtype=bool)
         mid, rad = np.empty((len(rows), 3, self.P)), np.empty((len(rows), 3, self.P))
+        err = np.empty((len(rows), 3))
         todo = rows[~have]
         if len(todo):
             mounts = None if self.mounts is None else self.mounts[todo]
-            H_lo, H_hi = taylor.packed_hessian(self.mod, [a[todo] for a in self.angles], self.Lv, lo, hi, mounts,
-                                               [v[todo] for v in self.extra], centre=self.centre)
+            H_lo, H_hi, err[~have] = taylor.packed_hessian(self.mod, [a[todo] for a in self.angles], self.Lv, lo, hi,
+                                                           mounts, [v[todo] for v in self.extra], centre=self.centre)
             mid[~have], rad[~have] = taylor.midrad(H_lo, H_hi)
             if len(self._direct) + len(todo) <= self.DIRECT_ROWS:
-                self._direct.update(zip(todo.tolist(), zip(mid[~have], rad[~have])))
+                self._direct.update(zip(todo.tolist(), zip(mid[~have], rad[~have], err[~have])))
         for i in np.flatnonzero(have):
-            mid[i], rad[i] = self._direct[int(rows[i])]
-        return mid, rad
+            mid[i], rad[i], err[i] = self._direct[int(rows[i])]
+        return mid, rad, err
 
     def shift(self, dv):
         """C(dv) = 1/2 dv^T C_nu dv for each q_nu (C held packed): the curvature q absorbs."""
@@ -261,24 +271,24 @@ class Remainder:
         rb = np.empty((len(rows), 3))
         for b in range(0, len(rows), self.BLOCK):
             block = rows[b:b + self.BLOCK]
-            mid, rad = self._enclosure(lo, hi, block, direct)
+            mid, rad, err = self._enclosure(lo, hi, block, direct)
             fit = (self.A[:, _columns(block)].T @ self.C).reshape(mid.shape)
             margin = taylor.SUM_ERROR * (1 + np.abs(fit) + np.abs(mid))
-            rb[b:b + self.BLOCK] = (np.abs(mid - fit) + rad + margin) @ w
+            rb[b:b + self.BLOCK] = (np.abs(mid - fit) + rad + margin) @ w + err
         cb = np.abs(self.C) @ w
         return rb.reshape(-1) * (1 + taylor.SUM_ERROR), cb * (1 + taylor.SUM_ERROR)
 
     def functional(self, W, lo, hi, rows):
         """Bound of |W_nu R'| for each estimator row, the functional at once (the curvature of a sum
         cancels where the per-reading bounds add): positions `rows` hold W's support."""
-        mid, rad = self._enclosure(lo, hi, rows, direct=True)
+        mid, rad, err = self._enclosure(lo, hi, rows, direct=True)
         cols = _columns(rows)
         fit = (self.A[:, cols].T @ self.C).reshape(mid.shape)
         D = (mid - fit).reshape(len(cols), -1)
         margin = taylor.SUM_ERROR * (1 + np.abs(fit) + np.abs(mid)).reshape(len(cols), -1)
         Wc = W[:, cols]
         return ((np.abs(Wc @ D) + np.abs(Wc) @ (rad.reshape(len(cols), -1) + margin)) @ self._weights(lo, hi)
-                ) * (1 + taylor.SUM_ERROR)
+                + np.abs(Wc) @ err.reshape(-1)) * (1 + taylor.SUM_ERROR)
 
 
 class InformationSet:

@@ -14,12 +14,12 @@ from .premises import G_DEFAULT, premises as make_premises
 
 
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None, progress=None):
+             imu=None, which_run=None, progress=None, bound=None):
     """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors
     from positions: a CSV path, a means file (with `imu` and `which_run`), a DataFrame or an array
     (`positions_of`). g in m/s^2 (None: 9.81 with the uncertainty of an assumed g); the premises of
     the bounds are in the result. A consistent result with the block's errors holds "calibration",
-    the dictionary `apply` takes."""
+    the dictionary `apply` takes. `bound`: {parameter: a-priori bound}, over the description's and `prior`."""
     from . import estimate as est
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
@@ -27,10 +27,10 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
         raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {mount!r}")
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
-                         g_uncertainty=g_uncertainty, prior=prior)
+                         g_uncertainty=g_uncertainty, prior=prior, bound=bound)
     res = est.estimate(mod, positions_of(mod, data, imu, which_run), sigma, prem.g, remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress)
-    if res["consistent"] and ("physical" in res or "block" in res):
+    if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
         res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
     return results.Estimate(res)
@@ -63,18 +63,26 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False):
     return Positions(str(data), angles_for(mod, run.nominal, data), np.array([st.mean for st in run.stills]))
 
 
-def calibrate_norm(log, g=G_DEFAULT, params=9, fmt=None, sensor=None, imu=None, window=1.0, k=10.0,
-                   min_still=2.0, delta_sigma=None, diagnose=False):
+def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, window=1.0, k=10.0,
+                   min_still=2.0, delta_sigma=None, diagnose=False, g_uncertainty=None):
     """Calibrate a static log (a path, or an array (N, 4): time in s, then the three raw axes) through
     the norm relation (2.2) of 001: still intervals (moving variance over `window` s below `k` times the
     first seconds', at least `min_still` s), the verdict, M and b with guaranteed errors. A consistent
-    result holds "calibration", the dictionary `apply` takes; `diagnose` adds the effect catalogue's test."""
+    result holds "calibration", the dictionary `apply` takes; `diagnose` adds the effect catalogue's test.
+    g None: 9.81 assumed, and |Delta_g/g| bounded as every command bounds it (premises.gravity_uncertainty),
+    in the calibration's bounds."""
     from ..io import calibration, recordings
     from . import calibrate_norm as cn
+    from .premises import gravity_uncertainty
     mod = models.load("norm")
     data = _log(log, fmt, sensor, imu)
+    g_given, g = g is not None, G_DEFAULT if g is None else g
+    g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data))
+    res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
+    res["premises"] += (f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} "
+                        "m/s^2 (lambda* of (2.2) of 001), the calibration's bounds include it")
     dt = float(recordings.median(np.diff(data.t)))
     per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
     res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
@@ -105,7 +113,7 @@ def _log(log, fmt, sensor, imu):
 
 
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
-                  search_seconds=None, max_candidates=None, mount=None, gamma="lower"):
+                  search_seconds=None, max_candidates=None, mount=None, gamma="lower", bound=None):
     """The position to measure next on a stand, from the positions measured so far (a positions CSV,
     a header alone at the start, or an array; see `positions_of`): next.py's suggestion, and once every
     q has an estimator the verdict of `estimate` on the data (`consistent`; its `disagreements` when
@@ -118,9 +126,9 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     verdict, printed = None, None
     if len(pos.angles_deg) and (_repeats_refute(pos, sigma, g) or not lp.unidentifiable(
             lp.measurement_matrix(mod, np.deg2rad(pos.angles_deg), pos.mounts))):    # a verdict is possible
-        verdict = estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma)
+        verdict = estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, bound=bound)
     floor = None
-    if verdict is not None and verdict["consistent"]:
+    if verdict is not None and verdict["consistent"] and not verdict.get("premises_refuted"):
         printed, floor = printed_bounds(verdict, target_names(mod, model, mount, gamma))
     out = results.NextPosition(suggest(mod, model, pos.angles_deg, mounts, sigma, target, grid, search_seconds,
                                        max_candidates, mount, gamma, printed=printed, floor=floor).to_dict())
@@ -130,6 +138,8 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     if verdict is not None and not verdict["consistent"]:
         out["disagreements"] = verdict.get("disagreements") or verdict.get("repeated_disagree")
         out["next"] = None                           # no position helps until the cause is found
+    if verdict is not None and verdict.get("premises_refuted"):
+        out["premises_refuted"], out["next"] = verdict["premises_refuted"], None
     return out
 
 
@@ -140,14 +150,14 @@ def _repeats_refute(pos, sigma, g):
     return len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g)) > 0
 
 
-def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None):
+def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=None):
     """The missing-effect workflow of diagnose.py on positions (see `positions_of`): the verdict of the
     current model, the catalogue effects the data need, their estimates and what separates the rest.
     The result's attribute `study` (not a field: not in JSON) is what `diagnose.write_module` needs."""
     from . import diagnose as diagnosis
     mod = models.load(model)
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
-                         g_uncertainty=g_uncertainty, prior=prior)
+                         g_uncertainty=g_uncertainty, prior=prior, bound=bound)
     res = diagnosis.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, prem)
     study = res.pop("_study")
     out = results.Diagnosis(res)

@@ -145,7 +145,8 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     default target then holds TARGET_SLACK for that and `floor`, what the premises alone set."""
     from ..models import layout
     from ..solve import plans
-    from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates
+    from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates, refuse_variables
+    refuse_variables(mod, model)
     names, mount_names = layout(mod)
     P, M, fixed = _with_measured(*candidates(mod, grid, max_candidates or MAX_CANDIDATES), np.asarray(angles_deg, float).reshape(-1, len(names)),
                                  np.asarray(mounts, int))
@@ -190,9 +191,14 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         n, found, _, floor = plans.covering_plans(cols, lams, 1, 1.0, search_seconds or SEARCH_SECONDS, fixed)
         pool, needed, proven = [s for s in found[0] if s not in fixed], n - len(fixed), floor is None
     else:                                         # (nominal_done: the plan would be, what estimate prints is not)
+        pool = []
+    if not pool:                                  # (or the plan is measured, and what estimate prints is not there)
         pool = [s for s in range(len(P)) if s not in fixed]
         needed = max(1, rank_still_needed(mod, P[fixed], M[fixed], np.eye(m) if C is None else C))
         proven = False
+    if not pool:
+        raise DataError(f"all {len(P)} candidate positions are measured and the guaranteed errors are still above the "
+                        "target (a repeat does not lower a guaranteed bound): give a finer --grid, or a larger --target")
     best, after = _best(mod, P, M, fixed, pool, sigma, goal, C)
     return Next(**common, position=position(best), after=after, still_needed=needed, still_needed_proven=proven)
 

@@ -69,6 +69,16 @@ MAX_CANDIDATES = 10_000
 SEARCH_SECONDS = 7.0
 
 
+def refuse_variables(mod, model):
+    """DataError for a model whose H depends on VARIABLES (an extended model's time or temperature):
+    which position comes when, or how warm, is not a choice among positions."""
+    variables = tuple(map(str, getattr(mod, "VARIABLES", ())))
+    if variables:
+        raise DataError(f"{model}: H depends on {', '.join(variables)} (when or how warm each position is measured), "
+                        "which a plan of positions cannot choose: plan with the base model, record "
+                        f"{', '.join(variables)} on every row, and estimate with this one")
+
+
 def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES, search_seconds=SEARCH_SECONDS,
          progress=None, certify=False):
     """The Plan of a stand model: candidates every `grid` degrees (default: detents or quarter turns), and
@@ -81,6 +91,7 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
     from ..models import layout
     from ..proof import build
     from ..solve import continuum, plans
+    refuse_variables(mod, model)
     names, mounts = layout(mod)
     P, M = candidates(mod, grid, max_candidates)
     if certify:

@@ -98,25 +98,51 @@ class Premises:
                              for n, k, b, s in zip(self.names, self.kinds, self.bounds, self.sources)}}
 
 
-def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sigma_source="--sigma"):
-    """The premises of a model's bounds: each parameter's a-priori bound from the description, or
-    `prior` for every stand, mounting, block and effect parameter when given (the override), or the
-    default of its kind; Delta_g/g from `g_uncertainty`, else the default for a stated or assumed g."""
+def gravity_uncertainty(g_given, stated=None):
+    """(bound of |Delta_g/g|, its source): the one rule of every command (estimate, calibrate-norm and the
+    rest): --g-uncertainty when stated, else 1e-5 for a local --g, else 5e-3 for the assumed 9.81."""
+    if stated is not None:
+        return stated, "--g-uncertainty"
+    if g_given:
+        return G_UNCERTAINTY_LOCAL, "default for a local --g"
+    return G_UNCERTAINTY_DEFAULT, f"default: g = {G_DEFAULT:g} assumed, not given"
+
+
+def gravity_line(g_given, g_uncertainty, g_source):
+    """The line every command prints when --g was not given (None when it was): what the assumed g costs."""
+    if g_given:
+        return None
+    return (f"g: {G_DEFAULT:g} m/s^2 assumed (no --g), |Delta_g/g| <= {g_uncertainty:g} ({g_source}): scale factors "
+            f"are relative to {G_DEFAULT:g} and the calibration saved allows for up to {g_uncertainty * G_DEFAULT:.2g} "
+            f"m/s^2 at 1 g; give --g, the local gravity, for {G_UNCERTAINTY_LOCAL:g}")
+
+
+def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sigma_source="--sigma", bound=None):
+    """The premises of a model's bounds: each parameter's a-priori bound from `bound` ({name: bound}, the
+    --bound NAME=VALUE of the commands), else `prior` for every stand, mounting, block and effect parameter
+    when given (the override), else the description's, else the default of its kind; Delta_g/g from
+    `g_uncertainty`, else the default for a stated or assumed g."""
     kinds = getattr(mod, "PARAMETER_KINDS", None) or tuple(
         "bias" if n.startswith("bias") else "block" for n in mod.PARAMETER_NAMES)
     stated = getattr(mod, "PARAMETER_BOUNDS", None) or (None,) * len(kinds)
-    if g_uncertainty is not None:
-        g_unc, g_src = g_uncertainty, "--g-uncertainty"
-    elif g_given:
-        g_unc, g_src = G_UNCERTAINTY_LOCAL, "default for a local --g"
-    else:
-        g_unc, g_src = G_UNCERTAINTY_DEFAULT, "default: g = 9.81 assumed, not given"
+    g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     default = {"stand": STAND_BOUND, "mounting": MOUNTING_BOUND, "block": BLOCK_BOUND, "effect": BLOCK_BOUND}
     absorbed = tuple(getattr(mod, "ABSORBED", ()))
+    named = dict(bound or {})
+    for name in named:
+        if name not in mod.PARAMETER_NAMES:
+            raise DataError(f"--bound {name}: not a parameter of this model; its parameters: "
+                            + ", ".join(mod.PARAMETER_NAMES))
+        kind = kinds[mod.PARAMETER_NAMES.index(name)]
+        if kind in ("bias", "gravity"):
+            raise DataError(f"--bound {name}: " + ("a bias enters the readings linearly and needs no bound" if kind == "bias"
+                                                  else "bound Delta_g/g with --g-uncertainty"))
     bounds, sources, split = [], [], {}
     for name, kind, b in zip(mod.PARAMETER_NAMES, kinds, stated):
         if kind == "bias":
             bound, src = np.inf, "none needed: enters linearly"
+        elif name in named:
+            bound, src = named[name], "--bound"
         elif kind == "gravity":
             bound, src = g_unc, g_src
         elif prior is not None:

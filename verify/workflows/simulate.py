@@ -95,14 +95,69 @@ def rows_time_temp(n):
     return k * ROW_SECONDS, 20 + 4 * np.sin(2 * np.pi * k / max(n, 2) * 1.5) + 0.02 * k
 
 
-def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4):
-    """Readings at a plan with random small errors, the given effects and noise bounded by sigma."""
+#: The kinds of a stand's parameters a --size can name (the generated module's PARAMETER_KINDS).
+KINDS = ("stand", "mounting", "gravity", "block", "bias")
+
+
+def parse_sizes(text):
+    """--size: one bound for every parameter ('1e-4'), or one per kind ('stand=1e-4,mounting=3e-3,block=1e-2,
+    bias=0.05'; a kind not named is drawn as 0): {kind: bound}, each a finite number >= 0 and < 1
+    (dimensionless or rad; a bias over g)."""
+    def number(v, what):
+        try:
+            x = float(v)
+        except ValueError:
+            raise DataError(f"--size: {what} {v[:40]!r} is not a number") from None
+        if not (math.isfinite(x) and 0 <= x < 1):
+            raise DataError(f"--size: {what} {v[:40]!r} must be a number >= 0 and < 1 (the bound of a small error)")
+        return x
+    if "=" not in text:
+        return dict.fromkeys(KINDS, number(text, "the bound"))
+    out = dict.fromkeys(KINDS, 0.0)
+    for part in text.split(","):
+        kind, _, v = part.partition("=")
+        if kind.strip() not in KINDS:
+            raise DataError(f"--size: unknown kind {kind.strip()[:40]!r}; name one of {', '.join(KINDS)}")
+        out[kind.strip()] = number(v.strip(), kind.strip())
+    return out
+
+
+def read_truth(path, mod):
+    """--truth FILE.json: {"parameter name": value, ...} for parameters of the stand (the others 0), each a
+    finite number with |value| < 1 (rad, dimensionless, a bias over g)."""
+    from ..io import files
+    files.regular(path, "the truth file", 1_000_000)
+    try:
+        with open(path, "rb") as fh:
+            data = files.json_text(fh.read().decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError) as e:
+        raise DataError(f"{path}: not a JSON object of parameter values ({str(e).splitlines()[0][:120]})") from None
+    if not isinstance(data, dict):
+        raise DataError(f'{path}: expected a JSON object such as {{"kappa": 5e-5, "bias1": 0.05}}')
+    for name, v in data.items():
+        if name not in mod.PARAMETER_NAMES:
+            raise DataError(f"{path}: {name[:40]!r} is not a parameter of this stand; its parameters: "
+                            + ", ".join(mod.PARAMETER_NAMES))
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and abs(v) < 1):
+            raise DataError(f"{path}: {name}: {str(v)[:40]} must be a number with |value| < 1 (rad, dimensionless, "
+                            "or a bias over g)")
+    return {k: float(v) for k, v in data.items()}
+
+
+def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4, truth=None):
+    """Readings at a plan with the given effects and noise bounded by sigma, the stand's own errors drawn at
+    random within `size` (a number, or {kind: bound} as parse_sizes gives), or set by `truth` ({name:
+    value}, the others 0)."""
     from garant.derive import effects as catalogue
     rng = np.random.default_rng(seed)
     ext = catalogue.extend(base_model, [n for n, _ in effects])
     exact = exact_module(ext)
     P, mounts = plan_positions(mod, plan)
-    values = {p.name: rng.uniform(-size, size) for p in base_model.parameters}
+    sizes = size if isinstance(size, dict) else dict.fromkeys(KINDS, size)
+    kinds = dict(zip(mod.PARAMETER_NAMES, getattr(mod, "PARAMETER_KINDS", ("block",) * len(mod.PARAMETER_NAMES))))
+    values = {p.name: rng.uniform(-1, 1) * sizes.get(kinds.get(p.name, "block"), 0.0) for p in base_model.parameters}
+    if truth is not None:
+        values = {p.name: truth.get(p.name, 0.0) for p in base_model.parameters}
     for name, vals in effects:
         values.update(zip((p.name for p in catalogue.CATALOGUE[name].params), vals))
     physical = [values[n] for n in exact.PARAMETER_NAMES]
