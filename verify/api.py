@@ -18,7 +18,8 @@ from .workflows import jobs
 ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--still-factor": "k", "--k": "k", "--min-still": "min_still", "--format": "fmt", "--sigma": "sigma", "--g-uncertainty": "g_uncertainty",
              "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
              "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid",
-             "--search-seconds": "search_seconds", "--count-seconds": "count_seconds",
+             "--search-seconds": "search_seconds", "--count-seconds": "count_seconds", "--search-nodes": "search_nodes",
+             "--count-nodes": "count_nodes",
              "--max-candidates": "max_candidates", "--target": "target", "--bound": "bound"}
 
 
@@ -26,6 +27,7 @@ ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--stil
 CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravity, "g_uncertainty": checks.small,
           "prior": checks.small, "grid": checks.positive, "target": checks.positive,
           "count_seconds": checks.positive, "search_seconds": checks.positive, "max_candidates": checks.positive_int,
+          "search_nodes": checks.positive_int, "count_nodes": checks.positive_int,
           "window": checks.positive, "k": checks.positive, "min_still": checks.positive,
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
@@ -62,17 +64,20 @@ def _api(fn):
 
 
 @_api
-def plan(model, grid=None, count_seconds=5.0, max_candidates=None, search_seconds=None):
+def plan(model, grid=None, count_seconds=None, max_candidates=None, search_seconds=None, search_nodes=None,
+         count_nodes=None):
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
     as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
-    `max_candidates` and `search_seconds` (None: the command's defaults) bound the size and the time of
-    the search for the fewest positions."""
-    from .workflows.plan import MAX_CANDIDATES, SEARCH_SECONDS, norm_plan, plan as search_plan
+    `max_candidates` bounds the size of the search, `search_nodes` and `count_nodes` its work (the same plan
+    on every machine), `search_seconds` and `count_seconds` are its safety stops (None: the command's
+    defaults)."""
+    from .workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS, norm_plan, plan as search_plan
     mod = models.load(model)
     if model == "norm":
         return results.Plan(norm_plan(mod))
-    return results.Plan(search_plan(mod, model, grid, count_seconds, max_candidates or MAX_CANDIDATES,
-                                    search_seconds or SEARCH_SECONDS).to_dict())
+    return results.Plan(search_plan(mod, model, grid, count_seconds or COUNT_SECONDS, max_candidates or MAX_CANDIDATES,
+                                    search_seconds or SEARCH_SECONDS, search_nodes=search_nodes,
+                                    count_nodes=count_nodes).to_dict())
 
 
 @_api

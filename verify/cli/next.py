@@ -18,7 +18,8 @@ def add(sub):
     p.add_argument("--max-candidates", type=options.positive_int, metavar="N",
                    help="refuse a --grid of more than N candidate positions (times mountings; default as for plan)")
     p.add_argument("--search-seconds", type=options.positive, metavar="S",
-                   help="time allowed for proving the fewest positions still needed (default as for plan)")
+                   help="safety stop of the search for the fewest positions still needed (default as for plan; "
+                        "the search itself is budgeted by nodes, the same on every machine)")
     options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
     options.premises(p)
     p.add_argument("--mount", metavar="Q", help="target the block's parameters in mounting Q (e.g. +y+z+x; "

@@ -2,7 +2,8 @@
 import sys
 
 from ..errors import DataError
-from ..workflows.plan import MAX_CANDIDATES, SEARCH_SECONDS
+from ..solve.highs import COUNT_NODES, SEARCH_NODES
+from ..workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS
 from . import args as options
 
 
@@ -14,11 +15,17 @@ def add(sub):
     options.json(p)
     p.add_argument("--grid", type=options.positive, metavar="STEP", help="search positions every STEP degrees (detents "
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
-    p.add_argument("--count-seconds", type=options.positive, default=5.0, metavar="S",
-                   help="time allowed for counting the optimal plans on a large grid (default 5 s)")
+    p.add_argument("--search-nodes", type=options.positive_int, default=SEARCH_NODES, metavar="N",
+                   help=f"work allowed for proving the fewest positions: branch-and-bound nodes (default "
+                        f"{SEARCH_NODES:,}; the same plan on every machine); when they run out, the plan found is "
+                        "printed with a proven lower bound on the fewest")
+    p.add_argument("--count-nodes", type=options.positive_int, default=COUNT_NODES, metavar="N",
+                   help=f"work allowed for counting the optimal plans on a large grid, in nodes (default {COUNT_NODES:,})")
     p.add_argument("--search-seconds", type=options.positive, default=SEARCH_SECONDS, metavar="S",
-                   help=f"time allowed for proving the fewest positions (default {SEARCH_SECONDS:g} s); when it runs "
-                        "out, the plan found is printed with a proven lower bound on the fewest")
+                   help=f"safety stop of the search (default {SEARCH_SECONDS:g} s; a stop it causes is said, for it "
+                        "depends on the machine)")
+    p.add_argument("--count-seconds", type=options.positive, default=COUNT_SECONDS, metavar="S",
+                   help=f"safety stop of the count (default {COUNT_SECONDS:g} s)")
     p.add_argument("--max-candidates", type=options.positive_int, default=MAX_CANDIDATES, metavar="N",
                    help=f"refuse a --grid of more than N candidate positions (times mountings; default {MAX_CANDIDATES:,}: "
                         "a 3-degree grid on the two-axis stand takes about 30 s)")
@@ -50,7 +57,7 @@ def run(args):
     names, mounts = models.layout(mod)
     res = search_plan(mod, args.model, args.grid, args.count_seconds, args.max_candidates, args.search_seconds,
                       progress=lambda text: print(f"plan: {text} ...", file=sys.stderr, flush=True),
-                      certify=bool(args.certificates))
+                      certify=bool(args.certificates), search_nodes=args.search_nodes, count_nodes=args.count_nodes)
     d = res.to_dict()
     if args.route:
         from ..workflows.plan import route
@@ -99,14 +106,16 @@ def _print(mod, res, d, grid, names):
         " and the exchange positions" if res.added else "") + (" x mountings" if res.multi else "")
     print(f"\nminimal number of positions optimal for every q ({where}, {len(r.angles_deg)} positions): "
           + (f"{r.min_positions}" if r.floor is None else
-             f"at most {r.min_positions}, at least {r.floor} (the search stopped after --search-seconds "
-             f"{res.search_seconds:g}; raise it to prove the fewest)"))
+             f"at most {r.min_positions}, at least {r.floor} (the search stopped "
+             + (f"at its safety stop, --search-seconds {res.search_seconds:g}: another machine may go further"
+                if r.clock else f"after --search-nodes {res.search_nodes:,}") + "; raise it to prove the fewest)"))
     if r.floor is not None:
         print(f"a plan of {r.min_positions} positions optimal for every q (not proven the fewest), found by {r.method}")
     else:
         print(f"optimal plans of {r.min_positions} positions on that grid: "
-              + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped; "
-                                                                 "--count-seconds for more)")
+              + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped"
+                 + (" at its safety stop, --count-seconds: another machine may count more" if r.clock else
+                    " after --count-nodes; raise it for more") + ")")
               + f"; counted by {r.method}"
               + ("; every one on quarter turns" if d["optimal_plans_on_quarter_turns"] and grid else ""))
     print(f"plan ({', '.join(a + '_deg' for a in names)}{', mounting' if res.multi else ''}): "

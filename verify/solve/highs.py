@@ -228,19 +228,30 @@ def sparse_dual(A, targets=None, slack=1e-9):
     return Lam, values
 
 
-def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()):
+#: The work the search for the fewest positions may take: branch-and-bound nodes of its first solve (the
+#: built-in stands prove their minimum in a few), then nodes for counting the plans of that size (in all).
+#: Budgeted by work, the result is the same on every machine; the time limits are a safety stop only.
+SEARCH_NODES = 20_000
+COUNT_NODES = 20
+
+
+def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=(), nodes=SEARCH_NODES,
+                   count_nodes=COUNT_NODES):
     """Every smallest set of positions x (binary, S) such that, for each block (V (m x C), owner (C,)
     position of each column, cap), some w >= 0 has V w = e and w_k <= cap x_owner(k): a mixed-integer
-    program solved, then re-solved with each set found cut off (sum over it <= size - 1) and the size
-    fixed, until infeasible, `limit` sets or `seconds` of solving. Returns (size, sets, complete, floor):
-    floor is None when size is proven smallest, else the solver's proven lower bound on it (the first
-    solve stopped at `search_seconds` with a set found but not proven smallest). The positions `fixed`
-    are in every set (those already measured)."""
+    program solved (at most `nodes` branch-and-bound nodes), then re-solved with each set found cut off
+    (sum over it <= size - 1) and the size fixed, until infeasible, `limit` sets or `count_nodes` nodes in
+    all. Returns (size, sets, complete, floor, clock): floor is None when size is proven smallest, else the
+    solver's proven lower bound on it (the first solve stopped with a set found but not proven smallest);
+    clock is True when a safety time limit (`search_seconds` for the first solve, `seconds` in all) stopped
+    the work rather than its node budget: then the result may differ on another machine. The positions
+    `fixed` are in every set (those already measured)."""
     import math
     import time
     start = time.perf_counter()
     h = new()
     h.setOptionValue("mip_rel_gap", 0.0)
+    h.setOptionValue("mip_max_nodes", int(nodes))
     if search_seconds is not None:
         h.setOptionValue("time_limit", float(search_seconds))
     inf = INF
@@ -260,24 +271,34 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
         for k in range(C):                                   # w_k - cap x_owner <= 0
             h.addRow(-inf, 0.0, 2, np.array([idx[k], owner[k]], dtype=np.int32), np.array([1.0, -cap]))
         n += C
-    found, size = [], None
-    while len(found) < limit and (not found or time.perf_counter() - start < seconds):
-        if found:                                   # the first plan always; the count within the time left
+    stopped = (highspy.HighsModelStatus.kTimeLimit, highspy.HighsModelStatus.kSolutionLimit,
+               highspy.HighsModelStatus.kIterationLimit)
+    found, size, spent = [], None, 0
+    while len(found) < limit:
+        if found:                                   # the first plan always; the count within what is left
+            left = count_nodes - spent
+            if left <= 0 or time.perf_counter() - start >= seconds:
+                return size, tuple(found), False, None, left > 0
+            h.setOptionValue("mip_max_nodes", int(left))
             h.setOptionValue("time_limit", max(seconds - (time.perf_counter() - start), 0.1))
         h.run()
         status = h.getModelStatus()
-        if found and status == highspy.HighsModelStatus.kTimeLimit:
-            return size, tuple(found), False, None
-        if status == highspy.HighsModelStatus.kTimeLimit and h.getInfo().primal_solution_status == 2:
+        clock = status == highspy.HighsModelStatus.kTimeLimit
+        if found:
+            spent += max(h.getInfo().mip_node_count, 1)
+            if status in stopped:
+                return size, tuple(found), False, None, clock
+        elif status in stopped and h.getInfo().primal_solution_status == 2:
             x = np.array(h.getSolution().col_value[:S])              # a plan, not proven the smallest
             plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
-            return len(plan), (plan,), False, math.ceil(h.getInfo().mip_dual_bound - 1e-6)
-        if status == highspy.HighsModelStatus.kTimeLimit:
-            raise DataError(f"the plan search found no plan within --search-seconds on {S} candidate positions: "
-                            "raise --search-seconds, or give fewer candidates")
+            return len(plan), (plan,), False, math.ceil(h.getInfo().mip_dual_bound - 1e-6), clock
+        elif status in stopped:
+            which = "--search-seconds" if clock else "--search-nodes"
+            raise DataError(f"the plan search found no plan within {which} on {S} candidate positions: raise it, or "
+                            "give fewer candidates")
         if status != highspy.HighsModelStatus.kOptimal:
             if found:
-                return size, tuple(found), True, None
+                return size, tuple(found), True, None, False
             raise LPFailed(f"the plan search (mixed-integer program): {h.modelStatusToString(h.getModelStatus())}")
         x = np.array(h.getSolution().col_value[:S])
         plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
@@ -286,4 +307,4 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
             h.addRow(size, size, S, np.arange(S, dtype=np.int32), np.ones(S))
         found.append(plan)
         h.addRow(-inf, size - 1, size, np.array(plan, dtype=np.int32), np.ones(size))
-    return size, tuple(found), False, None
+    return size, tuple(found), False, None, False

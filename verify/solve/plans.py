@@ -286,6 +286,7 @@ class PlanSearch:
     duals: tuple = ()                           # per nu: the dual vector lambda (exact when it could be)
     method: str = ""                            # how the plans were counted
     floor: int | None = None                    # None: min_positions proven; else a proven lower bound
+    clock: bool = False                         # a safety time limit, not the work budget, stopped the search
 
     def plan_deg(self, plan):
         """The angles in degrees of the positions of a plan (indices into the grid)."""
@@ -326,10 +327,12 @@ def _bitmask_plans(S, per_nu):
 PLAN_COUNT_LIMIT = 200
 
 
-def covering_plans(cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None, fixed=()):
+def covering_plans(cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seconds=None, fixed=(), nodes=None,
+                   count_nodes=None):
     """The fewest positions carrying an optimal estimator of every q, and every plan of that size: a
     mixed-integer program (HiGHS), re-solved with each plan found cut off until the size grows (or
-    `limit` plans). Returns (size, plans, complete, floor) as highs.covering_plans.
+    `limit` plans), within `nodes` and `count_nodes` (None: highs.SEARCH_NODES, COUNT_NODES). Returns
+    (size, plans, complete, floor, clock) as highs.covering_plans.
 
     For each q_nu, weights w >= 0 on the measurements where its dual certificate touches, with
     sum_k w_k sign_k H_k = e_nu (then sum w = lambda_nu, the optimum), and w_k <= lambda_nu x_s.
@@ -342,7 +345,8 @@ def covering_plans(cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seco
         cand, signs = touching(cols, lam)
         V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float).T        # (m, C)
         blocks.append((V, np.array([s for s, _ in cand]), float(lam[nu]), np.eye(m)[nu]))
-    return highs.covering_plans(S, blocks, limit, seconds, search_seconds, fixed)
+    return highs.covering_plans(S, blocks, limit, seconds, search_seconds, fixed, nodes or highs.SEARCH_NODES,
+                                highs.COUNT_NODES if count_nodes is None else count_nodes)
 
 
 def estimator_in(cols, nu, lam):
@@ -395,12 +399,13 @@ def columns(mod, angles_deg, mounts):
 
 
 def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0,
-           search_seconds=None):
+           search_seconds=None, search_nodes=None, count_nodes=None):
     """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans.
 
-    A mixed-integer search (grids beyond the bit masks) still running `search_seconds` after the call
-    began keeps the plan it found, with the solver's proven lower bound on the fewest positions as
-    `floor`."""
+    A mixed-integer search (grids beyond the bit masks) is budgeted by work: `search_nodes` nodes to prove
+    the fewest positions (beyond, it keeps the plan it found, with the solver's proven lower bound as
+    `floor`) and `count_nodes` to count the plans of that size; `search_seconds` and `count_seconds` are a
+    safety stop (`clock` says when one fired)."""
     import time
     deadline = None if search_seconds is None else time.perf_counter() + search_seconds
     if angles_deg is None:
@@ -419,18 +424,19 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
                         and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
                    for nu, lam in enumerate(lams))
     S = len(angles_deg)
-    floor = None
+    floor, clock = None, False
     if S <= BITMASK_LIMIT and all(sets is not None for sets in per_nu):
         n, plans = _bitmask_plans(S, per_nu)
         exhaustive, method = True, "every subset of the grid (bit masks)" + (
             ", in floating point (positions off the 15-degree grid)" if cols.dtype.kind == "f" else "")
     else:
         left = None if deadline is None else max(deadline - time.perf_counter(), 0.5)
-        n, plans, exhaustive, floor = covering_plans(cols, lams, count_limit, count_seconds, left)
+        n, plans, exhaustive, floor, clock = covering_plans(cols, lams, count_limit, count_seconds, left,
+                                                            nodes=search_nodes, count_nodes=count_nodes)
         exact = all([_confirm(cols, lams, plan) for plan in plans])
         method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
                   + ("exactly" if exact else "(in floating point where the dual is not exact)"))
     if not plans:
         raise ValueError("no plan on this grid is optimal for every parameter")
     return PlanSearch(np.asarray(angles_deg, float), mounts, n, plans, exhaustive, tuple(per_nu), errors, proven,
-                      tuple(lams), method, floor)
+                      tuple(lams), method, floor, clock)

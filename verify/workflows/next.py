@@ -188,7 +188,7 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     if np.all(before <= goal * (1 + AT_TARGET)):
         return Next(**common, position=None, after=None, still_needed=0, still_needed_proven=True)
     if target is None and mount is None and not nominal_done:
-        n, found, _, floor = plans.covering_plans(cols, lams, 1, 1.0, search_seconds or SEARCH_SECONDS, fixed)
+        n, found, _, floor, _ = plans.covering_plans(cols, lams, 1, 1.0, search_seconds or SEARCH_SECONDS, fixed)
         pool, needed, proven = [s for s in found[0] if s not in fixed], n - len(fixed), floor is None
     else:                                         # (nominal_done: the plan would be, what estimate prints is not)
         pool = []

@@ -19,7 +19,8 @@ class Plan:
     continuum: list | None        # the exchange method's optimum on the continuum, per q (None: detents)
     added: int                    # exchange positions added to the candidates
     grid_step: float | None       # degrees (None: detents or quarter turns)
-    search_seconds: float | None = None   # the time allowed for proving the fewest positions
+    search_seconds: float | None = None   # the safety stop of the search for the fewest positions
+    search_nodes: int | None = None       # the work allowed for it (branch-and-bound nodes)
 
     @property
     def finite(self):
@@ -54,6 +55,7 @@ class Plan:
             "min_positions": r.min_positions, "min_positions_proven": r.floor is None,
             "min_positions_at_least": r.min_positions if r.floor is None else r.floor,
             "optimal_plans_count": len(r.optimal_plans) if r.exhaustive else None,
+            "stopped_by_clock": bool(r.clock),
             "optimal_plans_on_quarter_turns": bool(on_quarter),
             "plan": [self.position(s) for s in self.plan],
             "optimal_plans": [[self.position(s) for s in pl] for pl in r.optimal_plans]}
@@ -63,10 +65,11 @@ class Plan:
 #: grid on the two-axis stand (14,400) takes about 30 s on one core.
 MAX_CANDIDATES = 10_000
 
-#: The time the search for the fewest positions may take (s) before it keeps the plan it has, with a
-#: proven lower bound on the fewest: 24 mountings of a four-detent table take minutes to prove, the
-#: built-in stands' grids under 3 s.
-SEARCH_SECONDS = 7.0
+#: Safety stops only (s): the search for the fewest positions and the count of its plans are budgeted by
+#: work (--search-nodes, --count-nodes: solve/highs.py), so that they give the same plan on every machine;
+#: a time limit that fires instead is said, for its result may differ elsewhere.
+SEARCH_SECONDS = 300.0
+COUNT_SECONDS = 120.0
 
 
 def refuse_variables(mod, model):
@@ -79,12 +82,14 @@ def refuse_variables(mod, model):
                         f"{', '.join(variables)} on every row, and estimate with this one")
 
 
-def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES, search_seconds=SEARCH_SECONDS,
-         progress=None, certify=False):
+def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_CANDIDATES,
+         search_seconds=SEARCH_SECONDS, progress=None, certify=False, search_nodes=None, count_nodes=None):
     """The Plan of a stand model: candidates every `grid` degrees (default: detents or quarter turns), and
     on a stand with a continuous angle the exchange method's positions added when the candidates miss
     the continuum optimum. A grid of more than `max_candidates` positions (times mountings) is refused
-    before any work; the search for the fewest positions keeps its best plan after `search_seconds`.
+    before any work; the search for the fewest positions keeps its best plan after `search_nodes`
+    branch-and-bound nodes, and counts the plans of that size within `count_nodes` (None: the defaults of
+    solve/highs.py); the seconds are a safety stop.
     `progress(text)`, when given, hears the size of a search beyond the bit masks before it starts.
     With `certify`, a stand whose H is not exact at the candidates (no certificate can be written) is
     refused before the search."""
@@ -100,10 +105,14 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
             exact.exact_columns(mod, P[:1], M[:1])
         except ValueError as e:
             raise DataError(f"--certificates: {e}") from None
+    from ..solve import highs
+    work = dict(count_seconds=count_seconds, search_seconds=search_seconds, search_nodes=search_nodes,
+                count_nodes=count_nodes)
     if progress is not None and len(P) > plans.BITMASK_LIMIT:
         progress(f"{len(P)} candidate positions, {len(mod.Q_NAMES)} combinations: the fewest positions by a "
-                 f"mixed-integer program (up to {search_seconds:g} s, then {count_seconds:g} s counting)")
-    r = plans.search(mod, P, M, count_seconds=count_seconds, search_seconds=search_seconds)
+                 f"mixed-integer program (up to {search_nodes or highs.SEARCH_NODES:,} nodes, then "
+                 f"{highs.COUNT_NODES if count_nodes is None else count_nodes:,} counting)")
+    r = plans.search(mod, P, M, **work)
     n = len(names)
     ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
     detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
@@ -112,13 +121,12 @@ def plan(mod, model, grid=None, count_seconds=5.0, max_candidates=MAX_CANDIDATES
         sol = continuum.exchange(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
         cont = sol.values
         if any(e > c + 1e-7 for e, c in zip(r.errors, cont)):   # the exchange positions become candidates
-            r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), count_seconds,
-                                      search_seconds)
+            r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), work)
     return Plan(model, mod, r, _preferred_plan(mod, r), None if cont is None else list(cont), added, grid,
-                search_seconds)
+                search_seconds, search_nodes or highs.SEARCH_NODES)
 
 
-def _with_exchange(mod, r, P, M, sol, ranges, detents, k, count_seconds, search_seconds):
+def _with_exchange(mod, r, P, M, sol, ranges, detents, k, work):
     """The search again with the exchange method's positions as candidates: exact ones (multiples of 15
     degrees) first, then all, until the candidates reach the continuum optimum. (search, added)."""
     from ..solve import plans
@@ -131,8 +139,7 @@ def _with_exchange(mod, r, P, M, sol, ranges, detents, k, count_seconds, search_
         if not new:
             continue
         P2 = np.vstack([base, np.array(new)])
-        r, added = plans.search(mod, np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2)),
-                                count_seconds=count_seconds, search_seconds=search_seconds), len(new)
+        r, added = plans.search(mod, np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2)), **work), len(new)
         if all(e <= c + 1e-7 for e, c in zip(r.errors, sol.values)):
             break
     return r, added
