@@ -118,14 +118,49 @@ def test_reports_for_estimate_and_calibrate_norm(tmp_path, capsys):
         assert "**consistent**" in page and "lambda1" in page and (tmp_path / "c" / "directions.png").exists()
 
 
+def _kalibr_fields(path):
+    return dict(line.split("#")[0].strip().split(": ") for line in path.read_text().splitlines()
+                if ": " in line.split("#")[0])
+
+
 @needs_real
-def test_kalibr_export(tmp_path, capsys):
+def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
+    # Issue 44: --export-kalibr wrote the nested imu0: layout of Kalibr's output, which its input reader
+    # (ImuParameters: flat rostopic, update_rate and four noise figures, each > 0) cannot read. Now the flat
+    # keys; what an accelerometer log does not measure is a comment, never a number made up.
+    from garant.verify.io.calibration import KALIBR_KEYS
     out = tmp_path / "imu.yaml"
     assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--export-kalibr", str(out)]) == 0
-    fields = dict(line.split("#")[0].strip().split(": ") for line in out.read_text().splitlines()
-                  if ": " in line.split("#")[0])
+    fields = _kalibr_fields(out)
     assert 1e-4 < float(fields["accelerometer_noise_density"]) < 1e-1
     assert float(fields["update_rate"]) == pytest.approx(100, rel=0.01)           # the log is about 100 Hz
+    assert not {"gyroscope_noise_density", "accelerometer_random_walk"} & set(fields)   # 7 s intervals: no walk
+    assert "Kalibr's reader also needs: accelerometer_random_walk" in capsys.readouterr().out
+    assert main(["calibrate-norm", str(REAL / "imu_tk_xsens_acc.txt"), "--g", str(G), "--export-kalibr", str(out),
+                 "--kalibr-gyro", "1.7e-4,1.9e-5", "--kalibr-topic", "/xsens/imu"]) == 0
+    fields = _kalibr_fields(out)
+    assert set(KALIBR_KEYS) <= set(fields) and fields["rostopic"] == "/xsens/imu"
+    assert all(float(fields[k]) > 0 for k in KALIBR_KEYS if k != "rostopic")     # the reader's own checks
+    assert "every field Kalibr's reader needs" in capsys.readouterr().out
+
+
+@needs_real
+def test_apply_in_the_imu_tk_frame_is_the_imu_tk_file(tmp_path, capsys):
+    # Issue 44: the imu_tk file holds a norm calibration turned into imu_tk's upper-triangular T, while apply
+    # corrected into garant's frame: up to 0.42 m/s^2 apart on the Xsens log. apply --frame imu_tk gives the
+    # file's frame (to the CSV's 8 digits), its bound carried through the turn; the default is garant's.
+    log = REAL / "imu_tk_xsens_acc.txt"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--save", str(tmp_path / "c.json"), "--export-imu-tk",
+                 str(tmp_path / "c.txt")]) == 0
+    assert "turned 1.34 degrees from garant's" in capsys.readouterr().out
+    M, B = calibration.read_imu_tk(tmp_path / "c.txt")
+    raw = recordings.read_log(str(log), None, "adxl355", None).raw
+    for frame, far in (("imu_tk", False), ("garant", True)):
+        assert main(["apply", str(tmp_path / "c.json"), str(log), "-o", str(tmp_path / "a.csv"), "--frame", frame]) == 0
+        a = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)[:, 1:4]
+        gap = np.abs(a - (M @ (raw - B).T).T).max()
+        assert (gap > 0.1) if far else (gap < 1e-5), (frame, gap)
+    assert "the garant frame is turned 1.34 degrees from it" in capsys.readouterr().out
 
 
 def test_outputs_honour_the_umask(tmp_path):

@@ -45,6 +45,7 @@ def test_each_report_is_one_self_contained_page(tmp_path, capsys):
         assert "<table>" in html and "Premises" in html and "Reproduce with" in html
         assert hashlib.sha256(source.read_bytes()).hexdigest() in html and "garant 0." in html
         assert "@page{size:A4" in html
+    assert "The log, its still intervals, and the residual of each" in (tmp_path / "c" / "index.html").read_text()
     assert "a&lt;b&gt;.csv" in (tmp_path / "e" / "index.html").read_text() and "a<b>" not in (
         tmp_path / "e" / "index.html").read_text()
 

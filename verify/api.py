@@ -31,7 +31,8 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "window": checks.positive, "k": checks.positive, "min_still": checks.positive,
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
-          "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds}
+          "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
+          "frame": checks.one_of("garant", "imu_tk")}
 
 
 def _api(fn):
@@ -180,7 +181,7 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=N
 
 
 @_api
-def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False):
+def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, frame="garant"):
     """Correct a raw log with a calibration, as `garant apply`.
 
     Parameters
@@ -189,10 +190,12 @@ def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False):
         checked as `garant apply` checks it (schema, a well-conditioned M, the log's unit unless
         `trust_units`).
     log : a log path or an array (N, 4): time in s, then x, y, z raw.
+    frame : "garant" (M as calibrated) or "imu_tk", the frame of the imu_tk export (for a norm calibration
+        turned into imu_tk's upper-triangular T; the command prints the angle between them).
 
     Returns
     -------
     Correction: t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2, the worst-case error of each component;
     it unpacks as (t, a, bound).
     """
-    return jobs.apply(calibration, log, fmt, sensor, imu, trust_units)
+    return jobs.apply(calibration, log, fmt, sensor, imu, trust_units, frame=frame)

@@ -10,7 +10,8 @@ import numpy as np
 from .errors import DataError
 
 MODELS = {"two-axis": "garant.generated.two_axis", "single-axis": "garant.generated.single_axis",
-          "three-axis": "garant.generated.three_axis", "norm": "garant.generated.norm"}
+          "three-axis": "garant.generated.three_axis", "six-face": "garant.generated.six_face",
+          "norm": "garant.generated.norm"}
 STANDS = ["two-axis", "single-axis", "three-axis"]       # models with stand angles (plan, estimate)
 
 

@@ -29,6 +29,7 @@ OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("
            ("out", "the output folder", "folder"), ("save", "the calibration file", "file"),
            ("export_imu_tk", "the imu_tk calibration file", "file"),
            ("csv", "the plan file", "file"), ("export_kalibr", "the Kalibr YAML", "file"),
+           ("export_imucal", "the imucal calibration file", "file"),
            ("markdown", "the Markdown file", "file"))
 
 

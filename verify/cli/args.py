@@ -67,6 +67,25 @@ def named_bound(text):
     return name.strip(), small(value)
 
 
+def imucal_export(p):
+    """--export-imucal FILE.json and --imucal-gyro CAL.json: the calibration as imucal's file."""
+    p.add_argument("--export-imucal", metavar="FILE.json", help="also write the calibration as imucal's "
+                   "FerrarisCalibrationInfo (load_calibration_info reads it); the bounds in its comment")
+    p.add_argument("--imucal-gyro", metavar="CAL.json", help="the imucal calibration whose gyroscope part "
+                   "--export-imucal carries (else the gyroscope is written as not calibrated)")
+
+
+def export_imucal(args, cal):
+    """Write --export-imucal when asked: garant's accelerometer, the gyroscope of --imucal-gyro or none."""
+    if not getattr(args, "export_imucal", None):
+        return
+    from ..io import imucal, report
+    gyro = imucal.read_calibration(args.imucal_gyro) if args.imucal_gyro else None
+    report.write_json(args.export_imucal, imucal.calibration_json(cal, gyro))
+    print(f"wrote {args.export_imucal}" + ("" if gyro else " (gyroscope not calibrated: --imucal-gyro CAL.json "
+                                                           "carries an imucal calibration's)"))
+
+
 def say_gravity(g_given, premises):
     """The gravity line (workflows/premises.gravity_line) on a line of its own, when --g was not given."""
     from ..workflows.premises import gravity_line

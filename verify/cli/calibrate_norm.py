@@ -35,8 +35,24 @@ def add(sub):
     p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
                    "for `garant apply`")
     p.add_argument("--export-imu-tk", metavar="FILE", help="write the calibration in imu_tk's form (T, K, B)")
-    p.add_argument("--export-kalibr", metavar="FILE.yaml", help="write a Kalibr-style imu.yaml (noise density, rate)")
+    p.add_argument("--export-kalibr", metavar="FILE.yaml",
+                   help="write the IMU file Kalibr's reader takes (imu.yaml: rate, noise density, random walk; the "
+                        "gyroscope's from --kalibr-gyro, else written as missing)")
+    p.add_argument("--kalibr-gyro", metavar="ND,RW", type=_gyro,
+                   help="the gyroscope's noise density (rad/s/sqrt(Hz)) and random walk (rad/s^2/sqrt(Hz)) for "
+                        "--export-kalibr (an accelerometer log does not measure them)")
+    p.add_argument("--kalibr-topic", default="/imu0", metavar="TOPIC", help="the rostopic of --export-kalibr")
+    options.imucal_export(p)
     return p
+
+
+def _gyro(text):
+    """--kalibr-gyro ND,RW: two finite numbers > 0."""
+    import argparse
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r}: give ND,RW, e.g. 1.7e-4,1.9e-5")
+    return tuple(options.positive(p) for p in parts)
 
 
 def run(args):
@@ -51,7 +67,7 @@ def run(args):
     import copy
 
     from ..io import mimu, report
-    for opt in ("save", "export_imu_tk", "export_kalibr", "plot", "report"):
+    for opt in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report"):
         if getattr(args, opt):
             raise DataError(f"--{opt.replace('_', '-')} writes one sensor's calibration: give one IMU with --imu K")
     results, codes = {}, []
@@ -75,14 +91,19 @@ def _run(args, into=None):
         report.write_json(args.json, res)
     if args.plot:
         from ..io import plots
-        plots.norm_residuals(res, args.plot)
+        plots.norm_residuals(res, _log_of(args), args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
-    if args.save or args.export_imu_tk:
+    if args.save or args.export_imu_tk or args.export_imucal:
         _save(res, args)
     if args.export_kalibr:
         from ..io import calibration
-        report.write_text(args.export_kalibr, calibration.kalibr_text(res["noise_density"], res["rate_hz"]))
-        print(f"wrote {args.export_kalibr}")
+        walk, why = res["random_walk"], res["random_walk_note"]
+        report.write_text(args.export_kalibr, calibration.kalibr_text(res["noise_density"], res["rate_hz"], walk,
+                                                                      args.kalibr_gyro, args.kalibr_topic, why))
+        missing = ([] if walk is not None else [f"accelerometer_random_walk ({why})"]) + (
+            [] if args.kalibr_gyro else ["the gyroscope's two fields (--kalibr-gyro ND,RW)"])
+        print(f"wrote {args.export_kalibr}" + (f"; Kalibr's reader also needs: {'; '.join(missing)}" if missing
+                                              else ": every field Kalibr's reader needs"))
     if args.report:
         _report(res, args)
     if into is not None:
@@ -109,8 +130,14 @@ def _print(res, args):
     for row in res["matrix"]:
         print("   " + "  ".join(f"{v:+.6e}" for v in row))
     print("b (raw units): " + "  ".join(f"{v:+.6e}" for v in res["bias"]))
-    print("the same in imu_tk's form X' = T K (X - B): T = M diag(M)^-1 (unit diagonal), K = diag(M) = "
-          + "  ".join(f"{v:.6e}" for v in np.diag(np.array(res["matrix"]))) + ", B = b")
+    from ..io import calibration
+    T, K, R = calibration.imu_tk_form({"M": res["matrix"], "kind": "norm"})
+    print(f"as --export-imu-tk writes it, X' = T K (X - B), B = b, in imu_tk's frame (T upper triangular), turned "
+          f"{calibration.frame_turn_deg(R):.3g} degrees from garant's (apply --frame imu_tk gives that frame; the "
+          "default is garant's): T =")
+    for row in T:
+        print("   " + "  ".join(f"{v:+.6e}" for v in row))
+    print("K = diag(" + "  ".join(f"{v:.6e}" for v in np.diag(K)) + ")")
     dsig = res["delta_sigma_max"]
     print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * res['g']:.3e} m/s^2), from the "
           f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
@@ -149,6 +176,7 @@ def _save(res, args):
         if path:
             write(path, res["calibration"])
             print(f"wrote {path}")
+    options.export_imucal(args, res["calibration"])
 
 
 UNITS = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
@@ -195,6 +223,13 @@ def _print_bounds(res, args=None):
               f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
 
 
+def _log_of(args):
+    """(t, raw) of the log, read again for its plot (the calibration keeps only the still intervals)."""
+    from ..workflows import jobs
+    data = jobs.read_log(args.log, args.format, args.sensor, args.imu)
+    return data.t, data.raw
+
+
 def _report(res, args):
     from pathlib import Path
 
@@ -202,7 +237,7 @@ def _report(res, args):
 
     from ..io import files, plots, report
     folder = files.make_folder(args.report)
-    plots.norm_residuals(res, folder / "residuals.png")
+    plots.norm_residuals(res, _log_of(args), folder / "residuals.png")
     rows = res["per_interval"]
     M, b = np.array(res["matrix"]), np.array(res["bias"])
     plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows], [res["g"] * r["noise_rule"] for r in rows],
@@ -222,7 +257,7 @@ def _report(res, args):
               _side(k, pars[k]) if k in pars else "", _side(k, v).lstrip("+"),
               f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
              for k, v in res["guaranteed_error"].items()])))
-    sections += [("Residual per still interval", report.Image("residuals.png")),
+    sections += [("The log, its still intervals, and the residual of each", report.Image("residuals.png")),
                  ("Residual against the direction of gravity", report.Image("directions.png"))]
     command = report.command_line(args, f"garant calibrate-norm {args.log} --params {args.params}")
     print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections, [args.log])}")

@@ -15,6 +15,9 @@ def add(sub):
     options.model(p)
     options.sigma(p)
     options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
+    p.add_argument("--format", choices=("imucal",), help="imucal: a Ferraris session (acc_x, acc_y, acc_z in m/s^2) with "
+                   "--sections or a part column, for --model six-face")
+    p.add_argument("--sections", metavar="LIST.json", help="imucal's section list of the session (x_p, x_a, ...)")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a means file with an imu column")
     p.add_argument("--run", dest="which_run", metavar="R", help="run R of a means file with a run column (exp or run)")
     p.add_argument("--mount", metavar="Q", help="mounting of the block, e.g. +y+z+x (block axis 1 along "
@@ -30,6 +33,7 @@ def add(sub):
                    "`garant apply`, from any stand")
     p.add_argument("--export-imu-tk", metavar="FILE", help="also write the block's calibration in imu_tk's form "
                    "(T, K, B), the stand's frame")
+    options.imucal_export(p)
     return p
 
 
@@ -41,9 +45,9 @@ def run(args):
     res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
                         args.gamma, args.imu, args.which_run,
                         progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True),
-                        bound=dict(args.bound))
+                        bound=dict(args.bound), fmt=args.format, sections=args.sections)
     mod = models.load(args.model)
-    wanted = args.save or args.export_imu_tk
+    wanted = args.save or args.export_imu_tk or args.export_imucal
     if wanted and res["consistent"] and "calibration" not in res and not res.get("premises_refuted"):
         why = res.get("block_not_separated", "this model has no block parameters")
         raise DataError(f"--save/--export-imu-tk: {why}; nothing written")
@@ -174,6 +178,8 @@ def print_estimate(res, mod, args):
             if path:
                 write(path, res["calibration"])
                 print(f"wrote {path}")
+    if "calibration" in res:
+        options.export_imucal(args, res["calibration"])
     return 0
 
 

@@ -198,8 +198,14 @@ def check_units(cal, log_path, raw, cal_path):
                         "--trust-units if the scale is right")
 
 
-def apply(cal, raw):
-    """Corrected specific force (N, 3) in m/s^2 and its worst-case error per sample (N, 3). Computed
+#: The frames `apply` can correct into: garant's (M as calibrated) or that of the imu_tk export.
+FRAMES = ("garant", "imu_tk")
+
+
+def apply(cal, raw, frame="garant"):
+    """Corrected specific force (N, 3) in m/s^2 and its worst-case error per sample (N, 3), in garant's
+    frame or, with frame "imu_tk", in the frame of the imu_tk export (`imu_tk_form`: turned by R, the
+    bound carried through |R|). Computed
     axis by axis ((3, N), each axis contiguous): |n_i n_j| = |a_i a_j| / |a|^2. The nonlinearity the file
     states (`delta`, of the 12-parameter model) is taken out as calibrate-norm fitted it, g delta_l n_axis(l)
     n_l with n the direction of M (raw - b); its bound `bound_delta` stays in the bound, and so does what the
@@ -217,23 +223,39 @@ def apply(cal, raw):
     if np.any(delta):
         moved = 4 * np.sqrt((bound * bound).sum(axis=0) * inv2)          # bounds |n - m| twice over
         bound = bound + inverse @ ((cal["g"] * np.abs(delta))[:, None] * moved)
+    if frame == "imu_tk":
+        R = imu_tk_form(cal)[2]
+        a, bound = R @ a, (np.abs(R) @ bound) * (1 + 1e-12)
     return a.T, (bound * (1 + 1e-12)).T
+
+
+def imu_tk_form(cal):
+    """(T, K, R): the imu_tk file's T (unit diagonal) and K with T K = R M, R the turn from garant's frame
+    into the file's. A norm calibration's frame is free (the norm relation sees |a| only): it is turned,
+    M -> Q^T M by the QR decomposition M = Q U, into imu_tk's own convention for accelerometers, T upper
+    triangular, with the same |a| for every reading. A stand calibration's frame is the stand's (R = I)."""
+    M = np.asarray(cal["M"], float)
+    R = np.eye(3)
+    if cal.get("kind") == "norm":
+        Q, U = np.linalg.qr(M)
+        S = np.diag(np.sign(np.diag(U)))          # positive scale factors: U -> S U, Q -> Q S
+        R, M = (Q @ S).T, np.triu(S @ U)
+    K = np.diag(np.diag(M))
+    T = M @ np.linalg.inv(K)
+    np.fill_diagonal(T, 1.0)
+    return T, K, R
+
+
+def frame_turn_deg(R):
+    """The angle (degrees) of the turn R between two frames."""
+    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))))
 
 
 def imu_tk_text(cal):
     """The calibration in imu_tk's CalibratedTriad file form (T, K, B), X' = T K (X - B), its unit
-    diagonal written as exactly 1. A norm calibration's frame is free (the norm relation sees |a| only):
-    it is turned, M -> Q^T M by the QR decomposition M = Q U, into imu_tk's own convention for
-    accelerometers, T upper-triangular, with the same |a| for every reading. A stand calibration's frame
-    is the stand's and is written as it is (imu_tk reads a general T)."""
-    M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
-    if cal.get("kind") == "norm":
-        Q, U = np.linalg.qr(M)
-        S = np.diag(np.sign(np.diag(U)))          # positive scale factors: U -> S U, Q -> Q S
-        M = np.triu(S @ U)
-    K = np.diag(np.diag(M))
-    T = M @ np.linalg.inv(K)
-    np.fill_diagonal(T, 1.0)
+    diagonal written as exactly 1, in the frame `imu_tk_form` says."""
+    T, K, _ = imu_tk_form(cal)
+    b = np.asarray(cal["b"], float)
 
     def block(X):
         return "\n".join(" ".join(f"{v:.17g}" for v in row) for row in X)
@@ -259,14 +281,33 @@ def read_imu_tk(path):
     return T @ K, B
 
 
-def kalibr_text(noise_density, rate_hz):
-    """A Kalibr-style IMU YAML (imu.yaml) with the fields Kalibr has for these quantities: the
-    accelerometer noise density (m/s^2/sqrt(Hz)) and the update rate (Hz). Kalibr's imu.yaml has no
-    fields for scale, misalignment or bias: those stay in the garant JSON and the imu_tk file."""
-    return ("# Written by garant calibrate-norm --export-kalibr: the fields Kalibr's imu.yaml has for what a static\n"
-            "# calibration measures. Scale, misalignment and bias are not imu.yaml fields: see the garant JSON\n"
-            "# (--save) or the imu_tk file (--export-imu-tk). The random walks are not measured by a static log.\n"
-            "imu0:\n"
-            "  T_i_b:\n" + "".join(f"    - [{', '.join('1.0' if i == j else '0.0' for j in range(4))}]\n" for i in range(4))
-            + f"  accelerometer_noise_density: {noise_density:.6g}   # [ m / s^2 / sqrt(Hz) ]\n"
-            + f"  update_rate: {rate_hz:.6g}   # [ Hz ]\n")
+def kalibr_text(noise_density, rate_hz, random_walk=None, gyro=None, topic="/imu0", why_no_walk=""):
+    """The IMU file Kalibr's reader takes (its ImuParameters: flat keys rostopic,
+    update_rate, accelerometer_noise_density (m/s^2/sqrt(Hz)), accelerometer_random_walk (m/s^3/sqrt(Hz)),
+    gyroscope_noise_density (rad/s/sqrt(Hz)), gyroscope_random_walk (rad/s^2/sqrt(Hz))). What a static
+    accelerometer log does not measure is never invented: the random walk when no still interval is long
+    enough (`why_no_walk` says why) and the gyroscope's figures unless given (`gyro` = (noise density,
+    random walk)) are written as comments, and Kalibr's reader then names the missing key."""
+    lines = ["# Written by garant calibrate-norm --export-kalibr: Kalibr's IMU configuration (imu.yaml), the",
+             "# statistics Kalibr's reader takes. Scale, misalignment and bias are no fields of it: see the garant",
+             "# JSON (--save) or the imu_tk file (--export-imu-tk).",
+             f"rostopic: {topic}",
+             f"update_rate: {rate_hz:.6g}   # [ Hz ]",
+             f"accelerometer_noise_density: {noise_density:.6g}   # [ m / s^2 / sqrt(Hz) ], from the still intervals"]
+    lines.append(f"accelerometer_random_walk: {random_walk:.6g}   # [ m / s^3 / sqrt(Hz) ], from the longest still "
+                 "interval (Allan deviation; statistical, not a bound)" if random_walk is not None else
+                 f"# accelerometer_random_walk: not measured ({why_no_walk}); Kalibr needs it")
+    if gyro is not None:
+        lines += [f"gyroscope_noise_density: {gyro[0]:.6g}   # [ rad / s / sqrt(Hz) ], as given (--kalibr-gyro)",
+                  f"gyroscope_random_walk: {gyro[1]:.6g}   # [ rad / s^2 / sqrt(Hz) ], as given (--kalibr-gyro)"]
+    else:
+        lines += ["# gyroscope_noise_density: not measured by an accelerometer log (give --kalibr-gyro ND,RW); "
+                  "Kalibr needs it",
+                  "# gyroscope_random_walk: not measured by an accelerometer log (give --kalibr-gyro ND,RW); "
+                  "Kalibr needs it"]
+    return "\n".join(lines) + "\n"
+
+
+#: The keys Kalibr's IMU reader (ImuParameters) requires.
+KALIBR_KEYS = ("rostopic", "update_rate", "accelerometer_noise_density", "accelerometer_random_walk",
+               "gyroscope_noise_density", "gyroscope_random_walk")

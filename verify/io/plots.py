@@ -58,31 +58,51 @@ def residuals_by_direction(n, residual_ms2, noise_ms2, path, title):
     plt.close(fig)
 
 
-def norm_residuals(result, path):
-    """PNG of the norm residual per still interval: before (the starting map) and after the
-    calibration, each at its own scale, with the noise bound band after."""
+def norm_residuals(result, log, path):
+    """PNG of a norm calibration at a glance: the raw log's three axes against time with the still intervals
+    shaded and numbered (what the calibration used), then the norm residual of each interval before (the
+    starting map) and after, against the interval's number and against time, each at its own scale, with
+    the noise bound band after. `log`: (t, raw) of the log, drawn from at most 20,000 samples."""
     plt = _pyplot()
     rows = result["per_interval"]
     k = np.arange(1, len(rows) + 1)
     g = result["g"]
-    fig, (a0, a1) = plt.subplots(1, 2, figsize=(10, 4))
-    a0.plot(k, [r["residual_before_ms2"] for r in rows], "o", color="C3")
-    a0.set_title("before (starting map)", fontsize=9)
-    a1.plot(k, [r["residual_after_ms2"] for r in rows], "s", color="C0")
-    a1.plot(k, [g * r["noise_rule"] for r in rows], "_", color="C2", label="noise rule of each interval")
-    a1.plot(k, [-g * r["noise_rule"] for r in rows], "_", color="C2")
+    t, raw = log
+    step = max(1, len(t) // 20_000)
+    fig = plt.figure(figsize=(12, 7.5))
+    top = fig.add_subplot(2, 1, 1)
+    for i, name in enumerate("xyz"):
+        top.plot(t[::step], raw[::step, i], lw=0.6, color=f"C{i}", label=f"raw {name}")
+    lo, hi = float(np.min(raw[::step])), float(np.max(raw[::step]))
+    for n, r in enumerate(rows, 1):
+        top.axvspan(r["start_s"], r["stop_s"], color="0.5", alpha=0.18, lw=0)
+        top.text(0.5 * (r["start_s"] + r["stop_s"]), hi + 0.02 * (hi - lo), str(n), ha="center", va="bottom", fontsize=7)
+    top.set_xlabel("time (s)")
+    top.set_ylabel(f"raw ({result['raw_unit']})")
+    top.set_title(f"the log and its {len(rows)} still intervals (shaded, numbered as below)", fontsize=9)
+    top.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
+    a0, a1, a2 = (fig.add_subplot(2, 3, 4 + i) for i in range(3))
+    before, after = [r["residual_before_ms2"] for r in rows], [r["residual_after_ms2"] for r in rows]
+    mid = [0.5 * (r["start_s"] + r["stop_s"]) for r in rows]
     band = g * (result["delta_sigma_max"] + result["remainder_bound"])
-    a1.axhspan(-band, band, color="C0", alpha=0.12,
-               label=f"+- (delta_sigma_max + remainder) g = {band:.2e} m/s^2")
+    a0.plot(k, before, "o", color="C3")
+    a0.set_title("before (starting map)", fontsize=9)
+    for ax, x, label in ((a1, k, "still interval"), (a2, mid, "time (s)")):
+        ax.plot(x, after, "s", color="C0")
+        ax.plot(x, [g * r["noise_rule"] for r in rows], "_", color="C2", label="noise rule of each interval")
+        ax.plot(x, [-g * r["noise_rule"] for r in rows], "_", color="C2")
+        ax.axhspan(-band, band, color="C0", alpha=0.12, label=f"+- (delta_sigma_max + remainder) g = {band:.2e} m/s^2")
+        ax.set_xlabel(label)
     a1.set_title(f"after ({result['params']}-parameter calibration): "
                  + ("consistent" if result["consistent"] else "INCONSISTENT"), fontsize=9)
-    for ax in (a0, a1):
+    a2.set_title("after, against time (a drift shows here)", fontsize=9)
+    a0.set_xlabel("still interval")
+    for ax in (a0, a1, a2):
         ax.axhline(0, color="k", lw=0.6)
-        ax.set_xlabel("still interval")
     a0.set_ylabel("(|a|^2 - g^2) / (2 |a|^2) x g   (m/s^2)")
     fig.legend(*a1.get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
-    fig.suptitle(f"{result['log'].rsplit('/', 1)[-1]}: norm residual per still interval", fontsize=10)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.suptitle(f"{result['log'].rsplit('/', 1)[-1]}: the log, and the norm residual per still interval", fontsize=10)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     save_figure(fig, path)
     plt.close(fig)
 

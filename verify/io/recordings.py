@@ -331,3 +331,33 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
             mean, std_error, batch = _segment(log.raw[a:b])
             out.append(Still(float(log.t[a]), float(log.t[min(b, last)]), mean, std_error, int(b - a), batch))
     return out, note
+
+
+#: The shortest still interval a random walk is read from (s): an Allan deviation at a quarter of it.
+RANDOM_WALK_SECONDS = 40.0
+
+
+def random_walk(log, stills, M, b):
+    """(accelerometer random walk in m/s^3/sqrt(Hz), or None, and why not): from the longest still interval
+    of at least RANDOM_WALK_SECONDS, calibrated (a = M (raw - b)), the Allan variance at tau = a quarter of
+    it less the white noise's (N^2 / tau, N from the samples), as K^2 = 3 (sigma^2 - N^2 / tau) / tau, the
+    largest of the three axes. A statistical figure, not a bound; None when no interval is long enough or
+    the white noise hides the walk there."""
+    if not stills:
+        return None, "no still interval"
+    st = max(stills, key=lambda s: s.stop - s.start)
+    span = st.stop - st.start
+    if span < RANDOM_WALK_SECONDS:
+        return None, f"the longest still interval is {span:.3g} s, under the {RANDOM_WALK_SECONDS:g} s it needs"
+    rows = (log.t >= st.start) & (log.t <= st.stop)
+    a = (np.asarray(M, float) @ (log.raw[rows] - np.asarray(b, float)).T).T
+    dt = float(median(np.diff(log.t[rows])))
+    n = len(a) // 4                                            # tau: a quarter of the interval, 4 clusters
+    means = a[: 4 * n].reshape(4, n, 3).mean(axis=1)
+    tau = n * dt
+    allan = 0.5 * np.mean(np.diff(means, axis=0) ** 2, axis=0)
+    white = np.var(np.diff(a, axis=0), axis=0) / 2 * dt / tau     # N^2 / tau, N^2 = var * dt
+    excess = allan - white
+    if np.all(excess <= 0):
+        return None, f"the white noise hides it over the longest still interval ({span:.3g} s)"
+    return float(np.sqrt(3 * excess.max() / tau)), ""

@@ -14,7 +14,7 @@ from .premises import G_DEFAULT, premises as make_premises
 
 
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None, progress=None, bound=None):
+             imu=None, which_run=None, progress=None, bound=None, fmt=None, sections=None):
     """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors
     from positions: a CSV path, a means file (with `imu` and `which_run`), a DataFrame or an array
     (`positions_of`). g in m/s^2 (None: 9.81 with the uncertainty of an assumed g); the premises of
@@ -28,7 +28,7 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
                         f"+y+z+x; got {mount!r}")
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
-    res = est.estimate(mod, positions_of(mod, data, imu, which_run), sigma, prem.g, remount=remount, mount=mount,
+    res = est.estimate(mod, positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections), sigma, prem.g, remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress)
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
@@ -36,14 +36,26 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     return results.Estimate(res)
 
 
-def positions_of(mod, data, imu=None, which_run=None, empty_ok=False):
+def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, sections=None):
     """Positions for `mod` from a positions CSV, a means file with known nominal directions (its run
-    `which_run` of IMU `imu`, the directions turned into the stand's angles), a DataFrame or an array.
+    `which_run` of IMU `imu`, the directions turned into the stand's angles), imucal's six-face session
+    (`fmt` "imucal", with its section list `sections` or a `part` column), a DataFrame or an array.
     `empty_ok`: a CSV of a header alone gives no positions rather than an error."""
     from ..io import means
     from ..io.positions import Positions, from_columns, read_positions
     from .directions import angles_for
     names, mounts = models.layout(mod)
+    if fmt == "imucal":
+        from ..io import imucal
+        U, F, _ = imucal.means(data, sections)
+        norm = float(np.median(np.linalg.norm(F, axis=1)))
+        if not 0.8 * G_DEFAULT < norm < 1.2 * G_DEFAULT:
+            raise DataError(f"{data}: the six faces read {norm:.4g} in the file's unit, not about g: estimate takes a "
+                            "session in m/s^2 (imucal's from_acc_unit m/s^2); calibrate raw counts through the norm "
+                            "with garant calibrate-norm")
+        return Positions(str(data), angles_for(mod, U, data), F)
+    if sections is not None:
+        raise DataError("--sections applies to --format imucal")
     if not (isinstance(data, (str, bytes)) or hasattr(data, "__fspath__")):
         return from_columns(data, names, mounts)
     if not means.looks_like(data):
@@ -75,7 +87,7 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, windo
     from . import calibrate_norm as cn
     from .premises import gravity_uncertainty
     mod = models.load("norm")
-    data = _log(log, fmt, sensor, imu)
+    data = read_log(log, fmt, sensor, imu)
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
@@ -89,6 +101,7 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, windo
                 "format": data.fmt, "sensor": sensor or "adxl355", "rate_hz": 1 / dt,
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
                                        / np.sqrt(3) * np.sqrt(dt))})
+    res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, stills, res["matrix"], res["bias"])
     if res["consistent"]:
         res["calibration"] = calibration.from_norm(res, mod.AXES)
     if diagnose:
@@ -98,7 +111,7 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, windo
     return results.NormCalibration(res)
 
 
-def _log(log, fmt, sensor, imu):
+def read_log(log, fmt=None, sensor=None, imu=None):
     """A Log from a path (any supported format) or from an array (N, 4): time (s), three raw axes."""
     from ..io import recordings
     if isinstance(log, (str, bytes)) or hasattr(log, "__fspath__"):
@@ -165,20 +178,21 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=N
     return out
 
 
-def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, chunk=None):
+def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, chunk=None, frame="garant"):
     """Correct a raw log with a calibration (a garant-calibration-1 file or the dictionary a result
     holds), checked as a file is (schema, a well-conditioned M, the log's unit unless `trust_units`).
     Returns the Correction t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2; with `chunk`, an iterator of
-    Corrections of at most `chunk` samples (the command writes a long log piece by piece)."""
+    Corrections of at most `chunk` samples (the command writes a long log piece by piece). `frame`: garant's,
+    or "imu_tk", that of the imu_tk export (io/calibration.imu_tk_form)."""
     from ..io import calibration as cal_io
     cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
-    data = _log(log, fmt, sensor, imu)
+    data = read_log(log, fmt, sensor, imu)
     if not trust_units:
         cal_io.check_units(cal, data.path, data.raw[:100_000],
                            "the calibration" if isinstance(calibration, dict) else str(calibration))
 
     def piece(i, j):
-        a, bound = cal_io.apply(cal, data.raw[i:j])
+        a, bound = cal_io.apply(cal, data.raw[i:j], frame)
         return results.Correction(t=data.t[i:j], a=a, bound=bound, kind=cal["kind"])
     if chunk is None:
         return piece(0, len(data.t))
