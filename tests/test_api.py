@@ -123,3 +123,16 @@ def test_a_npy_log_calibrates_as_its_text(tmp_path):
     np.save(tmp_path / "o.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
     with pytest.raises(garant.DataError, match="not a NumPy array of numbers"):
         garant.calibrate_norm(str(tmp_path / "o.npy"))
+
+
+def test_an_estimates_q_and_bounds_come_as_named_arrays(tmp_path):
+    # Issue 44, item 6: Estimate.q and its bounds as arrays, in the order of the names beside them.
+    from garant.generated import two_axis as mod
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
+    f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
+    r = garant.estimate("two-axis", np.column_stack([P, f]), 1e-5)
+    assert r.names == mod.Q_NAMES
+    assert np.array_equal(r.array("q"), [r.q[n] for n in mod.Q_NAMES])
+    assert np.array_equal(r.array("guaranteed_error"), [r.guaranteed_error[n] for n in mod.Q_NAMES])
+    with pytest.raises(KeyError):
+        r.array("premises")

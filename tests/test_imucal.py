@@ -63,3 +63,30 @@ def test_an_annotated_session_in_counts_is_refused_by_estimate_in_a_line(tmp_pat
                  "--sigma", "1e-2"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the six faces read 2066 in the file's unit, not about g" in err
+
+
+def test_imucals_session_through_the_norm_says_what_six_faces_cannot_identify(capsys):
+    # Issue 43 item 5 on imucal's own session (issue 44: read as a log with --format imucal --rate): the norm
+    # fit set a misalignment to 1.6 rad at its first step and went on to M -> 0. It stops there and says why.
+    assert main(["calibrate-norm", str(SESSION), "--format", "imucal"]) == 2
+    assert "give --rate HZ" in capsys.readouterr().err
+    assert main(["calibrate-norm", str(SESSION), "--format", "imucal", "--rate", "102.4"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the norm fit diverges at step 1" in err
+    assert "13 still intervals in 6 distinct orientation(s), each along an axis" in err
+    assert "cannot identify alpha, beta, gamma" in err and "would identify lambda1, lambda2, lambda3" in err
+
+
+def test_a_dataframe_in_gives_a_calibrated_copy_out(calibrated):
+    # Issue 44, item 6: imucal's habit, calibrate_df: a DataFrame with acc_x, acc_y, acc_z (no time: rate over
+    # its index) is corrected into a copy, its other columns kept, the bounds beside.
+    import garant
+    df = pd.read_csv(SESSION, header=0, index_col=0)
+    out = garant.apply(str(calibrated / "g.json"), df, rate=102.4)
+    from imucal.management import load_calibration_info
+    theirs = load_calibration_info(calibrated / "i.json").calibrate_df(df, "m/s^2", "deg/s")
+    assert list(out.columns) == list(df.columns) + ["bound_x", "bound_y", "bound_z"]
+    assert np.allclose(out[["acc_x", "acc_y", "acc_z"]], theirs[["acc_x", "acc_y", "acc_z"]], rtol=0, atol=1e-9)
+    assert out["gyr_x"].equals(df["gyr_x"]) and (out["bound_x"] > 0).all()
+    with pytest.raises(garant.DataError, match="needs rate=HZ"):
+        garant.apply(str(calibrated / "g.json"), df)

@@ -32,7 +32,7 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
           "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
-          "frame": checks.one_of("garant", "imu_tk")}
+          "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate}
 
 
 def _api(fn):
@@ -117,12 +117,14 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
 
 @_api
 def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, delta_sigma=None, imu=None, window=1.0,
-                   k=10.0, min_still=2.0, diagnose=False, g_uncertainty=None):
+                   k=10.0, min_still=2.0, diagnose=False, g_uncertainty=None, rate=None):
     """Calibrate a static log through the norm relation (2.2) of 001, as `garant calibrate-norm --json`.
 
     Parameters
     ----------
-    log : a log path (formats of docs/formats.md) or an array (N, 4): time in s, then x, y, z raw.
+    log : a log path (formats of docs/formats.md), an array (N, 4): time in s, then x, y, z raw, or a pandas
+        DataFrame as `apply` takes it (acc_x, acc_y, acc_z; a time column or `rate`).
+    rate : Hz, for a log of sample indices (--format imucal, a DataFrame without a time column).
     g : local gravity, m/s^2 (None: 9.81 assumed, |Delta_g/g| <= 5e-3 in the calibration's bounds).
     g_uncertainty : the bound on |Delta_g/g| (default 1e-5 with g, 5e-3 without).
     params : 9 (scale, misalignment, bias) or 12 (also the nonlinearity).
@@ -136,7 +138,7 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, delta_sigma=Non
     NormCalibration; when consistent its "calibration" is the dictionary `apply` takes.
     """
     return jobs.calibrate_norm(log, g, params, fmt, sensor, imu, window, k, min_still, delta_sigma, diagnose,
-                               g_uncertainty)
+                               g_uncertainty, rate)
 
 
 @_api
@@ -181,7 +183,7 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=N
 
 
 @_api
-def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, frame="garant"):
+def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, frame="garant", rate=None):
     """Correct a raw log with a calibration, as `garant apply`.
 
     Parameters
@@ -189,7 +191,10 @@ def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, 
     calibration : a garant-calibration-1 file or the dictionary a result's "calibration" holds; either is
         checked as `garant apply` checks it (schema, a well-conditioned M, the log's unit unless
         `trust_units`).
-    log : a log path or an array (N, 4): time in s, then x, y, z raw.
+    log : a log path, an array (N, 4): time in s, then x, y, z raw, or a pandas DataFrame with columns
+        acc_x, acc_y, acc_z (or x, y, z, ...) and a time column (time_s, time_ms, ...) or, without one,
+        `rate` (Hz) over its index: then a calibrated copy of the DataFrame is returned (its accelerometer
+        columns corrected, m/s^2, and bound_x, bound_y, bound_z added), as imucal's calibrate_df.
     frame : "garant" (M as calibrated) or "imu_tk", the frame of the imu_tk export (for a norm calibration
         turned into imu_tk's upper-triangular T; the command prints the angle between them).
 
@@ -198,4 +203,4 @@ def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, 
     Correction: t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2, the worst-case error of each component;
     it unpacks as (t, a, bound).
     """
-    return jobs.apply(calibration, log, fmt, sensor, imu, trust_units, frame=frame)
+    return jobs.apply(calibration, log, fmt, sensor, imu, trust_units, frame=frame, rate=rate)

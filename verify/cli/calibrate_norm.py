@@ -43,6 +43,8 @@ def add(sub):
                         "--export-kalibr (an accelerometer log does not measure them)")
     p.add_argument("--kalibr-topic", default="/imu0", metavar="TOPIC", help="the rostopic of --export-kalibr")
     options.imucal_export(p)
+    p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "
+                   "(--format imucal: imucal's session)")
     return p
 
 
@@ -85,7 +87,7 @@ def _run(args, into=None):
     from ..io import report
     from ..workflows import jobs
     res = jobs.calibrate_norm(args.log, args.g, args.params, args.format, args.sensor, args.imu, args.window, args.k,
-                              args.min_still, args.delta_sigma, args.diagnose, args.g_uncertainty)
+                              args.min_still, args.delta_sigma, args.diagnose, args.g_uncertainty, args.rate)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)
@@ -226,7 +228,7 @@ def _print_bounds(res, args=None):
 def _log_of(args):
     """(t, raw) of the log, read again for its plot (the calibration keeps only the still intervals)."""
     from ..workflows import jobs
-    data = jobs.read_log(args.log, args.format, args.sensor, args.imu)
+    data = jobs.read_log(args.log, args.format, args.sensor, args.imu, args.rate)
     return data.t, data.raw
 
 

@@ -8,7 +8,7 @@ import numpy as np
 from ..errors import DataError
 from . import files, mimu
 
-FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy")
+FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy", "imucal")
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 
@@ -181,9 +181,10 @@ def _check_time(path, t, named_unit):
     return step, repeats
 
 
-def read_log(path, fmt=None, sensor="adxl355", imu=None):
+def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     """Time (s) and three accelerometer columns of a log; one clear line on any problem. `imu` picks
-    one IMU of a multi-IMU stream (mimu: 1-8)."""
+    one IMU of a multi-IMU stream (mimu: 1-8); `rate` (Hz) times a log of sample indices (imucal's
+    session: a column n_samples or samples, acc_x, acc_y, acc_z; rows in any order, sorted by index)."""
     files.regular(path, "the log", MAX_LOG_BYTES)
     step, note = None, ""
     try:
@@ -219,6 +220,18 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None):
         elif fmt == "npy":
             data = _load_npy(path)
             t, raw, unit = data[:, 0].copy(), data[:, 1:4], True
+        elif fmt == "imucal":
+            if rate is None:
+                raise DataError(f"{path}: an imucal session has a sample index, no time: give --rate HZ (imucal's "
+                                "example sessions: 102.4)")
+            header = _header(path, ",")
+            index = next((c for c in ("n_samples", "samples") if c in header), None)
+            missing = [c for c in ("acc_x", "acc_y", "acc_z") if c not in header] + ([] if index else ["n_samples"])
+            if missing:
+                raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an imucal session")
+            data = _load(path, ",", [header.index(c) for c in (index, "acc_x", "acc_y", "acc_z")], 1)
+            data = data[np.argsort(data[:, 0], kind="stable")]
+            t, raw, unit = data[:, 0] / rate, data[:, 1:4], True
         else:
             raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
     except OSError as e:

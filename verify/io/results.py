@@ -100,6 +100,18 @@ class Estimate(Result):
               "calibration": "the block's garant-calibration-1 dictionary `garant.apply` takes (when consistent and "
                              "the stand separates the block's errors)"}
 
+    @property
+    def names(self):
+        """The q's names, in the model's order (empty when the data refute sigma)."""
+        return tuple(self.get("q", {}))
+
+    def array(self, field="q"):
+        """A per-q field (q, guaranteed_error, guaranteed_error_linear, ...) as a numpy array in `names`' order."""
+        values = self[field] if field in self else None
+        if not isinstance(values, dict) or set(values) != set(self.names):
+            raise KeyError(f"{field!r} is not a per-q field of this result")
+        return np.array([values[n] for n in self.names], float)
+
 
 class NormCalibration(Result):
     """`garant.calibrate_norm`: a log calibrated through the norm relation (2.2) of 001."""

@@ -82,14 +82,16 @@ def fit(mod, raw, g, params=9):
         q, _ = chebyshev_fit(mod.H(n)[:params], s)
         if not np.all(np.isfinite(q)) or np.abs(q).max() > MAX_STEP:
             k = int(np.nanargmax(np.where(np.isfinite(q), np.abs(q), np.inf)))
-            raise DataError(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to {PARAM_LABELS[k]}): "
-                            "the orientations do not hold the parameters apart; record orientations between the "
-                            "axes (garant plan norm)")
+            raise Diverged(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to {PARAM_LABELS[k]})")
         M, b, delta = fold(M, b, delta, q, g)
         if np.abs(q).max() < 1e-12:
             break
     s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
     return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note)
+
+
+class Diverged(DataError):
+    """A norm fit that runs away (a step beyond MAX_STEP): the orientations do not hold the parameters apart."""
 
 
 def orientations(n, within_deg=SAME_ORIENTATION_DEG):
@@ -102,24 +104,28 @@ def orientations(n, within_deg=SAME_ORIENTATION_DEG):
     return np.array(reps)
 
 
-def _identifiable(mod, stills, n, params, path):
+def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""):
     """Before the fit: the parameters the orientations present identify, structurally: each direction
-    within ON_AXIS_DEG of a sensor axis taken as that axis (six faces, each axis up and down, are axes
+    within `within_deg` of a sensor axis taken as that axis (six faces, each axis up and down, are axes
     to within a degree), an exact rank test of (2.2) of 001 on them. The parameters they cannot identify
-    are named with the orientations to add, and nothing is fitted (a fit on them runs away)."""
+    are named with the orientations to add, and nothing is fitted (a fit on them runs away). After a fit
+    that ran away (`cause`), the same statement with the orientations' own distance from the axes."""
     axes = np.vstack([np.eye(3), -np.eye(3)])
     snapped = np.array([axes[np.argmax(axes @ d)] if np.degrees(np.arccos(np.clip((axes @ d).max(), -1, 1)))
-                        <= ON_AXIS_DEG else d for d in n.T]).T
+                        <= within_deg else d for d in n.T]).T
     unseen = lp.unidentifiable(mod.H(snapped)[:params])
     if not unseen:
+        if cause:
+            raise DataError(f"{path}: {cause}; record orientations between the axes (garant plan norm)")
         return
     distinct = orientations(n)
-    on_axes = all(np.abs(d).max() > np.cos(np.radians(ON_AXIS_DEG)) for d in distinct)
+    on_axes = all(np.abs(d).max() > np.cos(np.radians(within_deg)) for d in distinct)
     seen = [PARAM_LABELS[k] for k in range(params) if k not in unseen]
     add = [p for p in (mod.PLAN[:18] if params == 9 else mod.PLAN)
            if np.degrees(np.arccos(np.clip(distinct @ p, -1, 1))).min() > 10.0][:6]
-    raise DataError(f"{path}: {len(stills)} still intervals in {len(distinct)} distinct orientation(s)"
-                    + (f", each along an axis (within {ON_AXIS_DEG:g} degree)" if on_axes else "")
+    raise DataError(f"{path}: " + (f"{cause}: " if cause else "") + f"{len(stills)} still intervals in "
+                    f"{len(distinct)} distinct orientation(s)"
+                    + (f", each along an axis (within {within_deg:.2g} degree)" if on_axes else "")
                     + ": they cannot identify " + ", ".join(PARAM_LABELS[k] for k in unseen)
                     + (" (a misalignment enters the norm only at second order when every orientation lies along an "
                        "axis)" if on_axes and any(3 <= k < 6 for k in unseen) else "")
@@ -228,7 +234,11 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     M0, b0, _ = initial_map(raw, g)
     before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
     _identifiable(mod, stills, n0, params, path)
-    res = fit(mod, raw, g, params)
+    try:
+        res = fit(mod, raw, g, params)
+    except Diverged as e:                      # say what the orientations, as they lie, cannot hold apart
+        off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
+        _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), str(e))
     fit_residual = float(np.abs(res["sigma"]).max())
     rule = noise_rule(stills, res["M"], res["n"], g, quantum)
     dsig = float(rule.max()) if delta_sigma is None else delta_sigma

@@ -76,7 +76,7 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
 
 
 def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, window=1.0, k=10.0,
-                   min_still=2.0, delta_sigma=None, diagnose=False, g_uncertainty=None):
+                   min_still=2.0, delta_sigma=None, diagnose=False, g_uncertainty=None, rate=None):
     """Calibrate a static log (a path, or an array (N, 4): time in s, then the three raw axes) through
     the norm relation (2.2) of 001: still intervals (moving variance over `window` s below `k` times the
     first seconds', at least `min_still` s), the verdict, M and b with guaranteed errors. A consistent
@@ -87,7 +87,7 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, windo
     from . import calibrate_norm as cn
     from .premises import gravity_uncertainty
     mod = models.load("norm")
-    data = read_log(log, fmt, sensor, imu)
+    data = read_log(log, fmt, sensor, imu, rate)
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
@@ -111,11 +111,14 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, windo
     return results.NormCalibration(res)
 
 
-def read_log(log, fmt=None, sensor=None, imu=None):
-    """A Log from a path (any supported format) or from an array (N, 4): time (s), three raw axes."""
+def read_log(log, fmt=None, sensor=None, imu=None, rate=None):
+    """A Log from a path (any supported format), a DataFrame (see `_frame`) or an array (N, 4): time (s),
+    three raw axes."""
     from ..io import recordings
     if isinstance(log, (str, bytes)) or hasattr(log, "__fspath__"):
-        return recordings.read_log(log, fmt, sensor or "adxl355", imu)
+        return recordings.read_log(log, fmt, sensor or "adxl355", imu, rate)
+    if hasattr(log, "columns"):
+        log = _frame(log, rate)
     arr = real_array(log, "log")
     if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) < recordings.MIN_SAMPLES:
         raise DataError(f"log: expected an array of shape (N, 4), N >= {recordings.MIN_SAMPLES}: time in s, x, y, z; "
@@ -123,6 +126,27 @@ def read_log(log, fmt=None, sensor=None, imu=None):
     if not np.all(np.isfinite(arr)) or np.any(np.diff(arr[:, 0]) <= 0):
         raise DataError("log: every value must be finite and the times increasing")
     return recordings.Log("array", arr[:, 0] - arr[0, 0], arr[:, 1:], fmt="array")
+
+
+def _frame(df, rate=None):
+    """(N, 4) time (s), x, y, z of a pandas DataFrame log: the accelerometer columns by the names a csv
+    log may have (acc_x, acc_y, acc_z, as imucal's, among them), time from a time column (its suffix the
+    unit) or, with none, from the index over `rate` (imucal's sample index)."""
+    from ..io import recordings
+    low = {str(c).lower(): c for c in df.columns}
+    acc = next((names for names in recordings.ACCEL_COLUMNS if all(n in low for n in names)), None)
+    if acc is None:
+        raise DataError(f"log: a DataFrame needs accelerometer columns such as acc_x, acc_y, acc_z; it has "
+                        f"{', '.join(map(str, df.columns))}")
+    times = [c for c in low if c in recordings.TIME_COLUMNS]
+    if times:
+        t = real_array(df[low[times[0]]], f"log: column {times[0]}") * recordings.TIME_COLUMNS[times[0]]
+    elif rate is not None:
+        t = real_array(df.index, "log: the index") / rate
+    else:
+        raise DataError("log: a DataFrame without a time column (time_s, time_ms, ...) needs rate=HZ: its index "
+                        "counts samples")
+    return np.column_stack([t, *(real_array(df[low[n]], f"log: column {n}") for n in acc)])
 
 
 def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
@@ -178,15 +202,16 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=N
     return out
 
 
-def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, chunk=None, frame="garant"):
+def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, chunk=None, frame="garant",
+          rate=None):
     """Correct a raw log with a calibration (a garant-calibration-1 file or the dictionary a result
     holds), checked as a file is (schema, a well-conditioned M, the log's unit unless `trust_units`).
     Returns the Correction t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2; with `chunk`, an iterator of
     Corrections of at most `chunk` samples (the command writes a long log piece by piece). `frame`: garant's,
     or "imu_tk", that of the imu_tk export (io/calibration.imu_tk_form)."""
-    from ..io import calibration as cal_io
+    from ..io import calibration as cal_io, recordings
     cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
-    data = read_log(log, fmt, sensor, imu)
+    data = read_log(log, fmt, sensor, imu, rate)
     if not trust_units:
         cal_io.check_units(cal, data.path, data.raw[:100_000],
                            "the calibration" if isinstance(calibration, dict) else str(calibration))
@@ -194,6 +219,14 @@ def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, 
     def piece(i, j):
         a, bound = cal_io.apply(cal, data.raw[i:j], frame)
         return results.Correction(t=data.t[i:j], a=a, bound=bound, kind=cal["kind"])
+    if chunk is None and hasattr(log, "columns"):       # a DataFrame in, a calibrated copy out (imucal's habit)
+        out, c = log.copy(), piece(0, len(data.t))
+        low = {str(n).lower(): n for n in out.columns}
+        names = next(n for n in recordings.ACCEL_COLUMNS if all(x in low for x in n))
+        for k, n in enumerate(names):
+            out[low[n]] = c.a[:, k]
+            out[f"bound_{'xyz'[k]}"] = c.bound[:, k]
+        return out
     if chunk is None:
         return piece(0, len(data.t))
     return (piece(i, i + chunk) for i in range(0, len(data.t), chunk))
