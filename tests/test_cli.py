@@ -117,3 +117,10 @@ def test_tables_state_their_model_and_human_units(tmp_path, capsys, mod):
     assert rc == 0, err
     assert "model: z = f/g - u(angles) = H^T q + rho, (1)-(3) of 000" in out
     assert " urad " in out and " ppm " in out and (" ug " in out or " mg " in out)
+
+
+def test_docs_cli_is_the_parser():
+    # Issue 45: docs/cli.md is generated from argparse (python -m verify.cli.doc --write); it drifts, this fails.
+    from garant.verify.cli import doc
+    assert doc.PATH.read_text() == doc.markdown()
+    assert all(f"## garant {name}" in doc.markdown() for name in doc.COMMANDS)
