@@ -136,3 +136,32 @@ def test_an_estimates_q_and_bounds_come_as_named_arrays(tmp_path):
     assert np.array_equal(r.array("guaranteed_error"), [r.guaranteed_error[n] for n in mod.Q_NAMES])
     with pytest.raises(KeyError):
         r.array("premises")
+
+
+def test_an_error_names_the_option_as_the_caller_spells_it(tmp_path, capsys):
+    # Issue 45: workflows wrote "--imu" into errors and the API rewrote them by regex ("choose one with --imu K"
+    # came out "imu K"). An error now marks its options (errors.opt): the command prints --imu and --run,
+    # the API imu= and which_run=, and the error carries the parameter it is about.
+    from garant.verify.cli import main
+    data = write_csv(tmp_path / "d.csv", [(a, b) for a in range(0, 360, 90) for b in range(0, 360, 90)],
+                     np.tile([0.0, 0.0, 9.81], (16, 1)))
+    with pytest.raises(garant.DataError) as e:
+        garant.estimate("two-axis", str(data), 1e-5, which_run="3")
+    assert str(e.value).startswith("imu= and which_run= apply to a means file") and e.value.param == "imu"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--run", "3"]) == 2
+    assert "--imu and --run apply to a means file" in capsys.readouterr().err
+
+
+def test_every_result_has_a_status_and_its_message(tmp_path):
+    # Issue 45: like scipy's OptimizeResult, every result says what came out in a word and a line.
+    from garant.verify.io import results
+    for cls in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.Correction,
+                results.NextPosition):
+        assert cls.STATUSES and all(isinstance(v, str) and v for v in cls.STATUSES.values())
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
+    from garant.generated import two_axis as mod
+    f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
+    good = garant.estimate("two-axis", np.column_stack([P, f]), 1e-5)
+    bad = garant.estimate("two-axis", np.column_stack([P, f + 0.01]), 1e-5)
+    assert (good.status, bad.status) == ("consistent", "refuted") and "no bound" in bad.message
+    assert garant.plan("two-axis").status == "done"

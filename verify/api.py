@@ -14,15 +14,6 @@ from .io.recordings import FORMATS, SENSORS
 from .workflows import jobs
 
 
-#: The commands' options by the API's argument names: an error raised below names what the caller wrote.
-ARGUMENTS = {"--imu": "imu", "--run": "which_run", "--window": "window", "--still-factor": "k", "--k": "k", "--min-still": "min_still", "--format": "fmt", "--sigma": "sigma", "--g-uncertainty": "g_uncertainty",
-             "--g": "g", "--prior": "prior", "--delta-sigma": "delta_sigma", "--mount": "mount",
-             "--trust-units": "trust_units=True", "--params": "params", "--sensor": "sensor", "--grid": "grid",
-             "--search-seconds": "search_seconds", "--count-seconds": "count_seconds", "--search-nodes": "search_nodes",
-             "--count-nodes": "count_nodes",
-             "--max-candidates": "max_candidates", "--target": "target", "--bound": "bound"}
-
-
 #: The check of each argument (verify/options.py: the same function as the command's option type).
 CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravity, "g_uncertainty": checks.small,
           "prior": checks.small, "grid": checks.positive, "target": checks.positive,
@@ -37,11 +28,10 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
 
 def _api(fn):
     """The API's form of a job: each argument checked as the command checks its option (CHECKS), a
-    DataError's option names rewritten to the API's (ARGUMENTS), and the input files the result came
-    from remembered, so that `result.to_json(path)` never writes over one of them."""
+    DataError's options named as the API's arguments (`imu=`: errors.opt), and the input files the result
+    came from remembered, so that `result.to_json(path)` never writes over one of them."""
     import functools
     import inspect
-    import re
     signature = inspect.signature(fn)
 
     @functools.wraps(fn)
@@ -55,8 +45,7 @@ def _api(fn):
         try:
             out = fn(*bound.args, **bound.kwargs)
         except DataError as e:
-            text = re.sub(r"--[a-z][a-z-]*", lambda m: ARGUMENTS.get(m.group(0), m.group(0)), str(e))
-            raise DataError(text) from None
+            raise DataError(e.render("api"), param=e.param) from None
         if isinstance(out, results.Result):
             out._inputs = tuple(str(v) for v in bound.arguments.values()
                                if isinstance(v, (str, os.PathLike)) and os.path.isfile(v))

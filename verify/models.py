@@ -24,7 +24,7 @@ def load(name):
         return from_generated_file(name)
     if name not in MODELS:
         raise DataError(f"unknown model {name!r}; built-in models: {', '.join(MODELS)}, a STAND.toml, or the "
-                        "STAND.py `garant derive --out` writes")
+                        f"STAND.py `garant derive --out` writes")
     return importlib.import_module(MODELS[name])
 
 

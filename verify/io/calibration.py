@@ -32,7 +32,7 @@ import json
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from . import files, recordings, schemas
 from .report import json_value, write_json, write_text
 
@@ -195,7 +195,7 @@ def check_units(cal, log_path, raw, cal_path):
         say = {"m/s^2": "m/s^2", "count": "raw counts"}
         raise DataError(f"{log_path}: its readings (median norm {norm:.4g}) look like {say[looks]}, but {cal_path} was "
                         f"made from a log in {say[cal['raw_unit']]}; correct a log of the same unit, or pass "
-                        "--trust-units if the scale is right")
+                        f"{opt('trust_units')} if the scale is right")
 
 
 #: The frames `apply` can correct into: garant's (M as calibrated) or that of the imu_tk export.

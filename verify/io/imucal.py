@@ -10,7 +10,7 @@ import csv
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from . import files
 
 #: The six static sections and the up-direction (block axes) each holds.
@@ -53,7 +53,7 @@ def read_sections(path, sections=None):
         labels = np.array(labels)
         out = {face: data[labels == face] for face in FACES}
     else:
-        raise DataError(f"{path}: no `part` column: give the section list with --sections FILE.json")
+        raise DataError(f"{path}: no `part` column: give the section list with {opt('sections')} FILE.json")
     short = [f for f, x in out.items() if len(x) < 2]
     if short:
         raise DataError(f"{path}: the section(s) {', '.join(short)} hold fewer than 2 samples; a six-face session "

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from . import files
 from .positions import _number
 from .recordings import Still
@@ -77,7 +77,7 @@ def imus(path):
     """The IMU numbers of a means file, in order of first appearance."""
     lines, head, body = _rows(path)
     if "imu" not in head:
-        raise DataError(f"--imu all: {path} has no imu column")
+        raise DataError(f"{opt('imu')} all: {path} has no imu column")
     k = head.index("imu")
     out = []
     for line, cells in zip(lines[1:], body):
@@ -100,9 +100,9 @@ def read(path, imu=None, rate=None, quantum=0.0):
         raise DataError(f"{path}: missing column(s) {', '.join(missing)} of a means file (docs/formats.md)")
     run_col = next((c for c in ("exp", "run") if c in head), None)
     if "imu" in head and imu is None:
-        raise DataError(f"{path}: the file holds several IMUs (column imu); choose one with --imu K or --imu all")
+        raise DataError(f"{path}: the file holds several IMUs (column imu); choose one with {opt('imu')} K or {opt('imu')} all")
     if imu is not None and "imu" not in head:
-        raise DataError(f"--imu {imu}: {path} has no imu column")
+        raise DataError(f"{opt('imu')} {imu}: {path} has no imu column")
     col = {c: head.index(c) for c in head}
     runs = {}
     for line, cells in zip(lines[1:], body):

@@ -8,7 +8,7 @@ map into the array frame by C_BOTTOM.
 """
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 
 IMUS = 8
 PACKET = 1 + 3 + 4 + IMUS * 12 + 2
@@ -59,7 +59,7 @@ def read(path, imu):
     that repeat, go back or jump by over 100 steps (a reset): when there are any, time is taken from the
     packet count at the median step, and the caller says so."""
     if not 1 <= imu <= IMUS:
-        raise DataError(f"--imu {imu}: the MIMU4444BT stream holds IMUs 1 to {IMUS}")
+        raise DataError(f"{opt('imu')} {imu}: the MIMU4444BT stream holds IMUs 1 to {IMUS}")
     pk, skipped = packets(path)
     ts = pk[:, 4:8].astype(np.int64) @ np.array([1 << 24, 1 << 16, 1 << 8, 1])
     ticks = np.diff(ts) % (1 << 32)                                  # the 32-bit stamp wraps

@@ -5,7 +5,7 @@ from typing import NamedTuple      # loaded with numpy anyway; dataclasses would
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from . import files, mimu
 
 FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy", "imucal")
@@ -190,10 +190,10 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     try:
         fmt = fmt or guess_format(path)
         if imu is not None and fmt != "mimu":
-            raise DataError(f"--imu applies to a multi-IMU stream (--format mimu), not to a {fmt} log")
+            raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu), not to a {fmt} log")
         if fmt == "mimu":
             if imu is None:
-                raise DataError(f"{path}: a MIMU4444BT stream holds {mimu.IMUS} IMUs; choose one with --imu K")
+                raise DataError(f"{path}: a MIMU4444BT stream holds {mimu.IMUS} IMUs; choose one with {opt('imu')} K")
             t, raw, step, skipped, jumps = mimu.read(path, imu)
             unit = True
             note = (f"MIMU4444BT IMU {imu}, array frame, {mimu.COUNTS_PER_G} counts per g = "
@@ -222,7 +222,7 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
             t, raw, unit = data[:, 0].copy(), data[:, 1:4], True
         elif fmt == "imucal":
             if rate is None:
-                raise DataError(f"{path}: an imucal session has a sample index, no time: give --rate HZ (imucal's "
+                raise DataError(f"{path}: an imucal session has a sample index, no time: give {opt('rate')} HZ (imucal's "
                                 "example sessions: 102.4)")
             header = _header(path, ",")
             index = next((c for c in ("n_samples", "samples") if c in header), None)
@@ -323,7 +323,7 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     dt = log.dt or float(median(np.diff(log.t)))
     span = float(log.t[-1] - log.t[0])
     if window >= span / 4:
-        raise DataError(f"--window {window:g} s: the moving-variance window must be under a quarter of the log's "
+        raise DataError(f"{opt('window')} {window:g} s: the moving-variance window must be under a quarter of the log's "
                         f"{span:.4g} s")
     n = max(int(round(window / dt)), 5)
     var = moving_variance(log.raw, n)

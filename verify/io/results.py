@@ -28,6 +28,8 @@ class Result(dict):
     """A result: its keys are also attributes; FIELDS documents them (name: meaning and unit)."""
 
     FIELDS = {}
+    #: status -> message: what each status means, in a line (every result has a status; scipy's habit).
+    STATUSES = {"done": "the job ran"}
     #: The input files the result was computed from (set by the API): `to_json` never writes over one.
     _inputs = ()
 
@@ -36,6 +38,16 @@ class Result(dict):
             return self[name]
         except KeyError:
             raise AttributeError(f"{type(self).__name__} has no field {name!r}; it has {', '.join(self.keys())}") from None
+
+    @property
+    def status(self):
+        """What came out, in a word (a key of STATUSES): consistent, refuted, premise refuted, done, ..."""
+        return "done"
+
+    @property
+    def message(self):
+        """The status in a line."""
+        return self.STATUSES[self.status]
 
     def __dir__(self):
         return sorted(set(super().__dir__()) | set(self.keys()))
@@ -100,6 +112,18 @@ class Estimate(Result):
               "calibration": "the block's garant-calibration-1 dictionary `garant.apply` takes (when consistent and "
                              "the stand separates the block's errors)"}
 
+    STATUSES = {"consistent": "the readings fit sigma within the premises: q, the bounds and the calibration hold",
+                "refuted": "the readings refute sigma (or a premise): no bound is given",
+                "premise refuted": "the readings put some q beyond what its parameters' stated bounds allow: no "
+                                   "bound is guaranteed (premises_refuted names them)"}
+
+    @property
+    def status(self):
+        """consistent, refuted or premise refuted."""
+        if not self["consistent"]:
+            return "refuted"
+        return "premise refuted" if self.get("premises_refuted") else "consistent"
+
     @property
     def names(self):
         """The q's names, in the model's order (empty when the data refute sigma)."""
@@ -124,6 +148,13 @@ class NormCalibration(Result):
               "samples": "samples in the log", "duration_s": "length of the log, s",
               "noise_density": "median noise density of the still intervals, m/s^2/sqrt(Hz) (Kalibr's)",
               "rate_hz": "sample rate, Hz", "diagnosis": "the effect catalogue's test (with diagnose=True)"}
+    STATUSES = {"consistent": "the still intervals fit the noise bound: M, b and their bounds hold",
+                "refuted": "the still intervals refute the noise bound: no bound is given"}
+
+    @property
+    def status(self):
+        """consistent or refuted."""
+        return "consistent" if self["consistent"] else "refuted"
 
 
 class Diagnosis(Result):
@@ -133,6 +164,16 @@ class Diagnosis(Result):
               "effects": "the fewest effects that make the model consistent", "estimates": "each named effect's parameters",
               "indistinguishable": "per named effect, it and the alternatives that, in its place, also make the model consistent",
               "blind_to": "effects these positions cannot see", "premises": "what the verdict assumes"}
+    STATUSES = {"consistent": "the model fits the data within sigma as it is",
+                "explained": "the effects named close the gap",
+                "unexplained": "no effect of the catalogue closes the gap"}
+
+    @property
+    def status(self):
+        """consistent (as it is), explained (by the effects named) or unexplained."""
+        if self["consistent_before"]:
+            return "consistent"
+        return "explained" if self.get("consistent_after") else "unexplained"
 
 
 class Correction(Result):
@@ -162,3 +203,13 @@ class NextPosition(Result):
                             "unless readings repeated at one position already refute it)",
               "bounds_from": "what guaranteed_error_before is: estimate's printed bounds on the readings so far "
                              "(done is decided on them), or the nominal optimal estimators before an estimate"}
+    STATUSES = {"done": "every guaranteed error is at or below its target",
+                "measure": "measure the position `next`",
+                "refuted": "the readings so far refute sigma or a premise: find the cause before measuring more"}
+
+    @property
+    def status(self):
+        """done, measure or refuted."""
+        if self.get("consistent") is False or self.get("premises_refuted"):
+            return "refuted"
+        return "done" if self["done"] else "measure"

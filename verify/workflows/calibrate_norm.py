@@ -10,7 +10,7 @@ residual, which would make the bounds circular), plus the proven remainder (2.3)
 """
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from ..io.recordings import BATCHES, median, raw_unit
 from ..solve import highs, lp, taylor
 
@@ -229,7 +229,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     need = params + 3
     if len(stills) < need:
         raise DataError(f"{path}: found only {len(stills)} still interval(s); a {params}-parameter "
-                        f"calibration needs at least {need} (record more orientations, or lower --k)")
+                        f"calibration needs at least {need} (record more orientations, or lower {opt('k')})")
     raw = np.array([s.mean for s in stills])
     M0, b0, _ = initial_map(raw, g)
     before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))

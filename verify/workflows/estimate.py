@@ -1,7 +1,7 @@
 """Estimate q, with guaranteed error bounds, from readings at any set of positions ((6)-(8) of 000)."""
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from ..io.positions import Positions
 from ..solve import lp, taylor
 from . import block, guarantee, mounting, nearby
@@ -95,7 +95,7 @@ def check_residual_size(z, path, limit=0.5):
     if worst.max() > limit:
         k = int(np.argmax(worst))
         raise DataError(f"{path}: position {k + 1} differs from the model by {worst[k]:.3g} g; readings must be "
-                        "specific force in m/s^2 (check --g, the units and the column order)")
+                        f"specific force in m/s^2 (check {opt('g')}, the units and the column order)")
 
 
 def choose_estimator(mod, positions, A):

@@ -1,7 +1,7 @@
 """`garant identify`: what a model can estimate, what it confounds, and what a plan cannot separate."""
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from ..io.positions import read_plan
 from ..solve import lp
 
@@ -62,7 +62,7 @@ def report(model, plan_path=None):
         return res
     if model in ("003-example1", "003-example2"):
         if plan_path:
-            raise DataError(f"--plan applies to stand models, not to {model}")
+            raise DataError(f"{opt('plan')} applies to stand models, not to {model}")
         out = I.analyse_example(model)
         return {"model": model, "title": out["title"], "V": str(out["V"]),
                 "basis_functions": [f"{n} = {f}" for n, f in out["functions"]],

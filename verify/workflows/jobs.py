@@ -7,7 +7,7 @@ objects of io/results.py (a dict whose keys are also attributes, with `to_json()
 import numpy as np
 
 from .. import models
-from ..errors import DataError
+from ..errors import DataError, opt
 from ..options import real_array
 from ..io import results
 from .premises import G_DEFAULT, premises as make_premises
@@ -24,7 +24,7 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     if mount and (remount is None or mount not in remount.MOUNTS):
-        raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like "
+        raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {mount!r}")
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
@@ -55,19 +55,19 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
                             "with garant calibrate-norm")
         return Positions(str(data), angles_for(mod, U, data), F)
     if sections is not None:
-        raise DataError("--sections applies to --format imucal")
+        raise DataError(f"{opt('sections')} applies to {opt('fmt')} imucal")
     if not (isinstance(data, (str, bytes)) or hasattr(data, "__fspath__")):
         return from_columns(data, names, mounts)
     if not means.looks_like(data):
         if imu is not None or which_run is not None:
-            raise DataError(f"--imu and --run apply to a means file; {data} is a positions file")
+            raise DataError(f"{opt('imu')} and {opt('which_run')} apply to a means file; {data} is a positions file")
         return read_positions(data, names, mounts, empty_ok)
     runs = means.read(data, imu)
     keys = [r.name.rsplit("=", 1)[-1] for r in runs]
     if which_run is None and len(runs) > 1:
-        raise DataError(f"{data}: holds runs {', '.join(keys)}; choose one with --run R")
+        raise DataError(f"{data}: holds runs {', '.join(keys)}; choose one with {opt('which_run')} R")
     if which_run is not None and which_run not in keys:
-        raise DataError(f"--run {which_run}: {data} holds runs {', '.join(keys)}")
+        raise DataError(f"{opt('which_run')} {which_run}: {data} holds runs {', '.join(keys)}")
     run = runs[keys.index(which_run)] if which_run is not None else runs[0]
     if run.nominal is None:
         raise DataError(f"{data}: no nominal directions (nom_x, nom_y, nom_z); estimate needs known positions "

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 
 #: Relative slack of "at the target": the LP's own tolerance.
 AT_TARGET = 1e-7
@@ -88,7 +88,7 @@ def block_functionals(mod, model, mount, gamma="lower"):
     from ..models import load_remount
     remount = None if str(model).endswith(".toml") else load_remount(model)
     if remount is None or mount not in remount.MOUNTS:
-        raise DataError(f"--mount needs a model with the remount formulas (two-axis) and a mounting like +y+z+x; "
+        raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like +y+z+x; "
                         f"got {mount!r}")
     return remount.recovery_matrix(mount, gamma), list(remount.OUTPUTS)
 
@@ -163,7 +163,7 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         of = f"the block's parameters in mounting {mount}, (28)-(29) of 000 (biases over g)"
         optimal = errors_on(mod, P, M, C)
         if not np.all(np.isfinite(optimal)):
-            raise DataError(f"--mount {mount}: this stand does not separate "
+            raise DataError(f"{opt('mount')} {mount}: this stand does not separate "
                             + ", ".join(n for n, o in zip(labels, optimal) if not np.isfinite(o)))
     if target is None and printed is None:
         goal, source = sigma * optimal, "sigma x the stand's optimal errors on its reachable positions"
@@ -176,7 +176,7 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         goal, source = np.full(len(labels), float(target)), "--target"
         short = [f"{q} ({sigma * o:.3g})" for q, o in zip(labels, optimal) if sigma * o > target * (1 + AT_TARGET)]
         if short:
-            raise DataError(f"--target {target:g} is below the stand's optimal error of {', '.join(short)}: no plan "
+            raise DataError(f"{opt('target')} {target:g} is below the stand's optimal error of {', '.join(short)}: no plan "
                             "of its reachable positions reaches it")
     before = sigma * errors_on(mod, P[fixed], M[fixed], C)
     nominal_done = bool(np.all(before <= goal * (1 + AT_TARGET)))
@@ -198,7 +198,7 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         proven = False
     if not pool:
         raise DataError(f"all {len(P)} candidate positions are measured and the guaranteed errors are still above the "
-                        "target (a repeat does not lower a guaranteed bound): give a finer --grid, or a larger --target")
+                        f"target (a repeat does not lower a guaranteed bound): give a finer {opt('grid')}, or a larger {opt('target')}")
     best, after = _best(mod, P, M, fixed, pool, sigma, goal, C)
     return Next(**common, position=position(best), after=after, still_needed=needed, still_needed_proven=proven)
 

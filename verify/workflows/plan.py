@@ -4,7 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 
 
 @dataclass
@@ -104,7 +104,7 @@ def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_
         try:
             exact.exact_columns(mod, P[:1], M[:1])
         except ValueError as e:
-            raise DataError(f"--certificates: {e}") from None
+            raise DataError(f"{opt('certificates')}: {e}") from None
     from ..solve import highs
     work = dict(count_seconds=count_seconds, search_seconds=search_seconds, search_nodes=search_nodes,
                 count_nodes=count_nodes)
@@ -162,7 +162,7 @@ def candidates(mod, step=None, limit=MAX_CANDIDATES):
         from ..solve import plans
         return plans.grid(mod)
     if 360 % step:
-        raise DataError(f"--grid {step:g}: give a step that divides 360 degrees")
+        raise DataError(f"{opt('grid')} {step:g}: give a step that divides 360 degrees")
     from ..models import layout, reachable_grid
     n = len(mod.ANGLES)
     k = len(layout(mod)[1])

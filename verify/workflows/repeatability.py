@@ -13,7 +13,7 @@ import itertools
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from . import calibrate_norm as cn
 
 #: Candidate effects between runs: (name, physics, which of the 9 parameters move per run, within-run
@@ -142,7 +142,7 @@ def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
     runs = [r for r in runs if not getattr(r, "refused", None)]
     if len(runs) > max_runs:
         raise DataError(f"{len(runs):,} runs, over the limit of {max_runs} (the effect test fits every run at once "
-                        "and grows with the square of their number): compare fewer runs, or raise --max-runs")
+                        f"and grows with the square of their number): compare fewer runs, or raise {opt('max_runs')}")
     runs, results, more = calibrate_runs(mod, runs, g, params)
     refused += more
     if len(runs) < 2:

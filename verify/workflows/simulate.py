@@ -5,7 +5,7 @@ import types
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 from ..io.positions import read_plan
 from ..models import layout, reachable_grid, unreachable
 from ..io.report import write_text
@@ -27,8 +27,8 @@ def plan_positions(mod, plan):
         return P, mounts
     if plan == "optimal10":
         if not len(getattr(mod, "PLAN_DEG", ())):
-            raise DataError("this model has no optimal plan of its own; write one with `garant plan STAND --csv "
-                            "PLAN.csv` and pass --plan PLAN.csv, or use quarter or grid:STEP")
+            raise DataError(f"this model has no optimal plan of its own; write one with `garant plan STAND --csv "
+                            f"PLAN.csv` and pass {opt('plan')} PLAN.csv, or use quarter or grid:STEP")
         P = np.asarray(mod.PLAN_DEG, float)
         _check_reachable(mod, ranges, detents, P, "the model's plan")
     elif plan in ("quarter16", "quarter"):
@@ -65,16 +65,16 @@ def parse_effect(text, catalogue, base_angles=None):
     try:
         values = [float(v) for v in vals.split(",")] if vals else []
     except ValueError:
-        raise DataError(f"--effect {text}: values must be numbers") from None
+        raise DataError(f"{opt('effect')} {text}: values must be numbers") from None
     if not all(math.isfinite(v) for v in values):
-        raise DataError(f"--effect {text}: values must be finite numbers (not inf or nan)")
+        raise DataError(f"{opt('effect')} {text}: values must be finite numbers (not inf or nan)")
     n = len(catalogue[name].params)
     if catalogue[name].angle is not None and base_angles is not None and catalogue[name].angle not in base_angles:
-        raise DataError(f"--effect {name} is an error of the encoder of angle {catalogue[name].angle!r}; this stand's "
+        raise DataError(f"{opt('effect')} {name} is an error of the encoder of angle {catalogue[name].angle!r}; this stand's "
                         f"angles are {', '.join(base_angles)}")
     if len(values) != n:
         names = ", ".join(p.name for p in catalogue[name].params)
-        raise DataError(f"--effect {name} takes {n} values ({names}), got {len(values)}")
+        raise DataError(f"{opt('effect')} {name} takes {n} values ({names}), got {len(values)}")
     return name, values
 
 
@@ -107,9 +107,9 @@ def parse_sizes(text):
         try:
             x = float(v)
         except ValueError:
-            raise DataError(f"--size: {what} {v[:40]!r} is not a number") from None
+            raise DataError(f"{opt('size')}: {what} {v[:40]!r} is not a number") from None
         if not (math.isfinite(x) and 0 <= x < 1):
-            raise DataError(f"--size: {what} {v[:40]!r} must be a number >= 0 and < 1 (the bound of a small error)")
+            raise DataError(f"{opt('size')}: {what} {v[:40]!r} must be a number >= 0 and < 1 (the bound of a small error)")
         return x
     if "=" not in text:
         return dict.fromkeys(KINDS, number(text, "the bound"))
@@ -117,7 +117,7 @@ def parse_sizes(text):
     for part in text.split(","):
         kind, _, v = part.partition("=")
         if kind.strip() not in KINDS:
-            raise DataError(f"--size: unknown kind {kind.strip()[:40]!r}; name one of {', '.join(KINDS)}")
+            raise DataError(f"{opt('size')}: unknown kind {kind.strip()[:40]!r}; name one of {', '.join(KINDS)}")
         out[kind.strip()] = number(v.strip(), kind.strip())
     return out
 
