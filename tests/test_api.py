@@ -162,6 +162,8 @@ def test_every_result_has_a_status_and_its_message(tmp_path):
     from garant.generated import two_axis as mod
     f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
     good = garant.estimate("two-axis", np.column_stack([P, f]), 1e-5)
-    bad = garant.estimate("two-axis", np.column_stack([P, f + 0.01]), 1e-5)
+    spike = f.copy()
+    spike[3, 0] += 0.01                                  # one reading 100 sigma off: no unit fits it
+    bad = garant.estimate("two-axis", np.column_stack([P, spike]), 1e-5)
     assert (good.status, bad.status) == ("consistent", "refuted") and "no bound" in bad.message
     assert garant.plan("two-axis").status == "done"
