@@ -124,3 +124,26 @@ def test_docs_cli_is_the_parser():
     from garant.verify.cli import doc
     assert doc.PATH.read_text() == doc.markdown()
     assert all(f"## garant {name}" in doc.markdown() for name in doc.COMMANDS)
+
+
+def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
+    # Issue 45: estimate printed lines of 330 characters, verify 659. On a terminal every line now wraps at 100
+    # columns (continuations indented), a word longer than that (a path) is not cut; into a file, nothing wraps.
+    import io
+
+    from garant.verify.cli import WIDTH, _Output, wrap
+    line = "premises: " + " ".join(["the bounds hold if every residual component"] * 12)
+    wrapped = wrap(line).splitlines()
+    assert WIDTH == 100 and len(wrapped) > 1 and max(map(len, wrapped)) <= 100
+    assert all(x.startswith("  ") for x in wrapped[1:]) and " ".join(w.strip() for w in wrapped) == line
+    assert wrap("/" + "x" * 150) == "/" + "x" * 150
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+    tty, plain = Tty(), io.StringIO()
+    for stream in (tty, plain):
+        out = _Output(stream)
+        out.write(line[:50])
+        out.write(line[50:] + "\nshort\n")
+    assert max(map(len, tty.getvalue().splitlines())) <= 100 and plain.getvalue() == line + "\nshort\n"

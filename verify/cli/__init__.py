@@ -89,24 +89,52 @@ def main(argv=None):
         files.check_inputs([])                         # the API after a command protects nothing stale
 
 
+#: The widest line printed to a terminal (narrower terminals wrap at their own width).
+WIDTH = 100
+
+
+def wrap(text, width=WIDTH):
+    """Each line of `text` longer than `width` wrapped at spaces, its continuation indented two columns
+    (a table row or a path with no space is left whole rather than cut)."""
+    import textwrap
+    out = []
+    for line in text.split("\n"):
+        if len(line) <= width or not line.strip(" -"):      # a table's rule is cut to the width
+            out.append(line[:width])
+            continue
+        indent = len(line) - len(line.lstrip(" "))
+        out.append(textwrap.fill(line, width, subsequent_indent=" " * (indent + 2), break_long_words=False,
+                                 break_on_hyphens=False, drop_whitespace=True))
+    return "\n".join(out)
+
+
 class _Output:
-    """Standard output that, once its reader stops (`garant ... | head`), drops what is printed after: the
-    command still finishes its work and writes its files."""
+    """Standard output that, on a terminal, wraps each line at WIDTH columns (or the terminal's width) and,
+    once its reader stops (`garant ... | head`), drops what is printed after: the command still finishes
+    its work and writes its files. Into a file or a pipe the lines go as they are, for programs."""
 
     def __init__(self, stream):
-        self.stream, self.stopped = stream, False
+        import shutil
+        self.stream, self.stopped, self.pending = stream, False, ""
+        tty = getattr(stream, "isatty", lambda: False)()
+        self.width = min(WIDTH, shutil.get_terminal_size((WIDTH, 24)).columns) if tty else None
 
     def write(self, text):
-        """Write to the stream while its reader reads; afterwards, drop the text."""
+        """Write to the stream while its reader reads (wrapped on a terminal); afterwards, drop the text."""
+        if self.width is not None:
+            whole, _, self.pending = (self.pending + text).rpartition("\n")
+            if not whole and "\n" not in text:
+                return len(text)
+            text = wrap(whole, self.width) + "\n"
         if not self.stopped:
             try:
-                return self.stream.write(text)
+                self.stream.write(text)
             except BrokenPipeError:
                 self.stopped = True
         return len(text)
 
     def flush(self):
-        """Flush while the reader reads."""
+        """Flush while the reader reads (a partial line waits for its end on a terminal)."""
         if not self.stopped:
             try:
                 self.stream.flush()
@@ -124,6 +152,8 @@ def _reader_may_stop():
     try:
         yield
     finally:
+        if out.pending and not out.stopped:
+            out.stream.write(wrap(out.pending, out.width or WIDTH))
         sys.stdout = out.stream
         if out.stopped:                                # no flush of what the reader will never read
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

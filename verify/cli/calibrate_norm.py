@@ -141,8 +141,11 @@ def _print(res, args):
         print("   " + "  ".join(f"{v:+.6e}" for v in row))
     print("K = diag(" + "  ".join(f"{v:.6e}" for v in np.diag(K)) + ")")
     dsig = res["delta_sigma_max"]
-    print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * res['g']:.3e} m/s^2), from the "
-          f"{res['delta_sigma_source']}; proven remainder {res['remainder_bound']:.1e}")
+    source = res["delta_sigma_source"]
+    source = "the noise rule (statistical, not guaranteed: the premises below say it)" if source.startswith(
+        "noise rule") else source                            # each premise printed once
+    print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * res['g']:.3e} m/s^2), from {source}; proven "
+          f"remainder {res['remainder_bound']:.1e}")
     print(f"premises: {res['premises']}")
     options.say_gravity(res["g_given"], res)
     print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
@@ -233,7 +236,6 @@ def _log_of(args):
 
 
 def _report(res, args):
-    from pathlib import Path
 
     import numpy as np
 

@@ -186,7 +186,7 @@ def print_estimate(res, mod, args):
 def print_refuted(refuted, command):
     """The premises the data refute: each q wholly beyond what its parameters' stated bounds allow, with
     the parameters, their bounds and sources, and the option that states a wider bound."""
-    print(f"\nPREMISE REFUTED: the readings fit sigma, but put these q beyond what the a-priori bounds allow; the "
+    print("\nPREMISE REFUTED: the readings fit sigma, but put these q beyond what the a-priori bounds allow; the "
           "bounds above assume those bounds and are not guaranteed (no calibration is given):")
     for r in refuted:
         named = ", ".join(f"|{p['name']}| <= {p['bound']:g} ({p['source']})" for p in r["parameters"])
