@@ -45,13 +45,11 @@ def test_calibration_and_imu_tk_examples_agree(tmp_path):
     assert np.all(bound > cal["bound_bias"])
 
 
-def test_api_example_runs(monkeypatch, capsys):
-    if not (ROOT.parent / "shared" / "data" / "real").is_dir():
-        pytest.skip("../shared/data/real is not present")
-    monkeypatch.chdir(ROOT)
+def test_api_example_runs(capsys):
+    # Issue 45: the example needs no file beside the clone (it made a log of 001's plan in memory).
     exec(compile(block("api.md", "python"), "docs/api.md", "exec"), {})
     out = capsys.readouterr().out.splitlines()
-    assert out[0].startswith("10 [1.0, 1.0, 1.0]") and out[1].startswith("True noise rule")
+    assert out[0].startswith("10 [1.0, 1.0, 1.0]") and out[1].startswith("consistent noise rule")
 
 
 def test_means_example(tmp_path):

@@ -71,23 +71,16 @@ def plan(model, grid=None, count_seconds=None, max_candidates=None, search_secon
 
 
 @_api
-def positions(model_module, data):
-    """Positions from a CSV path, a pandas DataFrame (columns as in the CSV) or an array (N, angles + 3):
-    the stand's angles in degrees, then f1, f2, f3 in m/s^2 (and, for a stand with several mountings,
-    a last column with the mounting's index)."""
-    return jobs.positions_of(model_module, data)
-
-
-@_api
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None, bound=None):
+             imu=None, which_run=None, bound=None, fmt=None, sections=None):
     """The verdict, q and guaranteed errors from positions, as `garant estimate --json` (the same
     function: workflows/jobs.py).
 
     Parameters
     ----------
     model : a built-in stand's name or a STAND.toml path.
-    data : a positions CSV, a means file (then `imu` and `which_run`), a DataFrame or an array (N, angles + 3).
+    data : a positions CSV, a means file (then `imu` and `which_run`), imucal's session (then fmt="imucal" and
+        `sections`, its section list, unless it has a part column), a DataFrame or an array (N, angles + 3).
     sigma : the noise bound (5) of 000, dimensionless (units of g).
     g : local gravity, m/s^2 (None: 9.81, with the uncertainty of an assumed g).
     g_uncertainty : the bound on Delta_g/g. prior : one a-priori bound for every stand, mounting and block
@@ -101,7 +94,8 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     Estimate; its "premises" say what the bounds assume, and "premises_refuted" lists each q the readings
     put beyond what those a-priori bounds allow (then no bound is guaranteed and no calibration given).
     """
-    return jobs.estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, imu, which_run, bound=bound)
+    return jobs.estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, imu, which_run, bound=bound,
+                         fmt=fmt, sections=sections)
 
 
 @_api
