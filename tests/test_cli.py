@@ -110,6 +110,7 @@ def test_tables_state_their_model_and_human_units(tmp_path, capsys, mod):
     from garant.verify.io.report import human
     assert human(2e-4, "1") == "+200 ppm" and human(1e-4, "rad") == "+100 urad" and human(2e-3, "rad") == "+2 mrad"
     assert human(1e-3, "1", bias=True) == "+1 mg" and human(9.80665e-6, "m/s^2", bias=True) == "+1 ug"
+    assert human(1.2e-2, "1") == "+1.2 %" and human(-1.2e-4, "1") == "-120 ppm"     # issue 45: not +1.2e+04 ppm
     p = truth(4)
     f = simulate(mod, PLAN10, p, SIGMA, seed=4)
     path = write_csv(tmp_path / "d.csv", PLAN10, f)

@@ -21,14 +21,14 @@ def table(headers, rows, out=None):
 
 def human(value, unit, bias=False):
     """A value in the unit an engineer reads at a glance, beside SI: a dimensionless scale factor or
-    misalignment in ppm, an angle in mrad or urad, a bias (over g, or in m/s^2) in mg or ug."""
+    misalignment in % (from 0.1 %) or ppm, an angle in mrad or urad, a bias (over g, or in m/s^2) in mg or ug."""
     if bias:
         mg = value * 1e3 if unit == "1" else value / 9.80665 * 1e3
         return f"{mg:+.4g} mg" if abs(mg) >= 1 else f"{mg * 1e3:+.4g} ug"
     if unit == "rad":
         return f"{value * 1e3:+.4g} mrad" if abs(value) >= 1e-3 else f"{value * 1e6:+.4g} urad"
-    if unit == "1":
-        return f"{value * 1e6:+.4g} ppm"
+    if unit == "1":                                    # 1.2 %, 120 ppm: never 1.2e+04 ppm
+        return f"{value * 100:+.3g} %" if abs(value) >= 1e-3 else f"{value * 1e6:+.3g} ppm"
     return f"{value:+.4g} {unit}"
 
 
