@@ -8,7 +8,6 @@ import numpy as np
 from ..errors import DataError, opt
 from . import files, mimu
 
-FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy", "imucal")
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 
@@ -181,59 +180,88 @@ def _check_time(path, t, named_unit):
     return step, repeats
 
 
+class Read(NamedTuple):
+    """What a format's reader gives: time (its unit named or not), the three raw axes, the quantisation
+    step the format states (or None) and a note."""
+    t: np.ndarray
+    raw: np.ndarray
+    unit: bool             # the time's unit is stated by the format (else it is checked to be seconds)
+    step: float = None
+    note: str = ""
+
+
+def _read_mimu(path, sensor, imu, rate):
+    if imu is None:
+        raise DataError(f"{path}: a MIMU4444BT stream holds {mimu.IMUS} IMUs; choose one with {opt('imu')} K")
+    t, raw, step, skipped, jumps = mimu.read(path, imu)
+    note = (f"MIMU4444BT IMU {imu}, array frame, {mimu.COUNTS_PER_G} counts per g = {mimu.G_DATASHEET} m/s^2; "
+            f"{len(t)} packets" + (f", {skipped} bytes outside valid packets skipped" if skipped else "")
+            + (f"; {jumps} time stamp(s) repeat, go back or jump (a reset?): time taken from the packet count at "
+               f"{mimu.RATE_HZ:g} Hz" if jumps else ""))
+    return Read(t, raw, True, step, note)
+
+
+def _read_openaxes(path, sensor, imu, rate):
+    header = _header(path, ";")
+    cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
+    missing = [c for c in cols if c not in header]
+    if missing:
+        raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an OpenAXES log")
+    data = _load(path, ";", [header.index(c) for c in cols], 1)
+    return Read(data[:, 0] * 1e-6, data[:, 1:4], False)                   # TIME in microseconds
+
+
+def _read_csv(path, sensor, imu, rate):
+    header = _header(path, ",")
+    ti, factor, acc = _csv_columns(path, header)
+    data = _load(path, ",", [ti] + acc, 1)
+    return Read(data[:, 0] * factor, data[:, 1:4], factor == 1.0)
+
+
+def _read_imu_tk(path, sensor, imu, rate):
+    data = _load(path, None, [0, 1, 2, 3], 0)
+    return Read(data[:, 0], data[:, 1:4], True)
+
+
+def _read_npy(path, sensor, imu, rate):
+    data = _load_npy(path)
+    return Read(data[:, 0].copy(), data[:, 1:4], True)
+
+
+def _read_imucal(path, sensor, imu, rate):
+    if rate is None:
+        raise DataError(f"{path}: an imucal session has a sample index, no time: give {opt('rate')} HZ (imucal's "
+                        "example sessions: 102.4)")
+    header = _header(path, ",")
+    index = next((c for c in ("n_samples", "samples") if c in header), None)
+    missing = [c for c in ("acc_x", "acc_y", "acc_z") if c not in header] + ([] if index else ["n_samples"])
+    if missing:
+        raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an imucal session")
+    data = _load(path, ",", [header.index(c) for c in (index, "acc_x", "acc_y", "acc_z")], 1)
+    data = data[np.argsort(data[:, 0], kind="stable")]
+    return Read(data[:, 0] / rate, data[:, 1:4], True)
+
+
+#: Each log format and its reader (path, sensor, imu, rate) -> Read: one place to add a format.
+READERS = {"imu_tk": _read_imu_tk, "csv": _read_csv, "openaxes": _read_openaxes, "mimu": _read_mimu,
+           "npy": _read_npy, "imucal": _read_imucal}
+#: The formats a log may be read as (`--format`).
+FORMATS = tuple(READERS)
+
+
 def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
-    """Time (s) and three accelerometer columns of a log; one clear line on any problem. `imu` picks
-    one IMU of a multi-IMU stream (mimu: 1-8); `rate` (Hz) times a log of sample indices (imucal's
-    session: a column n_samples or samples, acc_x, acc_y, acc_z; rows in any order, sorted by index)."""
+    """Time (s) and three accelerometer columns of a log, by the format's reader (READERS); one clear
+    line on any problem. `imu` picks one IMU of a multi-IMU stream (mimu: 1-8); `rate` (Hz) times a log
+    of sample indices (imucal's session: a column n_samples or samples, acc_x, acc_y, acc_z; rows in any
+    order, sorted by index)."""
     files.regular(path, "the log", MAX_LOG_BYTES)
-    step, note = None, ""
     try:
         fmt = fmt or guess_format(path)
         if imu is not None and fmt != "mimu":
             raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu), not to a {fmt} log")
-        if fmt == "mimu":
-            if imu is None:
-                raise DataError(f"{path}: a MIMU4444BT stream holds {mimu.IMUS} IMUs; choose one with {opt('imu')} K")
-            t, raw, step, skipped, jumps = mimu.read(path, imu)
-            unit = True
-            note = (f"MIMU4444BT IMU {imu}, array frame, {mimu.COUNTS_PER_G} counts per g = "
-                    f"{mimu.G_DATASHEET} m/s^2; {len(t)} packets" + (f", {skipped} bytes outside valid packets "
-                                                                     "skipped" if skipped else "")
-                    + (f"; {jumps} time stamp(s) repeat, go back or jump (a reset?): time taken from the packet "
-                       f"count at {mimu.RATE_HZ:g} Hz" if jumps else ""))
-        elif fmt == "openaxes":
-            header = _header(path, ";")
-            cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
-            missing = [c for c in cols if c not in header]
-            if missing:
-                raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an OpenAXES log")
-            data = _load(path, ";", [header.index(c) for c in cols], 1)
-            t, raw, unit = data[:, 0] * 1e-6, data[:, 1:4], False            # TIME in microseconds
-        elif fmt == "csv":
-            header = _header(path, ",")
-            ti, factor, acc = _csv_columns(path, header)
-            data = _load(path, ",", [ti] + acc, 1)
-            t, raw, unit = data[:, 0] * factor, data[:, 1:4], factor == 1.0
-        elif fmt == "imu_tk":
-            data = _load(path, None, [0, 1, 2, 3], 0)
-            t, raw, unit = data[:, 0], data[:, 1:4], True
-        elif fmt == "npy":
-            data = _load_npy(path)
-            t, raw, unit = data[:, 0].copy(), data[:, 1:4], True
-        elif fmt == "imucal":
-            if rate is None:
-                raise DataError(f"{path}: an imucal session has a sample index, no time: give {opt('rate')} HZ (imucal's "
-                                "example sessions: 102.4)")
-            header = _header(path, ",")
-            index = next((c for c in ("n_samples", "samples") if c in header), None)
-            missing = [c for c in ("acc_x", "acc_y", "acc_z") if c not in header] + ([] if index else ["n_samples"])
-            if missing:
-                raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an imucal session")
-            data = _load(path, ",", [header.index(c) for c in (index, "acc_x", "acc_y", "acc_z")], 1)
-            data = data[np.argsort(data[:, 0], kind="stable")]
-            t, raw, unit = data[:, 0] / rate, data[:, 1:4], True
-        else:
+        if fmt not in READERS:
             raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
+        t, raw, unit, step, note = READERS[fmt](path, sensor, imu, rate)
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     if len(t) < MIN_SAMPLES:
