@@ -15,6 +15,7 @@ _API = {
     "plan": ("garant.verify.api", "plan"),
     "estimate": ("garant.verify.api", "estimate"),
     "calibrate_norm": ("garant.verify.api", "calibrate_norm"),
+    "calibrate_many": ("garant.verify.api", "calibrate_many"),
     "diagnose": ("garant.verify.api", "diagnose"),
     "next_position": ("garant.verify.api", "next_position"),
     "apply": ("garant.verify.api", "apply"),

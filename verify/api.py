@@ -23,7 +23,7 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
           "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
-          "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate}
+          "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate, "jobs": checks.positive_int}
 
 
 def _api(fn):
@@ -122,6 +122,23 @@ def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, delta_sigma=Non
     """
     return jobs.calibrate_norm(log, g, params, fmt, sensor, imu, window, k, min_still, delta_sigma, diagnose,
                                g_uncertainty, rate)
+
+
+@_api
+def calibrate_many(logs, jobs=None, spec=None, g=None, params=9, fmt=None, sensor=None, delta_sigma=None, imu=None,
+                   window=1.0, k=10.0, min_still=2.0, g_uncertainty=None, rate=None):
+    """Many logs calibrated as `calibrate_norm`, in one process pool (`jobs`, default every core; the same
+    results whatever it is), as `garant calibrate-norm LOG... --out DIR`: a list of rows, one per log in
+    order, each {"log", "status" (consistent, refuted or error), "message", "result" (the calibration's
+    dictionary, or None)} and, with `spec` (a SPEC.toml path: [limits] and [bound_limits] of scale,
+    misalignment, bias), "verdict" (pass: every guaranteed interval within its limit; fail; undecided) and
+    "reason". A log that cannot be calibrated is its row, never the end of the batch."""
+    from .workflows import batch
+    if not isinstance(logs, (list, tuple)) or not logs:
+        raise DataError("logs: a list of log paths or arrays")
+    return batch.calibrate_many(logs, jobs, batch.read_spec(spec) if spec else None, None, g=g, params=params,
+                                fmt=fmt, sensor=sensor, imu=imu, window=window, k=k, min_still=min_still,
+                                delta_sigma=delta_sigma, g_uncertainty=g_uncertainty, rate=rate)
 
 
 @_api

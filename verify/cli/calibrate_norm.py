@@ -9,7 +9,7 @@ from . import args as options
 def add(sub):
     """The `garant calibrate-norm` subcommand and its options."""
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
-    p.add_argument("log", metavar="LOG")
+    p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): a batch, one process, every core")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or all of them "
@@ -45,6 +45,12 @@ def add(sub):
     options.imucal_export(p)
     p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "
                    "(--format imucal: imucal's session)")
+    p.add_argument("--out", metavar="DIR", help="a batch's folder: DIR/<log>.json (each unit's calibration), "
+                   "DIR/summary.csv and DIR/index.html (each unit's parameters, bounds, verdict)")
+    p.add_argument("--jobs", type=options.positive_int, metavar="N",
+                   help="processes for a batch (default: every core); the files are the same whatever N")
+    p.add_argument("--spec", metavar="SPEC.toml", help="the unit's specification ([limits], [bound_limits] of "
+                   "scale, misalignment, bias): each unit a guaranteed pass, a fail or undecided, with the reason")
     return p
 
 
@@ -59,6 +65,11 @@ def _gyro(text):
 
 def run(args):
     """`garant calibrate-norm`: parse, call the job, print; the exit status."""
+    if len(args.logs) > 1 or args.out:
+        return _batch(args)
+    if args.jobs or args.spec:
+        raise DataError("--jobs and --spec apply to a batch: give several logs, or --out DIR")
+    args.log = args.logs[0]
     if args.imu is None or args.imu != "all":
         if args.imu is not None:
             try:
@@ -81,6 +92,57 @@ def run(args):
     if args.json:
         report.write_json(args.json, results)
     return max(codes)
+
+
+def _batch(args):
+    """Many logs in one process (workflows/batch.py): each unit's calibration file in --out, the summary as
+    CSV and a page, a progress line on standard error; the exit status counts the units that failed (a
+    log that could not be calibrated, refuted its noise bound, or failed its specification), at most 125."""
+    from ..io import files, report
+    from ..workflows import batch
+    single = [o for o in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report", "json")
+              if getattr(args, o)]
+    if single or args.imu == "all" or args.diagnose:
+        raise DataError(f"--{(single or ['imu all' if args.imu == 'all' else 'diagnose'])[0].replace('_', '-')} "
+                        "concerns one log: a batch writes each unit's files to --out DIR")
+    if not args.out:
+        raise DataError("several logs: give --out DIR for each unit's calibration and the summary")
+    spec = batch.read_spec(args.spec) if args.spec else None
+    imu = int(args.imu) if args.imu is not None else None
+
+    def progress(done, total):
+        print(f"\rcalibrate-norm: {done}/{total} logs", end="" if done < total else "\n", file=sys.stderr, flush=True)
+    rows = batch.calibrate_many(args.logs, args.jobs, spec, progress, g=args.g, params=args.params, fmt=args.format,
+                                sensor=args.sensor, imu=imu, window=args.window, k=args.k, min_still=args.min_still,
+                                delta_sigma=args.delta_sigma, g_uncertainty=args.g_uncertainty, rate=args.rate)
+    folder = files.make_folder(args.out)
+    for stem, row in zip(batch.stems(args.logs), rows):
+        if row["result"] and row["result"].get("calibration"):
+            report.write_json(folder / f"{stem}.json", row["result"]["calibration"])
+    head, table = batch.summary_rows(rows)
+    report.write_text(folder / "summary.csv", "\n".join(",".join(_csv_cell(c) for c in r) for r in [head, *table]) + "\n")
+    counts = {s: sum(r["status"] == s for r in rows) for s in ("consistent", "refuted", "error")}
+    verdicts = {v: sum(r.get("verdict") == v for r in rows) for v in ("pass", "fail", "undecided")} if spec else {}
+    said = (f"{len(rows)} logs: {counts['consistent']} calibrated, {counts['refuted']} refuted their noise bound, "
+            f"{counts['error']} could not be calibrated" + (f"; against {args.spec}: {verdicts['pass']} pass (guaranteed), "
+                                                             f"{verdicts['fail']} fail, {verdicts['undecided']} undecided"
+                                                             if spec else ""))
+    report.write_page(folder, f"Batch: {len(rows)} logs", report.command_line(args, "garant calibrate-norm ..."),
+                      [("Summary", said), ("Each unit (parameters of (1.3) of 001 with their guaranteed errors; "
+                                            "biases over g)", report.Table(head, table))], args.logs)
+    for row in rows:
+        print(f"{row['log']}: {row['status']}" + (f", {row['verdict']} ({row['reason']})" if spec else
+                                                  f": {row['message']}" if row["message"] else ""))
+    print(said)
+    print(f"wrote {folder}/summary.csv, {folder}/index.html and {counts['consistent']} calibration file(s)")
+    failed = sum(r["status"] != "consistent" or r.get("verdict") == "fail" for r in rows)
+    return min(failed, 125)
+
+
+def _csv_cell(text):
+    """A CSV cell: quoted when it holds a comma or a quote."""
+    text = str(text)
+    return '"' + text.replace('"', '""') + '"' if ("," in text or '"' in text) else text
 
 
 def _run(args, into=None):

@@ -1,0 +1,54 @@
+"""A production line in one command (issue 46): many logs in one process, every core, a guaranteed pass
+or fail against the unit's specification, one bad log a row of the summary."""
+import json
+
+import pytest
+
+from garant.verify.cli import main
+from test_calibrate_norm import REAL, needs_real
+
+SPEC = """[limits]
+scale = 0.01
+misalignment = 0.01
+bias = 0.05
+
+[bound_limits]
+scale = 0.005
+"""
+
+
+@needs_real
+def test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line(tmp_path, capsys):
+    logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3, 4)]
+    (tmp_path / "bad.txt").write_text("not a log\n")
+    (tmp_path / "spec.toml").write_text(SPEC)
+    outs = {}
+    for jobs in ("1", "2"):
+        code = main(["calibrate-norm", *logs, str(tmp_path / "bad.txt"), "--g", "9.81", "--out", str(tmp_path / jobs),
+                     "--spec", str(tmp_path / "spec.toml"), "--jobs", jobs])
+        assert code == 1                                    # one unit failed: the bad log
+        outs[jobs] = {p.name: p.read_bytes() for p in (tmp_path / jobs).iterdir() if p.suffix in (".json", ".csv")}
+    assert outs["1"] == outs["2"] and len(outs["1"]) == 4     # three calibrations and the summary, whatever --jobs
+    out = capsys.readouterr().out
+    assert "bad.txt: error, fail (not calibrated: " in out
+    assert "4 logs: 3 calibrated, 0 refuted their noise bound, 1 could not be calibrated" in out
+    rows = (tmp_path / "1" / "summary.csv").read_text().splitlines()
+    assert rows[0].startswith("log,status,verdict,reason") and len(rows) == 5
+    # session 3's lambda2 is bounded less tightly than the 0.005 the spec allows its bound: not a guaranteed pass
+    assert ",consistent,undecided,lambda2's guaranteed error " in rows[2] and " above 0.005," in rows[2]
+    cal = json.loads((tmp_path / "1" / "repeat_session2_acc.json").read_text())
+    assert cal["format"] == "garant-calibration-1" and cal["kind"] == "norm"
+    assert (tmp_path / "1" / "index.html").exists()
+
+
+def test_a_specification_is_checked_and_single_log_outputs_are_refused_in_a_batch(tmp_path, capsys):
+    (tmp_path / "spec.toml").write_text("[limits]\nscale = 2\n")
+    (tmp_path / "a.txt").write_text("x\n")
+    assert main(["calibrate-norm", str(tmp_path / "a.txt"), str(tmp_path / "a.txt"), "--out", str(tmp_path / "o"),
+                 "--spec", str(tmp_path / "spec.toml")]) == 2
+    assert "[limits] scale = 2 must be a number > 0 and < 1" in capsys.readouterr().err
+    assert main(["calibrate-norm", str(tmp_path / "a.txt"), str(tmp_path / "a.txt"), "--out", str(tmp_path / "o"),
+                 "--save", str(tmp_path / "c.json")]) == 2
+    assert "--save concerns one log" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["calibrate-norm", str(tmp_path / "a.txt"), "--jobs", "0"])
