@@ -4,8 +4,11 @@ import tempfile
 import numpy as np
 import pytest
 
-# Derived descriptions are cached (verify/models.py); the tests keep theirs apart from the user's.
-os.environ.setdefault("GARANT_CACHE", tempfile.mkdtemp(prefix="garant-test-cache-"))
+# Derived descriptions are cached (verify/models.py); the tests keep theirs apart from the user's, in a
+# folder made once by the process that starts the run (the workers inherit it) and removed at its end.
+_OWN_CACHE = None
+if "GARANT_CACHE" not in os.environ:
+    _OWN_CACHE = os.environ["GARANT_CACHE"] = tempfile.mkdtemp(prefix="garant-test-cache-")
 
 from garant.generated import two_axis as two_axis
 
@@ -126,3 +129,10 @@ def pytest_collection_modifyitems(items):
     for item in items:
         if f"{item.path.name}::{item.originalname}" in SLOW:
             item.add_marker(pytest.mark.slow)
+
+
+def pytest_sessionfinish(session):
+    """Remove the cache folder this run made (by the process that made it, after every worker is done)."""
+    import shutil
+    if _OWN_CACHE and not hasattr(session.config, "workerinput"):
+        shutil.rmtree(_OWN_CACHE, ignore_errors=True)
