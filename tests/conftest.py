@@ -40,6 +40,8 @@ def write_csv(path, positions_deg, f, extra=None):
 #: Tests that take over a second each on one core (measured with --durations=0): `pytest -m "not slow"` is the
 #: fast lane a change is tried with first; CI runs every test.
 SLOW = {
+    "test_report.py::test_a_batch_summary_page_renders_in_headless_chromium",
+    "test_batch.py::test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line",
     "test_any_stand.py::test_diagnose_advises_only_reachable_positions",
     "test_api.py::test_diagnose_of_the_api_is_the_command",
     "test_api.py::test_every_result_has_a_status_and_its_message",

@@ -83,6 +83,24 @@ def test_each_report_renders_in_headless_chromium(tmp_path, capsys):
         assert shot.exists() and shot.stat().st_size > 10_000      # something visible was drawn
 
 
+@pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")
+def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
+    # Issue 46: the batch's summary page (each unit's row) is one self-contained page a browser draws.
+    logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3)]
+    assert main(["calibrate-norm", *logs, "--g", "9.81", "--out", str(tmp_path / "b"), "--jobs", "1"]) == 0
+    page = tmp_path / "b" / "index.html"
+    assert "repeat_session3_acc.txt" in page.read_text() and not re.search(r"""(src|href)=["'](?!data:)""",
+                                                                           page.read_text())
+    probe = tmp_path / "b" / "probe.html"
+    probe.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
+    dom = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000",
+                          "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=120).stdout
+    seen = re.search(r'data-seen="([^"]*)"', dom)
+    assert seen, "the page did not load"
+    tables = seen.group(1).split("|")[1].split()
+    assert tables and all(float(h) > 10 for h in tables), tables
+
+
 @pytest.mark.parametrize("model", ["two-axis", "single-axis", "three-axis"])
 def test_the_plan_plot_shows_the_up_direction_of_each_position(tmp_path, capsys, model):
     """plan --plot draws, per position, the direction the readings of an error-free block point along
