@@ -85,6 +85,17 @@ def json_text(text, parse_int=None):
     return json.loads(text, parse_int=parse_int, parse_constant=constant, object_pairs_hook=unique)
 
 
+def read_json(path, what, max_bytes=1_000_000):
+    """A user's small JSON file (a section list, a truth, an imucal calibration), strict as `json_text`;
+    DataError naming the file and `what` it should be."""
+    regular(path, what, max_bytes)
+    try:
+        with open(path, "rb") as fh:
+            return json_text(fh.read(max_bytes + 1).decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError) as e:
+        raise DataError(f"{path}: not {what} ({str(e).splitlines()[0][:120]})") from None
+
+
 def _identity(path):
     try:
         st = os.stat(path)

@@ -63,12 +63,7 @@ def read_sections(path, sections=None):
 
 def _section_list(path, n):
     """{face: (start, end)} from imucal's section list JSON, each a range of sample indices within n."""
-    files.regular(path, "the section list", 1_000_000)
-    try:
-        with open(path, "rb") as fh:
-            data = files.json_text(fh.read().decode("utf-8"))
-    except (UnicodeDecodeError, ValueError, RecursionError) as e:
-        raise DataError(f"{path}: not a JSON section list ({str(e).splitlines()[0][:120]})") from None
+    data = files.read_json(path, "a JSON section list")
     out = {}
     for face in FACES:
         s = data.get(face) if isinstance(data, dict) else None
@@ -114,12 +109,7 @@ def calibration_json(cal, gyro=None, comment=""):
 
 def read_calibration(path):
     """An imucal calibration file's dictionary (for its gyroscope part)."""
-    files.regular(path, "the imucal calibration", 1_000_000)
-    try:
-        with open(path, "rb") as fh:
-            data = files.json_text(fh.read().decode("utf-8"))
-    except (UnicodeDecodeError, ValueError, RecursionError) as e:
-        raise DataError(f"{path}: not an imucal calibration ({str(e).splitlines()[0][:120]})") from None
+    data = files.read_json(path, "an imucal calibration")
     need = ("K_g", "R_g", "K_ga", "b_g")
     if not isinstance(data, dict) or any(k not in data for k in need):
         raise DataError(f"{path}: an imucal Ferraris calibration has {', '.join(need)}")

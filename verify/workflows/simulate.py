@@ -126,12 +126,7 @@ def read_truth(path, mod):
     """--truth FILE.json: {"parameter name": value, ...} for parameters of the stand (the others 0), each a
     finite number with |value| < 1 (rad, dimensionless, a bias over g)."""
     from ..io import files
-    files.regular(path, "the truth file", 1_000_000)
-    try:
-        with open(path, "rb") as fh:
-            data = files.json_text(fh.read().decode("utf-8"))
-    except (UnicodeDecodeError, ValueError, RecursionError) as e:
-        raise DataError(f"{path}: not a JSON object of parameter values ({str(e).splitlines()[0][:120]})") from None
+    data = files.read_json(path, "a JSON object of parameter values")
     if not isinstance(data, dict):
         raise DataError(f'{path}: expected a JSON object such as {{"kappa": 5e-5, "bias1": 0.05}}')
     for name, v in data.items():
