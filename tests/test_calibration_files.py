@@ -152,15 +152,19 @@ def test_apply_in_the_imu_tk_frame_is_the_imu_tk_file(tmp_path, capsys):
     log = REAL / "imu_tk_xsens_acc.txt"
     assert main(["calibrate-norm", str(log), "--g", str(G), "--save", str(tmp_path / "c.json"), "--export-imu-tk",
                  str(tmp_path / "c.txt")]) == 0
-    assert "turned 1.34 degrees from garant's" in capsys.readouterr().out
+    printed = capsys.readouterr().out
     M, B = calibration.read_imu_tk(tmp_path / "c.txt")
+    # the turn between the frames, from the two files alone: R = M_file M^-1, its angle from its trace
+    R = M @ np.linalg.inv(np.array(json.loads((tmp_path / "c.json").read_text())["M"]))
+    turn = f"{np.degrees(np.arccos((np.trace(R) - 1) / 2)):.3g}"
+    assert float(turn) > 0.5 and f"turned {turn} degrees from garant's" in printed
     raw = recordings.read_log(str(log), None, "adxl355", None).raw
     for frame, far in (("imu_tk", False), ("garant", True)):
         assert main(["apply", str(tmp_path / "c.json"), str(log), "-o", str(tmp_path / "a.csv"), "--frame", frame]) == 0
         a = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)[:, 1:4]
         gap = np.abs(a - (M @ (raw - B).T).T).max()
         assert (gap > 0.1) if far else (gap < 1e-5), (frame, gap)
-    assert "the garant frame is turned 1.34 degrees from it" in capsys.readouterr().out
+    assert f"the garant frame is turned {turn} degrees from it" in capsys.readouterr().out
 
 
 def test_outputs_honour_the_umask(tmp_path):
