@@ -97,11 +97,61 @@ def compare(peer, res):
     return rows
 
 
+BATCH_COPIES = 10          # the production line: 10 copies of each of repeat sessions 2-4, 30 logs
+
+
+def batch(binary, repeat=3):
+    """The production line: 30 logs (BATCH_COPIES copies of repeat sessions 2-4) in one `garant calibrate-norm
+    LOG... --out DIR` (every core, then --jobs 1) against imu_tk run once per log, alternately, `repeat` times;
+    medians of CPU (user + system, the pool's workers included) and wall seconds, and whether --jobs 1 and
+    the default write the same files."""
+    import filecmp
+    import shutil
+    with tempfile.TemporaryDirectory() as tmp:
+        logs = []
+        for copy in range(BATCH_COPIES):
+            for k in (2, 3, 4):
+                logs.append(Path(tmp) / f"unit{copy:02d}_session{k}.txt")
+                shutil.copyfile(REAL / f"repeat_session{k}_acc.txt", logs[-1])
+        garant = str(Path(sys.executable).with_name("garant"))
+        runs = {"garant, every core": [], "garant --jobs 1": [], "imu_tk, once per log": []}
+        for _ in range(repeat):
+            for name in runs:
+                out = Path(tmp) / name.split(",")[0].replace(" ", "")
+                shutil.rmtree(out, ignore_errors=True)
+                if name.startswith("imu_tk"):
+                    each = [measured([binary, str(log), str(G_LOGS), "5", "0", "0", "0"]) for log in logs]
+                    runs[name].append((sum(r[0] for r in each), sum(r[1] for r in each)))
+                    continue
+                jobs = ["--jobs", "1"] if "jobs" in name else []
+                cpu, wall, _, _, code = measured([garant, "calibrate-norm", *map(str, logs), "--g", str(G_LOGS),
+                                                  "--out", str(out), *jobs])
+                if code != 0:
+                    raise SystemExit(f"garant calibrate-norm on the batch exited with {code}")
+                runs[name].append((cpu, wall))
+        a, b = Path(tmp) / "garant", Path(tmp) / "garant--jobs1"
+        files = sorted(p.name for p in a.iterdir())
+        same = all(filecmp.cmp(a / f, b / f, shallow=False) for f in files if f.endswith((".json", ".csv")))
+    med = {k: (float(np.median([r[0] for r in v])), float(np.median([r[1] for r in v]))) for k, v in runs.items()}
+    peer_cpu = med["imu_tk, once per log"][0] / len(logs)
+    print(f"\nThe production line: {len(logs)} logs ({BATCH_COPIES} copies of repeat sessions 2-4), medians of {repeat} "
+          f"alternating runs; CPU includes the pool's workers")
+    print(f"{'run':24s} {'CPU s':>7s} {'wall s':>7s} {'CPU s per log':>14s} {'/ imu_tk':>9s}")
+    for name, (cpu, wall) in med.items():
+        print(f"{name:24s} {cpu:7.2f} {wall:7.2f} {cpu / len(logs):14.4f} {cpu / len(logs) / peer_cpu:9.2f}")
+    print(f"--jobs 1 and every core wrote the same calibrations and summary.csv: {'yes' if same else 'NO'}")
+    return med, same
+
+
 def main():
-    """Both tools on every real log, then on synthetic logs of 1e5 and 1e6 samples."""
+    """Both tools on every real log, then on synthetic logs of 1e5 and 1e6 samples; then the production line
+    (`--batch`: that alone)."""
     binary = imu_tk_binary()
     if binary is None:
         print("imu_tk is not built (../shared/peers/imu_tk/build.sh, or IMU_TK_ACC=path): no peer rows")
+        return
+    if "--batch" in sys.argv[1:]:
+        batch(binary)
         return
     print(f"garant calibrate-norm against imu_tk ({binary}); medians of {REPEAT} alternating runs each")
     one_thread = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}      # as the garant command sets it
@@ -128,6 +178,7 @@ def main():
         worst = max(abs(p - g) / e for _, p, g, e in rows)
         print(f"{name:34s} " + "  ".join(f"{k.split()[0]} {abs(p - g) / e:.2f}" for k, p, g, e in rows)
               + f"  -> {'within' if worst <= 1 else 'OUTSIDE'}")
+    batch(binary)
 
 
 def _synthetic(tmp):

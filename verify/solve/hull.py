@@ -26,18 +26,19 @@ class Empty(Exception):
 
 def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
     """A proven upper bound of c^T x over X from the multipliers lam (a multiplier on a side that is
-    infinite is dropped: it would bound nothing; rows without a multiplier cost nothing)."""
-    lam = np.where((lam > 0) & ~np.isfinite(row_hi) | (lam < 0) & ~np.isfinite(row_lo), 0.0, lam)
-    on = np.flatnonzero(lam)
-    lam, B, row_lo, row_hi = lam[on], B[on], row_lo[on], row_hi[on]
-    n = len(on) + 2
-    mu = c - B.T @ lam
-    slack = 1.01 * n * EPS * (np.abs(c) + np.abs(B).T @ np.abs(lam))          # |mu_true - mu| (rounding of B^T lam)
-    rows = np.where(lam > 0, lam * row_hi, lam * row_lo)
+    infinite is dropped: it would bound nothing; rows without a multiplier cost nothing). c and lam may
+    be stacks, one objective and its multipliers a row: then an array of bounds, one a row."""
+    C, L = np.atleast_2d(c), np.atleast_2d(lam)
+    lo_ok, hi_ok = np.isfinite(row_lo), np.isfinite(row_hi)
+    L = np.where((L > 0) & ~hi_ok | (L < 0) & ~lo_ok, 0.0, L)
+    n = B.shape[0] + 2                                  # terms of each entry of L B (zeros add no error)
+    mu = C - L @ B
+    slack = 1.01 * n * EPS * (np.abs(C) + np.abs(L) @ np.abs(B))     # |mu_true - mu| (rounding of L B)
+    rows = np.where(L > 0, L * np.where(hi_ok, row_hi, 0.0), L * np.where(lo_ok, row_lo, 0.0))
     cols = np.maximum(mu * col_lo, mu * col_hi) + slack * np.maximum(np.abs(col_lo), np.abs(col_hi))
-    terms = np.r_[rows, cols]
-    total = terms.sum()
-    return float(total + 1.01 * (len(terms) + 2) * EPS * np.abs(terms).sum())
+    terms = np.hstack([rows, cols])
+    out = terms.sum(axis=1) + 1.01 * (terms.shape[1] + 2) * EPS * np.abs(terms).sum(axis=1)
+    return float(out[0]) if np.ndim(c) == 1 else out
 
 
 GENERATE_ABOVE = highs.GENERATE_ABOVE     # rows: above this, the LPs start on the tightest rows and add violated ones
@@ -100,26 +101,40 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
         _add_rows(h, Bs[new], lo_s[new], hi_s[new])
         S = np.r_[S, new]                          # in the model's row order
         todo = [e for e, col in zip(keys, V[new].T) if col.max() > TOLERANCE] + [e for e in ends if found[e] is None]
-    out_lo, out_hi, pts, lams = np.empty(len(C)), np.empty(len(C)), [], []
-    zero = np.zeros(rows)
-    for k, c in enumerate(C):
-        bound, used, xs = [], [], []
-        for sign in (1.0, -1.0):
-            cands = [zero]                            # lambda = 0: the column box, always valid
-            got = found[k, sign]
-            if got is not None:
-                y = got[0]
-                lam = zero.copy()
-                lam[S[:len(y)]] = -y / r[S[:len(y)]]
-                cands.append(lam)
-            b = [upper(sign * c, B, row_lo, row_hi, col_lo, col_hi, lam) for lam in cands]
-            bound.append(min(b))
-            used.append(cands[int(np.argmin(b))])
-            xs.append(None if got is None else xc + dc * got[1])
-        out_hi[k], out_lo[k] = bound[0], -bound[1]
-        pts.append((xs[1], xs[0]))
-        lams.append((used[1], used[0]))
+    K = len(C)
+    signs = np.array([1.0, -1.0])
+    objectives = (signs[None, :, None] * C[:, None, :]).reshape(2 * K, -1)     # (k, +), (k, -), ...
+    lam = np.zeros((2 * K, rows))
+    for i, (k, sign) in enumerate((k, sign) for k in range(K) for sign in signs):
+        got = found[k, sign]
+        if got is not None:
+            y = got[0]
+            lam[i, S[:len(y)]] = -y / r[S[:len(y)]]
+    # lambda = 0 (the column box) is always valid: each end the better of the two proofs
+    both = upper(np.vstack([objectives, objectives]), B, row_lo, row_hi, col_lo, col_hi,
+                 np.vstack([np.zeros_like(lam), lam])).reshape(2, K, 2)
+    use = both[1] <= both[0]
+    out_hi = np.where(use[:, 0], both[1, :, 0], both[0, :, 0])
+    out_lo = -np.where(use[:, 1], both[1, :, 1], both[0, :, 1])
+    used = np.where(use.reshape(-1)[:, None], lam, 0.0).reshape(K, 2, rows)
+    pts = [tuple(None if found[k, sign] is None else xc + dc * found[k, sign][1] for sign in (-1.0, 1.0))
+           for k in range(K)]
+    lams = [(used[k, 1], used[k, 0]) for k in range(K)]
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
+
+
+def proven(B, row_lo, row_hi, col_lo, col_hi, C, proofs):
+    """(lo, hi) of c^T x over X for each row c of C from multipliers found before, with no LP: `proofs` is a
+    list of what `ranges(..., multipliers=True)` returned for the same B and C (on other row and column
+    bounds); each end is the least `upper` over them and lambda = 0 (the column box)."""
+    C = np.atleast_2d(np.asarray(C, float))
+    K, rows = len(C), B.shape[0]
+    lams = np.stack([np.zeros((K, 2, rows))] + [np.array([[a, b] for a, b in p]) for p in proofs])
+    objectives = np.stack([-C, C], axis=1).reshape(2 * K, -1)                # (k, min), (k, max), ...
+    n = len(lams)
+    ends = upper(np.tile(objectives, (n, 1)), B, row_lo, row_hi, col_lo, col_hi,
+                 lams.reshape(n * 2 * K, rows)).reshape(n, K, 2).min(axis=0)
+    return -ends[:, 0], ends[:, 1]
 
 
 def _solve(h, cost):

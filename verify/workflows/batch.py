@@ -6,6 +6,7 @@ pass), fails if some parameter's whole interval lies outside it, and is undecide
 says why. One bad log is a row of the summary, never the end of the batch.
 """
 import os
+import sys
 import tomllib
 
 import numpy as np
@@ -106,7 +107,14 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
             if progress:
                 progress(k, len(work))
     else:
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
+        import multiprocessing
+        from .. import models                                 # loaded once, here: the forked workers share them
+        from ..io import calibration, recordings             # noqa: F401
+        from ..solve import hull                             # noqa: F401
+        from . import calibrate_norm, jobs as _jobs, premises  # noqa: F401
+        models.load("norm")
+        context = multiprocessing.get_context("fork" if sys.platform == "linux" else None)
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
             outcomes = []
             for k, outcome in enumerate(pool.map(_one, work), 1):
                 outcomes.append(outcome)

@@ -8,6 +8,8 @@ of each parameter on the directions actually present is the LP (3.1)-(3.2) on th
 each interval's own noise bound: --delta-sigma, or the noise rule from the data (never the fit's own
 residual, which would make the bounds circular), plus the proven remainder (2.3) around the fit.
 """
+import functools
+
 import numpy as np
 
 from ..errors import DataError, opt
@@ -370,52 +372,66 @@ def exact_information(mod, res, noise, nu):
     A[6:9] /= f
     base = noise / f
 
-    def step(reach, X=None):
-        """(lo, hi) of q and the remainder left, on the box |q| <= reach (and X), or None."""
+    def step(reach, X=None, proofs=None):
+        """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
+        or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP."""
         A_box = np.array([[reach[0], 0, 0], [reach[3], reach[1], 0], [reach[4], reach[5], reach[2]]])
         left, shift = remainder_per_interval(F, A_box, reach[6:9], nu)
         if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
             return None
-        lo, hi = _hull(A, s, base + left, None if X is None else X + shift)
-        return lo - shift, hi + shift, left
+        lo, hi, lams = _hull(A, s, base + left, None if X is None else X + shift, proofs)
+        return lo - shift, hi + shift, left, lams
 
-    lo, hi = _hull(A, s, base)
-    own = np.maximum(np.abs(lo), np.abs(hi))
+    lo, hi, lams = _hull(A, s, base)
+    own, proofs = np.maximum(np.abs(lo), np.abs(hi)), [lams]
     for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
-        got = step(own)
-        if got is None:
-            return None
-        grown = np.maximum(np.abs(got[0]), np.abs(got[1]))
-        if np.all(grown <= own * 1.1):                        # it only sets the premise's scale
-            break
-        own = grown
-    for factor in PREMISE_FACTORS:
+        for by in (proofs, None):                            # by the multipliers solved, then by LPs
+            got = step(own, None, by)
+            if got is None:
+                return None
+            grown = np.maximum(np.abs(got[0]), np.abs(got[1]))
+            if np.all(grown <= own * 1.1):                    # it only sets the premise's scale
+                break
+        else:
+            own = grown
+            proofs.append(got[3])
+            continue
+        break
+    for factor in PREMISE_FACTORS:                           # each box tried by those multipliers, then by LPs
         X = factor * own
-        got = step(X, X)
-        if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X):
+        got = next((got for by in (proofs, None) for got in [step(X, X, by)]
+                    if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X)), None)
+        if got is not None:
             break
     else:
         return None
     lo, hi, left = np.maximum(got[0], -X), np.minimum(got[1], X), got[2]
-    for _ in range(STEPS):                                   # from the premise down: each box proven, inside the last
-        got = step(np.maximum(np.abs(lo), np.abs(hi)), X)
-        lo2, hi2 = np.maximum(lo, got[0]), np.minimum(hi, got[1])
-        shrunk = np.all(hi2 - lo2 >= 0.95 * (hi - lo))
-        lo, hi, left = lo2, hi2, np.minimum(left, got[2])
-        if shrunk:                                           # a smaller box would move no bound by much
-            break
+    proofs += [got[3]] if got[3] is not None else []
+    # from the premise down: each box proven, inside the last; first by the multipliers of the two sets solved
+    # (no LP: the sets between differ in their bounds only), then by LPs until no bound moves by much
+    for by in (proofs, None):
+        for _ in range(STEPS):
+            got = step(np.maximum(np.abs(lo), np.abs(hi)), X, by)
+            lo2, hi2 = np.maximum(lo, got[0]), np.minimum(hi, got[1])
+            shrunk = np.all(hi2 - lo2 >= 0.95 * (hi - lo))
+            lo, hi, left = lo2, hi2, np.minimum(left, got[2])
+            if shrunk:                                       # a smaller box would move no bound by much
+                break
     return (lo, hi), left, X
 
 
-def _hull(A, s, bound, X=None):
+def _hull(A, s, bound, X=None, proofs=None):
     """(lo, hi) of each q over |s_k - a_k^T q| <= bound_k and |q| <= X (default 1: no correction of a fit is as
-    large), proven (solve/hull.py)."""
+    large), proven (solve/hull.py), and the multipliers that prove it; from `proofs` alone when given."""
     from ..solve import hull
     box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
+    args = (A.T, s - bound, s + bound, -box, box, np.eye(A.shape[0]))
+    if proofs is not None:
+        return (*hull.proven(*args, proofs), None)
     try:
-        return hull.ranges(A.T, s - bound, s + bound, -box, box, np.eye(A.shape[0]))
+        return hull.ranges(*args, multipliers=True)
     except hull.Empty:
-        return -box, box
+        return -box, box, [(np.zeros(len(s)), np.zeros(len(s)))] * A.shape[0]
 
 
 def information(mod, res, params, bound):
@@ -436,14 +452,22 @@ def information(mod, res, params, bound):
     return np.maximum(lo, box[0]), np.minimum(hi, box[1])
 
 
+@functools.lru_cache(maxsize=None)
+def plan_bounds(mod, params):
+    """The guaranteed errors of the optimal plan's estimator (noise 1 per direction): one LP per model."""
+    plan = mod.PLAN[:18] if params == 9 else mod.PLAN
+    best = lp.primal(mod.H(plan.T)[:params])[1]
+    best.flags.writeable = False                        # shared by every call
+    return best
+
+
 def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
     """For data consistent with the noise bound: the estimate (the midpoint of the information set `info`,
     (lo, hi) of q, folded into the fit `res`), its parameters with guaranteed errors over the same set (each a
     linear function of q: an LP pair, proven), the a-priori ones of the LP estimator (noise + remainder rb per
     interval; `err` the linear part), those of the optimal plan, and the orientations worth adding."""
     from ..solve import hull
-    plan = mod.PLAN[:18] if params == 9 else mod.PLAN
-    _, best = lp.primal(mod.H(plan.T)[:params])
+    best = plan_bounds(mod, params)
     Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
     lo, hi = info
     dq, half = taylor.midrad(lo, hi)
