@@ -52,3 +52,35 @@ def test_a_specification_is_checked_and_single_log_outputs_are_refused_in_a_batc
     assert "--save concerns one log" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["calibrate-norm", str(tmp_path / "a.txt"), "--jobs", "0"])
+
+
+@needs_real
+def test_apply_corrects_each_log_by_its_own_calibration_from_the_batch_folder(tmp_path, capsys):
+    """`apply DIR LOG... --out OUT`: each log takes DIR/<its name>.json, the file is byte for byte the one-log
+    command's, and a log without a calibration is said on its line (exit status 1) while the others go on.
+    Red if a log took another unit's calibration (the two sessions' files would then differ from the one-log
+    runs), or if the missing one stopped the batch."""
+    logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 4)]
+    assert main(["calibrate-norm", *logs, "--g", "9.81744", "--out", str(tmp_path / "cal"), "--jobs", "1"]) == 0
+    (tmp_path / "stranger.txt").write_text((REAL / "repeat_session3_acc.txt").read_text())
+    code = main(["apply", str(tmp_path / "cal"), *logs, str(tmp_path / "stranger.txt"), "--out", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert code == 1 and "stranger.txt: not corrected: no calibration " in out
+    assert "3 logs: 2 corrected into " in out
+    for log in logs:
+        stem = log.rsplit("/", 1)[1][:-4]
+        assert main(["apply", str(tmp_path / "cal" / f"{stem}.json"), log, "-o", str(tmp_path / f"{stem}.csv")]) == 0
+        assert (tmp_path / "out" / f"{stem}.csv").read_bytes() == (tmp_path / f"{stem}.csv").read_bytes()
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["repeat_session2_acc.csv", "repeat_session4_acc.csv"]
+
+
+def test_apply_says_which_output_several_logs_need(tmp_path, capsys):
+    """Several logs with -o (one file for many), or a folder of calibrations for one log with -o: one line, exit 2."""
+    (tmp_path / "c.json").write_text("{}")
+    (tmp_path / "a.txt").write_text("0 0 0 9.8\n")
+    assert main(["apply", str(tmp_path / "c.json"), str(tmp_path / "a.txt"), str(tmp_path / "a.txt"),
+                 "-o", str(tmp_path / "o.csv")]) == 2
+    assert "several logs: give --out DIR" in capsys.readouterr().err
+    assert main(["apply", str(tmp_path), str(tmp_path / "a.txt"), "-o", str(tmp_path / "o.csv")]) == 2
+    assert "is a folder: a batch's calibrations apply to several logs with --out DIR" in capsys.readouterr().err
+    assert not (tmp_path / "o.csv").exists()

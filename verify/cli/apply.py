@@ -1,4 +1,6 @@
 """garant apply: correct a raw log with a calibration, with the worst-case error of every sample."""
+import os
+
 from ..io.recordings import FORMATS, SENSORS
 
 
@@ -6,8 +8,9 @@ def add(sub):
     """The `garant apply` subcommand and its options."""
     p = sub.add_parser("apply", help="correct a raw log with a calibration (garant JSON): specific force in "
                                      "m/s^2 and its worst-case error per sample")
-    p.add_argument("calibration", metavar="CAL.json", help="a garant-calibration-1 file (calibrate-norm --save)")
-    p.add_argument("log", metavar="LOG")
+    p.add_argument("calibration", metavar="CAL", help="a garant-calibration-1 file (calibrate-norm --save), or a "
+                   "batch's folder (calibrate-norm LOG... --out DIR): each log takes DIR/<its name>.json")
+    p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): each corrected into --out DIR")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
@@ -16,16 +19,18 @@ def add(sub):
     p.add_argument("--frame", choices=("garant", "imu_tk"), default="garant",
                    help="the frame of the corrected output: garant's (default), or that of the imu_tk export "
                         "(--export-imu-tk; for a norm calibration turned into imu_tk's upper-triangular T)")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
+    p.add_argument("-o", "--output", metavar="OUT.csv",
                    help="CSV: time_s (12 digits), ax, ay, az (m/s^2, 8 significant digits), bound_x, bound_y, "
                         "bound_z (m/s^2, worst case, 4 digits rounded up)")
+    p.add_argument("--out", metavar="DIR", help="several logs: DIR/<log name>.csv each (as --output), a bad log "
+                   "said on its line while the others go on; the exit status counts the logs that failed")
     return p
 
 
-def _frame_said(args):
+def _frame_said(args, path):
     """The output's frame in words, with its turn from the other one."""
     from ..io import calibration
-    cal = calibration.read(args.calibration)
+    cal = calibration.read(path)
     turn = calibration.frame_turn_deg(calibration.imu_tk_form(cal)[2])
     if turn == 0:
         return "garant's, which is also the imu_tk export's (a stand calibration)" if args.frame == "garant" else \
@@ -41,13 +46,54 @@ CHUNK = 1_000_000
 
 
 def run(args):
-    """Correct the log with the calibration and write the CSV piece by piece (CHUNK samples at a time)."""
+    """One log into --output, or several (or --out) each into DIR/<log name>.csv."""
+    from ..errors import DataError, opt
+    if len(args.logs) > 1 or args.out:
+        if args.output:
+            raise DataError(f"several logs: give {opt('out')} DIR (each log's CSV is DIR/<log name>.csv), not "
+                            f"{opt('output')}")
+        if not args.out:
+            raise DataError(f"several logs: give {opt('out')} DIR for the corrected CSVs")
+        return _batch(args)
+    if not args.output:
+        raise DataError(f"give {opt('output')} OUT.csv for the corrected log")
+    if os.path.isdir(args.calibration):
+        raise DataError(f"{args.calibration} is a folder: a batch's calibrations apply to several logs with "
+                        f"{opt('out')} DIR; for one log give its calibration file")
+    print(_apply(args, args.calibration, args.logs[0], args.output))
+    return 0
+
+
+def _batch(args):
+    """Each log corrected by the calibration (or by DIR/<its name>.json of a batch's folder) into
+    --out/<its name>.csv; a log that fails is said on its line and the others go on."""
+    from ..errors import DataError
+    from ..io import files
+    from ..workflows import batch
+    folder = files.make_folder(args.out)
+    failed = 0
+    for k, (stem, log) in enumerate(zip(batch.stems(args.logs), args.logs), 1):
+        cal = (os.path.join(args.calibration, os.path.splitext(os.path.basename(log))[0] + ".json")
+               if os.path.isdir(args.calibration) else args.calibration)
+        try:
+            if not os.path.isfile(cal):
+                raise DataError(f"no calibration {cal} for this log (the batch's folder holds one per log it calibrated)")
+            print(f"[{k}/{len(args.logs)}] {_apply(args, cal, log, folder / f'{stem}.csv')}")
+        except DataError as e:
+            failed += 1
+            print(f"[{k}/{len(args.logs)}] {log}: not corrected: {e}")
+    print(f"{len(args.logs)} logs: {len(args.logs) - failed} corrected into {folder}, {failed} failed")
+    return min(failed, 125)
+
+
+def _apply(args, calibration, log, output):
+    """Correct one log and write its CSV piece by piece (CHUNK samples at a time); the line that says so."""
     import numpy as np
 
     from ..io.report import write_chunks
     from ..io.text import csv_bytes
     from ..workflows import jobs
-    pieces = jobs.apply(args.calibration, args.log, args.format, args.sensor, args.imu, args.trust_units, chunk=CHUNK,
+    pieces = jobs.apply(calibration, log, args.format, args.sensor, args.imu, args.trust_units, chunk=CHUNK,
                         frame=args.frame)
     worst, total, n, kind = np.zeros(3), 0.0, 0, ""
 
@@ -58,8 +104,7 @@ def run(args):
             np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
             total, n, kind = total + c.bound.sum(), n + len(c.t), c.kind
             yield csv_bytes([c.t, *c.a.T, *c.bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
-    write_chunks(args.output, rows())
-    print(f"wrote {args.output}: {n} samples corrected by {args.calibration} ({kind} calibration); "
-          f"worst-case error per component up to {worst.max():.3e} m/s^2 (mean {total / max(3 * n, 1):.3e}); "
-          f"frame: {_frame_said(args)}")
-    return 0
+    write_chunks(output, rows())
+    return (f"wrote {output}: {n} samples corrected by {calibration} ({kind} calibration); worst-case error per "
+            f"component up to {worst.max():.3e} m/s^2 (mean {total / max(3 * n, 1):.3e}); frame: "
+            f"{_frame_said(args, calibration)}")
