@@ -11,6 +11,7 @@ from .description import check_observable
 @dataclass(frozen=True)
 class Derivation:
     """One stand model derived: exact readings per mounting, the Jacobian, H, q and the estimators."""
+
     model: model_mod.Model
     up_nominal: tuple            # per mounting: u(angles) in block axes
     force_over_g: tuple          # per mounting: exact readings over g, (1) of 000

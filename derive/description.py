@@ -289,29 +289,29 @@ class _References:
 def _links(path, data, angles, ref):
     """The [[link]] tables, outermost first: turning (angle, offset, harmonic) or fixed (angle_deg, error)."""
     links = []
-    for i, l in enumerate(_table_list(path, "link", data.get("link", []), LIMITS["links"]), 1):
+    for i, link in enumerate(_table_list(path, "link", data.get("link", []), LIMITS["links"]), 1):
         where = f"link[{i}]"
-        _keys(path, where, l, KEYS["link"])
-        axis, sign = _axis(path, f"{where}.axis", l.get("axis"))
-        if "angle" in l:
-            if not isinstance(l["angle"], str) or l["angle"] not in {a.name for a in angles}:
-                _fail(path, f"{where}.angle", f"{_short(l['angle'])} is not an [[angle]]")
-            if "error" in l:
+        _keys(path, where, link, KEYS["link"])
+        axis, sign = _axis(path, f"{where}.axis", link.get("axis"))
+        if "angle" in link:
+            if not isinstance(link["angle"], str) or link["angle"] not in {a.name for a in angles}:
+                _fail(path, f"{where}.angle", f"{_short(link['angle'])} is not an [[angle]]")
+            if "error" in link:
                 _fail(path, where, "a link with an angle takes 'offset', not 'error'")
-            harmonic = l.get("harmonic")
+            harmonic = link.get("harmonic")
             if harmonic is not None and (not isinstance(harmonic, list) or len(harmonic) != 2):
                 _fail(path, f"{where}.harmonic", "give two parameters [a_sin, a_cos]")
-            links.append(Link(axis, l["angle"], ref(f"{where}.offset", l["offset"]) if "offset" in l else None,
+            links.append(Link(axis, link["angle"], ref(f"{where}.offset", link["offset"]) if "offset" in link else None,
                               sign, tuple(ref(f"{where}.harmonic", h) for h in harmonic) if harmonic else None))
-        elif "error" in l or "angle_deg" in l:
-            if "offset" in l or "harmonic" in l:
+        elif "error" in link or "angle_deg" in link:
+            if "offset" in link or "harmonic" in link:
                 _fail(path, where, "a fixed link takes 'angle_deg' and 'error' only")
-            fixed = l.get("angle_deg")
+            fixed = link.get("angle_deg")
             if fixed is not None:
                 if not _is_number(fixed) or not -360 <= fixed <= 360:
                     _fail(path, f"{where}.angle_deg", f"{_short(fixed)} is not an angle in degrees within one turn")
                 fixed = _exact(_degrees(path, f"{where}.angle_deg", fixed))
-            links.append(Link(axis, None, ref(f"{where}.error", l["error"]) if "error" in l else None, sign,
+            links.append(Link(axis, None, ref(f"{where}.error", link["error"]) if "error" in link else None, sign,
                               fixed_deg=fixed))
         else:
             _fail(path, where, "a link needs an 'angle' (turning), an 'angle_deg' (a fixed turn such as a wedge) "
@@ -345,8 +345,8 @@ def _estimation(path, data, links, declared, theta, dg, n_angles):
     est = data.get("estimation", {})
     _keys(path, "estimation", est, KEYS["estimation"])
     block_params = [p.name for p in Block().parameters]
-    default = ([l.error for l in links if l.error and l.error not in theta and l.error != dg]
-               + [h for l in links if l.harmonic for h in l.harmonic] + block_params + [*theta, dg])
+    default = ([ln.error for ln in links if ln.error and ln.error not in theta and ln.error != dg]
+               + [h for ln in links if ln.harmonic for h in ln.harmonic] + block_params + [*theta, dg])
     preferred = est.get("preferred", default)
     if not isinstance(preferred, list) or not all(isinstance(n, str) for n in preferred):
         _fail(path, "estimation.preferred", "give a list of parameter names")
@@ -382,9 +382,9 @@ def check_observable(model, J):
                                "or a link that tilts it (a wedge angle other than 90 degrees, an axis not parallel)")
     for k, p in enumerate(model.parameters):
         if all(v == 0 for v in J.col(k)):
-            where = next((f"link[{n - i}].{'offset' if l.angle and l.error == p.name else 'error'}"
-                          if p.name == l.error else f"link[{n - i}].harmonic"
-                          for i, l in enumerate(model.stand.chain) if p.name in (l.error, *(l.harmonic or ()))),
+            where = next((f"link[{n - i}].{'offset' if ln.angle and ln.error == p.name else 'error'}"
+                          if p.name == ln.error else f"link[{n - i}].harmonic"
+                          for i, ln in enumerate(model.stand.chain) if p.name in (ln.error, *(ln.harmonic or ()))),
                          "block")
             raise DescriptionError(f"{model.source_file}: {where}: parameter {p.name!r} cannot be observed: "
                                    "the readings do not depend on it to first order (e.g. a turn about "

@@ -18,6 +18,7 @@ VARIABLE_DEFAULTS = {"time_s": 0.0, "temp_c": 20.0}     # s; degrees C (the refe
 @dataclass(frozen=True)
 class Effect:
     """A catalogue effect: its physics in one line, its parameters, and how it enters the readings."""
+
     name: str
     physics: str                          # one line: what it is, as a formula
     params: tuple[Parameter, ...]
@@ -74,8 +75,8 @@ def extend(model, names):
     for name in sorted(names, key=list(CATALOGUE).index):
         e = CATALOGUE[name]
         if e.angle is not None:
-            chain = tuple(replace(l, harmonic=tuple(p.name for p in e.params)) if l.angle == e.angle else l
-                          for l in model.stand.chain)
+            chain = tuple(replace(ln, harmonic=tuple(p.name for p in e.params)) if ln.angle == e.angle else ln
+                          for ln in model.stand.chain)
             stand = replace(model.stand, chain=chain, parameters=model.stand.parameters + e.params)
             model = replace(model, stand=stand)
         else:

@@ -17,6 +17,7 @@ import sympy as sp
 @dataclass(frozen=True)
 class Relation:
     """An identity sum a_k phi_k = 0 among basis functions: a direction no data can see."""
+
     coefficients: tuple          # a_k, one per basis function
     names: tuple                 # names of the basis functions
 

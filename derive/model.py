@@ -284,7 +284,7 @@ def absorbed(model):
             Gp = (1 - dg) * EG * _turn_matrix(turn.axis, turn.c, turn.s).T - sp.eye(3)
             links = st.chain[1:]
     angles = {a.name: a.symbol for a in st.angles}
-    rest = set().union(*(C(l.axis, link_angle(l, s, angles)).free_symbols for l in links))
+    rest = set().union(*(C(ln.axis, link_angle(ln, s, angles)).free_symbols for ln in links))
     gone = {s[n] for n in names} | ({s[n] for n in st.theta} if turn is not None else set())
     if not same or rest & gone:
         return (), None, None

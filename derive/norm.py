@@ -22,7 +22,7 @@ class NormModel:
     source: str = "001, (1.3), (2.2)-(2.4)"
 
     def __post_init__(self):
-        if any(a == l + 1 for l, a in enumerate(self.axes)) or not set(self.axes) <= {1, 2, 3}:
+        if any(a == k + 1 for k, a in enumerate(self.axes)) or not set(self.axes) <= {1, 2, 3}:
             raise ValueError(f"pendulosity axes (i, j, k) need i != 1, j != 2, k != 3, got {self.axes}")
 
 
@@ -52,7 +52,7 @@ def block(model):
 
 def pendulosity(model, v, d):
     """D(v)_l = d_l v_idx(l) v_l: the B(w) w term of (1.3) over g, for a unit-scaled v."""
-    return sp.Matrix([d[l] * v[model.axes[l] - 1] * v[l] for l in range(3)])
+    return sp.Matrix([d[k] * v[model.axes[k] - 1] * v[k] for k in range(3)])
 
 
 def readings(model):
@@ -179,9 +179,9 @@ def plan(model):
     for a, b in ((0, 1), (0, 2), (1, 2)):
         for s1, s2 in ((1, 1), (1, -1), (-1, -1), (-1, 1)):
             dirs.append((s1 * e[a] + s2 * e[b]) / SQ2)
-    for l, i in enumerate(model.axes):          # delta_l: n_l^2 n_i, touching points n_l^2 = 3/4
+    for k, i in enumerate(model.axes):          # delta_k: n_k^2 n_i, touching points n_k^2 = 3/4
         for s1, s2 in ((1, 1), (-1, 1), (1, -1), (-1, -1)):
-            dirs.append(s1 * SQ3 / 2 * e[l] + s2 * e[i - 1] / 2)
+            dirs.append(s1 * SQ3 / 2 * e[k] + s2 * e[i - 1] / 2)
     return dirs
 
 

@@ -34,6 +34,7 @@ def mountings():
 @dataclass(frozen=True)
 class Remount:
     """The remount formulas (26)-(29) of 000 for one stand: G(q), the bias and stand q, and the rest D."""
+
     G: sp.Matrix            # 3 x 3 of q symbols: G[i, j] = q whose leading parameter is Gamma_ij
     bias: tuple             # q index (0-based) whose leading parameter is bias_i
     stand: dict             # name -> (q index, definition) for the stand combinations kept in (28)

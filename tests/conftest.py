@@ -10,7 +10,7 @@ _OWN_CACHE = None
 if "GARANT_CACHE" not in os.environ:
     _OWN_CACHE = os.environ["GARANT_CACHE"] = tempfile.mkdtemp(prefix="garant-test-cache-")
 
-from garant.generated import two_axis as two_axis
+from garant.generated import two_axis as two_axis  # noqa: E402  (after the cache is set)
 
 
 @pytest.fixture(scope="session")

@@ -97,7 +97,7 @@ def test_diagnose_advises_only_reachable_positions(tmp_path, capsys):
                  "--effect", "bias_drift=1e-8,0,0", "-o", str(data)]) == 0
     capsys.readouterr()
     main(["diagnose", "--model", str(STANDS / "wedge45.toml"), str(data), "--sigma", "1e-6"])
-    advice = [l for l in capsys.readouterr().out.splitlines() if "measure at" in l]
+    advice = [line for line in capsys.readouterr().out.splitlines() if "measure at" in line]
     for line in advice:
         for deg in [float(v) for v in __import__("re").findall(r"\((-?\d+(?:\.\d+)?)\)", line)]:
             assert deg in (0, 90, 180, 270)

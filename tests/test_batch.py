@@ -71,7 +71,8 @@ def test_apply_corrects_each_log_by_its_own_calibration_from_the_batch_folder(tm
         stem = log.rsplit("/", 1)[1][:-4]
         assert main(["apply", str(tmp_path / "cal" / f"{stem}.json"), log, "-o", str(tmp_path / f"{stem}.csv")]) == 0
         assert (tmp_path / "out" / f"{stem}.csv").read_bytes() == (tmp_path / f"{stem}.csv").read_bytes()
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["repeat_session2_acc.csv", "repeat_session4_acc.csv"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["repeat_session2_acc.csv",
+                                                                    "repeat_session4_acc.csv"]
 
 
 def test_apply_says_which_output_several_logs_need(tmp_path, capsys):

@@ -14,7 +14,8 @@ from garant.verify.cli import main
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 G = 9.81744                      # the value the recordings' authors used (shared/data/real/README.md)
 # Skipped on a machine without shared/, never in CI (CI=true): there the data must be present.
-needs_real = pytest.mark.skipif(not REAL.is_dir() and not os.environ.get("CI"), reason="../shared/data/real is not present")
+needs_real = pytest.mark.skipif(not REAL.is_dir() and not os.environ.get("CI"), reason="../shared/data/real is not "
+    "present")
 
 
 def synthetic_log(path, params, directions, noise, seed=0, still_s=3.0, move_s=2.0, rate=100):
@@ -44,7 +45,8 @@ def test_synthetic_log_recovers_errors_within_bounds(tmp_path):
     log = recordings.read_log(str(path), "imu_tk")
     stills, _ = recordings.still_intervals(log)
     assert len(stills) == len(dirs) + 1
-    box = dict(k_max=2e-3, v_max=2e-3, eps_max=2e-3, delta_max=0.0, df_max=1e-5, dg_max=0.0)   # hard bound of the mean noise
+    box = dict(k_max=2e-3, v_max=2e-3, eps_max=2e-3, delta_max=0.0, df_max=1e-5,
+               dg_max=0.0)   # hard bound of the mean noise
     res = calibrate_norm.run(N, stills, G, 9, str(path), delta_sigma=N.remainder_bound(**box))
     got = np.array(list(res["parameters"].values()))
     bound = np.array(list(res["guaranteed_error"].values()))
@@ -80,7 +82,8 @@ def test_real_recordings_calibrate(tmp_path, name, args, consistent):
     assert res["consistent"] is consistent and res["delta_sigma_source"].startswith("noise rule")
     assert res["intervals"] >= 20 and (tmp_path / "r.png").stat().st_size > 10000
     assert all(abs(r["residual_after_ms2"]) <= G * res["minimax_residual"] * (1 + 1e-6) for r in res["per_interval"])
-    inside = [abs(r["residual_after_ms2"]) <= G * (r["noise_rule"] + res["remainder_bound"]) for r in res["per_interval"]]
+    inside = [abs(r["residual_after_ms2"]) <= G * (r["noise_rule"] + res["remainder_bound"])
+              for r in res["per_interval"]]
     assert all(inside) is consistent and ("guaranteed_error" in res) is consistent
     if name.startswith("imu_tk"):                 # raw counts: about 415 counts per m/s^2 (datasheet)
         assert 1 / res["matrix"][0][0] == pytest.approx(415, rel=0.02)
@@ -138,7 +141,8 @@ def test_parameter_bounds_carry_the_q_box_exactly():
     assert not np.allclose(bound, e, rtol=1e-3)          # the old bound (e itself) is not this one
 
 
-SPLIT_LOGS = ([("imu_tk_xsens_acc.txt", None, None)] + [(f"repeat_session{i}_acc.txt", None, None) for i in (1, 2, 3, 4)]
+SPLIT_LOGS = ([("imu_tk_xsens_acc.txt", None, None)]
+              + [(f"repeat_session{i}_acc.txt", None, None) for i in (1, 2, 3, 4)]
               + [("openaxes_imu9.csv", "openaxes", None)]
               + [(f"mimu4444bt/raw/exp_{e}/data.bin", "mimu", k) for e in (1, 2) for k in range(1, 9)])
 
@@ -186,7 +190,8 @@ def test_k_batch_is_the_student_t_point():
     from garant.verify.io.recordings import BATCHES
     from garant.verify.workflows.calibrate_norm import K_BATCH
     nu = BATCHES - 1
-    pdf = lambda t: mp.gamma((nu + 1) / 2) / (mp.sqrt(nu * mp.pi) * mp.gamma(nu / 2)) * (1 + t ** 2 / nu) ** (-(nu + 1) / 2)
+    def pdf(t):
+        return mp.gamma((nu + 1) / 2) / (mp.sqrt(nu * mp.pi) * mp.gamma(nu / 2)) * (1 + t ** 2 / nu) ** (-(nu + 1) / 2)
     point = mp.findroot(lambda x: mp.quad(pdf, [-mp.inf, x]) - (1 + mp.erf(3 / mp.sqrt(2))) / 2, 4.5)
     assert abs(K_BATCH - point) < 0.005
 

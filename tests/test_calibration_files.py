@@ -91,7 +91,8 @@ def test_stand_estimate_applied_at_new_positions(tmp_path, capsys):
     P = np.array([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], float)
     f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (len(P), 3))
     data, cal = write_csv(tmp_path / "d.csv", P, f), tmp_path / "c.json"
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--prior", "1e-3", "--save", str(cal)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--prior", "1e-3", "--save",
+                 str(cal)]) == 0
     clean = np.array([0.0 if n.startswith(("Gamma", "bias")) else v for n, v in zip(mod.PARAMETER_NAMES, p)])
     alpha, beta = rng.uniform(0, 2 * np.pi, (2, 500))                     # new positions
     a, bound = calibration.apply(calibration.read(cal), mod.readings(alpha, beta, p, 9.81).T)
@@ -130,7 +131,8 @@ def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
     # keys; what an accelerometer log does not measure is a comment, never a number made up.
     from garant.verify.io.calibration import KALIBR_KEYS
     out = tmp_path / "imu.yaml"
-    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--export-kalibr", str(out)]) == 0
+    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--export-kalibr",
+                 str(out)]) == 0
     fields = _kalibr_fields(out)
     assert 1e-4 < float(fields["accelerometer_noise_density"]) < 1e-1
     assert float(fields["update_rate"]) == pytest.approx(100, rel=0.01)           # the log is about 100 Hz
@@ -181,7 +183,8 @@ def test_outputs_honour_the_umask(tmp_path):
         write_text(tmp_path / "c.csv", "x\n")
     finally:
         os.umask(old)
-    mode = lambda name: stat.S_IMODE((tmp_path / name).stat().st_mode)
+    def mode(name):
+        return stat.S_IMODE((tmp_path / name).stat().st_mode)
     assert mode("a.json") == mode("b.png") == 0o644 and mode("c.csv") == 0o600
 
 
@@ -228,7 +231,8 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
     rng = np.random.default_rng(11)
     p = np.array([rng.uniform(-1e-3, 1e-3) if k in ("block", "bias") else rng.uniform(-b, b)
                   for k, b in zip(prem.kinds, np.minimum(prem.bounds, 1e-3))])
-    kw = lambda m: {"mount": m} if len(mounts) > 1 else {}
+    def kw(m):
+        return {"mount": m} if len(mounts) > 1 else {}
     from garant.verify.solve import plans
     P, M = plans.grid(mod)
     f = mod.readings(*np.deg2rad(P).T, p, 9.81, **kw(M)).T + 9.81 * rng.uniform(-1e-5, 1e-5, (len(P), 3))

@@ -67,7 +67,8 @@ def test_a_mems_size_unit_from_a_truth_file_is_bounded_with_the_built_in_premise
     data, truth = _simulated(tmp_path, "--truth", str(tmp_path / "unit.json"))
     assert truth["parameters"]["Gamma11"] == 1.2e-2 and truth["parameters"]["epsilon"] == 0.0
     assert truth["drawn"] == {"from": str(tmp_path / "unit.json")}
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--json", str(tmp_path / "r.json")]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--json",
+                 str(tmp_path / "r.json")]) == 0
     res = json.loads((tmp_path / "r.json").read_text())
     assert all(abs(res["q"][q] - v) <= res["guaranteed_error"][q] for q, v in truth["q"].items())
 

@@ -34,7 +34,8 @@ def test_plan_json(tmp_path, capsys):
     assert d["plan"] == [list(p) for p in PLAN10]
 
 
-@pytest.mark.parametrize("positions, seed", [(PLAN10, 1), ([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], 2)])
+@pytest.mark.parametrize("positions, seed", [(PLAN10, 1),
+                                             ([(a, b) for a in range(0, 360, 30) for b in range(0, 360, 45)], 2)])
 def test_estimate_recovers_q_within_bound(tmp_path, capsys, mod, positions, seed):
     p = truth(seed)
     f = simulate(mod, positions, p, SIGMA, seed=seed)
@@ -114,7 +115,8 @@ def test_tables_state_their_model_and_human_units(tmp_path, capsys, mod):
     p = truth(4)
     f = simulate(mod, PLAN10, p, SIGMA, seed=4)
     path = write_csv(tmp_path / "d.csv", PLAN10, f)
-    rc, out, err = run(["estimate", "--model", "two-axis", str(path), "--sigma", str(SIGMA), "--units", "human"], capsys)
+    rc, out, err = run(["estimate", "--model", "two-axis", str(path), "--sigma", str(SIGMA), "--units", "human"],
+                       capsys)
     assert rc == 0, err
     assert "model: z = f/g - u(angles) = H^T q + rho, (1)-(3) of 000" in out
     assert " urad " in out and " ppm " in out and (" ug " in out or " mg " in out)

@@ -123,7 +123,8 @@ def test_trig_degree_counts_links_and_effect_powers():
     def interpolated(x, y, d):
         n = 2 * d + 1
         nodes = 2 * np.pi * np.arange(n) / n
-        w = lambda t: (1 + 2 * sum(np.cos(m * (t - nodes)) for m in range(1, d + 1))) / n
+        def w(t):
+            return (1 + 2 * sum(np.cos(m * (t - nodes)) for m in range(1, d + 1))) / n
         return sum(w(x)[i] * w(y)[j] * np.array(fn(nodes[i], nodes[j]), float) for i in range(n) for j in range(n))
     x, y = 0.7, -2.1
     exact = np.array(fn(x, y), float)

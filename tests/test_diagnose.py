@@ -111,7 +111,8 @@ def test_diagnose_described_stands(tmp_path, capsys, stand, plan, effect, values
     assert not res["consistent_before"] and res["effects"] == [effect] and res["consistent_after"]
 
 
-@pytest.mark.parametrize("pair, seed", [(("scale_quadratic", "bias_drift"), 0), (("cross_coupling", "bias_temperature"), 1),
+@pytest.mark.parametrize("pair, seed", [(("scale_quadratic", "bias_drift"), 0), (("cross_coupling",
+                                                                                  "bias_temperature"), 1),
                                         (("beta_encoder_harmonic", "scale_asymmetry"), 2)])
 def test_two_effects_at_two_sigma_both_named(tmp_path, pair, seed):
     # Issue 12: two effects at once, each with a signature of 2 sigma (the largest change of a reading

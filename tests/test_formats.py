@@ -68,7 +68,8 @@ def test_a_large_numeric_positions_file_is_read_in_c_exactly_as_cell_by_cell(tmp
     rng = np.random.default_rng(0)
     rows = np.column_stack([rng.uniform(0, 360, (50, 2)), rng.normal(0, 9.81, (50, 3))])
     path = tmp_path / "p.csv"
-    path.write_text("alpha_deg,beta_deg,f1,f2,f3\n" + "\n".join(",".join(repr(float(x)) for x in r) for r in rows) + "\n")
+    path.write_text("alpha_deg,beta_deg,f1,f2,f3\n"
+                    + "\n".join(",".join(repr(float(x)) for x in r) for r in rows) + "\n")
     assert positions._numeric(str(path), ["alpha_deg", "beta_deg", "f1", "f2", "f3"]) is not None
     fast = positions.read_positions(str(path))
     monkeypatch.setattr(positions, "_numeric", lambda *a: None)

@@ -156,7 +156,8 @@ def test_absorbed_curvature_decomposition_is_sound(name, step):
     rb, cb = rem(lo, hi)
     kw = {"mount": pos.mounts} if pos.mounts is not None else {}
     rng = np.random.default_rng(1)
-    V = np.hstack([rng.choice([-1.0, 1.0], (len(lo), 30)) * hi[:, None], rng.uniform(lo[:, None], hi[:, None], (len(lo), 10))])
+    V = np.hstack([rng.choice([-1.0, 1.0], (len(lo), 30)) * hi[:, None], rng.uniform(lo[:, None], hi[:, None],
+                                                                                     (len(lo), 10))])
     for v in V.T:
         p = L @ v
         Cp = rem.shift(v)

@@ -288,5 +288,6 @@ def test_a_file_name_of_nested_mathtext_draws_as_written(tmp_path, capsys):
     # Issue 42: a file name with nested $\sqrt{...}$ ended every plot in RecursionError.
     name = "a$" + "\\sqrt{" * 30 + "x" + "}" * 30 + "$.csv"
     data = _positions(tmp_path).rename(tmp_path / name)
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--plot", str(tmp_path / "p.png")]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--plot",
+                 str(tmp_path / "p.png")]) == 0
     assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"

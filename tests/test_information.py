@@ -62,7 +62,8 @@ def test_96_positions_prove_a_quarter_of_sigma_and_match_an_independent_hull():
     x = cp.Variable(len(q))
     half = []
     for nu in range(len(q)):
-        ends = [cp.Problem(sense(x[nu]), [cp.abs(z - A.T @ x) <= SIGMA]).solve() for sense in (cp.Maximize, cp.Minimize)]
+        ends = [cp.Problem(sense(x[nu]), [cp.abs(z - A.T @ x) <= SIGMA]).solve() for sense in (cp.Maximize,
+                                                                                               cp.Minimize)]
         half.append(0.5 * (ends[0] - ends[1]))
     ratio = e / np.array(half)
     assert np.all(np.abs(ratio - 1) <= 0.05), ratio
@@ -100,7 +101,8 @@ def test_apply_bound_holds_for_scale_errors_of_two_percent(tmp_path, model, moun
         p[[mod.PARAMETER_NAMES.index(n) for n in ("Gamma12", "Gamma13", "Gamma23")]] = 0.0
     from garant.verify.solve import plans
     P, M = plans.grid(mod) if model != "two-axis" else (GRID96, np.zeros(len(GRID96), int))
-    kw = (lambda m: {"mount": m} if len(mounts) > 1 else {})
+    def kw(m):
+        return {"mount": m} if len(mounts) > 1 else {}
     f = mod.readings(*np.deg2rad(P).T, p, G, **kw(M)).T + G * SIGMA * rng.choice([-1.0, 1.0], (len(P), 3))
     data = tmp_path / "d.csv"
     cols = [f"{a}_deg" for a in names] + ["f1", "f2", "f3"] + (["mount"] if len(mounts) > 1 else [])
@@ -136,7 +138,8 @@ def test_the_split_without_g_carries_delta_g(tmp_path):
     d = json.loads(out.read_text())
     Gamma = np.array([p[mod.PARAMETER_NAMES.index(f"Gamma{i}{i}")] for i in (1, 2, 3)])
     got, bound = np.diag(d["physical"]["Gamma"]), np.diag(d["physical_bound"]["Gamma"])
-    assert np.all(np.abs(got - Gamma) <= bound) and np.all(np.abs(got - Gamma) > 0.5 * bound), np.abs(got - Gamma) / bound
+    miss = np.abs(got - Gamma)
+    assert np.all(miss <= bound) and np.all(miss > 0.5 * bound), miss / bound
     assert "Delta_g/g" in d["physical_note"] and "0.005" in d["physical_note"]
 
 
@@ -223,7 +226,8 @@ def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
     rng = np.random.default_rng(0)
     p = power.mems_truth(mod, rng, vertex=True)
     p[[mod.PARAMETER_NAMES.index(n) for n in ("Gamma12", "Gamma13", "Gamma23")]] = 0.0
-    data = write_csv(tmp_path / "d.csv", P, power.mems_readings(mod, P, None, p, rng.uniform(-SIGMA, SIGMA, (len(P), 3))))
+    noise = rng.uniform(-SIGMA, SIGMA, (len(P), 3))
+    data = write_csv(tmp_path / "d.csv", P, power.mems_readings(mod, P, None, p, noise))
     out, cal = tmp_path / "e.json", tmp_path / "c.json"
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G), "--mount",
                  "+x+y+z", "--json", str(out), "--save", str(cal)]) == 0

@@ -56,7 +56,8 @@ def test_a_session_reaches_the_optimal_errors_in_the_fewest_positions(tmp_path, 
     assert needed == list(range(fewest, 0, -1))                   # each step one fewer: exact counts
     assert all(e <= t * (1 + 1e-7) for e, t in zip(res.guaranteed_error_before, res.target))
     # the command says the same, in one step from the same file, and writes its JSON
-    assert main(["next", "--model", model, str(session), "--sigma", str(SIGMA), "--json", str(tmp_path / "n.json")]) == 0
+    assert main(["next", "--model", model, str(session), "--sigma", str(SIGMA), "--json",
+                 str(tmp_path / "n.json")]) == 0
     assert "done" in capsys.readouterr().out
     assert json.loads((tmp_path / "n.json").read_text())["done"]
 

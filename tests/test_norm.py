@@ -34,7 +34,7 @@ def test_exact_remainder_decomposition():
         u, d = np.array([u1, u2, u3]), (d1, d2, d3)
 
         def D(v):
-            return np.array([d[l] * v[N.AXES[l] - 1] * v[l] for l in range(3)])
+            return np.array([d[k] * v[N.AXES[k] - 1] * v[k] for k in range(3)])
         F = N.readings(m, p)
         n = F / np.linalg.norm(F)
         h, c = np.linalg.norm(F) - 1, 1 - dg

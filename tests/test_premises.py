@@ -93,7 +93,8 @@ def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path,
         p[mod.PARAMETER_NAMES.index(n)] = 5e-3
     data = write_csv(tmp_path / "d.csv", P, readings(mod, P, None, p, 0.0))
     out = tmp_path / "e.json"
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81", "--json", str(out)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81", "--json",
+                 str(out)]) == 0
     assert "The bounded q are those of the unit that reads the same with Delta_beta, theta1, theta2, theta3, " \
         "Delta_g = 0" in capsys.readouterr().out
     d = json.loads(out.read_text())
@@ -103,7 +104,8 @@ def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path,
     p[mod.PARAMETER_NAMES.index("Delta_beta")] = 5e-3
     p[[mod.PARAMETER_NAMES.index(n) for n in ("Gamma12", "Gamma21")]] = 2e-2
     data = write_csv(tmp_path / "d.csv", P, readings(mod, P, None, p, 0.0))
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81", "--json", str(out)]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81", "--json",
+                 str(out)]) == 0
     text = capsys.readouterr().out
     assert "|kappa, epsilon, Delta_alpha, alpha_star| <= 0.0001 (stand description)" in text
     d = json.loads(out.read_text())
@@ -182,9 +184,10 @@ def test_smallest_supported_sigma_to_its_stated_tolerance(tmp_path):
 
 @pytest.mark.parametrize("name", ["two-axis", "single-axis", "three-axis"])
 def test_remainder_part_per_q_against_the_worst_nonlinear_error_found(name):
-    # Item 3 of issue 23: each q's remainder part against the worst nonlinear error of its estimate that a
-    # search finds where worst cases live (vertices of the last box, single-sign flips): on the 10-position
-    # plan of 000 (the grids of `grid` on the other stands), a precision block. Every bound holds the worst found (soundness), and every q's is within
+    # Each q's remainder part against the worst nonlinear error of its estimate that a search finds where
+    # worst cases live (vertices of the last box, single-sign flips): on the 10-position plan of 000 (the
+    # grids of `grid` on the other stands), a precision block. Every bound holds the worst found (soundness),
+    # and every q's is within
     # 3x of the larger of that and 1 % of sigma times its linear factor (the issue's target). Before the
     # mounting and Delta_g were absorbed into Gamma, the stand and bias combinations were 7-13x (the Hessian's
     # width over the mounting's box); before issue 23, over 4,000x. A looser bound turns this red.

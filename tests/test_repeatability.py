@@ -144,7 +144,7 @@ def test_raw_stream_agrees_with_the_published_means():
     t, f, step, _, jumps = mimu.read(str(MIMU / "raw" / "exp_1" / "data.bin"), 3)
     assert jumps == 0                                  # the real stream's stamps advance
     assert abs(step - COUNT) < 1e-12 and 590 < t[-1] < 610
-    rows = [l.split(",") for l in open(MIMU / "static_positions_runs1-5.csv") if l.startswith("1,")]
+    rows = [line.split(",") for line in open(MIMU / "static_positions_runs1-5.csv") if line.startswith("1,")]
     for r in [r for r in rows if r[10] == "3"][:5]:
         a, b = int(r[7]), int(r[8])
         assert np.allclose(f[a:b].mean(axis=0), [float(v) for v in r[11:14]], atol=2e-3)
@@ -171,12 +171,13 @@ def test_repeatability_on_mimu4444bt_runs_1_to_5(tmp_path):
 def test_fixture_stand_with_known_directions(capsys):
     """The fixture stand (docs/stands/icosahedral_fixture.toml) estimated from the means file: the data
     refute a fixture known to 1e-3 g, support it at 0.02 g, and its bias agrees with the norm relation's."""
-    args = ["estimate", "--model", str(ROOT / "docs" / "stands" / "icosahedral_fixture.toml"), str(MIMU / "static_positions_runs1-5.csv"),
+    args = ["estimate", "--model", str(ROOT / "docs" / "stands" / "icosahedral_fixture.toml"),
+            str(MIMU / "static_positions_runs1-5.csv"),
             "--imu", "1", "--run", "1", "--g", str(G)]
     assert main(args + ["--sigma", "0.001"]) == 3
     capsys.readouterr()
     assert main(args + ["--sigma", "0.02"]) == 0
-    row = next(l for l in capsys.readouterr().out.splitlines() if l.startswith("q12"))
+    row = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("q12"))
     est, err = float(row.split()[2]), float(row.split()[3])
     norm = rp.run(models.load("norm"), means.read(str(MIMU / "static_positions_runs1-5.csv"), 1, quantum=COUNT)[:2], G)
     a, e = norm["runs"][0]["parameters"]["eps3/g"], norm["runs"][0]["guaranteed_error"]["eps3/g"]

@@ -25,7 +25,8 @@ def _reports(tmp_path):
     hidden = tmp_path / "h.csv"
     assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--effect",
                  "scale_asymmetry=5e-5,0,0", "-o", str(hidden)]) == 0
-    assert main(["diagnose", "--model", "two-axis", str(hidden), "--sigma", "1e-5", "--report", str(tmp_path / "d")]) == 0
+    assert main(["diagnose", "--model", "two-axis", str(hidden), "--sigma", "1e-5", "--report",
+                 str(tmp_path / "d")]) == 0
     means = REAL / "mimu4444bt" / "static_positions_runs1-5.csv"
     assert main(["repeatability", str(means), "--imu", "1", "--g", "9.80665", "--count", "0.0047884",
                  "--report", str(tmp_path / "r")]) == 0

@@ -52,7 +52,8 @@ def _stand_with_speeds(tmp_path):
 def test_the_route_of_the_two_axis_plan_is_the_fastest_order(tmp_path, capsys):
     import json
     path = _stand_with_speeds(tmp_path)
-    assert main(["plan", str(path), "--route", "--json", str(tmp_path / "p.json"), "--csv", str(tmp_path / "r.csv")]) == 0
+    assert main(["plan", str(path), "--route", "--json", str(tmp_path / "p.json"), "--csv",
+                 str(tmp_path / "r.csv")]) == 0
     out = capsys.readouterr().out
     d = json.loads((tmp_path / "p.json").read_text())
     r = d["route"]

@@ -221,4 +221,5 @@ def test_certificate_rows_red_on_a_swapped_certificate(tmp_path, monkeypatch):
 def test_certificate_rows_red_on_a_missing_certificate(tmp_path, monkeypatch):
     folder = _committed_copy(tmp_path, monkeypatch)
     (folder / "two-axis_q1.json").unlink()
-    assert [r.name for r in failed(certificates.certificates())] == ["certificates two-axis: every optimal value certified"]
+    assert [r.name for r in failed(certificates.certificates())] == ["certificates two-axis: every optimal value "
+                                                                     "certified"]

@@ -125,7 +125,8 @@ def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, ca
 def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
     # Issue 15: identify works for every stand; an encoder effect on an angle the stand lacks is named as such.
     assert main(["identify", "single-axis"]) == 0
-    assert "Delta_g + phi[Gamma11]" in capsys.readouterr().out.replace("phi[Delta_g] + phi[Gamma11]", "Delta_g + phi[Gamma11]")
+    assert "Delta_g + phi[Gamma11]" in capsys.readouterr().out.replace("phi[Delta_g] + phi[Gamma11]", "Delta_g + "
+        "phi[Gamma11]")
     assert main(["simulate", "--model", "single-axis", "--plan", "quarter", "--effect", "beta_encoder_harmonic=1e-5,0",
                  "--sigma", "1e-5", "-o", str(tmp_path / "x.csv")]) == 2
     err = capsys.readouterr().err
@@ -148,7 +149,8 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
     plan, data = tmp_path / "p.csv", tmp_path / "d.csv"
     assert main(["plan", str(stand), "--csv", str(plan)]) == 0
     assert main(["simulate", "--model", str(stand), "--plan", str(plan), "--sigma", "1e-5", "-o", str(data)]) == 0
-    assert main(["estimate", "--model", str(stand), str(data), "--sigma", "1e-5", "--json", str(tmp_path / "e.json")]) == 0
+    assert main(["estimate", "--model", str(stand), str(data), "--sigma", "1e-5", "--json",
+                 str(tmp_path / "e.json")]) == 0
     res, truth = json.loads((tmp_path / "e.json").read_text()), json.loads((tmp_path / "d.truth.json").read_text())
     assert all(abs(res["q"][q] - truth["q"][q]) <= res["guaranteed_error"][q] for q in mod.Q_NAMES)
     capsys.readouterr()

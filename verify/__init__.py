@@ -1,0 +1,1 @@
+"""The numeric side: the guaranteed estimators, their proofs, the workflows and the `garant` command."""

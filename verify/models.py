@@ -204,11 +204,14 @@ def reachable_grid(ranges, detents, step, limit=1_000_000, what="the grid", rais
     them, else at the multiples of `step` (one per angle, or one for all) inside its range. A grid of
     more than `limit` positions is refused before it is built (`raise_with`: the option that raises it)."""
     steps = list(step) if np.ndim(step) else [step] * len(ranges)
-    cells = [len(det) if len(det) else (min(hi - lo, 360) + 1e-9) / st for (lo, hi), det, st in zip(ranges, detents, steps)]
+    cells = [len(det) if len(det) else (min(hi - lo, 360) + 1e-9) / st for (lo, hi), det, st in zip(ranges, detents,
+                                                                                                    steps)]
     size = math.prod(c if isinstance(c, int) else math.floor(c) + 1 if c < 1e18 else math.inf for c in cells)
     if size > limit:
         more = f", or raise {raise_with}" if raise_with else ""
-        raise DataError(f"{what} has {size:.3g} positions".replace("inf positions", "more than 1e18 positions") + f", over the limit of {limit:,}: use a coarser step{more}")
+        raise DataError(f"{what} has {size:.3g} positions".replace("inf positions",
+                                                                   "more than 1e18 positions") + f", over the limit of "
+                                                                       f"{limit:,}: use a coarser step{more}")
     values = []
     for (lo, hi), det, st in zip(ranges, detents, steps):
         values.append(np.asarray(det, float) if len(det) else

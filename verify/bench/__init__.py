@@ -32,6 +32,7 @@ class Timing(float):
     """Median wall-clock seconds of REPEAT runs, with the median CPU seconds beside it."""
 
     def __new__(cls, wall, cpu):
+        """Wall seconds, with the CPU seconds beside them."""
         t = super().__new__(cls, wall)
         t.cpu = cpu
         return t
@@ -288,7 +289,8 @@ def bench_startup(mod):
     from garant.derive.builtin import TWO_AXIS_MODEL
     out = []
     base, _ = timed(lambda: subprocess.run([sys.executable, "-c", "pass"], check=True))
-    garant = [sys.executable, "-c", "import sys; from garant.verify.cli import main; sys.exit(main())"]   # = the garant script
+    garant = [sys.executable, "-c",
+              "import sys; from garant.verify.cli import main; sys.exit(main())"]   # = the garant script
     with tempfile.TemporaryDirectory() as tmp:
         P, f, t, T, _, _ = simulate.simulate(TWO_AXIS_MODEL, mod, "optimal10", [], 1e-5, 0)
         simulate.write(f"{tmp}/d.csv", P, f, t, T)
@@ -320,7 +322,8 @@ def bench_apply():
     with tempfile.TemporaryDirectory() as tmp:
         np.savetxt(f"{tmp}/r.csv", raw, delimiter=",", fmt="%.6f")
         base, _ = timed(lambda: np.loadtxt(f"{tmp}/r.csv", delimiter=","))
-    return ("apply: correction + worst-case bound + CSV text, 1e6 samples", t_run, "np.loadtxt of the same samples", base)
+    return ("apply: correction + worst-case bound + CSV text, 1e6 samples", t_run, "np.loadtxt of the same samples",
+            base)
 
 
 def _imu_tk_style(path, g=9.81, window=100):
@@ -395,7 +398,8 @@ def main():
     from garant.derive import description
     from garant.derive.builtin import STANDS_DIR
     from garant.derive.derivation import derive as derive_model
-    three, _ = timed(lambda: (derive_model.cache_clear(), derive_model(description.load(STANDS_DIR / "three_axis.toml"))))
+    three, _ = timed(lambda: (derive_model.cache_clear(),
+                              derive_model(description.load(STANDS_DIR / "three_axis.toml"))))
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(), bench_continuum(mod),
             bench_certificates(), bench_guarantee(mod), bench_diagnose(mod), *bench_estimate(), *bench_startup(mod),
             bench_apply(), bench_calibrate_norm(), bench_calibrate_norm(10_000_000)]

@@ -68,8 +68,8 @@ def side_by_side(log, bias0, binary, json_path):
 
 def imu_tk_result(text):
     """imu_tk's nine parameters from its RESULT line, or None when it reported failure."""
-    line = next((l for l in text.splitlines() if l.startswith("RESULT")), None)
-    ok = next((l for l in text.splitlines() if l.startswith("samples")), "")
+    line = next((t for t in text.splitlines() if t.startswith("RESULT")), None)
+    ok = next((t for t in text.splitlines() if t.startswith("samples")), "")
     if line is None or " ok 1 " not in ok + " ":
         return None
     parts = line.split()[1:]
@@ -134,7 +134,8 @@ def batch(binary, repeat=3):
         same = all(filecmp.cmp(a / f, b / f, shallow=False) for f in files if f.endswith((".json", ".csv")))
     med = {k: (float(np.median([r[0] for r in v])), float(np.median([r[1] for r in v]))) for k, v in runs.items()}
     peer_cpu = med["imu_tk, once per log"][0] / len(logs)
-    print(f"\nThe production line: {len(logs)} logs ({BATCH_COPIES} copies of repeat sessions 2-4), medians of {repeat} "
+    print(f"\nThe production line: {len(logs)} logs ({BATCH_COPIES} copies of repeat sessions 2-4), medians of "
+          f"{repeat} "
           f"alternating runs; CPU includes the pool's workers")
     print(f"{'run':24s} {'CPU s':>7s} {'wall s':>7s} {'CPU s per log':>14s} {'/ imu_tk':>9s}")
     for name, (cpu, wall) in med.items():

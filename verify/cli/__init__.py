@@ -20,7 +20,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 from ..errors import DataError, LPFailed  # noqa: E402  (after the BLAS setting)
 
 #: The subcommands, in the order of `garant --help`: command name -> its module.
-COMMANDS = {"verify": "verify", "plan": "plan", "next": "next", "estimate": "estimate", "calibrate-norm": "calibrate_norm",
+COMMANDS = {"verify": "verify", "plan": "plan", "next": "next", "estimate": "estimate",
+            "calibrate-norm": "calibrate_norm",
             "repeatability": "repeatability", "apply": "apply", "identify": "identify", "derive": "derive",
             "simulate": "simulate", "diagnose": "diagnose", "check-certificate": "check_certificate"}
 #: Output options of the commands: (attribute, what it is, a file or a folder).

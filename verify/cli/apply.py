@@ -15,7 +15,8 @@ def add(sub):
     p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
     p.add_argument("--trust-units", action="store_true",
-                   help="apply even when the log's scale does not look like the calibration's raw unit (m/s^2 or counts)")
+                   help="apply even when the log's scale does not look like the calibration's raw unit (m/s^2 or "
+                        "counts)")
     p.add_argument("--frame", choices=("garant", "imu_tk"), default="garant",
                    help="the frame of the corrected output: garant's (default), or that of the imu_tk export "
                         "(--export-imu-tk; for a norm calibration turned into imu_tk's upper-triangular T)")
@@ -77,7 +78,8 @@ def _batch(args):
                if os.path.isdir(args.calibration) else args.calibration)
         try:
             if not os.path.isfile(cal):
-                raise DataError(f"no calibration {cal} for this log (the batch's folder holds one per log it calibrated)")
+                raise DataError(f"no calibration {cal} for this log (the batch's folder holds one per log it "
+                                f"calibrated)")
             print(f"[{k}/{len(args.logs)}] {_apply(args, cal, log, folder / f'{stem}.csv')}")
         except DataError as e:
             failed += 1

@@ -31,7 +31,8 @@ def add(sub):
     options.units(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
-    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, tables, plots, the command, inputs SHA-256) and DIR/report.md")
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
+                                                   "tables, plots, the command, inputs SHA-256) and DIR/report.md")
     p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
                    "for `garant apply`")
     p.add_argument("--export-imu-tk", metavar="FILE", help="write the calibration in imu_tk's form (T, K, B)")
@@ -120,12 +121,15 @@ def _batch(args):
         if row["result"] and row["result"].get("calibration"):
             report.write_json(folder / f"{stem}.json", row["result"]["calibration"])
     head, table = batch.summary_rows(rows)
-    report.write_text(folder / "summary.csv", "\n".join(",".join(_csv_cell(c) for c in r) for r in [head, *table]) + "\n")
+    report.write_text(folder / "summary.csv", "\n".join(",".join(_csv_cell(c) for c in r) for r in [head,
+                                                                                                    *table]) + "\n")
     counts = {s: sum(r["status"] == s for r in rows) for s in ("consistent", "refuted", "error")}
     verdicts = {v: sum(r.get("verdict") == v for r in rows) for v in ("pass", "fail", "undecided")} if spec else {}
     said = (f"{len(rows)} logs: {counts['consistent']} calibrated, {counts['refuted']} refuted their noise bound, "
-            f"{counts['error']} could not be calibrated" + (f"; against {args.spec}: {verdicts['pass']} pass (guaranteed), "
-                                                             f"{verdicts['fail']} fail, {verdicts['undecided']} undecided"
+            f"{counts['error']} could not be calibrated" + (f"; against {args.spec}: {verdicts['pass']} pass "
+                                                            f"(guaranteed), "
+                                                             f"{verdicts['fail']} fail, {verdicts['undecided']} "
+                                                             f"undecided"
                                                              if spec else ""))
     report.write_page(folder, f"Batch: {len(rows)} logs", report.command_line(args, "garant calibrate-norm ..."),
                       [("Summary", said), ("Each unit (parameters of (1.3) of 001 with their guaranteed errors; "
@@ -282,11 +286,14 @@ def _print_bounds(res, args=None):
     gain = res["directions_gain"]
     if res["directions_to_add"]:
         print(f"\nadding {len(res['directions_to_add'])} orientation(s) would shrink the bound of {gain['parameter']} "
-              f"{gain['factor']:.2f} times (the most of any parameter; unit vectors in sensor axes, -gravity direction):")
+              f"{gain['factor']:.2f} times (the most of any parameter; unit vectors in sensor axes, -gravity "
+              f"direction):")
         for d in res["directions_to_add"]:
-            print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present {d['nearest_present_deg']:.0f} deg")
+            print("   (" + ", ".join(f"{v:+.3f}" for v in d["n"]) + f")  nearest present "
+                                                                    f"{d['nearest_present_deg']:.0f} deg")
     elif gain["parameter"] is not None:
-        print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by {gain['threshold']:g} "
+        print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by "
+              f"{gain['threshold']:g} "
               f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
 
 
@@ -306,11 +313,13 @@ def _report(res, args):
     plots.norm_residuals(res, _log_of(args), folder / "residuals.png")
     rows = res["per_interval"]
     M, b = np.array(res["matrix"]), np.array(res["bias"])
-    plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows], [res["g"] * r["noise_rule"] for r in rows],
+    plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows],
+                                 [res["g"] * r["noise_rule"] for r in rows],
                                  folder / "directions.png", f"{args.log}: residual against the direction of gravity")
-    verdict = ("**consistent**" if res["consistent"] else "**INCONSISTENT**: the data refute the noise bound; no bound is given") \
-        + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} ({res['delta_sigma_source']}), " \
-        + f"proven remainder {res['remainder_bound']:.1e} (units of g)"
+    verdict = (("**consistent**" if res["consistent"] else "**INCONSISTENT**: the data refute the noise bound; no "
+                                                           "bound is given")
+               + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} "
+               f"({res['delta_sigma_source']}), proven remainder {res['remainder_bound']:.1e} (units of g)")
     sections = [("Verdict", verdict), ("Premises", res["premises"]),
                 ("Calibration a = M (raw - b)", report.Table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
                  [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
@@ -318,7 +327,8 @@ def _report(res, args):
         pars = res.get("parameters") or {}
         sections.append(("Parameters of (1.3) and their guaranteed errors (over the information set; a priori: the "
                          "LP estimator's)", report.Table(
-            ("parameter", "estimate", "guaranteed error", "estimate", "guaranteed error", "a priori", "on the optimal plan"),
+            ("parameter", "estimate", "guaranteed error", "estimate", "guaranteed error", "a priori", "on the optimal "
+                "plan"),
             [(k, f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}",
               _side(k, pars[k]) if k in pars else "", _side(k, v).lstrip("+"),
               f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")

@@ -54,7 +54,8 @@ def run(args):
         print(f"  to separate {' and '.join(s['effects'])}, measure at ({', '.join(names)}) = "
               + "; ".join("(" + ", ".join(f"{p[a + '_deg']:g}" for a in names)
                           + (f", {p['mount']}" if "mount" in p else "")
-                          + f") [differ by {p['predicted_difference'] / args.sigma:.1f} sigma]" for p in s["positions"]))
+                          + f") [differ by {p['predicted_difference'] / args.sigma:.1f} sigma]"
+                          for p in s["positions"]))
     print(f"after: minimax residual {res['max_residual_after'] / args.sigma:.2f} sigma (limit 1 + "
           f"{res['effect_allowance'] / args.sigma:.2f}: the added effects' rows are taken at zero errors): "
           + ("consistent" if res["consistent_after"] else "still INCONSISTENT"))
@@ -81,18 +82,21 @@ def _report(res, args, names):
     from ..io import plots, report
     s = args.sigma
     plots.diagnosis(res, Path(args.report) / "residuals.png", f"{args.data}: residuals before and after")
-    verdict = (lambda key, ok: f"minimax residual {res[key] / s:.2f} sigma (less the proven remainder, <= "
-               f"{res['remainder_bound'] / s:.2f} sigma): " + ("**consistent**" if ok else "**INCONSISTENT**"))
+    def verdict(key, ok):
+        return (f"minimax residual {res[key] / s:.2f} sigma (less the proven remainder, <= "
+                f"{res['remainder_bound'] / s:.2f} sigma): " + ("**consistent**" if ok else "**INCONSISTENT**"))
     sections = [("Current model", verdict("max_residual_before", res["consistent_before"])),
                 ("Premises", res["premises"]["statement"])]
     if res["disagreements"]:
         worst = sorted(res["disagreements"], key=lambda d: -d["excess_over_sigma"])[:20]
-        sections.append((f"Where the data disagree ({len(res['disagreements'])} components; the largest 20)", report.Table(
+        sections.append((f"Where the data disagree ({len(res['disagreements'])} components; the largest 20)",
+                         report.Table(
             ("position", *(f"{a} (deg)" for a in names), "component", "residual / sigma"),
             [(d["position"], *(f"{d[a + '_deg']:g}" for a in names), d["component"], f"{d['residual'] / s:+.2f}")
              for d in worst])))
     if res["history"]:
-        sections.append(("Selection: the worst residual (units of sigma) with each candidate effect added", report.Table(
+        sections.append(("Selection: the worst residual (units of sigma) with each candidate effect added",
+                         report.Table(
             ("step", "effect", "worst residual / sigma"),
             [(h["step"], e, f"{v / s:.2f}") for h in res["history"]
              for e, v in sorted(h["scores"].items(), key=lambda kv: kv[1])])))
@@ -102,7 +106,8 @@ def _report(res, args, names):
             [(k, f"{v['value']:+.4e}", f"{v['bound']:.3e}", v["unit"], v["q"]) for k, v in res["estimates"].items()])))
     notes = ["indistinguishable on this plan: " + " / ".join(g) for g in res["indistinguishable"]]
     notes += [f"to separate {' and '.join(x['effects'])}, measure at ({', '.join(names)}) = " + "; ".join(
-        "(" + ", ".join(f"{p[a + '_deg']:g}" for a in names) + ")" for p in x["positions"]) for x in res["separating_positions"]]
+        "(" + ", ".join(f"{p[a + '_deg']:g}" for a in names) + ")" for p in x["positions"])
+        for x in res["separating_positions"]]
     notes += ["this plan is blind to: " + (", ".join(res["blind_to"]) or "nothing in the catalogue")]
     notes += [f"not tried: {e} ({why})" for e, why in res["skipped"].items()]
     sections += [("With the effects added", verdict("max_residual_after", res["consistent_after"])),

@@ -1,8 +1,8 @@
 """docs/cli.md from the argument parser itself: every command, every option, its metavar, default and help.
 
-    python -m verify.cli.doc            # print it
-    python -m verify.cli.doc --check    # fail when docs/cli.md differs (tests/test_cli.py does the same)
-    python -m verify.cli.doc --write    # write docs/cli.md
+python -m verify.cli.doc            # print it
+python -m verify.cli.doc --check    # fail when docs/cli.md differs (tests/test_cli.py does the same)
+python -m verify.cli.doc --write    # write docs/cli.md
 """
 import argparse
 import sys
@@ -17,8 +17,8 @@ HEADER = ("# The command line\n\nGenerated from the argument parser (`python -m 
 
 def _row(action):
     flags = ", ".join(f"`{f}`" for f in action.option_strings) or f"`{action.metavar or action.dest}`"
-    meta = "" if action.nargs == 0 else (action.metavar or (f"{{{','.join(map(str, action.choices))}}}" if action.choices
-                                                             else action.dest.upper()))
+    choices = f"{{{','.join(map(str, action.choices))}}}" if action.choices else action.dest.upper()
+    meta = "" if action.nargs == 0 else (action.metavar or choices)
     default = action.default
     shown = ("" if default in (None, False, [], argparse.SUPPRESS) or not action.option_strings
              or "default" in (action.help or "") else f" (default {default})")

@@ -15,7 +15,8 @@ def add(sub):
     options.model(p)
     options.sigma(p)
     options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
-    p.add_argument("--format", choices=("imucal",), help="imucal: a Ferraris session (acc_x, acc_y, acc_z in m/s^2) with "
+    p.add_argument("--format", choices=("imucal",), help="imucal: a Ferraris session (acc_x, acc_y, acc_z in m/s^2) "
+                                                         "with "
                    "--sections or a part column, for --model six-face")
     p.add_argument("--sections", metavar="LIST.json", help="imucal's section list of the session (x_p, x_a, ...)")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a means file with an imu column")
@@ -28,7 +29,8 @@ def add(sub):
     options.units(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
-    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, tables, plots, the command, inputs SHA-256) and DIR/report.md")
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
+                                                   "tables, plots, the command, inputs SHA-256) and DIR/report.md")
     p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
                    "`garant apply`, from any stand")
     p.add_argument("--export-imu-tk", metavar="FILE", help="also write the block's calibration in imu_tk's form "
@@ -194,7 +196,8 @@ def print_refuted(refuted, command):
               f"{r['allowed']:.3g} allowed by {named}")
     wider = " ".join(f"--bound {p['name']}={_wider(abs(r['estimate']) + r['guaranteed_error'])}"
                      for r in refuted for p in r["parameters"][:1])
-    print(f"if the unit (or the stand) is that far off, state a wider bound and run again: garant {command} ... {wider}")
+    print(f"if the unit (or the stand) is that far off, state a wider bound and run again: "
+          f"garant {command} ... {wider}")
 
 
 def _wider(x):
@@ -213,7 +216,8 @@ def print_block(res, human=False):
     rows += [(f"bias{i + 1}", g * blk['bias'][i], g * blk['bias_bound'][i], "m/s^2", True) for i in range(3)]
     print("\nthe block's errors in its own axes: f = (E + Gamma) a + bias, so a = (E + Gamma)^-1 (f - bias), "
           "f the readings and a the specific force (m/s^2); Gamma11 > 0: accelerometer 1 reads high")
-    report.table(("parameter", "estimate", "guaranteed error", "unit") + (("estimate", "guaranteed error") if human else ()),
+    report.table(("parameter", "estimate", "guaranteed error", "unit") + (("estimate",
+                                                                           "guaranteed error") if human else ()),
                  [(n, f"{v:+.6e}", f"{e:.3e}", u) + ((report.human(v, u, b), report.human(e, u, b).lstrip("+"))
                                                     if human else ()) for n, v, e, u, b in rows])
     with_ = {k: v for k, v in blk["confounded"].items() if v}

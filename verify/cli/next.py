@@ -48,7 +48,8 @@ def run(args):
                  "next: " + ", ".join(f"{v:g}" if not isinstance(v, str) else v for v in res["next"]))
         plots.bounds_before_after(res["names"], res["guaranteed_error_before"],
                                   res["guaranteed_error_after"] if res["next"] is not None else None,
-                                  res["target"], args.plot, f"{args.data}: {len(res['measured'])} position(s) measured, "
+                                  res["target"], args.plot, f"{args.data}: {len(res['measured'])} position(s) "
+                                                            f"measured, "
                                   + state)
         print(f"wrote {args.plot}")
     if res["consistent"] is False or res.get("premises_refuted"):
@@ -60,7 +61,8 @@ def _print(res, args):
     from ..io import report
     fmt = (lambda v: "no estimator yet" if v is None else f"{v:.3e}")          # noqa: E731
     after = res["guaranteed_error_after"] or [None] * len(res["names"])
-    report.table(("q" if res["names"][0] == "q1" else "parameter", "target", "guaranteed error now", "after the next position"),
+    report.table(("q" if res["names"][0] == "q1" else "parameter", "target", "guaranteed error now", "after the next "
+        "position"),
                  [(q, f"{t:.3e}", fmt(b), "-" if res["done"] else fmt(a))
                   for q, t, b, a in zip(res["names"], res["target"], res["guaranteed_error_before"], after)])
     print(f"{res['of']}; units: dimensionless or rad; target: {res['target_source']}; sigma = {res['sigma']:g}; "

@@ -20,14 +20,16 @@ def add(sub):
                         f"{SEARCH_NODES:,}; the same plan on every machine); when they run out, the plan found is "
                         "printed with a proven lower bound on the fewest")
     p.add_argument("--count-nodes", type=options.positive_int, default=COUNT_NODES, metavar="N",
-                   help=f"work allowed for counting the optimal plans on a large grid, in nodes (default {COUNT_NODES:,})")
+                   help=f"work allowed for counting the optimal plans on a large grid, in nodes (default "
+                        f"{COUNT_NODES:,})")
     p.add_argument("--search-seconds", type=options.positive, default=SEARCH_SECONDS, metavar="S",
                    help=f"safety stop of the search (default {SEARCH_SECONDS:g} s; a stop it causes is said, for it "
                         "depends on the machine)")
     p.add_argument("--count-seconds", type=options.positive, default=COUNT_SECONDS, metavar="S",
                    help=f"safety stop of the count (default {COUNT_SECONDS:g} s)")
     p.add_argument("--max-candidates", type=options.positive_int, default=MAX_CANDIDATES, metavar="N",
-                   help=f"refuse a --grid of more than N candidate positions (times mountings; default {MAX_CANDIDATES:,}: "
+                   help=f"refuse a --grid of more than N candidate positions (times mountings; default "
+                        f"{MAX_CANDIDATES:,}: "
                         "a 3-degree grid on the two-axis stand takes about 30 s)")
     p.add_argument("--certificates", metavar="DIR", help="write a certificate of the plan's optimality for each "
                    "q (garant check-certificate re-checks it without any solver)")
@@ -47,7 +49,8 @@ def run(args):
         given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates),
                                     ("--route", args.route or None)) if v is not None]
         if given:
-            raise DataError(f"{' and '.join(given)} {'apply' if len(given) > 1 else 'applies'} to a stand with angles; `plan norm` gives the orientations "
+            raise DataError(f"{' and '.join(given)} {'apply' if len(given) > 1 else 'applies'} to a stand with angles; "
+                            f"`plan norm` gives the orientations "
                             "of 001 on the sphere, held by hand (their certificates: garant verify --certificates DIR)")
         return run_norm(args)
     from .. import models
@@ -77,7 +80,8 @@ def run(args):
         rows = [[*pos] for pos in d["plan"]]
         if args.route:
             rt = d["route"]
-            header += ["order", "move_s" if rt["arrive_s"] else "largest_turn_deg"] + (["arrive_s"] if rt["arrive_s"] else [])
+            header += ["order",
+                       "move_s" if rt["arrive_s"] else "largest_turn_deg"] + (["arrive_s"] if rt["arrive_s"] else [])
             rows = [[*pos, k + 1, mv, *([rt["arrive_s"][k]] if rt["arrive_s"] else [])]
                     for k, (pos, mv) in enumerate(zip(rt["positions"], rt["move"]))]
         report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
@@ -137,7 +141,8 @@ def _print_route(rt, names, multi):
           f"largest angle in one move: {rt['total']:g} deg (no speeds in the description: speed_deg_s per angle "
           "gives a schedule in seconds)")
     if rt["lower_bound"] is not None:
-        print(f"lower bound on any order: {rt['lower_bound']:.4g} s (the route is within {100 * rt['gap']:.1f} % of it)")
+        print(f"lower bound on any order: {rt['lower_bound']:.4g} s "
+              f"(the route is within {100 * rt['gap']:.1f} % of it)")
     for note in rt["notes"]:
         print(f"note: {note}")
 

@@ -25,7 +25,8 @@ def add(sub):
     p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
                    "stop_sample columns (gives the runs a time, for the bias_drift effect)")
     p.add_argument("--max-runs", type=options.positive_int, default=MAX_RUNS, metavar="N",
-                   help=f"refuse more than N runs (default {MAX_RUNS}; the effect test grows with the square of the runs)")
+                   help=f"refuse more than N runs (default {MAX_RUNS}; the effect test grows with the square of the "
+                        f"runs)")
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
     p.add_argument("--markdown", metavar="FILE.md", help="the tables and coverage figures as Markdown")
@@ -103,7 +104,8 @@ def run(args):
         from ..io import files
         files.make_folder(args.report)
         plots.repeatability(results, Path(args.report) / "runs.png")
-        page = sections(results) + [("Each parameter per run with its bound; dashed: the envelope", report.Image("runs.png"))]
+        page = sections(results) + [("Each parameter per run with its bound; dashed: the envelope",
+                                     report.Image("runs.png"))]
         print(f"wrote {report.write_page(args.report, _title(args), command, page, args.logs)}", file=sys.stderr)
     return 0 if all("envelope" in r for r in results.values()) else 3
 
@@ -191,11 +193,14 @@ def sections(results):
                      "against the envelope of the others."),
            ("Coverage", report.Table(["sensor", "pairs inside per-run bounds", "pairs inside with the envelope",
                                       "runs inside the envelope of the others", "named effect", "unexplained"],
-                                     [[k, _p(r.get("coverage_per_run_bounds")), _p(r.get("coverage_with_envelope_pairs")),
-                                       _p(r.get("coverage_with_envelope_leave_one_out")), r.get("named_effect") or "none",
+                                     [[k, _p(r.get("coverage_per_run_bounds")),
+                                       _p(r.get("coverage_with_envelope_pairs")),
+                                       _p(r.get("coverage_with_envelope_leave_one_out")),
+                                       r.get("named_effect") or "none",
                                        len(r.get("unexplained", []))] for k, r in results.items()])),
            ("All sensors", f"{_p(per_run)} of {len(comps)} run-pair x parameter comparisons inside the per-run bounds; "
-                           f"with the envelope {_p(pairs)} (pairs) and {_p(loo)} (runs against the envelope of the others).")]
+                           f"with the envelope {_p(pairs)} (pairs) and {_p(loo)} (runs against the envelope of the "
+                           f"others).")]
     out.append(("Premises", "Each run's bounds are those of calibrate-norm, on its own premises; run 1 of "
                 f"{next(iter(results))}: {first['runs'][0]['premises']}."))
     for label, res in results.items():

@@ -170,7 +170,8 @@ def _nan(value, where=""):
         return where or "the value"
     items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
     for k, v in items:
-        found = _nan(v, f"{where}.{k}" if isinstance(k, str) and where else k if isinstance(k, str) else f"{where}[{k}]")
+        found = _nan(v, f"{where}.{k}" if isinstance(k, str) and where else k if isinstance(k,
+                                                                                            str) else f"{where}[{k}]")
         if found is not None:
             return found
     return None

@@ -99,7 +99,8 @@ def calibration_json(cal, gyro=None, comment=""):
     return {"acc_unit": "m/s^2", "gyr_unit": g.get("gyr_unit", "deg/s"), "from_acc_unit": unit,
             "from_gyr_unit": g.get("from_gyr_unit", "deg/s"),
             "comment": (f"garant: accelerometer from {cal.get('source', 'a garant calibration')}; worst-case error of "
-                        f"a corrected sample: (I - B)^-1 (B |a| + bound_bias) with B = {np.round(cal['bound_matrix'], 8).tolist()}"
+                        f"a corrected sample: (I - B)^-1 (B |a| + bound_bias) with B = "
+                        f"{np.round(cal['bound_matrix'], 8).tolist()}"
                         f", bound_bias = {np.round(cal['bound_bias'], 8).tolist()} m/s^2; {said}"
                         + (f"; {comment}" if comment else "")),
             "K_a": np.diag(k).tolist(), "R_a": (P / k[:, None]).tolist(), "b_a": b.tolist(),

@@ -23,6 +23,7 @@ MAX_BYTES = 200 * MAX_ROWS
 @dataclass
 class Run:
     """One run of a means file: the still positions' means (m/s^2), their nominal directions if given."""
+
     name: str
     stills: list                   # Still per position, mean in m/s^2
     nominal: np.ndarray = None     # (K, 3) nominal up-directions, when the file gives them
@@ -49,7 +50,7 @@ def _rows(path):
     if len(lines) > MAX_ROWS + 1:                     # the header and MAX_ROWS rows
         raise DataError(f"{path}: more than {MAX_ROWS:,} rows")
     try:
-        table = list(csv.reader(l for _, l in lines))
+        table = list(csv.reader(line for _, line in lines))
     except csv.Error as e:
         raise DataError(f"{path}: not a CSV file ({e})") from None
     return [k for k, _ in lines], [h.strip().lower() for h in table[0]], table[1:]
@@ -66,7 +67,7 @@ def looks_like(path):
     """True when the first non-comment line is a means-file header."""
     try:
         with open(path, encoding="utf-8-sig", errors="replace") as fh:
-            head = next((l for l in fh if l.strip() and not l.lstrip().startswith("#")), "")
+            head = next((line for line in fh if line.strip() and not line.lstrip().startswith("#")), "")
     except OSError:
         return False
     cells = {c.strip().lower() for c in head.split(",")}
@@ -100,7 +101,8 @@ def read(path, imu=None, rate=None, quantum=0.0):
         raise DataError(f"{path}: missing column(s) {', '.join(missing)} of a means file (docs/formats.md)")
     run_col = next((c for c in ("exp", "run") if c in head), None)
     if "imu" in head and imu is None:
-        raise DataError(f"{path}: the file holds several IMUs (column imu); choose one with {opt('imu')} K or {opt('imu')} all")
+        raise DataError(f"{path}: the file holds several IMUs (column imu); choose one with {opt('imu')} K or "
+                        f"{opt('imu')} all")
     if imu is not None and "imu" not in head:
         raise DataError(f"{opt('imu')} {imu}: {path} has no imu column")
     col = {c: head.index(c) for c in head}

@@ -76,7 +76,8 @@ def norm_residuals(result, log, path):
     lo, hi = float(np.min(raw[::step])), float(np.max(raw[::step]))
     for n, r in enumerate(rows, 1):
         top.axvspan(r["start_s"], r["stop_s"], color="0.5", alpha=0.18, lw=0)
-        top.text(0.5 * (r["start_s"] + r["stop_s"]), hi + 0.02 * (hi - lo), str(n), ha="center", va="bottom", fontsize=7)
+        top.text(0.5 * (r["start_s"] + r["stop_s"]), hi + 0.02 * (hi - lo), str(n), ha="center", va="bottom",
+                 fontsize=7)
     top.set_xlabel("time (s)")
     top.set_ylabel(f"raw ({result['raw_unit']})")
     top.set_title(f"the log and its {len(rows)} still intervals (shaded, numbered as below)", fontsize=9)
@@ -241,7 +242,8 @@ def bounds_before_after(q_names, before, after, target, path, title):
     (done, or the data refute sigma), the errors now alone."""
     plt = _pyplot()
     t = np.asarray(target, float)
-    bars = [(-0.2, before, "C3", "now"), (0.2, after, "C0", "after the next position")] if after else [(0, before, "C3", "now")]
+    bars = ([(-0.2, before, "C3", "now"), (0.2, after, "C0", "after the next position")] if after
+            else [(0, before, "C3", "now")])
     ratios = [np.asarray([np.inf if v is None else v for v in x], float) / t for _, x, _, _ in bars]
     finite = np.concatenate([r[np.isfinite(r)] for r in ratios])
     top = 2 * max(finite.max() if finite.size else 1.0, 1.0)

@@ -13,6 +13,7 @@ SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 class Log(NamedTuple):
     """A raw log: time (s) and three accelerometer columns in the sensor's own unit."""
+
     path: str
     t: np.ndarray          # s
     raw: np.ndarray        # (N, 3), the sensor's own units (counts or m/s^2)
@@ -183,6 +184,7 @@ def _check_time(path, t, named_unit):
 class Read(NamedTuple):
     """What a format's reader gives: time (its unit named or not), the three raw axes, the quantisation
     step the format states (or None) and a note."""
+
     t: np.ndarray
     raw: np.ndarray
     unit: bool             # the time's unit is stated by the format (else it is checked to be seconds)
@@ -285,6 +287,7 @@ def quantum(log):
 
 class Still(NamedTuple):
     """A still interval of a log: its span (s), mean (raw units) and the mean's standard errors."""
+
     start: float           # s
     stop: float            # s
     mean: np.ndarray       # (3,) raw units
@@ -351,7 +354,8 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     dt = log.dt or float(median(np.diff(log.t)))
     span = float(log.t[-1] - log.t[0])
     if window >= span / 4:
-        raise DataError(f"{opt('window')} {window:g} s: the moving-variance window must be under a quarter of the log's "
+        raise DataError(f"{opt('window')} {window:g} s: the moving-variance window must be under a quarter of the "
+                        f"log's "
                         f"{span:.4g} s")
     n = max(int(round(window / dt)), 5)
     var = moving_variance(log.raw, n)

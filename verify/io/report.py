@@ -93,6 +93,7 @@ class Table(tuple):
     """A section's table: (headers, rows), rendered as Markdown or HTML by write_page."""
 
     def __new__(cls, headers, rows):
+        """The headers and the rows, each a tuple."""
         return super().__new__(cls, (tuple(headers), [tuple(r) for r in rows]))
 
 

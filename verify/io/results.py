@@ -37,7 +37,8 @@ class Result(dict):
         try:
             return self[name]
         except KeyError:
-            raise AttributeError(f"{type(self).__name__} has no field {name!r}; it has {', '.join(self.keys())}") from None
+            raise AttributeError(f"{type(self).__name__} has no field {name!r}; "
+                                 f"it has {', '.join(self.keys())}") from None
 
     @property
     def status(self):
@@ -161,8 +162,10 @@ class Diagnosis(Result):
     """`garant.diagnose`: where the model and the data disagree, and the effect that closes the gap."""
 
     FIELDS = {"consistent_before": "whether the base model fits the data within sigma",
-              "effects": "the fewest effects that make the model consistent", "estimates": "each named effect's parameters",
-              "indistinguishable": "per named effect, it and the alternatives that, in its place, also make the model consistent",
+              "effects": "the fewest effects that make the model consistent", "estimates": "each named effect's "
+                  "parameters",
+              "indistinguishable": "per named effect, it and the alternatives that, in its place, also make the model "
+                                   "consistent",
               "blind_to": "effects these positions cannot see", "premises": "what the verdict assumes"}
     STATUSES = {"consistent": "the model fits the data within sigma as it is",
                 "explained": "the effects named close the gap",

@@ -102,7 +102,7 @@ def column_bytes(x, up=False, digits=8):
 
 
 def csv_bytes(columns, up=(), digits=8):
-    """The rows of equal-length float `columns` as CSV bytes ("\\n" line ends); the columns whose index is in
+    """The rows of equal-length float `columns` as CSV bytes (newline line ends); the columns whose index is in
     `up` rounded towards +infinity; `digits`: significant digits (a multiple of 4), one for all or one per
     column."""
     digits = list(digits) if np.ndim(digits) else [digits] * len(columns)

@@ -5,6 +5,7 @@ from dataclasses import asdict, dataclass
 @dataclass(frozen=True)
 class Check:
     """One row of `garant verify`: the check, its source (paper and equation), expected, got, passed."""
+
     name: str
     source: str
     expected: str

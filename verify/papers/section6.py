@@ -17,6 +17,7 @@ from ..solve import exact, plans
 @dataclass(frozen=True)
 class Reduced:
     """The reduced estimation problem of section 6 of 000."""
+
     name: str                 # the block parameter q_nu
     estimators: int           # optimal estimators of the reduced model (minimal sets, quarter grid)
     biased: int               # how many carry stand errors in the full model

@@ -69,7 +69,8 @@ class Lab:
         if not net:
             return np.abs(change).max() / SIGMA
         from ..solve import highs, lp
-        return highs.chebyshev_fit(lp.measurement_matrix(self.mod, np.deg2rad(P), mounts), change.reshape(-1))[1] / SIGMA
+        return highs.chebyshev_fit(lp.measurement_matrix(self.mod, np.deg2rad(P), mounts),
+                                   change.reshape(-1))[1] / SIGMA
 
     def readings(self, effects, values, P, mounts, t, T):
         """Exact readings (N, 3) in m/s^2 with these effect values (name -> values) added to `values`."""
@@ -154,7 +155,8 @@ def rates(sets, levels, setups=SETUPS, progress=print, net=False, sizes=tuple(SI
                     res = [outcome(lab, make_set(lab, plan, size, {effect: a}, NOISES[k % 2], 7919 * k + 13, net),
                                    {effect})
                            for k in range(sets)]
-                    rows.append((stand, plan, size, effect, a, *(100.0 * np.mean([r[i] for r in res]) for i in range(3))))
+                    rows.append((stand, plan, size, effect, a,
+                                 *(100.0 * np.mean([r[i] for r in res]) for i in range(3))))
                     progress("  ".join(f"{x:g}" if isinstance(x, float) else str(x) for x in rows[-1]))
     return rows
 
@@ -368,7 +370,8 @@ def main():
               f"at +-sigma = {SIGMA:g}, then at the largest bound's estimator's own signs; a local --g")
         for name in MEMS_STANDS:
             runs, ok, out, ratios = mems_sweep(name, sets)
-            print(f"  {name:12s} {runs} runs, {ok} consistent, {out} truths outside a printed bound (or a printed bound "
+            print(f"  {name:12s} {runs} runs, {ok} consistent, {out} truths outside a printed bound (or a printed "
+                  f"bound "
                   f"above the a-priori one); each q's a-priori bound over its bound with block errors of 1e-4, largest "
                   f"per run: {min(ratios):.2f}-{max(ratios):.2f}x", flush=True)
         return 0

@@ -16,7 +16,8 @@ def main(argv=None):
     differ = sorted(n for n in fresh.keys() | old.keys() if fresh.get(n) != old.get(n))
     if args.check:
         for n in differ:
-            print(f"{COMMITTED.name}/{n}: " + ("missing" if n not in old else "stale" if n in fresh else "not built any more"))
+            print(f"{COMMITTED.name}/{n}: " + ("missing" if n not in old else "stale" if n in fresh else "not built "
+                "any more"))
         print(f"{len(fresh)} certificates {'up to date' if not differ else f'built, {len(differ)} differ'}.")
         return 1 if differ else 0
     COMMITTED.mkdir(exist_ok=True)

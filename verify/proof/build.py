@@ -232,7 +232,8 @@ def for_plan(mod, model, r, plan, grid_step=None):
         weights = plans.estimator_in(sub, nu, lam)
         if not weights:
             continue
-        to_sympy = (lambda x: x.sympy() if isinstance(x, field.QF) else as_exact(x))
+        def to_sympy(x):
+            return x.sympy() if isinstance(x, field.QF) else as_exact(x)
         primal = [([_angle(v) for v in r.angles_deg[plan[s_]]], 3 * int(r.mounts[plan[s_]]) + p, to_sympy(w))
                   for s_, p, w in weights]
         lam_x = [to_sympy(v) for v in lam]

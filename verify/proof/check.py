@@ -61,7 +61,7 @@ def make(model, claim, domain, H_rows, target, value, primal, dual):
     return {"format": FORMAT, "model": model, "claim": claim, "domain": domain, "H": H_rows,
             "target": [_s(a) for a in target], "value": _s(value),
             "primal": [{"at": list(at), "row": int(row), "weight": _s(w)} for at, row, w in primal],
-            "dual": [_s(l) for l in dual]}
+            "dual": [_s(y) for y in dual]}
 
 
 def _list(value, where, length=None):
@@ -143,7 +143,8 @@ def tied_to_model(cert, c, base=None):
         return False, str(e)
     kind = cert["domain"]["kind"]
     if [str(s) for s in c["syms"]] != dom_ref["names"]:
-        return False, f"domain angles {cert['domain'].get('names')} are not those of {cert['model']} ({dom_ref['names']})"
+        return False, (f"domain angles {cert['domain'].get('names')} are not those of {cert['model']} "
+                       f"({dom_ref['names']})")
     if kind != dom_ref["kind"] and kind != "positions":
         return False, f"domain kind {kind!r} is not that of {cert['model']} ({dom_ref['kind']!r})"
     if kind == "angles" and c["ranges"] != [[exact(x) for x in r] for r in dom_ref["ranges"]]:
@@ -352,7 +353,7 @@ def feasible_at(H, lam, syms, positions):
     with 50 digits, far beyond its distance from 1)."""
     x = sp.Symbol("x")
     touching = 0
-    polys = [sum((l * h for l, h in zip(lam, row) if l != 0), sp.Integer(0)) for row in H]
+    polys = [sum((y * h for y, h in zip(lam, row) if y != 0), sp.Integer(0)) for row in H]
     fast = _feasible_in_field(polys, syms, positions)
     if fast is not None:
         return fast
@@ -371,7 +372,7 @@ def feasible_at(H, lam, syms, positions):
 
 def feasible(H, lam, dom, syms, ranges=None, max_boxes=1_500_000):
     """|H^T lambda| <= 1 on the whole domain: (passed, detail)."""
-    polys = [sp.expand(sum((l * h for l, h in zip(lam, row) if l != 0), sp.Integer(0))) for row in H]
+    polys = [sp.expand(sum((y * h for y, h in zip(lam, row) if y != 0), sp.Integer(0))) for row in H]
     if dom["kind"] == "angles":
         from garant.derive.combinations import trig_basis
         sup = max(sum((abs(c) for c in trig_basis(p, syms).values()), sp.Integer(0)) for p in polys)
@@ -416,7 +417,8 @@ def harmonic_bound(p, syms):
         A = sp.expand(expanded.coeff(sp.cos(x)))
         B = sp.expand(expanded.coeff(sp.sin(x)))
         rest = sp.expand(expanded - A * sp.cos(x) - B * sp.sin(x))
-        if rest != 0 or x in (A.free_symbols | B.free_symbols) or A.has(sp.cos(x), sp.sin(x)) or B.has(sp.cos(x), sp.sin(x)):
+        if (rest != 0 or x in (A.free_symbols | B.free_symbols) or A.has(sp.cos(x), sp.sin(x))
+                or B.has(sp.cos(x), sp.sin(x))):
             continue
         q = sp.expand(A**2 + B**2)
         if sum((abs(v) for v in trig_basis(q, syms).values()), sp.Integer(0)) <= 1 or nonnegative(1 - q):
@@ -440,10 +442,10 @@ def box_bound(expr, syms, lo, hi, eta=ETA, max_boxes=1_500_000, start=8):
     """Prove |expr| <= 1 + eta over the box by branch and bound (mean-value form); or find a point."""
     f = sp.lambdify(syms, expr, modules=[{"sin": lambda x: x.sin(), "cos": lambda x: x.cos()}])
     n = len(syms)
-    edges = [np.linspace(l, h, start + 1) for l, h in zip(lo, hi)]
+    edges = [np.linspace(a, h, start + 1) for a, h in zip(lo, hi)]
     grids = np.meshgrid(*[e[:-1] for e in edges], indexing="ij")
     los = [g.ravel() for g in grids]
-    w = [np.full(los[0].shape, (h - l) / start) for l, h in zip(lo, hi)]
+    w = [np.full(los[0].shape, (h - a) / start) for a, h in zip(lo, hi)]
     evaluated = 0
     while los[0].size:
         evaluated += los[0].size

@@ -78,7 +78,7 @@ class _Parser:
         return out
 
     def expr(self):
-        """expr := term (('+' | '-') term)*, summed once (a long sum costs its length, not its square)"""
+        """expr := term (('+' | '-') term)*, summed once (a long sum costs its length, not its square)."""
         terms = [self.term()]
         while self.peek() in (("op", "+"), ("op", "-")):
             sign = self.take()[1]
@@ -86,7 +86,7 @@ class _Parser:
         return sp.Add(*terms) if len(terms) > 1 else terms[0]
 
     def term(self):
-        """term := unary (('*' | '/') unary)*, multiplied once"""
+        """term := unary (('*' | '/') unary)*, multiplied once."""
         factors = [self.unary()]
         while self.peek() in (("op", "*"), ("op", "/")):
             op = self.take()[1]
@@ -97,7 +97,7 @@ class _Parser:
         return sp.Mul(*factors) if len(factors) > 1 else factors[0]
 
     def unary(self):
-        """unary := '-' unary | power"""
+        """unary := '-' unary | power."""
         if self.peek() in (("op", "+"), ("op", "-")):
             sign = self.take()[1]
             inner = self.nested(self.unary)
@@ -105,7 +105,7 @@ class _Parser:
         return self.power()
 
     def power(self):
-        """power := atom ('**' exponent)?"""
+        """power := atom ('**' exponent)?."""
         base = self.atom()
         if self.peek() == ("op", "**"):
             self.take()
@@ -119,7 +119,7 @@ class _Parser:
         return base
 
     def exponent(self):
-        """exponent := a small integer or a half-integer (a root), signed"""
+        """exponent := a small integer or a half-integer (a root), signed."""
         kind, value = self.peek()
         if (kind, value) == ("op", "("):
             self.take()
@@ -142,7 +142,7 @@ class _Parser:
         return e
 
     def atom(self):
-        """atom := integer | allowed name | sqrt(expr) | sin(expr) | cos(expr) | (expr)"""
+        """atom := integer | allowed name | sqrt(expr) | sin(expr) | cos(expr) | (expr)."""
         kind, value = self.take()
         if kind == "int":
             return sp.Integer(value)

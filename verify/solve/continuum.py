@@ -15,6 +15,7 @@ from . import lp
 @dataclass
 class Solution:
     """The exchange method's result: each q's optimum on the continuum of angles and its positions."""
+
     values: np.ndarray            # optimal guaranteed error per target (units of sigma)
     lam: np.ndarray               # dual vectors (m x n_targets)
     positions: np.ndarray         # (S, n_angles) radians: the final exchange set

@@ -97,5 +97,5 @@ def l1(terms):
 def dual_lower_bound(H_sup, a, lam):
     """a^T lambda / max_p sum_nu |lambda_nu| H_SUP[p, nu]: a proven lower bound of the optimum."""
     a, lam = [Fraction(x) for x in a], [Fraction(x) for x in lam]
-    worst = max(sum(abs(l) * Fraction(int(s)) for l, s in zip(lam, row)) for row in np.asarray(H_sup))
+    worst = max(sum(abs(y) * Fraction(int(s)) for y, s in zip(lam, row)) for row in np.asarray(H_sup))
     return sum(x * y for x, y in zip(a, lam)) / worst

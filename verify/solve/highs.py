@@ -47,7 +47,8 @@ def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = cols, rows
     lp.col_cost_ = np.asarray(c, float)
-    lp.col_lower_, lp.col_upper_ = np.broadcast_to(col_lo, cols).astype(float), np.broadcast_to(col_hi, cols).astype(float)
+    lp.col_lower_, lp.col_upper_ = np.broadcast_to(col_lo, cols).astype(float), np.broadcast_to(col_hi,
+                                                                                                cols).astype(float)
     lp.row_lower_, lp.row_upper_ = np.asarray(row_lo, float), np.asarray(row_hi, float)
     lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
     lp.a_matrix_.start_ = np.arange(0, rows * cols + 1, rows, dtype=np.int32)
@@ -218,10 +219,10 @@ def sparse_dual(A, targets=None, slack=1e-9):
     m, K = A.shape
     T = np.eye(m) if targets is None else np.asarray(targets, float).reshape(m, -1)
     Lam, values = dual(A, T)
-    I = np.eye(m)
+    eye = np.eye(m)
     for k, a in enumerate(T.T):
         floor = values[k] - slack * max(1.0, values[k])
-        M = np.block([[A.T, np.zeros((K, m))], [a[None], np.zeros((1, m))], [I, -I], [-I, -I]])
+        M = np.block([[A.T, np.zeros((K, m))], [a[None], np.zeros((1, m))], [eye, -eye], [-eye, -eye]])
         x, _, _ = minimize(np.r_[np.zeros(m), np.ones(m)], M,
                         np.r_[-np.ones(K), floor, np.full(2 * m, -INF)], np.r_[np.ones(K), INF, np.zeros(2 * m)],
                         np.r_[np.full(m, -INF), np.zeros(m)], INF, "sparse dual")

@@ -1,4 +1,4 @@
-"""The hull of an information set: each linear function's least and largest value over a polytope
+"""The hull of an information set: each linear function's least and largest value over a polytope.
 
     X = {x : row_lo <= B x <= row_hi,  col_lo <= x <= col_hi},
 
@@ -50,10 +50,11 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     (`upper`); with `points`, also the solver's x at each end ((x_min, x_max) per row; None where it
     gave none); with `multipliers`, the lambda that proves each end ((for -c, for c) per row), which
     prove a bound on any other set with the same B and columns (`upper`). HiGHS solves on X shifted to
-    the centre of its column box and scaled to columns and rows of width 2 (its tolerances are absolute); the multipliers it returns are mapped back and proven on X. Many
-    rows: the LPs are solved on the rows tightest at the box's centre (and `start`: rows known to bind, e.g.
-    a previous set's), and rows an optimum violates are added until none is (the optimum over them is then the optimum over all; any subset's multipliers
-    prove a bound on X, which lies inside the subset's polytope)."""
+    the centre of its column box and scaled to columns and rows of width 2 (its tolerances are absolute);
+    the multipliers it returns are mapped back and proven on X. Many rows: the LPs are solved on the rows
+    tightest at the box's centre (and `start`: rows known to bind, e.g. a previous set's), and rows an
+    optimum violates are added until none is (the optimum over them is then the optimum over all; any
+    subset's multipliers prove a bound on X, which lies inside the subset's polytope)."""
     B = np.asarray(B, float)
     C = np.atleast_2d(np.asarray(C, float))
     row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)

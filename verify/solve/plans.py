@@ -86,7 +86,7 @@ def dual_on_grid(cols, nu, enumerate_sets=True):
             return lam, _minimal(cols, nu, lam) if enumerate_sets else None
     if cols.dtype.kind == "i":
         lam = [Fraction(v).limit_denominator(1000) for v in L[:, 0]]
-        ok = all(abs(sum(l * int(h) for l, h in zip(lam, col))) <= 1 for col in A.T.astype(int))
+        ok = all(abs(sum(y * int(h) for y, h in zip(lam, col))) <= 1 for col in A.T.astype(int))
         lam = lam if ok else _slackness_dual(cols, nu, A, L[:, 0])
         if lam is not None:
             lam = [Fraction(v.c[0]) if isinstance(v, field.QF) else v for v in lam]
@@ -192,7 +192,7 @@ def touching(cols, lam):
     for s, p in zip(*np.nonzero(near)):
         if exact:
             h = cols[s, p]
-            v = sum((l * (h_ if isinstance(h_, field.QF) else int(h_)) for l, h_ in zip(lam, h) if l != 0),
+            v = sum((y * (h_ if isinstance(h_, field.QF) else int(h_)) for y, h_ in zip(lam, h) if y != 0),
                     Fraction(0))
             if abs(v) != 1:
                 continue
@@ -275,6 +275,7 @@ def popcount(x):
 @dataclass(frozen=True)
 class PlanSearch:
     """The result of a plan search: the grid, each q's optimal error and the minimal optimal plans."""
+
     angles_deg: np.ndarray                      # (S, n_angles) grid
     mounts: np.ndarray                          # (S,) mounting index
     min_positions: int

@@ -14,6 +14,7 @@ import numpy as np
 @dataclass(frozen=True)
 class Worst:
     """The largest |f| a search found, where, and how it was found."""
+
     value: float          # the largest |f| found
     x: np.ndarray         # the position there
     p: np.ndarray         # the parameters there (a vertex of the box, or inside when interior=True)

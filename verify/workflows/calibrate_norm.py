@@ -51,7 +51,7 @@ def initial_map(raw, g):
 
 def pendulosity(mod, n, delta):
     """D(n) of (1.3) over g: delta_l n_idx(l) n_l, for directions n (3, K)."""
-    return np.array([delta[l] * n[mod.AXES[l] - 1] * n[l] for l in range(3)])
+    return np.array([delta[k] * n[mod.AXES[k] - 1] * n[k] for k in range(3)])
 
 
 def calibrated(mod, raw, M, b, delta, g):
@@ -132,7 +132,8 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
                     + (" (a misalignment enters the norm only at second order when every orientation lies along an "
                        "axis)" if on_axes and any(3 <= k < 6 for k in unseen) else "")
                     + (f"; they would identify {', '.join(seen)}" if seen else "")
-                    + "; add orientations such as " + ", ".join("(" + ", ".join(f"{v:+.3f}" for v in p) + ")" for p in add)
+                    + "; add orientations such as "
+                    + ", ".join("(" + ", ".join(f"{v:+.3f}" for v in p) + ")" for p in add)
                     + " (garant plan norm lists them all)")
 
 
@@ -314,7 +315,8 @@ def _premise_box(X):
     if X is None:
         return ""
     return ("; the truth's correction to this fit is within " + ", ".join(
-        f"{x.max():.2g} ({name})" for name, x in (("scale", X[:3]), ("misalignment, rad", X[3:6]), ("bias over g", X[6:9])))
+        f"{x.max():.2g} ({name})" for name, x in (("scale", X[:3]), ("misalignment, rad", X[3:6]), ("bias over g",
+                                                                                                    X[6:9])))
         + f" (the box each interval's remainder is proven from, at most {PREMISE_FACTORS[0]:g}x the information set's "
         "own box)")
 
@@ -541,8 +543,10 @@ def weighted_fit(Hk, s, bounds):
 
 
 def diagnose_norm(mod, stills, res, g, params, quantum=0.0):
-    """The model-discrepancy test on a real log: is the calibrated norm model consistent with each
-    interval's own noise (the noise rule), and which catalogue effect helps?"""
+    """The model-discrepancy test on a real log.
+
+    Is the calibrated norm model consistent with each interval's own noise (the noise rule), and which
+    catalogue effect helps?"""
     import sympy as sp
     from garant.derive.effects import CATALOGUE
     from garant.derive.norm import NormModel, effect_columns, n_sym

@@ -31,7 +31,8 @@ def variable_columns(mod, positions):
     out = {}
     for v in map(str, getattr(mod, "VARIABLES", ())):
         if v not in positions.extra:
-            raise DataError(f"{positions.path}: the model needs the column {v} ({'s' if v == 'time_s' else 'degrees C'}) "
+            raise DataError(f"{positions.path}: the model needs the column {v} "
+                            f"({'s' if v == 'time_s' else 'degrees C'}) "
                             "on every row")
         try:
             out[v] = np.asarray(positions.extra[v], float)
@@ -206,7 +207,8 @@ def unrefutable_premises(lin, stated):
     names = [lin.premises.names[k] for j, (k, b) in enumerate(zip(lin.T, lin.t_bound)) if b > 0 and _moves(lin, j)]
     out = dict(stated, unrefutable=names)
     if names:
-        out["statement"] += (f"; no data can check the bounds of {', '.join(names)} (they move the readings beyond what "
+        out["statement"] += (f"; no data can check the bounds of {', '.join(names)} (they move the readings beyond "
+                             f"what "
                              "q absorbs, and no plan separates them): these bounds rest on them")
     return out
 

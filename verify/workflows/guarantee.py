@@ -428,6 +428,7 @@ def _weighted_minimax(A, z, rb):
 @dataclass
 class Verdict:
     """Whether the data are consistent with sigma and, with an estimator, the guaranteed errors and their parts."""
+
     consistent: bool
     sigma: float
     sigma_min_supported: float       # smallest sigma the data support, to SIGMA_TOLERANCE (sigma when consistent)

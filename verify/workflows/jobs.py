@@ -28,7 +28,8 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
                         f"+y+z+x; got {mount!r}")
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
-    res = est.estimate(mod, positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections), sigma, prem.g, remount=remount, mount=mount,
+    res = est.estimate(mod, positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections), sigma, prem.g,
+                       remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress)
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration

@@ -42,7 +42,8 @@ def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None, q_box=N
     value, half = taylor.midrad(lo, hi)
     neglected = neglected or {}
     dg, db = neglected.get("Delta_g", 0.0), neglected.get("Delta_beta", 0.0)
-    premised = (np.abs(K) @ np.broadcast_to(q_shift, K.shape[1]) + np.abs(remount.neglected(mount, 1.0, 0.0, gamma)) * dg
+    premised = (np.abs(K) @ np.broadcast_to(q_shift, K.shape[1]) + np.abs(remount.neglected(mount, 1.0, 0.0,
+                                                                                            gamma)) * dg
                 + np.abs(remount.neglected(mount, 0.0, 1.0, gamma)) * db)
     bound = (half + premised) * (1 + 1e-15)
     if exact:                                    # Gamma exactly (LQ), not through the linear split and its gap

@@ -59,7 +59,8 @@ def sweep(mod, misses_deg, trials=20, seed=0):
     """Max over q of the guaranteed errors of (23) and of the LP, per miss size: (mean, worst) pairs."""
     out = []
     for miss in misses_deg:
-        rng = np.random.default_rng([seed, int(round(1000 * miss))])     # the same draws for a miss, alone or in a sweep
+        rng = np.random.default_rng([seed,
+                                     int(round(1000 * miss))])     # the same draws for a miss, alone or in a sweep
         e23, elp = [], []
         for _ in range(trials):
             P = np.asarray(mod.PLAN_DEG, float) + rng.uniform(-miss, miss, (len(mod.PLAN_DEG), 2))

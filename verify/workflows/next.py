@@ -40,8 +40,10 @@ class Next:
 
     def to_dict(self):
         """The result as `garant next --json` writes it (an error not yet finite is null)."""
-        finite = (lambda v: None if v is None else [None if not np.isfinite(x) else float(x) for x in v])
-        return {"model": self.model, "angles": list(self.angles), "names": list(self.names), "of": self.of, "sigma": self.sigma,
+        def finite(v):
+            return None if v is None else [None if not np.isfinite(x) else float(x) for x in v]
+        return {"model": self.model, "angles": list(self.angles), "names": list(self.names), "of": self.of,
+                "sigma": self.sigma,
                 "target": [float(t) for t in self.target], "target_source": self.target_source,
                 "measured": self.measured, "guaranteed_error_before": finite(self.before), "done": self.done,
                 "next": self.position, "guaranteed_error_after": finite(self.after),
@@ -88,7 +90,8 @@ def block_functionals(mod, model, mount, gamma="lower"):
     from ..models import load_remount
     remount = None if str(model).endswith(".toml") else load_remount(model)
     if remount is None or mount not in remount.MOUNTS:
-        raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like +y+z+x; "
+        raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like "
+                        f"+y+z+x; "
                         f"got {mount!r}")
     return remount.recovery_matrix(mount, gamma), list(remount.OUTPUTS)
 
@@ -148,8 +151,8 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates, refuse_variables
     refuse_variables(mod, model)
     names, mount_names = layout(mod)
-    P, M, fixed = _with_measured(*candidates(mod, grid, max_candidates or MAX_CANDIDATES), np.asarray(angles_deg, float).reshape(-1, len(names)),
-                                 np.asarray(mounts, int))
+    P, M, fixed = _with_measured(*candidates(mod, grid, max_candidates or MAX_CANDIDATES),
+                                 np.asarray(angles_deg, float).reshape(-1, len(names)), np.asarray(mounts, int))
     m = len(mod.Q_NAMES)
     if mount is None:
         C, labels, of = None, list(mod.Q_NAMES), "the combinations q of (4) of 000"
@@ -169,14 +172,16 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         goal, source = sigma * optimal, "sigma x the stand's optimal errors on its reachable positions"
     elif target is None:
         goal = sigma * optimal * (1 + TARGET_SLACK) + (0.0 if floor is None else floor)
-        source = (f"sigma x the stand's optimal errors on its reachable positions, +{TARGET_SLACK:.0%} for the estimate "
+        source = (f"sigma x the stand's optimal errors on its reachable positions, +{TARGET_SLACK:.0%} for the "
+                  f"estimate "
                   "linearised where the unit is" + (", plus what the premises alone set (estimate's bound)"
                                                      if floor is not None and np.any(floor > 0) else ""))
     else:
         goal, source = np.full(len(labels), float(target)), "--target"
         short = [f"{q} ({sigma * o:.3g})" for q, o in zip(labels, optimal) if sigma * o > target * (1 + AT_TARGET)]
         if short:
-            raise DataError(f"{opt('target')} {target:g} is below the stand's optimal error of {', '.join(short)}: no plan "
+            raise DataError(f"{opt('target')} {target:g} is below the stand's optimal error of {', '.join(short)}: no "
+                            f"plan "
                             "of its reachable positions reaches it")
     before = sigma * errors_on(mod, P[fixed], M[fixed], C)
     nominal_done = bool(np.all(before <= goal * (1 + AT_TARGET)))
@@ -198,7 +203,8 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
         proven = False
     if not pool:
         raise DataError(f"all {len(P)} candidate positions are measured and the guaranteed errors are still above the "
-                        f"target (a repeat does not lower a guaranteed bound): give a finer {opt('grid')}, or a larger {opt('target')}")
+                        f"target (a repeat does not lower a guaranteed bound): give a finer {opt('grid')}, or a larger "
+                        f"{opt('target')}")
     best, after = _best(mod, P, M, fixed, pool, sigma, goal, C)
     return Next(**common, position=position(best), after=after, still_needed=needed, still_needed_proven=proven)
 

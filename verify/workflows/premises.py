@@ -135,8 +135,9 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
                             + ", ".join(mod.PARAMETER_NAMES))
         kind = kinds[mod.PARAMETER_NAMES.index(name)]
         if kind in ("bias", "gravity"):
-            raise DataError(f"{opt('bound')} {name}: " + ("a bias enters the readings linearly and needs no bound" if kind == "bias"
-                                                  else f"bound Delta_g/g with {opt('g_uncertainty')}"))
+            raise DataError(f"{opt('bound')} {name}: "
+                            + ("a bias enters the readings linearly and needs no bound" if kind == "bias"
+                               else f"bound Delta_g/g with {opt('g_uncertainty')}"))
     bounds, sources, split = [], [], {}
     for name, kind, b in zip(mod.PARAMETER_NAMES, kinds, stated):
         if kind == "bias":
@@ -184,7 +185,8 @@ def _turned(axis, names, kinds, split, bounds, sources):
     A = 2 * w / (k0 - r0 * w) if k0 > r0 * w else np.inf
     if not r0 * A <= (k0 - r0 * w) / 2:
         raise DataError(f"the a-priori bounds of the mounting and {', '.join(gone)} (their sum {w:g} rad) are too "
-                        f"wide to bound the turn about the mountings' axis: state smaller ones (description or {opt('prior')})")
+                        f"wide to bound the turn about the mountings' axis: state smaller ones (description or "
+                        f"{opt('prior')})")
     given = ", ".join(f"|{names[k]}| <= {bounds[k]:g}" for k in kept)
     given += "".join(f", |{name}| <= {split[name][0]:g}" for name in gone)
     stated = {names[k]: (float(bounds[k]), sources[k]) for k in kept}

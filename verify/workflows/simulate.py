@@ -70,7 +70,8 @@ def parse_effect(text, catalogue, base_angles=None):
         raise DataError(f"{opt('effect')} {text}: values must be finite numbers (not inf or nan)")
     n = len(catalogue[name].params)
     if catalogue[name].angle is not None and base_angles is not None and catalogue[name].angle not in base_angles:
-        raise DataError(f"{opt('effect')} {name} is an error of the encoder of angle {catalogue[name].angle!r}; this stand's "
+        raise DataError(f"{opt('effect')} {name} is an error of the encoder of angle {catalogue[name].angle!r}; this "
+                        f"stand's "
                         f"angles are {', '.join(base_angles)}")
     if len(values) != n:
         names = ", ".join(p.name for p in catalogue[name].params)
@@ -109,7 +110,8 @@ def parse_sizes(text):
         except ValueError:
             raise DataError(f"{opt('size')}: {what} {v[:40]!r} is not a number") from None
         if not (math.isfinite(x) and 0 <= x < 1):
-            raise DataError(f"{opt('size')}: {what} {v[:40]!r} must be a number >= 0 and < 1 (the bound of a small error)")
+            raise DataError(f"{opt('size')}: {what} {v[:40]!r} must be a number >= 0 and < 1 (the bound of a small "
+                            f"error)")
         return x
     if "=" not in text:
         return dict.fromkeys(KINDS, number(text, "the bound"))
