@@ -63,6 +63,45 @@ CATALOGUE = {e.name: e for e in (
 )}
 
 
+BLOCK_PARAMETERS = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
+THERMAL_PREFIX = "thermal_d"
+
+
+def thermal_name(degree, t0):
+    """The name of the thermal effect of `degree` about t0 (whole degrees C): thermal_d2_t20, thermal_d1_tm5."""
+    if not (isinstance(degree, int) and 1 <= degree <= 3):
+        raise ValueError(f"thermal degree {degree!r}: 1, 2 or 3")
+    t0 = int(t0)
+    return f"{THERMAL_PREFIX}{degree}_t{'m' if t0 < 0 else ''}{abs(t0)}"
+
+
+def thermal(degree, t0):
+    """Every block parameter p (Gamma_ij, bias_i) a polynomial in the temperature T (column temp_c, C):
+    p(T) = p + sum_k p_Tk (T - t0)^k, k = 1..degree, added to the readings as Gamma_Tk w and bias_Tk are
+    ((1) of 000 at first order; the block model, (E + Gamma) w + bias, at T = t0)."""
+    tau = TEMP - t0
+    params = tuple(_p(f"{name}_T{k}", rf"{name}_{{T{k}}}", f"1/degC^{k}" if k > 1 else "1/degC",
+                      f"coefficient of (T - {t0} C)^{k} of {name}")
+                   for k in range(1, degree + 1) for name in BLOCK_PARAMETERS)
+
+    def term(w, s):
+        return sp.Matrix([sum((tau ** k * (sum((s[f"Gamma{i}{j}_T{k}"] * w[j - 1] for j in (1, 2, 3)), sp.Integer(0))
+                                           + s[f"bias{i}_T{k}"]) for k in range(1, degree + 1)), sp.Integer(0))
+                          for i in (1, 2, 3)])
+    return Effect(thermal_name(degree, t0), f"each Gamma_ij and bias_i + sum_k p_Tk (T - {t0} C)^k, k <= {degree}",
+                  params, term=term)
+
+
+def effect(name):
+    """A catalogue effect by name, or the thermal effect its name describes (thermal_name)."""
+    if name in CATALOGUE:
+        return CATALOGUE[name]
+    if name.startswith(THERMAL_PREFIX):
+        degree, t0 = name[len(THERMAL_PREFIX):].split("_t")
+        return thermal(int(degree), -int(t0[1:]) if t0.startswith("m") else int(t0))
+    raise KeyError(name)
+
+
 def applicable(model):
     """Catalogue effects that make sense for the model (encoder effects need their angle)."""
     angles = {a.name for a in model.stand.angles}
@@ -72,8 +111,8 @@ def applicable(model):
 def extend(model, names):
     """The model with the named effects added (a new Model; derivations are cached per model)."""
     model = replace(model, plan_deg=(), remount=False)
-    for name in sorted(names, key=list(CATALOGUE).index):
-        e = CATALOGUE[name]
+    for name in sorted(names, key=lambda n: list(CATALOGUE).index(n) if n in CATALOGUE else len(CATALOGUE)):
+        e = effect(name)
         if e.angle is not None:
             chain = tuple(replace(ln, harmonic=tuple(p.name for p in e.params)) if ln.angle == e.angle else ln
                           for ln in model.stand.chain)

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .effects import CATALOGUE, TEMP, TIME
+from .effects import TEMP, TIME, effect
 from .parameter import Parameter
 from .remount import mountings
 from .rotations import C, small_turn
@@ -102,7 +102,7 @@ class Model:
     def parameters(self):
         """Every physical parameter: the stand's, the block's and the effects' added."""
         return self.stand.parameters + self.block.parameters + tuple(
-            p for name in self.effects for p in CATALOGUE[name].params)
+            p for name in self.effects for p in effect(name).params)
 
     @property
     def parameter_kinds(self):
@@ -113,7 +113,8 @@ class Model:
         kinds = ["mounting" if p.name in st.theta else "gravity" if p.name == st.gravity_error else "stand"
                  for p in st.parameters]
         kinds += ["bias" if p.name.startswith("bias") else "block" for p in self.block.parameters]
-        return tuple(kinds) + tuple("effect" for name in self.effects for _ in CATALOGUE[name].params)
+        return tuple(kinds) + tuple("bias" if p.name.startswith("bias") else "effect"       # a thermal bias: linear
+                                    for name in self.effects for p in effect(name).params)
 
     @property
     def variables(self):
@@ -125,7 +126,7 @@ class Model:
 
     def _effect_term(self, name):
         w = sp.Matrix(sp.symbols("w1:4", real=True))
-        return CATALOGUE[name].term(w, self.symbols)
+        return effect(name).term(w, self.symbols)
 
     @property
     def symbols(self):
@@ -168,7 +169,7 @@ def trig_degrees(model):
     w = sp.symbols("w1:4", real=True)
     factor = 1
     for name in model.effects:
-        term = CATALOGUE[name].term(sp.Matrix(w), model.symbols)
+        term = effect(name).term(sp.Matrix(w), model.symbols)
         for e in term:
             try:
                 factor = max(factor, sp.Poly(e, *w).total_degree())
@@ -360,7 +361,7 @@ def _effects_over_g(model, Q, nominal=False):
     if model.effects:
         w = up_nominal(model, Q) if nominal else _product(_force_factors(model, Q)[1:])
         for name in model.effects:
-            out += CATALOGUE[name].term(w, model.symbols)
+            out += effect(name).term(w, model.symbols)
     return out
 
 

@@ -77,6 +77,40 @@ def from_description(path):
     return _execute(text, name, Path(path).resolve())
 
 
+def thermal(model, degree, t0):
+    """The thermal extension of a built-in stand or a description (each block parameter a polynomial of
+    `degree` in T about t0, derive/effects.py `thermal`): derived once and kept in the cache like a
+    description (keyed by SHA-256 of the base, the degree, t0 and the generator)."""
+    import hashlib
+    if str(model).endswith(".toml"):
+        try:
+            with open(model, "rb") as fh:
+                base = fh.read(1_000_001)
+        except OSError as e:
+            raise DataError(f"{model}: cannot read ({e.strerror})") from None
+    elif model in STANDS:
+        base = model.encode()
+    else:
+        raise DataError(f"a thermal calibration takes a stand: {', '.join(STANDS)} or a STAND.toml, not {model!r}")
+    key = hashlib.sha256(base + f"|thermal {degree} {t0}|".encode() + generator_version().encode()).hexdigest()
+    folder = _cache_folder()
+    hit = _entry(folder / f"{key}.py") if folder is not None else None
+    if hit is not None:
+        name, text = hit
+    else:
+        from garant.derive import builtin, codegen, description, effects
+        try:
+            stand = (description.load(model) if str(model).endswith(".toml")
+                     else builtin.MODELS[model.replace("-", "_")])
+        except description.DescriptionError as e:
+            raise DataError(str(e)) from None
+        ext = effects.extend(stand, [effects.thermal_name(degree, t0)])
+        name = ext.stand.name
+        text = codegen.model_files(ext)[f"generated/{name}.py"]
+        _keep(cache_dir(), f"{key}.py", name, text)
+    return _execute(text, name, Path(f"{model}+thermal{degree}"))
+
+
 ENTRY_BYTES = 4_000_000       # a cache entry larger than this is not one garant wrote
 
 

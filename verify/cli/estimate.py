@@ -36,6 +36,15 @@ def add(sub):
     p.add_argument("--export-imu-tk", metavar="FILE", help="also write the block's calibration in imu_tk's form "
                    "(T, K, B), the stand's frame")
     options.imucal_export(p)
+    p.add_argument("--temperature", type=int, choices=(1, 2, 3), metavar="D", help="each block parameter a "
+                   "polynomial of degree D (1-3) in T, the temp_c column (C): each q's coefficients and one guaranteed "
+                   "bound over the whole temperature range")
+    p.add_argument("--thermal-plot", metavar="FILE.png", help="with --temperature: each q(T) with its guaranteed "
+                   "band over the range, and the estimate and bound at each chamber temperature")
+    p.add_argument("--export-ardupilot", metavar="FILE.parm", help="with --temperature: ArduPilot's INS_TCALn_* "
+                   "parameters (TMIN, TMAX, the accelerometer offset polynomial ACC1-3 about 35 C, x 1e6)")
+    p.add_argument("--ardupilot-imu", type=int, choices=(1, 2, 3), default=1, metavar="N",
+                   help="the IMU the ArduPilot parameters are for (INS_TCALN_*; default 1)")
     return p
 
 
@@ -44,12 +53,20 @@ def run(args):
     from .. import models
     from ..io import report
     from ..workflows import jobs
+    thermal_only = [o for o, v in (("--thermal-plot", args.thermal_plot), ("--export-ardupilot", args.export_ardupilot))
+                    if v]
+    if thermal_only and args.temperature is None:
+        raise DataError(f"{thermal_only[0]} needs --temperature D")
+    wanted = args.save or args.export_imu_tk or args.export_imucal
+    if wanted and args.temperature is not None:
+        raise DataError("--save/--export-imu-tk/--export-imucal: a calibration file holds no temperature polynomial; "
+                        "with --temperature the thermal calibration is in --json (thermal) and --export-ardupilot")
     res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
                         args.gamma, args.imu, args.which_run,
                         progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True),
-                        bound=dict(args.bound), fmt=args.format, sections=args.sections)
-    mod = models.load(args.model)
-    wanted = args.save or args.export_imu_tk or args.export_imucal
+                        bound=dict(args.bound), fmt=args.format, sections=args.sections, temperature=args.temperature)
+    mod = (models.thermal(args.model, args.temperature, res["thermal"]["t0_c"]) if "thermal" in res
+           else models.load(args.model))
     if wanted and res["consistent"] and "calibration" not in res and not res.get("premises_refuted"):
         why = res.get("block_not_separated", "this model has no block parameters")
         raise DataError(f"--save/--export-imu-tk: {why}; nothing written")
@@ -182,7 +199,38 @@ def print_estimate(res, mod, args):
                 print(f"wrote {path}")
     if "calibration" in res:
         options.export_imucal(args, res["calibration"])
+    if "thermal" in res:
+        print_thermal(res, args)
     return 0
+
+
+def print_thermal(res, args):
+    """Each q's polynomial in T with its one bound over the range, the largest bound at a chamber temperature
+    beside it (the bound over the range is at least that), and the files asked for."""
+    from ..io import report
+    th = res["thermal"]
+    t0, d = th["t0_c"], th["degree"]
+    lo, hi = th["range_c"]
+    print("\nover temperature: q(T) = c0 + " + " + ".join(f"c{k} (T - {t0} C)^{k}" if k > 1 else f"c1 (T - {t0} C)"
+                                                        for k in range(1, d + 1))
+          + f", one guaranteed bound over [{lo:g}, {hi:g}] C ({len(th['temperatures_c'])} chamber temperatures: "
+          + ", ".join(f"{t:g}" for t in th["temperatures_c"]) + " C)")
+    print(f"premise: {th['premise']}")
+    report.table(("q", "definition", *(f"c{k}" for k in range(d + 1)), "bound over range", "largest at a T", "unit"),
+                 [(q, res["definitions"][q], *(f"{c:+.4e}" for c in th["q"][q]), f"{th['bound'][q]:.3e}",
+                   f"{max(r['bound'] for r in th['at_temperature'][q]):.3e}", res["units"][q])
+                  for q in th["q"]])
+    print(f"c_k in the q's unit per C^k; bound over range: the largest |q(T) - q_hat(T)| over every q that fits the "
+          f"readings, for every T in [{lo:g}, {hi:g}] C (Bernstein control points, each an LP proven by duality); "
+          "largest at a T: the largest of the bounds at the chamber temperatures, which it cannot undercut")
+    if args.thermal_plot:
+        from ..io import plots
+        plots.thermal(res, args.thermal_plot, f"{args.data}: q(T) with its guaranteed band")
+        print(f"wrote {args.thermal_plot}")
+    if args.export_ardupilot:
+        from ..io import ardupilot
+        ardupilot.write(args.export_ardupilot, res, args.ardupilot_imu)
+        print(f"wrote {args.export_ardupilot}")
 
 
 def print_refuted(refuted, command):

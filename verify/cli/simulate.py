@@ -19,8 +19,26 @@ def add(sub):
     p.add_argument("--truth", metavar="FILE.json",
                    help='the stand\'s errors by name instead of random ones, e.g. {"kappa": 5e-5, "Gamma11": 1.2e-2, '
                         '"bias1": 0.05} (rad, dimensionless, a bias over g); the others 0')
+    p.add_argument("--temperatures", type=_temperatures, metavar="T1,T2,...",
+                   help="chamber temperatures (C): the plan at each, temp_c set to it; --truth may then name thermal "
+                        "coefficients p_Tk of a block parameter p (e.g. bias1_T1, Gamma11_T2: per C^k about the middle "
+                        "of the temperatures)")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
+
+
+def _temperatures(text):
+    """T1,T2,...: two to twenty distinct temperatures within +-200 C."""
+    import argparse
+    import math
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:60]!r}: give temperatures in C, e.g. -20,0,20,40,60") from None
+    if not (2 <= len(values) <= 20 and len(set(values)) == len(values)
+            and all(math.isfinite(v) and abs(v) <= 200 for v in values)):
+        raise argparse.ArgumentTypeError(f"{text[:60]!r}: two to twenty distinct temperatures within +-200 C")
+    return values
 
 
 def run(args):
@@ -38,10 +56,10 @@ def run(args):
     effects = [simulate.parse_effect(e, CATALOGUE, [a.name for a in base.stand.angles]) for e in args.effect]
     if args.truth and args.size:
         raise DataError("--truth sets every error of the stand; --size draws them at random: give one")
-    given = simulate.read_truth(args.truth, mod) if args.truth else None
+    given = simulate.read_truth(args.truth, mod, thermal=args.temperatures is not None) if args.truth else None
     sizes = simulate.parse_sizes(args.size or "1e-4")
     P, f, t, T, values, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
-                                                   sizes, given)
+                                                   sizes, given, args.temperatures)
     names, mount_names = models.layout(mod)
     if not np.all(np.isfinite(f)):
         raise DataError("the simulated readings are not finite (an effect or option too large); nothing written")
@@ -50,7 +68,8 @@ def run(args):
     report.check_writable(truth, "the truth file")
     simulate.write(args.output, P, f, t, T, names, mounts, mount_names)
     hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects) or "none"
-    print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}")
+    print(f"wrote {args.output}: {len(P)} positions, noise within +-{args.sigma:g} g, effects: {hidden}"
+          + (f"; at {', '.join(f'{t:g}' for t in args.temperatures)} C" if args.temperatures else ""))
     report.write_json(truth, {"model": args.model, "plan": args.plan, "sigma": args.sigma, "g": args.g,
                               "seed": args.seed, "effects": {n: list(v) for n, v in effects},
                               "drawn": ({"from": args.truth} if given is not None else
@@ -59,7 +78,8 @@ def run(args):
                               "units": {n: units.get(n, "see the effect catalogue") for n in values},
                               "q": dict(zip(mod.Q_NAMES, models.q_of(mod, [values.get(n, 0.0) for n in
                                                                              mod.PARAMETER_NAMES]).tolist())),
-                              "q_absorbs": list(getattr(mod, "ABSORBED", ()))})
+                              "q_absorbs": list(getattr(mod, "ABSORBED", ())),
+                              "temperatures_c": args.temperatures})
     print(f"wrote {truth}: the hidden truth (parameters, q, effects)")
     return 0
 

@@ -265,3 +265,41 @@ def bounds_before_after(q_names, before, after, target, path, title):
     fig.tight_layout(rect=(0, 0.1, 1, 1))
     save_figure(fig, path)
     plt.close(fig)
+
+
+def thermal(res, path, title):
+    """One panel per q with a temperature polynomial: q(T) - q(T0) over the range with its guaranteed band
+    (the one bound over the range), and the estimate with its own bound at each chamber temperature."""
+    plt = _pyplot()
+    th = res["thermal"]
+    names = list(th["q"])
+    t0, (lo, hi) = th["t0_c"], th["range_c"]
+    cols = min(4, len(names))
+    rows = -(-len(names) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 2.6 * rows), squeeze=False)
+    T = np.linspace(lo, hi, 200)
+    for ax, name in zip(axes.flat, names):
+        c = np.asarray(th["q"][name])
+        unit = res["units"][name]
+        scale, label = (1e6, "ppm") if unit == "1" and not res["definitions"][name].startswith("bias") else \
+            (1e3, "mg") if res["definitions"][name].startswith("bias") else (1e3, f"m{unit}")
+        q = sum(ck * (T - t0) ** k for k, ck in enumerate(c)) - c[0]
+        b = th["bound"][name]
+        ax.fill_between(T, scale * (q - b), scale * (q + b), color="C0", alpha=0.25, label="guaranteed band")
+        ax.plot(T, scale * q, color="C0", lw=1.2, label="estimate")
+        pts = th["at_temperature"][name]
+        ax.errorbar([p["temp_c"] for p in pts], [scale * (p["q"] - c[0]) for p in pts],
+                    yerr=[scale * p["bound"] for p in pts], fmt="o", ms=3, color="C3", capsize=2,
+                    label="at a chamber temperature")
+        ax.set_title(f"{name} = {res['definitions'][name]}", fontsize=8)
+        ax.set_xlabel("T (C)", fontsize=8)
+        ax.set_ylabel(f"q(T) - q({t0} C) ({label})", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(names):]:
+        ax.axis("off")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8, bbox_to_anchor=(0.5, 0))
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)

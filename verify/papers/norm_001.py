@@ -126,8 +126,8 @@ BOXES = {
     "navigation grade": dict(k_max=1e-4, v_max=1e-4, eps_max=1e-4, delta_max=1e-4, df_max=1e-6, dg_max=1e-5),
     "MEMS": dict(k_max=1e-2, v_max=5e-3, eps_max=5e-3, delta_max=1e-3, df_max=1e-4, dg_max=1e-4),
 }
-#: The audit's counterexample to the printed (2.4) in the MEMS box (issue 13): a direction and a vertex
-#: of the box, parameters in the order (lambda_1..3, alpha, beta, gamma, e_1..3, d_1..3, Delta_g/g, u_1..3).
+#: The audit's counterexample to the printed (2.4) in the MEMS box: a direction and a vertex of the box,
+#: parameters in the order (lambda_1..3, alpha, beta, gamma, e_1..3, d_1..3, Delta_g/g, u_1..3).
 COUNTEREXAMPLE_24 = ((-0.5931, -0.5750, 0.5636),
                      (-1e-2, -1e-2, -1e-2, -5e-3, 5e-3, 5e-3, 5e-3, 5e-3, -5e-3, 1e-3, -1e-3, 1e-3, 1e-4,
                       1e-4, 1e-4, -1e-4))
@@ -157,14 +157,14 @@ def remainder_bounds(mod):
                     ours >= found.value)
         expect = "violated" if label == "MEMS" else "not violated by the search"
         got = "violated" if found.value > pub else "not violated by the search"
-        yield Check(f"printed bound (2.4), {label} box", "001, (2.4); audit of issue 13", expect,
+        yield Check(f"printed bound (2.4), {label} box", "001, (2.4); the audit", expect,
                     f"{got}: worst found {found.value:.4e} vs printed {pub:.4e} (x{found.value / pub:.3f})"
                     + (f" at n = ({', '.join(f'{v:+.4f}' for v in found.x)})" if found.value > pub else ""),
                     got == expect)
     m, p = (np.array(v, float)[:, None] for v in COUNTEREXAMPLE_24)
     at = float(np.abs(mod.remainder(m / np.linalg.norm(m), p))[0])
     pub = mod.published_bound(**BOXES["MEMS"])
-    yield Check("printed bound (2.4), MEMS box, at the audit's counterexample", "001, (2.4); audit of issue 13",
+    yield Check("printed bound (2.4), MEMS box, at the audit's counterexample", "001, (2.4); the audit",
                 "|delta_sigma| > (2.4)", f"{at:.4e} vs {pub:.4e} (x{at / pub:.3f})", at > pub)
 
 

@@ -15,10 +15,10 @@ chosen (indistinguishable on the plan); a spurious effect is one chosen that is 
                                                               levels of the part the model cannot absorb
     python -m verify.power --pairs [--sets N] [--net]         two effects at 2 sigma: exactly those two named
     python -m verify.power --clean N                          false alarms of diagnose on N clean sets
-    python -m verify.power --mems                             issue 23, item 0: MEMS-size units, estimate
-    python -m verify.power --mems-stands [--sets N]           issue 23: MEMS-size truths on every built-in stand,
+    python -m verify.power --mems                             MEMS-size units, estimate
+    python -m verify.power --mems-stands [--sets N]           MEMS-size truths on every built-in stand,
                                                               random and adversarial: soundness, non-vacuity
-    python -m verify.power --information [--sets N]           issue 40: what the readings prove against what the
+    python -m verify.power --information [--sets N]           what the readings prove against what the
                                                               plan guarantees, on 10 / 24 / 96 / 288 positions
 """
 import sys
@@ -173,7 +173,7 @@ def clean_alarms(n, stand="two-axis", plan="grid:30x45"):
 
 
 def mems_sets(sets=10, mounting=5e-3, stand=2e-5):
-    """Item 0 of issue 23, per set: (consistent, largest guaranteed error, largest |q - q_true| / bound). A
+    """The MEMS-size study, per set: (consistent, largest guaranteed error, largest |q - q_true| / bound). A
     MEMS-size block (scale errors to 2e-2, misalignments to 1e-2, biases to 0.1 g, mounting to 5e-3 rad) on
     the 30 x 45 degree grid of the two-axis stand, stand errors to 2e-5 rad, g exact with a local --g, noise
     at +-sigma with random signs, the premises' defaults. q_true is that of the unit with the mounting and
@@ -200,7 +200,7 @@ def mems_sets(sets=10, mounting=5e-3, stand=2e-5):
     return rows
 
 
-#: A MEMS-size block (issue 23, item 0): scale errors to 2e-2, misalignments to 1e-2 rad, biases to 0.1 g.
+#: A MEMS-size block: scale errors to 2e-2, misalignments to 1e-2 rad, biases to 0.1 g.
 MEMS_BLOCK = {"scale": 2e-2, "misalignment": 1e-2, "bias": 0.1}
 #: The 3-axis MEMS sweep's stands.
 MEMS_STANDS = ("two-axis", "single-axis", "three-axis")
@@ -224,7 +224,7 @@ def mems_truth(mod, rng, block=MEMS_BLOCK, vertex=False):
 
 
 def mems_grid(mod):
-    """(positions in degrees, mounting index per row or None): the 30 x 45 degree grid on two angles (issue 23),
+    """(positions in degrees, mounting index per row or None): the 30 x 45 degree grid on two angles,
     90 degrees on three, 30 on one (in every mounting)."""
     from .. import models
     names, mounts = models.layout(mod)
@@ -265,7 +265,7 @@ def estimator_weights(mod, P, m, f, nu):
 
 
 def mems_sweep(name, sets=20, seed=2311):
-    """Issue 23's Monte Carlo plus adversarial check on one stand: MEMS-size truths (`mems_truth`), the first half
+    """The Monte Carlo plus adversarial check on one stand: MEMS-size truths (`mems_truth`), the first half
     of the sets drawn inside the box, the rest at its vertices, noise at +-sigma with random signs, then with
     the signs of the estimator of the largest bound (its worst case). Returns (runs, consistent, truths
     outside a printed bound, ratios of each run's largest bound over the same run's with block errors of
@@ -299,13 +299,13 @@ def a_priori(r):
     return np.array(list(r["a_priori"]["guaranteed_error"].values()))
 
 
-#: Issue 40: plans of the study, (label, positions in degrees): the optimal plan of 000 and grids.
+#: The information study's plans, (label, positions in degrees): the optimal plan of 000 and grids.
 INFORMATION_PLANS = (("10 (optimal, Table 2 of 000)", None), ("24 (90 x 60)", (90, 60)), ("96 (30 x 45)", (30, 45)),
                      ("288 (15 x 30)", (15, 30)))
 
 
 def information(sets=5, seed=40):
-    """Issue 40: on the two-axis stand, small units (every error up to 1e-4), noise uniform in +-sigma or
+    """The information study: on the two-axis stand, small units (every error up to 1e-4), noise uniform in +-sigma or
     Gaussian with sd sigma/3 clipped at sigma: per plan and noise, the median over sets and q of the printed
     bound (what the readings prove) over the a-priori one (what the plan guarantees), the median printed bound
     in sigma, and the truths outside a printed bound. Rows (plan, noise, ratio, bound/sigma, outside, runs)."""
@@ -357,7 +357,7 @@ def _option(name, default, kind=int):
 def main():
     """Run the study the options name (module docstring) and print its table."""
     if "--mems" in sys.argv:
-        print(f"MEMS-size units (issue 23, item 0), two-axis stand, 30 x 45 degree grid, sigma = {SIGMA:g}, "
+        print(f"MEMS-size units, two-axis stand, 30 x 45 degree grid, sigma = {SIGMA:g}, "
               "g exact (--g), mounting to 5e-3 rad, stand errors to 2e-5 rad")
         print("  set  verdict     largest guaranteed error  largest |q - q_true| / bound")
         for k, (ok, worst, ratio) in enumerate(mems_sets()):

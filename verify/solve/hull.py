@@ -78,6 +78,9 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
                        np.asarray(start, int))
     h = _model(Bs[S], lo_s[S], hi_s[S])
     Cs = C * dc
+    unit = np.abs(Cs).max(axis=1)                  # each objective handed over at unit size: HiGHS's optimality
+    unit = np.where(unit > 0, unit, 1.0)           # tolerances are absolute (its duals are scaled back below)
+    Cs = Cs / unit[:, None]
     ends = [(k, sign) for k in range(len(C)) for sign in (1.0, -1.0)]
     found = {}                                     # (k, sign) -> (row duals over S as it then was, x), or None
     todo = ends
@@ -110,7 +113,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
         got = found[k, sign]
         if got is not None:
             y = got[0]
-            lam[i, S[:len(y)]] = -y / r[S[:len(y)]]
+            lam[i, S[:len(y)]] = -y * unit[k] / r[S[:len(y)]]
     # lambda = 0 (the column box) is always valid: each end the better of the two proofs
     both = upper(np.vstack([objectives, objectives]), B, row_lo, row_hi, col_lo, col_hi,
                  np.vstack([np.zeros_like(lam), lam])).reshape(2, K, 2)

@@ -119,14 +119,17 @@ def choose_estimator(mod, positions, A):
 PROGRESS_ABOVE = 100_000   # distinct positions: from here on each stage is announced (it takes seconds)
 
 
-def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", premises=None, progress=None):
+def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", premises=None, progress=None,
+             thermal=None):
     """The verdict (are the data consistent with sigma?), then q with guaranteed errors that include
     the proven linearisation remainder (workflows/guarantee.py), and the block's physical errors.
 
     The model is linearised at its exact fit to these data; `premises` (premises.py; default: the
     description's bounds and the defaults, g as given) are what the bounds assume, and the result
     states them. When the data refute sigma, `consistent` is False and no bound is given.
-    `progress(text)`, when given, hears of each stage of a large problem.
+    `progress(text)`, when given, hears of each stage of a large problem. `thermal` (degree, T0): the model
+    is a thermal extension (models.thermal), and the result holds each q's polynomial in T with one bound
+    over the whole range (workflows/thermal.py).
     """
     if not (sigma > 0 and np.isfinite(sigma)):
         raise DataError(f"sigma must be a finite number > 0 (got {sigma:g})")
@@ -194,7 +197,10 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         "warnings": near_prior(lin, q, e) + unrefutable(lin.A, W, mod),
         "premises_refuted": beyond_prior(lin, q, e),
     })
-    if not out["premises_refuted"]:                # else no block split: it rests on the refuted bounds
+    if thermal is not None:
+        from . import thermal as th
+        out["thermal"] = th.summary(mod, v.info, q, e, np.asarray(positions.extra["temp_c"], float), *thermal)
+    elif not out["premises_refuted"]:              # else no block split: it rests on the refuted bounds
         out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
     return out
 

@@ -14,15 +14,26 @@ from .premises import G_DEFAULT, premises as make_premises
 
 
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None, progress=None, bound=None, fmt=None, sections=None):
+             imu=None, which_run=None, progress=None, bound=None, fmt=None, sections=None, temperature=None):
     """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors
     from positions: a CSV path, a means file (with `imu` and `which_run`), a DataFrame or an array
     (`positions_of`). g in m/s^2 (None: 9.81 with the uncertainty of an assumed g); the premises of
     the bounds are in the result. A consistent result with the block's errors holds "calibration",
-    the dictionary `apply` takes. `bound`: {parameter: a-priori bound}, over the description's and `prior`."""
+    the dictionary `apply` takes. `bound`: {parameter: a-priori bound}, over the description's and `prior`.
+    `temperature` D: each block parameter a polynomial of degree D in T (the temp_c column), each q with one
+    bound over the whole range ("thermal"; workflows/thermal.py); no calibration file, which holds none."""
     from . import estimate as est
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
+    thermal = None
+    if temperature is not None:
+        from . import thermal as th
+        if mount:
+            raise DataError(f"{opt('temperature')} and {opt('mount')}: one at a time")
+        base = positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections)
+        T = th.temperatures(base, base.path)
+        thermal = (temperature, th.reference(T, temperature, base.path))
+        mod, remount = models.thermal(model, *thermal), None
     if mount and (remount is None or mount not in remount.MOUNTS):
         raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {mount!r}")
@@ -30,7 +41,7 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
     res = est.estimate(mod, positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections), sigma, prem.g,
                        remount=remount, mount=mount,
-                       gamma=gamma, premises=prem, progress=progress)
+                       gamma=gamma, premises=prem, progress=progress, thermal=thermal)
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
         res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)

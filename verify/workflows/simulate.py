@@ -124,15 +124,25 @@ def parse_sizes(text):
     return out
 
 
-def read_truth(path, mod):
+def thermal_degree(name):
+    """k of a thermal coefficient's name (Gamma11_T2 -> 2, bias3_T1 -> 1; derive/effects.py `thermal`), else 0."""
+    from garant.derive.effects import BLOCK_PARAMETERS
+    base, _, k = name.rpartition("_T")
+    return int(k) if base in BLOCK_PARAMETERS and k in ("1", "2", "3") else 0
+
+
+def read_truth(path, mod, thermal=False):
     """--truth FILE.json: {"parameter name": value, ...} for parameters of the stand (the others 0), each a
-    finite number with |value| < 1 (rad, dimensionless, a bias over g)."""
+    finite number with |value| < 1 (rad, dimensionless, a bias over g); with `thermal` also the coefficients
+    p_Tk of (T - T0)^k of a block parameter p (per C^k)."""
     from ..io import files
     data = files.read_json(path, "a JSON object of parameter values")
     if not isinstance(data, dict):
         raise DataError(f'{path}: expected a JSON object such as {{"kappa": 5e-5, "bias1": 0.05}}')
     for name, v in data.items():
-        if name not in mod.PARAMETER_NAMES:
+        if thermal and thermal_degree(name):
+            pass
+        elif name not in mod.PARAMETER_NAMES:
             raise DataError(f"{path}: {name[:40]!r} is not a parameter of this stand; its parameters: "
                             + ", ".join(mod.PARAMETER_NAMES))
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and abs(v) < 1):
@@ -141,15 +151,27 @@ def read_truth(path, mod):
     return {k: float(v) for k, v in data.items()}
 
 
-def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4, truth=None):
+def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4, truth=None, temperatures=None):
     """Readings at a plan with the given effects and noise bounded by sigma, the stand's own errors drawn at
     random within `size` (a number, or {kind: bound} as parse_sizes gives), or set by `truth` ({name:
-    value}, the others 0)."""
+    value}, the others 0). `temperatures` (C): the plan at each of these chamber temperatures, the truth's
+    thermal coefficients (p_Tk) about the middle of their range."""
     from garant.derive import effects as catalogue
     rng = np.random.default_rng(seed)
-    ext = catalogue.extend(base_model, [n for n, _ in effects])
+    names = [n for n, _ in effects]
+    thermal = {}
+    if temperatures is not None:
+        thermal = {n: v for n, v in (truth or {}).items() if thermal_degree(n)}
+        degree = max(map(thermal_degree, thermal), default=0)
+        if degree:
+            names.append(catalogue.thermal_name(degree, int(round(0.5 * (min(temperatures) + max(temperatures))))))
+    ext = catalogue.extend(base_model, names)
     exact = exact_module(ext)
     P, mounts = plan_positions(mod, plan)
+    if temperatures is not None:
+        n = len(P)
+        P = np.vstack([P] * len(temperatures))
+        mounts = None if mounts is None else np.concatenate([mounts] * len(temperatures))
     sizes = size if isinstance(size, dict) else dict.fromkeys(KINDS, size)
     kinds = dict(zip(mod.PARAMETER_NAMES, getattr(mod, "PARAMETER_KINDS", ("block",) * len(mod.PARAMETER_NAMES))))
     values = {p.name: rng.uniform(-1, 1) * sizes.get(kinds.get(p.name, "block"), 0.0) for p in base_model.parameters}
@@ -157,8 +179,11 @@ def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4, tru
         values = {p.name: truth.get(p.name, 0.0) for p in base_model.parameters}
     for name, vals in effects:
         values.update(zip((p.name for p in catalogue.CATALOGUE[name].params), vals))
-    physical = [values[n] for n in exact.PARAMETER_NAMES]
+    values.update(thermal)
+    physical = [values.get(n, 0.0) for n in exact.PARAMETER_NAMES]
     t, T = rows_time_temp(len(P))
+    if temperatures is not None:
+        T = np.repeat(np.asarray(temperatures, float), n)
     kw = {v: x for v, x in (("time_s", t), ("temp_c", T)) if v in exact.readings.__code__.co_varnames}
     if mounts is not None:
         f = np.column_stack([exact.readings(*np.deg2rad(P[k]), physical, g, mount=int(mounts[k]),

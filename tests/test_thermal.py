@@ -1,0 +1,157 @@
+"""Calibration over temperature: each q a polynomial in T, one guaranteed bound over the whole range, and
+ArduPilot's thermal parameters out."""
+import json
+
+import numpy as np
+import pytest
+
+from garant.verify import models
+from garant.verify.cli import main
+from garant.verify.workflows import thermal
+
+SIGMA, G = 1e-4, 9.81
+TEMPS = (-20.0, 0.0, 20.0, 40.0, 60.0)
+#: A MEMS-size unit: 1.2 % scale, 50 mg bias, biases 1 mg/C and scale factors 100 ppm/C, both quadratic in T.
+MEMS = {"kappa": 2e-5, "epsilon": -1.5e-5, "theta1": 3e-3, "theta2": -2e-3,
+        "Gamma11": 1.2e-2, "Gamma22": -8e-3, "Gamma33": 5e-3, "Gamma21": 4e-3, "Gamma31": -3e-3, "Gamma32": 2e-3,
+        "bias1": 0.05, "bias2": -0.03, "bias3": 0.02,
+        "bias1_T1": 1e-3, "bias2_T1": -1e-3, "bias3_T1": 1e-3, "bias1_T2": 1e-5, "bias2_T2": -1e-5, "bias3_T2": 1e-5,
+        "Gamma11_T1": 1e-4, "Gamma22_T1": -1e-4, "Gamma33_T1": 1e-4,
+        "Gamma11_T2": 1e-6, "Gamma22_T2": 1e-6, "Gamma33_T2": -1e-6}
+
+
+def _write(path, P, f, T):
+    rows = ["alpha_deg,beta_deg,f1,f2,f3,temp_c"] + [",".join(repr(float(x)) for x in (*p, *ff, t))
+                                                     for p, ff, t in zip(P, f, T)]
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def _session(tmp_path, truth, noise):
+    """The two-axis stand's 45 x 90 degree grid at each chamber temperature, the readings of the thermal model
+    (degree 2 about 20 C) with `noise(P, T)` (units of g, within +-SIGMA) added."""
+    mod = models.thermal("two-axis", 2, 20)
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 90)] * len(TEMPS), float)
+    T = np.repeat(TEMPS, len(P) // len(TEMPS))
+    p = [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES]
+    f = mod.readings(*np.deg2rad(P).T, p, G, temp_c=T).T + G * noise(P, T)
+    return mod, _write(tmp_path / "chamber.csv", P, f, T)
+
+
+NOISES = {
+    "uniform": lambda P, T: np.random.default_rng(5).uniform(-SIGMA, SIGMA, (len(P), 3)),
+    "tilting": lambda P, T: SIGMA * np.sign(T - 20.0 + 1e-9)[:, None] * np.ones((1, 3)),       # pushes the slope
+    "bending": lambda P, T: SIGMA * np.sign((T - 20.0) ** 2 - 800.0)[:, None] * np.ones((1, 3)),   # the curvature
+}
+
+
+@pytest.mark.parametrize("noise", NOISES)
+@pytest.mark.parametrize("signs", [1, -1])
+def test_the_bound_over_the_range_holds_at_every_temperature_of_it(tmp_path, noise, signs):
+    """A MEMS-size unit at the extremes of its thermal coefficients (both signs) and noise at +-sigma that
+    tilts or bends the polynomial: |q(T) - q_hat(T)| within the printed bound at every T of [-20, 60] C (401
+    temperatures, the chamber's five among them), for every q with a thermal part. Red if the bound were that
+    of q at T0 alone (the estimate's own guaranteed error), or taken at the chamber temperatures only with the
+    curvature between them left out; and it stays within 1.5x of the worst chamber temperature's own bound
+    (red if the control points were replaced by the box of the coefficients' bounds)."""
+    truth = {k: (signs * v if "_T" in k else v) for k, v in MEMS.items()}
+    mod, data = _session(tmp_path, truth, NOISES[noise])
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+    res = json.loads((tmp_path / "r.json").read_text())
+    th = res["thermal"]
+    assert th["t0_c"] == 20 and th["range_c"] == [-20.0, 60.0] and th["degree"] == 2
+    q_true = models.q_of(mod, [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES])
+    taus = np.linspace(-40.0, 40.0, 401)
+    polys = thermal.polynomials(mod, 2)
+    assert set(polys) == set(th["q"]) and len(polys) == 12            # every block q has its polynomial
+    for name, xs in polys.items():
+        true = sum(tk * (xs[k] @ q_true) for k, tk in enumerate((taus ** 0, taus, taus ** 2)))
+        est = sum(c * taus ** k for k, c in enumerate(th["q"][name]))
+        worst = np.abs(true - est).max()
+        assert worst <= th["bound"][name], (name, worst, th["bound"][name])
+        at = [r["bound"] for r in th["at_temperature"][name]]
+        assert th["bound"][name] <= 1.5 * max(at)        # close to the worst chamber's: the hull of 8 pieces is tight
+        assert th["bound"][name] < 5e-4                                  # and it says something
+    assert th["bound"]["q7"] > res["guaranteed_error"]["q7"]             # T0's own bound would not hold at the ends
+
+
+def test_too_few_temperatures_for_the_degree_are_refused_naming_what_is_missing(tmp_path, capsys):
+    """Two chamber temperatures cannot identify a quadratic: one line naming them and what to add, exit 2."""
+    mod = models.thermal("two-axis", 1, 20)
+    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 90)] * 2, float)
+    T = np.repeat([0.0, 40.0], len(P) // 2)
+    f = mod.readings(*np.deg2rad(P).T, [0.0] * len(mod.PARAMETER_NAMES), G, temp_c=T).T
+    data = _write(tmp_path / "two.csv", P, f, T)
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "2 distinct temperature(s) (0, 40 C) cannot identify a polynomial of degree 2 in T (it needs 3)" in err
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1"]) == 0
+
+
+def _ardupilot(parm, imu=1):
+    """ArduPilot's correction as its Tools/scripts/tempcal_IMU.py states it: P = poly1d of the ACC coefficients
+    (highest first, no constant term, each stored x 1e6), T held within [TMIN, TMAX], about TEMP_REF = 35 C;
+    corrected = raw - (P(T - 35) - P(T_cal - 35))."""
+    values = dict(line.split() for line in parm.splitlines() if line and not line.startswith("#"))
+    tmin, tmax = float(values[f"INS_TCAL{imu}_TMIN"]), float(values[f"INS_TCAL{imu}_TMAX"])
+    polys = [np.poly1d([float(values[f"INS_TCAL{imu}_ACC{p}_{a}"]) / 1e6 for p in (3, 2, 1)] + [0.0]) for a in "XYZ"]
+
+    def correct(raw, T, t_cal):
+        T, t_cal = np.clip(T, tmin, tmax), np.clip(t_cal, tmin, tmax)
+        return raw - np.column_stack([P(T - 35.0) - P(t_cal - 35.0) for P in polys])
+    return correct
+
+
+def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them(tmp_path):
+    """A unit whose biases alone drift with T (quadratic): ArduPilot's own formula with the exported parameters
+    takes each reading to what it was at 20 C, within twice the bias bound over the range plus twice the noise.
+    Red on a sign, the 1e6 scaling or the re-expansion about 35 C missing (the quadratic moves the linear
+    coefficient by 30 mg/C between 20 and 35 C)."""
+    truth = {k: v for k, v in MEMS.items() if not k.startswith("Gamma") or "_T" not in k}
+    mod, data = _session(tmp_path, truth, NOISES["uniform"])
+    parm = tmp_path / "tcal.parm"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--export-ardupilot", str(parm), "--json", str(tmp_path / "r.json")]) == 0
+    text = parm.read_text()
+    assert "INS_TCAL1_ENABLE 1\nINS_TCAL1_TMIN -20.0\nINS_TCAL1_TMAX 60.0\n" in text
+    res = json.loads((tmp_path / "r.json").read_text())
+    bound = G * max(res["thermal"]["bound"][q] for q in ("q7", "q11", "q15"))
+    rows = np.loadtxt(data, delimiter=",", skiprows=1)
+    raw, T = rows[:, 2:5], rows[:, 5]
+    corrected = _ardupilot(text)(raw, T, 20.0)
+    at20 = np.tile(raw[T == 20.0], (len(TEMPS), 1))
+    miss = np.abs(corrected - at20).max()
+    assert miss <= 2 * bound + 2 * G * SIGMA, (miss, bound)
+    assert np.abs(raw - at20).max() > 0.5                                # the drift itself is 60 mg and more
+
+
+def test_thermal_outputs_need_temperature_and_a_calibration_file_is_refused_with_it(tmp_path, capsys):
+    """--export-ardupilot or --thermal-plot without --temperature, or --save with it: one line, exit 2, no file."""
+    data = tmp_path / "d.csv"
+    data.write_text("alpha_deg,beta_deg,f1,f2,f3,temp_c\n0,0,0,0,9.81,20\n")
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--export-ardupilot",
+                 str(tmp_path / "t.parm")]) == 2
+    assert "--export-ardupilot needs --temperature D" in capsys.readouterr().err
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1", "--save",
+                 str(tmp_path / "c.json")]) == 2
+    assert "a calibration file holds no temperature polynomial" in capsys.readouterr().err
+    assert not list(tmp_path.glob("t.parm")) and not list(tmp_path.glob("c.json"))
+
+
+def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
+    """`simulate --temperatures` repeats the plan at each temperature with temp_c set, and the truth's thermal
+    coefficients are what estimate --temperature finds (within its bounds)."""
+    (tmp_path / "t.json").write_text(json.dumps(MEMS))
+    assert main(["simulate", "--model", "two-axis", "--plan", "grid:45x90", "--temperatures=-20,0,20,40,60",
+                 "--truth", str(tmp_path / "t.json"), "--sigma", str(SIGMA), "--seed", "3",
+                 "-o", str(tmp_path / "d.csv")]) == 0
+    rows = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)
+    assert sorted(set(rows[:, -1])) == list(TEMPS) and len(rows) == 5 * 32
+    assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA), "--g", "9.81",
+                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+    th = json.loads((tmp_path / "r.json").read_text())["thermal"]
+    for q, truth in (("q7", (0.05, 1e-3, 1e-5)), ("q11", (-0.03, -1e-3, -1e-5))):
+        worst = max(abs(sum(c * t ** k for k, c in enumerate(th["q"][q]))
+                        - sum(c * t ** k for k, c in enumerate(truth))) for t in np.linspace(-40, 40, 81))
+        assert worst <= th["bound"][q]

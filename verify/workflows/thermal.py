@@ -1,0 +1,130 @@
+"""Calibration over temperature: each q a polynomial in T, one guaranteed bound over the whole range.
+
+The thermal model (derive/effects.py `thermal`) gives every block parameter p (Gamma_ij, bias_i) the
+coefficients p_Tk of (T - T0)^k, k = 1..degree. Each q then has a polynomial
+
+    q(T) = psi(tau)^T q_ext,   psi(tau) = e_q + sum_k tau^k x_k,   tau = T - T0,
+
+with x_k the combination of the extended q that is q's block part with every p replaced by p_Tk (found
+from PHYSICAL_TO_Q, checked exactly). Its error over the information set Q of the estimate, for every
+T in [Tmin, Tmax] at once, is bounded by the Bernstein form: on [a, b], psi(tau) lies in the convex hull
+of its Bernstein control points beta_i, and q -> max over Q of beta^T (q - q_hat) is convex, so
+
+    sup over tau in [a, b] of max over Q |psi(tau)^T (q - q_hat)|  <=  max_i of the ends of beta_i over Q,
+
+each end an LP proven by duality (solve/hull.py through InformationSet.ranges). No T is sampled.
+"""
+from math import comb
+
+import numpy as np
+
+from ..errors import DataError, opt
+
+PIECES = 8          # the range cut into this many pieces, each bounded by its own control points
+ROUND_C = 0.5       # temperatures within this of each other (C) count as one chamber temperature
+
+
+def temperatures(positions, path):
+    """The temp_c column of the positions (C), or DataError naming it."""
+    T = positions.extra.get("temp_c")
+    if T is None:
+        raise DataError(f"{path}: {opt('temperature')} needs a temp_c column (degrees C) in the positions file")
+    T = np.asarray(T, float)
+    if not np.all(np.isfinite(T)) or np.abs(T).max() > 200:
+        raise DataError(f"{path}: temp_c must be finite temperatures within +-200 C")
+    return T
+
+
+def plateaus(T):
+    """The distinct chamber temperatures (C): values within ROUND_C of each other taken as one."""
+    out = []
+    for t in np.sort(T):
+        if not out or t - out[-1][-1] > ROUND_C:
+            out.append([t])
+        else:
+            out[-1].append(t)
+    return np.array([np.mean(g) for g in out])
+
+
+def reference(T, degree, path):
+    """T0 (the middle of the range, whole degrees C); DataError when the temperatures cannot identify the
+    degree (fewer distinct ones than degree + 1)."""
+    levels = plateaus(T)
+    if len(levels) < degree + 1:
+        raise DataError(f"{path}: {len(levels)} distinct temperature(s) ({', '.join(f'{t:g}' for t in levels)} C) "
+                        f"cannot identify a polynomial of degree {degree} in T (it needs {degree + 1}); measure at "
+                        f"{degree + 1 - len(levels)} more temperature(s) or lower {opt('temperature')}")
+    return int(round(0.5 * (T.min() + T.max())))
+
+
+def polynomials(mod, degree):
+    """{q name: (x_0, ..., x_degree)}: q(T) = sum_k tau^k x_k^T q_ext, for every q of the base model that has a
+    block part (x_0 = e_q); the combinations are solved from PHYSICAL_TO_Q and checked to 1e-12."""
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    names = list(mod.PARAMETER_NAMES)
+    thermal = {n for n in names if "_T" in n and n.rsplit("_T", 1)[1].isdigit()}
+    out = {}
+    for j, qname in enumerate(mod.Q_NAMES):
+        used = [names[i] for i in np.flatnonzero(R[j])]
+        if any(n in thermal for n in used):
+            continue
+        block = [n for n in used if f"{n}_T1" in names]
+        if not block:
+            continue
+        xs = [np.eye(len(R))[j]]
+        for k in range(1, degree + 1):
+            r = np.zeros(len(names))
+            for n in block:
+                r[names.index(f"{n}_T{k}")] = R[j, names.index(n)]
+            x, *_ = np.linalg.lstsq(R.T, r, rcond=None)
+            x = np.round(x, 9)
+            if np.abs(R.T @ x - r).max() > 1e-12:
+                break
+            xs.append(x)
+        if len(xs) == degree + 1:
+            out[qname] = tuple(xs)
+    return out
+
+
+def bernstein(xs, a, b):
+    """The Bernstein control points (rows) on [a, b] of psi(tau) = sum_k tau^k xs[k]."""
+    d, h = len(xs) - 1, b - a
+    y = [sum(comb(k, m) * a ** (k - m) * h ** m * xs[k] for k in range(m, d + 1)) for m in range(d + 1)]
+    return np.array([sum(comb(i, m) / comb(d, m) * y[m] for m in range(i + 1)) for i in range(d + 1)])
+
+
+def summary(mod, info, q, e, T, degree, t0):
+    """The thermal part of an estimate: per q its coefficients (lowest first, per C^k), q(T0) and one
+    guaranteed bound over [Tmin, Tmax]; the estimate and bound at each chamber temperature beside it."""
+    polys = polynomials(mod, degree)
+    lo_t, hi_t = float(T.min()), float(T.max())
+    levels = plateaus(T)
+    cuts = np.linspace(lo_t - t0, hi_t - t0, PIECES + 1)
+    q_hat = np.asarray(q, float)
+    reach = np.abs(q_hat) + np.asarray(e, float)
+    coef, bound, at = {}, {}, {}
+    for name, xs in polys.items():
+        X = np.array(xs)
+        coef[name] = (X @ q_hat).tolist()
+        pts = np.vstack([bernstein(xs, a, b) for a, b in zip(cuts[:-1], cuts[1:])])
+        lo, hi = info.ranges(pts)
+        v = pts @ q_hat
+        pad = 1e-12 * (np.abs(pts) @ reach) + 1e-300          # the float rounding of the control points
+        bound[name] = float(np.max(np.maximum(hi - v, v - lo) + pad))
+        taus = levels - t0
+        psi = np.array([sum(t ** k * X[k] for k in range(degree + 1)) for t in taus])
+        lo_l, hi_l = info.ranges(psi)
+        v_l = psi @ q_hat
+        at[name] = [(float(t), float(x), float(max(h - x, x - lo_) * (1 + 1e-12)))
+                    for t, x, lo_, h in zip(levels, v_l, lo_l, hi_l)]
+        # each proof holds; the range's is never printed below a chamber temperature's own (their LPs' rounding)
+        bound[name] = max(bound[name], max(b for _, _, b in at[name]))
+    return {
+        "t0_c": t0, "degree": degree, "range_c": [lo_t, hi_t], "temperatures_c": levels.tolist(),
+        "q": coef, "bound": bound,
+        "units": {name: [mod.Q_UNITS[mod.Q_NAMES.index(name)]] + [f"{mod.Q_UNITS[mod.Q_NAMES.index(name)]}/C^{k}"
+                                                                   for k in range(1, degree + 1)] for name in polys},
+        "at_temperature": {name: [{"temp_c": t, "q": x, "bound": b} for t, x, b in rows] for name, rows in at.items()},
+        "premise": (f"each Gamma_ij and bias_i is a polynomial of degree {degree} in T over [{lo_t:g}, {hi_t:g}] C "
+                    f"(T = temp_c); the bound holds at every T of that range, not beyond it"),
+    }
