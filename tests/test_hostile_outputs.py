@@ -291,3 +291,32 @@ def test_a_file_name_of_nested_mathtext_draws_as_written(tmp_path, capsys):
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--plot",
                  str(tmp_path / "p.png")]) == 0
     assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_every_option_that_names_a_file_to_write_is_checked_as_an_output():
+    """Every option of every command whose metavar names a file or folder to write (FILE.png, FILE.parm, DIR,
+    CAL.json of --save, ...) is in cli.OUTPUTS, so it is never taken for an input and never written over one.
+    Red when a new output option is added without its entry (--thermal-plot was taken for an input: a second
+    run refused to replace the first run's plot)."""
+    from garant.verify import cli
+    outputs = {attr for attr, _, _ in cli.OUTPUTS}
+    writes = ("plot", "json", "output", "report", "certificates", "out", "save", "csv", "markdown")
+    missing = []
+    for name, sub in cli.parser()._subparsers._group_actions[0].choices.items():
+        for action in sub._actions:
+            dest = action.dest
+            if (dest in writes or dest.startswith("export_") or dest.endswith("_plot")) and dest not in outputs:
+                missing.append(f"{name} --{dest.replace('_', '-')}")
+    assert not missing, missing
+
+
+def test_the_thermal_outputs_never_replace_an_input(tmp_path, capsys):
+    """--thermal-plot or --export-ardupilot naming the positions file: one line, exit 2, the file unchanged."""
+    data = tmp_path / "d.csv"
+    data.write_text("alpha_deg,beta_deg,f1,f2,f3,temp_c\n0,0,0,0,9.81,20\n")
+    before = data.read_bytes()
+    for option in ("--thermal-plot", "--export-ardupilot"):
+        assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1",
+                     option, str(data)]) == 2
+        assert "would be written over an input of this command" in capsys.readouterr().err
+    assert data.read_bytes() == before

@@ -216,6 +216,9 @@ def print_thermal(res, args):
           + f", one guaranteed bound over [{lo:g}, {hi:g}] C ({len(th['temperatures_c'])} chamber temperatures: "
           + ", ".join(f"{t:g}" for t in th["temperatures_c"]) + " C)")
     print(f"premise: {th['premise']}")
+    constant = [q for q, dfn in res["definitions"].items() if q not in th["q"] and "_T" not in dfn]
+    if constant:
+        print(f"constant in T (no block parameter in them; their bounds above): {', '.join(constant)}")
     report.table(("q", "definition", *(f"c{k}" for k in range(d + 1)), "bound over range", "largest at a T", "unit"),
                  [(q, res["definitions"][q], *(f"{c:+.4e}" for c in th["q"][q]), f"{th['bound'][q]:.3e}",
                    f"{max(r['bound'] for r in th['at_temperature'][q]):.3e}", res["units"][q])
