@@ -155,3 +155,34 @@ def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
         worst = max(abs(sum(c * t ** k for k, c in enumerate(th["q"][q]))
                         - sum(c * t ** k for k, c in enumerate(truth))) for t in np.linspace(-40, 40, 81))
         assert worst <= th["bound"][q]
+
+
+def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coefficient(tmp_path, capsys):
+    """`plan --temperatures`: 3 positions per temperature at five temperatures identify the 39 q of the quadratic
+    thermal two-axis model, proven fewest by counting (2 x 3 readings x 5 temperatures = 30 < 39); estimate on
+    readings there identifies every q and holds the truth, and without any one of the positions it cannot.
+    Red if the plan missed a coefficient, or if a position of it were idle."""
+    assert main(["plan", "two-axis", "--temperatures=-20,0,20,40,60", "--csv", str(tmp_path / "p.csv"),
+                 "--json", str(tmp_path / "p.json")]) == 0
+    out = capsys.readouterr().out
+    assert "3 position(s) per temperature identify every q" in out and "the fewest, proven" in out
+    d = json.loads((tmp_path / "p.json").read_text())
+    assert d["per_temperature"] == d["lower_bound"] == 3 and d["proven_fewest"]
+    rows = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1)
+    assert max(np.bincount(np.searchsorted(TEMPS, rows[:, 2]))) == 3 and len(set(rows[:, 2])) == 5
+    mod = models.thermal("two-axis", 2, 20)
+    p = [MEMS.get(n, 0.0) for n in mod.PARAMETER_NAMES]
+    f = mod.readings(*np.deg2rad(rows[:, :2]).T, p, G, temp_c=rows[:, 2]).T
+    _write(tmp_path / "d.csv", rows[:, :2], f, rows[:, 2])
+    assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+    res = json.loads((tmp_path / "r.json").read_text())
+    q_true = models.q_of(mod, p)
+    q, e = (np.array([res[k][n] for n in mod.Q_NAMES]) for k in ("q", "guaranteed_error"))
+    assert np.all(np.abs(q - q_true) <= e)
+    for drop in range(len(rows)):
+        keep = np.arange(len(rows)) != drop
+        _write(tmp_path / "d.csv", rows[keep, :2], f[keep], rows[keep, 2])
+        assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA),
+                     "--temperature", "2"]) == 2
+        assert "cannot identify" in capsys.readouterr().err

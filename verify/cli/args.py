@@ -13,6 +13,20 @@ positive, small, noise, positive_int, seed, gravity, rate = (
                                 checks.gravity, checks.rate))
 
 
+def temperatures(text):
+    """T1,T2,...: two to twenty distinct temperatures within +-200 C."""
+    import argparse
+    import math
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:60]!r}: give temperatures in C, e.g. -20,0,20,40,60") from None
+    if not (2 <= len(values) <= 20 and len(set(values)) == len(values)
+            and all(math.isfinite(v) and abs(v) <= 200 for v in values)):
+        raise argparse.ArgumentTypeError(f"{text[:60]!r}: two to twenty distinct temperatures within +-200 C")
+    return values
+
+
 def model(p, *, positional=False):
     """--model (or a positional MODEL): a built-in stand or a STAND.toml."""
     help_ = f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml"

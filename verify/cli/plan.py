@@ -40,11 +40,21 @@ def add(sub):
                    "(in the route's order with --route): arrows on the unit sphere, the faces that point up")
     p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
+    p.add_argument("--temperatures", type=options.temperatures, metavar="T1,T2,...",
+                   help="chamber temperatures (C; write --temperatures=-20,...): which positions at which temperature "
+                        "identify every coefficient of the thermal model (--temperature D), the fewest per temperature")
+    p.add_argument("--temperature", type=int, choices=(1, 2, 3), metavar="D",
+                   help="with --temperatures: the degree of each block parameter's polynomial in T (default 2, or one "
+                        "less than the temperatures given)")
     return p
 
 
 def run(args):
     """`garant plan`: parse, call the job, print; the exit status."""
+    if args.temperature is not None and args.temperatures is None:
+        raise DataError("--temperature D applies with --temperatures T1,T2,...")
+    if args.temperatures is not None:
+        return run_thermal(args)
     if args.model == "norm":
         given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates),
                                     ("--route", args.route or None)) if v is not None]
@@ -215,3 +225,42 @@ def _plot(mod, d, args):
     plots.plan_directions(U, args.plot, f"garant plan {args.model}: {len(positions)} positions"
                           + (" in the route's order" if args.route else ""))
     print(f"wrote {args.plot}")
+
+
+def run_thermal(args):
+    """`plan --temperatures`: the positions at each chamber temperature that identify every coefficient of
+    the thermal model (workflows/thermal.py `plan`), the fewest per temperature, and whether that is proven."""
+    from .. import models
+    from ..io import report
+    from ..workflows import thermal
+    other = [o for o, v in (("--grid", args.grid), ("--certificates", args.certificates),
+                            ("--route", args.route or None), ("--plot", args.plot)) if v is not None]
+    if other or args.model not in models.STANDS and not str(args.model).endswith(".toml"):
+        raise DataError(f"--temperatures takes a stand ({', '.join(models.STANDS)} or a STAND.toml)"
+                        + (f" and not {', '.join(other)}" if other else ""))
+    degree = args.temperature if args.temperature is not None else min(2, len(args.temperatures) - 1)
+    plan, per, lower, mod = thermal.plan(args.model, args.temperatures, degree)
+    names, mounts = models.layout(mod)
+    multi = len(mounts) > 1
+    total = sum(len(v) for v in plan.values())
+    print(f"thermal model: each block parameter a polynomial of degree {degree} in T (about "
+          f"{int(round(0.5 * (min(args.temperatures) + max(args.temperatures))))} C): {len(mod.Q_NAMES)} q to identify")
+    print(f"{per} position(s) per temperature identify every q ({total} in all): "
+          + ("the fewest, proven (3 readings a position: " if per == lower else "found; fewer are not excluded (the "
+             "counting bound is ") + f"at least {len(mod.Q_NAMES)} / (3 x {len(plan)}) = {lower} per temperature)")
+    rows = [[*pos, *([mounts[m]] if multi else []), t] for t, ps in plan.items() for pos, m in ps]
+    report.table([f"{a}_deg" for a in names] + (["mount"] if multi else []) + ["temp_c"],
+                 [[f"{x:g}" for x in r[:len(names)]] + r[len(names):-1] + [f"{r[-1]:g}"] for r in rows])
+    print("each q identified: every coefficient has an unbiased estimator on these readings; the guaranteed errors "
+          "of so few positions are large: `garant plan` at each temperature gives the optimal ones")
+    if args.json:
+        report.write_json(args.json, {"model": args.model, "degree": degree, "temperatures_c": args.temperatures,
+                                      "per_temperature": per, "lower_bound": lower, "proven_fewest": per == lower,
+                                      "plan": {f"{t:g}": [{"angles_deg": list(pos), **({"mount": mounts[m]} if multi
+                                                                                      else {})} for pos, m in ps]
+                                               for t, ps in plan.items()}})
+    if args.csv:
+        header = [f"{a}_deg" for a in names] + (["mount"] if multi else []) + ["temp_c"]
+        report.write_text(args.csv, "\n".join(",".join(str(c) for c in r) for r in [header, *rows]) + "\n")
+        print(f"wrote {args.csv}")
+    return 0

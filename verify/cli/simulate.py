@@ -19,26 +19,13 @@ def add(sub):
     p.add_argument("--truth", metavar="FILE.json",
                    help='the stand\'s errors by name instead of random ones, e.g. {"kappa": 5e-5, "Gamma11": 1.2e-2, '
                         '"bias1": 0.05} (rad, dimensionless, a bias over g); the others 0')
-    p.add_argument("--temperatures", type=_temperatures, metavar="T1,T2,...",
+    p.add_argument("--temperatures", type=options.temperatures, metavar="T1,T2,...",
                    help="chamber temperatures (C): the plan at each, temp_c set to it; --truth may then name thermal "
                         "coefficients p_Tk of a block parameter p (e.g. bias1_T1, Gamma11_T2: per C^k about the middle "
                         "of the temperatures)")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
 
-
-def _temperatures(text):
-    """T1,T2,...: two to twenty distinct temperatures within +-200 C."""
-    import argparse
-    import math
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text[:60]!r}: give temperatures in C, e.g. -20,0,20,40,60") from None
-    if not (2 <= len(values) <= 20 and len(set(values)) == len(values)
-            and all(math.isfinite(v) and abs(v) <= 200 for v in values)):
-        raise argparse.ArgumentTypeError(f"{text[:60]!r}: two to twenty distinct temperatures within +-200 C")
-    return values
 
 
 def run(args):

@@ -128,3 +128,54 @@ def summary(mod, info, q, e, T, degree, t0):
         "premise": (f"each Gamma_ij and bias_i is a polynomial of degree {degree} in T over [{lo_t:g}, {hi_t:g}] C "
                     f"(T = temp_c); the bound holds at every T of that range, not beyond it"),
     }
+
+
+def plan(model, temperatures, degree):
+    """Which positions at which chamber temperatures identify every coefficient of the thermal model: the
+    candidate positions of the stand (detents or quarter turns, every mounting) at each temperature, added
+    one temperature at a time, each time the position that raises the rank the most (ties: the first), until
+    every q is identified. Returns the plan {temperature: [(angles in degrees, mounting index)]}, the positions
+    per temperature it needed, the counting lower bound (3 readings a position: at least q / (3 n) per
+    temperature) and the model."""
+    from .. import models
+    from ..solve import lp, plans
+    temps = [float(t) for t in temperatures]
+    if len(temps) < degree + 1:
+        raise DataError(f"{len(temps)} temperature(s) cannot identify a polynomial of degree {degree} in T (it needs "
+                        f"{degree + 1}); give more with {opt('temperatures')} or lower {opt('temperature')}")
+    t0 = int(round(0.5 * (min(temps) + max(temps))))
+    mod = models.thermal(model, degree, t0)
+    P, M = plans.grid(mod)
+    nq = len(mod.Q_NAMES)
+    blocks = [lp.measurement_matrix(mod, np.deg2rad(P), M, [np.full(len(P), t)]).T.reshape(len(P), 3, nq)
+              for t in temps]
+    chosen = {j: [] for j in range(len(temps))}
+    rows = np.zeros((0, nq))
+    scale = max(float(np.abs(b).max()) for b in blocks)
+    rank = 0
+    while rank < nq:
+        moved = False
+        for j in range(len(temps)):
+            if rank == nq or len(chosen[j]) == len(P):
+                continue
+            best, best_rank = None, rank
+            for i in range(len(P)):
+                if i in chosen[j]:
+                    continue
+                r = np.linalg.matrix_rank(np.vstack([rows, blocks[j][i]]), tol=1e-9 * scale)
+                if r > best_rank:
+                    best, best_rank = i, r
+            if best is not None:
+                chosen[j].append(best)
+                rows, rank, moved = np.vstack([rows, blocks[j][best]]), best_rank, True
+        if not moved:
+            break
+    A = np.vstack([blocks[j][i] for j in chosen for i in chosen[j]]).T
+    missing = lp.unidentifiable(A)
+    if missing:
+        raise DataError(f"the stand's positions at {len(temps)} temperatures cannot identify "
+                        + ", ".join(f"{mod.Q_NAMES[k]} ({mod.Q_DEFINITIONS[k]})" for k in missing[:6]))
+    per = max(len(c) for c in chosen.values())
+    lower = -(-nq // (3 * len(temps)))
+    out = {t: [(tuple(float(a) for a in P[i]), int(M[i])) for i in sorted(chosen[j])] for j, t in enumerate(temps)}
+    return out, per, lower, mod
