@@ -186,3 +186,42 @@ def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coe
         assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA),
                      "--temperature", "2"]) == 2
         assert "cannot identify" in capsys.readouterr().err
+
+
+def _px4(params, instance=0):
+    """PX4's correction as its sensor-thermal-calibration guide states it: d = T - TREF (T held within [TMIN,
+    TMAX]), offset = X0 + X1 d + X2 d^2 + X3 d^3, corrected = (raw - offset) * SCL, per axis."""
+    values = {line.split("\t")[2]: float(line.split("\t")[3]) for line in params.splitlines()
+              if line and not line.startswith("#")}
+    a = f"TC_A{instance}"
+
+    def correct(raw, T):
+        d = np.clip(T, values[f"{a}_TMIN"], values[f"{a}_TMAX"]) - values[f"{a}_TREF"]
+        offset = np.column_stack([sum(values[f"{a}_X{n}_{i}"] * d ** n for n in range(4)) for i in range(3)])
+        return (raw - offset) * np.array([values[f"{a}_SCL_{i}"] for i in range(3)])
+    return correct, values
+
+
+def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(tmp_path):
+    """A unit whose biases alone drift with T: PX4's own formula with the exported TC_A0_* takes each reading to
+    its value at TREF within twice the bias bound plus twice the noise (scaled by SCL), and SCL is 1 / (1 + the
+    scale q) within that q's bound. Red on a sign, X0 left out, the polynomial about the wrong TREF or SCL
+    inverted."""
+    truth = {k: v for k, v in MEMS.items() if not k.startswith("Gamma") or "_T" not in k}
+    mod, data = _session(tmp_path, truth, NOISES["uniform"])
+    out = tmp_path / "tc.params"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--export-px4", str(out), "--json", str(tmp_path / "r.json")]) == 0
+    correct, values = _px4(out.read_text())
+    res = json.loads((tmp_path / "r.json").read_text())
+    assert values["TC_A_ENABLE"] == 1 and values["TC_A0_TREF"] == 20 and values["TC_A0_TMAX"] == 60
+    rows = np.loadtxt(data, delimiter=",", skiprows=1)
+    raw, T = rows[:, 2:5], rows[:, 5]
+    got = correct(raw, T)
+    at_ref = np.tile(got[T == 20.0], (len(TEMPS), 1))
+    bound = G * max(res["thermal"]["bound"][q] for q in ("q7", "q11", "q15"))
+    assert np.abs(got - at_ref).max() <= 1.02 * (2 * bound + 2 * G * SIGMA)
+    q_true = models.q_of(mod, [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES])
+    for i, q in enumerate(("q5", "q10", "q14")):                        # Gamma_ii - Delta_g
+        k = mod.Q_NAMES.index(q)
+        assert abs(values[f"TC_A0_SCL_{i}"] - 1 / (1 + q_true[k])) <= 1.1 * res["guaranteed_error"][q]

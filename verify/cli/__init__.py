@@ -32,7 +32,8 @@ OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("
            ("csv", "the plan file", "file"), ("export_kalibr", "the Kalibr YAML", "file"),
            ("export_imucal", "the imucal calibration file", "file"),
            ("markdown", "the Markdown file", "file"), ("thermal_plot", "the thermal plot", "file"),
-           ("export_ardupilot", "the ArduPilot parameter file", "file"))
+           ("export_ardupilot", "the ArduPilot parameter file", "file"),
+           ("export_px4", "the PX4 parameter file", "file"))
 
 
 class _Parser(argparse.ArgumentParser):

@@ -45,6 +45,10 @@ def add(sub):
                    "parameters (TMIN, TMAX, the accelerometer offset polynomial ACC1-3 about 35 C, x 1e6)")
     p.add_argument("--ardupilot-imu", type=int, choices=(1, 2, 3), default=1, metavar="N",
                    help="the IMU the ArduPilot parameters are for (INS_TCALN_*; default 1)")
+    p.add_argument("--export-px4", metavar="FILE.params", help="with --temperature: PX4's TC_A* parameters "
+                   "(QGroundControl's .params: TREF, TMIN, TMAX, the offset polynomial X0-X3 and SCL per axis)")
+    p.add_argument("--px4-instance", type=int, choices=(0, 1, 2), default=0, metavar="N",
+                   help="the accelerometer instance the PX4 parameters are for (TC_AN_*; default 0)")
     return p
 
 
@@ -53,14 +57,15 @@ def run(args):
     from .. import models
     from ..io import report
     from ..workflows import jobs
-    thermal_only = [o for o, v in (("--thermal-plot", args.thermal_plot), ("--export-ardupilot", args.export_ardupilot))
-                    if v]
+    thermal_only = [o for o, v in (("--thermal-plot", args.thermal_plot), ("--export-ardupilot", args.export_ardupilot),
+                                   ("--export-px4", args.export_px4)) if v]
     if thermal_only and args.temperature is None:
         raise DataError(f"{thermal_only[0]} needs --temperature D")
     wanted = args.save or args.export_imu_tk or args.export_imucal
     if wanted and args.temperature is not None:
         raise DataError("--save/--export-imu-tk/--export-imucal: a calibration file holds no temperature polynomial; "
-                        "with --temperature the thermal calibration is in --json (thermal) and --export-ardupilot")
+                        "with --temperature the thermal calibration is in --json (thermal), --export-ardupilot and "
+                        "--export-px4")
     res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
                         args.gamma, args.imu, args.which_run,
                         progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True),
@@ -230,10 +235,12 @@ def print_thermal(res, args):
         from ..io import plots
         plots.thermal(res, args.thermal_plot, f"{args.data}: q(T) with its guaranteed band")
         print(f"wrote {args.thermal_plot}")
-    if args.export_ardupilot:
-        from ..io import ardupilot
-        ardupilot.write(args.export_ardupilot, res, args.ardupilot_imu)
-        print(f"wrote {args.export_ardupilot}")
+    from ..io import tcal
+    for path, write, which in ((args.export_ardupilot, tcal.write, args.ardupilot_imu),
+                               (args.export_px4, tcal.write_px4, args.px4_instance)):
+        if path:
+            write(path, res, which)
+            print(f"wrote {path}")
 
 
 def print_refuted(refuted, command):
