@@ -60,6 +60,9 @@ CATALOGUE = {e.name: e for e in (
     Effect("bias_temperature", "f_i += g T_i (T - 20 C) (bias temperature coefficient; T = column temp_c)",
            _per_axis("T_", "T", "1/degC", "bias temperature coefficient over g"),
            term=lambda w, s: sp.Matrix([s[f"T_{i + 1}"] * (TEMP - 20) for i in range(3)])),
+    Effect("scale_temperature", "f_i += S_i (T - 20 C) w_i (scale-factor temperature coefficient; T = column temp_c)",
+           _per_axis("S_", "S", "1/degC", "scale-factor temperature coefficient"),
+           term=lambda w, s: sp.Matrix([s[f"S_{i + 1}"] * (TEMP - 20) * w[i] for i in range(3)])),
 )}
 
 

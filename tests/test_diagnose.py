@@ -15,7 +15,7 @@ from garant.verify.workflows.premises import premises
 S = 1e-5
 # Parameter scale that makes a value of k mean "k sigma" of effect on z (time up to ~96 min,
 # temperature within about +-4.5 C of 20 C in simulated rows).
-SCALE = {"bias_drift": 1 / 5760, "bias_temperature": 1 / 4.0}
+SCALE = {"bias_drift": 1 / 5760, "bias_temperature": 1 / 4.0, "scale_temperature": 1 / 4.0}
 
 
 def run(tmp_path, plan, effects, seed):

@@ -225,3 +225,20 @@ def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(tmp_path):
     for i, q in enumerate(("q5", "q10", "q14")):                        # Gamma_ii - Delta_g
         k = mod.Q_NAMES.index(q)
         assert abs(values[f"TC_A0_SCL_{i}"] - 1 / (1 + q_true[k])) <= 1.1 * res["guaranteed_error"][q]
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_needs(tmp_path, degree):
+    """diagnose's thermal step (workflows/thermal.degree_needed, on estimate --temperature D): a unit whose
+    biases and scale factors are linear in T needs degree 1, one with a quadratic part degree 2 (degree 1 is
+    then refuted by the data). Red if a degree were taken as consistent without its verdict, or the scan
+    stopped at the first degree."""
+    from garant.verify.workflows import jobs
+    truth = {k: v for k, v in MEMS.items() if degree == 2 or not k.endswith("_T2")}
+    _, data = _session(tmp_path, truth, NOISES["uniform"])
+    positions = jobs.positions_of(models.load("two-axis"), str(data))
+    levels = thermal.chamber_levels(positions)
+    assert levels == list(TEMPS)
+    found = thermal.degree_needed(levels, lambda d: jobs.estimate("two-axis", str(data), SIGMA, G, temperature=d))
+    assert found["needed"] == degree
+    assert [t["consistent"] for t in found["tried"]] == [False] * (degree - 1) + [True]

@@ -43,6 +43,13 @@ def run(args):
     for h in res["history"]:
         print(f"step {h['step']}: " + ", ".join(f"{e} {v / args.sigma:.2f}" for e, v in
                                                sorted(h["scores"].items(), key=lambda kv: kv[1])))
+    if res.get("thermal_degree"):
+        td = res["thermal_degree"]
+        print("chamber temperatures: " + "; ".join(
+            f"degree {t['degree']} in T: " + ("consistent" if t["consistent"] else "not identified" if
+                                               t["consistent"] is None else "INCONSISTENT") for t in td["tried"])
+              + (f" -> each block parameter needs a polynomial of degree {td['needed']} in T: garant estimate ... "
+                 f"--temperature {td['needed']}" if td["needed"] else " -> no degree up to 3 makes them consistent"))
     if res["effects"]:
         print("added: " + ", ".join(res["effects"]))
         report.table(("parameter", "estimate", "guaranteed error", "unit", "combination"),

@@ -207,8 +207,15 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=N
     mod = models.load(model)
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
-    res = diagnosis.diagnose(models.stand_model(model), mod, positions_of(mod, data), sigma, prem)
+    positions = positions_of(mod, data)
+    res = diagnosis.diagnose(models.stand_model(model), mod, positions, sigma, prem)
     study = res.pop("_study")
+    if not res["consistent_before"] and (model in models.STANDS or str(model).endswith(".toml")):
+        from . import thermal
+        levels = thermal.chamber_levels(positions)
+        if len(levels) >= 2:                       # a chamber session: the degree in T its data need
+            res["thermal_degree"] = thermal.degree_needed(
+                levels, lambda d: estimate(model, data, sigma, g, g_uncertainty, prior, bound=bound, temperature=d))
     out = results.Diagnosis(res)
     out.study = study
     return out

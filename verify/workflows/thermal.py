@@ -46,6 +46,36 @@ def plateaus(T):
     return np.array([np.mean(g) for g in out])
 
 
+CHAMBER_POSITIONS = 3   # a chamber temperature holds at least this many positions (a drifting room holds one each)
+
+
+def chamber_levels(positions):
+    """The chamber temperatures of a positions file (C): plateaus holding CHAMBER_POSITIONS or more positions;
+    empty without a temp_c column."""
+    T = positions.extra.get("temp_c")
+    if T is None:
+        return []
+    T = np.asarray(T, float)
+    return [t for t in plateaus(T) if np.count_nonzero(np.abs(T - t) <= ROUND_C) >= CHAMBER_POSITIONS]
+
+
+def degree_needed(levels, estimate):
+    """The least degree D (1 to 3, at most the chamber temperatures less one) whose thermal model the data
+    are consistent with (`estimate(D)` a result of estimate --temperature D), and each degree tried:
+    {"tried": [(D, consistent)], "needed": D or None}."""
+    tried = []
+    for degree in range(1, min(3, len(levels) - 1) + 1):
+        try:
+            ok = bool(estimate(degree)["consistent"])
+        except DataError as e:                    # the degree not identified: said, and the next one tried
+            tried.append({"degree": degree, "consistent": None, "why": str(e)})
+            continue
+        tried.append({"degree": degree, "consistent": ok})
+        if ok:
+            return {"tried": tried, "needed": degree}
+    return {"tried": tried, "needed": None}
+
+
 def reference(T, degree, path):
     """T0 (the middle of the range, whole degrees C); DataError when the temperatures cannot identify the
     degree (fewer distinct ones than degree + 1)."""
