@@ -127,16 +127,16 @@ def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them
 
 
 def test_thermal_outputs_need_temperature_and_a_calibration_file_is_refused_with_it(tmp_path, capsys):
-    """--export-ardupilot or --thermal-plot without --temperature, or --save with it: one line, exit 2, no file."""
+    """--export-ardupilot or --thermal-plot without --temperature, or --export-imu-tk with it: one line, exit 2."""
     data = tmp_path / "d.csv"
     data.write_text("alpha_deg,beta_deg,f1,f2,f3,temp_c\n0,0,0,0,9.81,20\n")
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--export-ardupilot",
                  str(tmp_path / "t.parm")]) == 2
     assert "--export-ardupilot needs --temperature D" in capsys.readouterr().err
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1", "--save",
-                 str(tmp_path / "c.json")]) == 2
-    assert "a calibration file holds no temperature polynomial" in capsys.readouterr().err
-    assert not list(tmp_path.glob("t.parm")) and not list(tmp_path.glob("c.json"))
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1",
+                 "--export-imu-tk", str(tmp_path / "c.txt")]) == 2
+    assert "--export-imu-tk/--export-imucal: those files hold no temperature polynomial" in capsys.readouterr().err
+    assert not list(tmp_path.glob("t.parm")) and not list(tmp_path.glob("c.txt"))
 
 
 def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
@@ -242,3 +242,44 @@ def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_n
     found = thermal.degree_needed(levels, lambda d: jobs.estimate("two-axis", str(data), SIGMA, G, temperature=d))
     assert found["needed"] == degree
     assert [t["consistent"] for t in found["tried"]] == [False] * (degree - 1) + [True]
+
+
+def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_path, capsys):
+    """`estimate --temperature 2 --save` holds the block at T0 and its polynomial in T; `apply` on a log with a
+    temp_c column corrects each sample at its own temperature: every component within its per-sample bound of
+    the true specific force (the readings of a block without errors), at 2,000 random positions and
+    temperatures of the range. Red if apply took the calibration at T0 for every sample (the biases drift by
+    up to 40 mg, 8x the bound), or left the drift's own bound out. A sample beyond the range, or a log without
+    temperatures, is refused in one line."""
+    mod, data = _session(tmp_path, MEMS, NOISES["uniform"])
+    cal = tmp_path / "cal.json"
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--save", str(cal)]) == 0
+    assert json.loads(cal.read_text())["thermal"]["range_c"] == [-20.0, 60.0]
+    rng = np.random.default_rng(1)
+    n = 2000
+    angles, T = rng.uniform(0, 360, (n, 2)), rng.uniform(-20, 60, n)
+    p = [MEMS.get(k, 0.0) for k in mod.PARAMETER_NAMES]
+    ideal = [0.0 if k.startswith(("Gamma", "bias")) else v for k, v in zip(mod.PARAMETER_NAMES, p)]
+    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T + G * rng.uniform(-SIGMA, SIGMA, (n, 3))
+    a_true = mod.readings(*np.deg2rad(angles).T, ideal, G, temp_c=T).T
+    log = tmp_path / "log.csv"
+    np.savetxt(log, np.column_stack([np.arange(n) * 0.01, f, T]), delimiter=",", header="time_s,ax,ay,az,temp_c",
+               comments="", fmt="%.12g")
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c.csv")]) == 0
+    out = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1)
+    assert np.all(np.abs(out[:, 1:4] - a_true) <= out[:, 4:7])
+    assert np.abs(f - a_true).max() > 8 * out[:, 4:7].max()             # uncorrected, far outside
+    T[7] = 61.0
+    np.savetxt(log, np.column_stack([np.arange(n) * 0.01, f, T]), delimiter=",", header="time_s,ax,ay,az,temp_c",
+               comments="", fmt="%.12g")
+    capsys.readouterr()
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c2.csv")]) == 2
+    assert "1 sample(s) at temperatures outside the calibrated range [-20, 60] C (the first, sample 8" in \
+        capsys.readouterr().err
+    np.savetxt(log, np.column_stack([np.arange(n) * 0.01, f]), delimiter=",", header="time_s,ax,ay,az",
+               comments="", fmt="%.12g")
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c2.csv")]) == 2
+    assert "the calibration holds a temperature polynomial; the log needs each sample's temperature" in \
+        capsys.readouterr().err
+    assert not (tmp_path / "c2.csv").exists()

@@ -62,9 +62,9 @@ def run(args):
     if thermal_only and args.temperature is None:
         raise DataError(f"{thermal_only[0]} needs --temperature D")
     wanted = args.save or args.export_imu_tk or args.export_imucal
-    if wanted and args.temperature is not None:
-        raise DataError("--save/--export-imu-tk/--export-imucal: a calibration file holds no temperature polynomial; "
-                        "with --temperature the thermal calibration is in --json (thermal), --export-ardupilot and "
+    if (args.export_imu_tk or args.export_imucal) and args.temperature is not None:
+        raise DataError("--export-imu-tk/--export-imucal: those files hold no temperature polynomial; with "
+                        "--temperature give --save (garant's calibration, which holds it), --export-ardupilot or "
                         "--export-px4")
     res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
                         args.gamma, args.imu, args.which_run,

@@ -108,8 +108,7 @@ def from_block(res):
     blk, prem = res["block"], res["premises"]
     G, g = np.asarray(blk["Gamma"]), res["g"]
     gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
-    M, B, eb = through_M(G, np.asarray(blk["Gamma_bound"]) + (prem["g_uncertainty"] * np.eye(3) if gravity else 0.0),
-                         g * np.asarray(blk["bias_bound"]))
+    M, B, eb = through_M(G, _gamma_bound(res), g * np.asarray(blk["bias_bound"]))
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
             "M": M.tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
             "bound_matrix": B.tolist(), "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
@@ -119,6 +118,46 @@ def from_block(res):
                         ", and on its diagonal the uncertainty of g)" if gravity else ")")
                     + ", bound_bias = |M| (the bounds of the biases)",
             "premises": " ".join(filter(None, (prem["statement"] + ".", prem.get("meaning"))))}
+
+
+BLOCK_NAMES = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
+
+
+def _gamma_bound(res):
+    """The bound of the block's Gamma at the estimate, with the uncertainty of g on its diagonal where the block
+    absorbs Delta_g."""
+    prem = res["premises"]
+    gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
+    return np.asarray(res["block"]["Gamma_bound"], float) + (prem["g_uncertainty"] * np.eye(3) if gravity else 0.0)
+
+
+def thermal_section(res):
+    """The `thermal` field of a calibration from an estimate --temperature: each Gamma_ij and bias_i (m/s^2) as
+    a polynomial in T - t0 (the coefficients k = 1..degree; k = 0 is the file's M and b), the bounds of the
+    drift part q(T) - q(t0) over the range (each over the information set), and the bounds at t0 apply adds
+    them to. A q that holds one block parameter with coefficient 1 carries its polynomial."""
+    import re
+    th, g, blk = res["thermal"], res["g"], res["block"]
+    owner = {}
+    for q, d in res["definitions"].items():
+        if q not in th["q"]:
+            continue
+        terms = re.findall(r"([+-]?)\s*([A-Za-z_]\w*)", d)
+        block = [(sign, name) for sign, name in terms if name in BLOCK_NAMES]
+        if len(block) == 1 and block[0][0] in ("", "+"):
+            owner[block[0][1]] = q
+    missing = [n for n in BLOCK_NAMES if n not in owner]
+    if missing:
+        raise DataError(f"--save with --temperature: this stand's q do not hold {', '.join(missing)} alone; the "
+                        "calibration's temperature polynomial needs each block parameter")
+    D = th["degree"]
+    gamma = [[[th["q"][owner[f"Gamma{i}{j}"]][k] for j in (1, 2, 3)] for i in (1, 2, 3)] for k in range(1, D + 1)]
+    bias = [[g * th["q"][owner[f"bias{i}"]][k] for i in (1, 2, 3)] for k in range(1, D + 1)]
+    return {"t0_c": th["t0_c"], "range_c": th["range_c"], "degree": D, "Gamma": gamma, "bias": bias,
+            "bound_Gamma": [[th["bound_drift"][owner[f"Gamma{i}{j}"]] for j in (1, 2, 3)] for i in (1, 2, 3)],
+            "bound_bias": [g * th["bound_drift"][owner[f"bias{i}"]] for i in (1, 2, 3)],
+            "bound_Gamma_t0": _gamma_bound(res).tolist(),
+            "bound_bias_t0": (g * np.asarray(blk["bias_bound"], float)).tolist()}
 
 
 def write(path, cal):
@@ -161,7 +200,31 @@ def checked(data, path="calibration"):
                         f"{MAX_CONDITION:g}); a calibration's M is close to a scaled rotation")
     if out["bound_matrix"].sum(axis=1).max() >= 1:
         raise DataError(f"{path}: each row of bound_matrix must sum below 1 (the bound (I - B)^-1 needs it)")
+    if "thermal" in data:
+        th = data["thermal"]
+        lo, hi = th["range_c"]
+        if not (lo <= th["t0_c"] <= hi) or len(th["Gamma"]) != th["degree"] or len(th["bias"]) != th["degree"]:
+            raise DataError(f"{path}: thermal: t0_c must lie in range_c and Gamma and bias hold one term per degree")
+        out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
     return out
+
+
+def thermal_at(cal, T):
+    """Per sample at temperatures T (C): (M (N, 3, 3), b (N, 3), bound_matrix (N, 3, 3), bound_bias (N, 3)) of a
+    calibration with a temperature polynomial: Gamma(T) = Gamma(t0) + sum_k Gamma_k (T - t0)^k with Gamma(t0) =
+    M^-1 - E of the file, b(T) likewise, through `through_M` with the bound at t0 plus that of the drift over the
+    range (each over the estimate's information set; their sum bounds the whole)."""
+    th = cal["thermal"]
+    tau = np.asarray(T, float) - th["t0_c"]
+    powers = np.stack([tau ** k for k in range(1, th["degree"] + 1)], axis=1)          # (N, D)
+    G = (np.linalg.inv(cal["M"]) - np.eye(3))[None] + np.einsum("nk,kij->nij", powers, th["Gamma"])
+    b = cal["b"][None] + powers @ th["bias"]
+    M = np.linalg.inv(np.eye(3)[None] + G)
+    absM = np.abs(M)
+    left = np.abs(M @ (np.eye(3)[None] + G) - np.eye(3)) + 8 * np.finfo(float).eps * (absM @ (1 + np.abs(G)))
+    B = (left + absM @ (th["bound_Gamma_t0"] + th["bound_Gamma"])) * (1 + 1e-12)
+    eb = (absM @ (th["bound_bias_t0"] + th["bound_bias"])) * (1 + 1e-12)
+    return M, b, B, eb
 
 
 def _nan(value, where=""):
@@ -201,6 +264,25 @@ def check_units(cal, log_path, raw, cal_path):
 
 #: The frames `apply` can correct into: garant's (M as calibrated) or that of the imu_tk export.
 FRAMES = ("garant", "imu_tk")
+
+
+def apply_thermal(cal, raw, T, path="the log"):
+    """Corrected specific force (N, 3), m/s^2, and its worst-case error per sample (N, 3) of a calibration with
+    a temperature polynomial, each sample at its own temperature T (C); DataError when a sample lies outside
+    the calibrated range (the polynomial and its bound hold there only)."""
+    lo, hi = cal["thermal"]["range_c"]
+    T = np.asarray(T, float)
+    out = np.flatnonzero((T < lo) | (T > hi) | ~np.isfinite(T))
+    if out.size:
+        raise DataError(f"{path}: {out.size} sample(s) at temperatures outside the calibrated range [{lo:g}, {hi:g}] "
+                        f"C (the first, sample {out[0] + 1}, at {T[out[0]]:g} C): the calibration holds nothing there")
+    M, b, B, eb = thermal_at(cal, T)
+    if B.sum(axis=2).max() >= 1:
+        raise DataError(f"{path}: the calibration's bounds at these temperatures do not keep each row of the bound "
+                        "matrix below 1")
+    a = np.einsum("nij,nj->ni", M, np.asarray(raw, float) - b)
+    bound = np.linalg.solve(np.eye(3)[None] - B, (np.einsum("nij,nj->ni", B, np.abs(a)) + eb)[..., None])[..., 0]
+    return a, bound * (1 + 1e-9)
 
 
 def apply(cal, raw, frame="garant"):

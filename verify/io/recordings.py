@@ -21,6 +21,7 @@ class Log(NamedTuple):
     note: str = ""         # what the reader did (skipped bytes, the IMU read)
     dt: float = None       # median sample interval, s (computed when None)
     fmt: str = ""          # the format it was read as (FORMATS), or "array"
+    temp: np.ndarray = None   # C, each sample's temperature where the log has a column of it (TEMP_COLUMNS)
 
 
 #: Time column names of a `csv` log, and the unit each one states (factor to seconds).
@@ -153,7 +154,7 @@ def _csv_columns(path, header):
     for names in ACCEL_COLUMNS:
         if all(n in low for n in names):
             return t, TIME_COLUMNS[times[0]], [low.index(n) for n in names]
-    rest = [k for k in range(len(low)) if k != t]
+    rest = [k for k in range(len(low)) if k != t and low[k] not in TEMP_COLUMNS]
     if len(rest) < 3:
         raise DataError(f"{path}: a csv log needs a time column and three accelerometer columns; header is "
                         f"{','.join(header)}")
@@ -190,6 +191,11 @@ class Read(NamedTuple):
     unit: bool             # the time's unit is stated by the format (else it is checked to be seconds)
     step: float = None
     note: str = ""
+    temp: np.ndarray = None
+
+
+#: Temperature column names of a `csv` log (degrees C).
+TEMP_COLUMNS = ("temp_c", "temperature_c", "temperature", "temp")
 
 
 def _read_mimu(path, sensor, imu, rate):
@@ -216,8 +222,10 @@ def _read_openaxes(path, sensor, imu, rate):
 def _read_csv(path, sensor, imu, rate):
     header = _header(path, ",")
     ti, factor, acc = _csv_columns(path, header)
-    data = _load(path, ",", [ti] + acc, 1)
-    return Read(data[:, 0] * factor, data[:, 1:4], factor == 1.0)
+    low = [h.lower() for h in header]
+    temp = [low.index(n) for n in TEMP_COLUMNS if n in low][:1]
+    data = _load(path, ",", [ti] + acc + temp, 1)
+    return Read(data[:, 0] * factor, data[:, 1:4], factor == 1.0, temp=data[:, 4].copy() if temp else None)
 
 
 def _read_imu_tk(path, sensor, imu, rate):
@@ -263,7 +271,8 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
             raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu), not to a {fmt} log")
         if fmt not in READERS:
             raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
-        t, raw, unit, step, note = READERS[fmt](path, sensor, imu, rate)
+        got = READERS[fmt](path, sensor, imu, rate)
+        t, raw, unit, step, note = got.t, got.raw, got.unit, got.step, got.note
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
     if len(t) < MIN_SAMPLES:
@@ -271,7 +280,7 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     dt, repeats = _check_time(path, t, unit)
     if repeats:
         note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))
-    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt, fmt)      # t is the reader's own array
+    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt, fmt, got.temp)   # t: the reader's own array
 
 
 def quantum(log):

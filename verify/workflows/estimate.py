@@ -200,7 +200,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     if thermal is not None:
         from . import thermal as th
         out["thermal"] = th.summary(mod, v.info, q, e, np.asarray(positions.extra["temp_c"], float), *thermal)
-    elif not out["premises_refuted"]:              # else no block split: it rests on the refuted bounds
+    if not out["premises_refuted"]:                # else no block split: it rests on the refuted bounds
         out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
     return out
 

@@ -21,7 +21,8 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     the bounds are in the result. A consistent result with the block's errors holds "calibration",
     the dictionary `apply` takes. `bound`: {parameter: a-priori bound}, over the description's and `prior`.
     `temperature` D: each block parameter a polynomial of degree D in T (the temp_c column), each q with one
-    bound over the whole range ("thermal"; workflows/thermal.py); no calibration file, which holds none."""
+    bound over the whole range ("thermal"; workflows/thermal.py); the calibration holds the block at T0 and its
+    polynomial in T ("thermal", io/calibration.py), which `apply` evaluates at each sample's temperature."""
     from . import estimate as est
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
@@ -45,6 +46,8 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
         res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
+        if "thermal" in res:
+            res["calibration"]["thermal"] = calibration.thermal_section(res)
     return results.Estimate(res)
 
 
@@ -235,8 +238,18 @@ def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, 
         cal_io.check_units(cal, data.path, data.raw[:100_000],
                            "the calibration" if isinstance(calibration, dict) else str(calibration))
 
+    if "thermal" in cal:
+        if data.temp is None:
+            raise DataError(f"{data.path}: the calibration holds a temperature polynomial; the log needs each "
+                            f"sample's temperature (a csv log with a column {' or '.join(recordings.TEMP_COLUMNS)}, C)")
+        if frame != "garant":
+            raise DataError(f"{opt('frame')} imu_tk: the imu_tk form holds no temperature polynomial")
+
     def piece(i, j):
-        a, bound = cal_io.apply(cal, data.raw[i:j], frame)
+        if "thermal" in cal:
+            a, bound = cal_io.apply_thermal(cal, data.raw[i:j], data.temp[i:j], data.path)
+        else:
+            a, bound = cal_io.apply(cal, data.raw[i:j], frame)
         return results.Correction(t=data.t[i:j], a=a, bound=bound, kind=cal["kind"])
     if chunk is None and hasattr(log, "columns"):       # a DataFrame in, a calibrated copy out (imucal's habit)
         out, c = log.copy(), piece(0, len(data.t))

@@ -132,15 +132,20 @@ def summary(mod, info, q, e, T, degree, t0):
     cuts = np.linspace(lo_t - t0, hi_t - t0, PIECES + 1)
     q_hat = np.asarray(q, float)
     reach = np.abs(q_hat) + np.asarray(e, float)
-    coef, bound, at = {}, {}, {}
-    for name, xs in polys.items():
-        X = np.array(xs)
-        coef[name] = (X @ q_hat).tolist()
+    coef, bound, drift, at = {}, {}, {}, {}
+
+    def over_range(xs):
+        """The proven sup over the range of |psi(tau)^T (q - q_hat)| for psi = sum_k tau^k xs[k]."""
         pts = np.vstack([bernstein(xs, a, b) for a, b in zip(cuts[:-1], cuts[1:])])
         lo, hi = info.ranges(pts)
         v = pts @ q_hat
         pad = 1e-12 * (np.abs(pts) @ reach) + 1e-300          # the float rounding of the control points
-        bound[name] = float(np.max(np.maximum(hi - v, v - lo) + pad))
+        return float(np.max(np.maximum(hi - v, v - lo) + pad))
+    for name, xs in polys.items():
+        X = np.array(xs)
+        coef[name] = (X @ q_hat).tolist()
+        bound[name] = over_range(xs)
+        drift[name] = over_range((0 * xs[0],) + tuple(xs[1:]))      # of q(T) - q(T0): what a calibration at T0 adds
         taus = levels - t0
         psi = np.array([sum(t ** k * X[k] for k in range(degree + 1)) for t in taus])
         lo_l, hi_l = info.ranges(psi)
@@ -151,7 +156,7 @@ def summary(mod, info, q, e, T, degree, t0):
         bound[name] = max(bound[name], max(b for _, _, b in at[name]))
     return {
         "t0_c": t0, "degree": degree, "range_c": [lo_t, hi_t], "temperatures_c": levels.tolist(),
-        "q": coef, "bound": bound,
+        "q": coef, "bound": bound, "bound_drift": drift,
         "units": {name: [mod.Q_UNITS[mod.Q_NAMES.index(name)]] + [f"{mod.Q_UNITS[mod.Q_NAMES.index(name)]}/C^{k}"
                                                                    for k in range(1, degree + 1)] for name in polys},
         "at_temperature": {name: [{"temp_c": t, "q": x, "bound": b} for t, x, b in rows] for name, rows in at.items()},
