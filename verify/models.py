@@ -48,66 +48,67 @@ def generator_version():
     return h.hexdigest()
 
 
-def from_description(path):
-    """The rendered module of a stand description: from the cache when one was derived from these very
-    bytes by this very generator (keyed by SHA-256 of both; a stale entry is never used), else derived
-    (SymPy), kept in the cache (best effort), and executed. No file beside the description is written."""
+def _description_bytes(path):
+    """The bytes of a stand description (at most 1,000,001: the reader refuses more), a regular file only."""
     try:
         if os.path.exists(path) and not os.path.isfile(path):    # a FIFO would block, a device never end
             raise DataError(f"{path}: the stand description must be a regular file")
         with open(path, "rb") as fh:
-            raw = fh.read(1_000_001)
+            return fh.read(1_000_001)
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})") from None
+
+
+def _cached(key_bytes, make):
+    """(stand name, module text): the cache entry made from `key_bytes` by this very generator (keyed by SHA-256
+    of both; a stale entry is never used), else `make()`'s, kept in the cache (best effort)."""
     import hashlib
-    key = hashlib.sha256(raw + generator_version().encode()).hexdigest()
+    key = hashlib.sha256(key_bytes + generator_version().encode()).hexdigest()
     folder = _cache_folder()
     hit = _entry(folder / f"{key}.py") if folder is not None else None
     if hit is not None:
-        name, text = hit
-    else:
-        from garant.derive import codegen, description
-        try:
-            model = description.load(path)
-            files = codegen.model_files(model)
-        except description.DescriptionError as e:
-            raise DataError(str(e)) from None
-        name, text = model.stand.name, files[f"generated/{model.stand.name}.py"]
-        _keep(cache_dir(), f"{key}.py", name, text)
+        return hit
+    name, text = make()
+    _keep(cache_dir(), f"{key}.py", name, text)
+    return name, text
+
+
+def _derived(model):
+    """(stand name, module text) of a derive Model (SymPy)."""
+    from garant.derive import codegen
+    return model.stand.name, codegen.model_files(model)[f"generated/{model.stand.name}.py"]
+
+
+def _load_description(path):
+    from garant.derive import description
+    try:
+        return description.load(path)
+    except description.DescriptionError as e:
+        raise DataError(str(e)) from None
+
+
+def from_description(path):
+    """The rendered module of a stand description: from the cache when one was derived from these very
+    bytes by this very generator, else derived (SymPy), kept in the cache (best effort), and executed. No
+    file beside the description is written."""
+    name, text = _cached(_description_bytes(path), lambda: _derived(_load_description(path)))
     return _execute(text, name, Path(path).resolve())
 
 
 def thermal(model, degree, t0):
     """The thermal extension of a built-in stand or a description (each block parameter a polynomial of
     `degree` in T about t0, derive/effects.py `thermal`): derived once and kept in the cache like a
-    description (keyed by SHA-256 of the base, the degree, t0 and the generator)."""
-    import hashlib
-    if str(model).endswith(".toml"):
-        try:
-            with open(model, "rb") as fh:
-                base = fh.read(1_000_001)
-        except OSError as e:
-            raise DataError(f"{model}: cannot read ({e.strerror})") from None
-    elif model in STANDS:
-        base = model.encode()
-    else:
+    description (keyed by the base, the degree and t0)."""
+    from garant.derive import builtin, effects
+    toml = str(model).endswith(".toml")
+    if not (toml or model in STANDS):
         raise DataError(f"a thermal calibration takes a stand: {', '.join(STANDS)} or a STAND.toml, not {model!r}")
-    key = hashlib.sha256(base + f"|thermal {degree} {t0}|".encode() + generator_version().encode()).hexdigest()
-    folder = _cache_folder()
-    hit = _entry(folder / f"{key}.py") if folder is not None else None
-    if hit is not None:
-        name, text = hit
-    else:
-        from garant.derive import builtin, codegen, description, effects
-        try:
-            stand = (description.load(model) if str(model).endswith(".toml")
-                     else builtin.MODELS[model.replace("-", "_")])
-        except description.DescriptionError as e:
-            raise DataError(str(e)) from None
-        ext = effects.extend(stand, [effects.thermal_name(degree, t0)])
-        name = ext.stand.name
-        text = codegen.model_files(ext)[f"generated/{name}.py"]
-        _keep(cache_dir(), f"{key}.py", name, text)
+    base = _description_bytes(model) if toml else model.encode()
+
+    def make():
+        stand = _load_description(model) if toml else builtin.MODELS[model.replace("-", "_")]
+        return _derived(effects.extend(stand, [effects.thermal_name(degree, t0)]))
+    name, text = _cached(base + f"|thermal {degree} {t0}|".encode(), make)
     return _execute(text, name, Path(f"{model}+thermal{degree}"))
 
 
