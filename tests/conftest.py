@@ -123,6 +123,19 @@ SLOW = {
     "test_stands.py::test_plan_file_travels_to_simulate_and_the_truth_is_saved",
     "test_stands.py::test_simulate_estimate_round_trip",
     "test_text.py::test_next_to_every_power_of_ten",
+    "test_thermal.py::test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_needs",
+    "test_thermal.py::test_simulate_runs_the_plan_at_each_chamber_temperature",
+    "test_thermal.py::test_the_bound_over_the_range_holds_at_every_temperature_of_it",
+    "test_thermal.py::test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them",
+    "test_thermal.py::test_the_px4_parameters_correct_the_readings_as_px4_applies_them",
+    "test_thermal.py::test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound",
+    "test_thermal.py::test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coefficient",
+    "test_thermal.py::test_too_few_temperatures_for_the_degree_are_refused_naming_what_is_missing",
+    "test_information.py::test_96_positions_prove_a_quarter_of_sigma_and_match_an_independent_hull",
+    "test_diagnose.py::test_no_effect_no_alarm",
+    "test_verify.py::test_primal_dual_chebyshev_agree_on_a_coarse_grid",
+    "test_text.py::test_up_never_below_and_nearest_within_half_a_unit",
+    "test_hostile_outputs.py::test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one",
 }
 
 
