@@ -125,6 +125,7 @@ SLOW = {
     "test_text.py::test_next_to_every_power_of_ten",
     "test_thermal.py::test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_needs",
     "test_thermal.py::test_simulate_runs_the_plan_at_each_chamber_temperature",
+    "test_thermal.py::test_the_api_takes_a_temperature_degree_as_the_command_does",
     "test_thermal.py::test_the_bound_over_the_range_holds_at_every_temperature_of_it",
     "test_thermal.py::test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them",
     "test_thermal.py::test_the_px4_parameters_correct_the_readings_as_px4_applies_them",

@@ -283,3 +283,18 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
     assert "the calibration holds a temperature polynomial; the log needs each sample's temperature" in \
         capsys.readouterr().err
     assert not (tmp_path / "c2.csv").exists()
+
+
+def test_the_api_takes_a_temperature_degree_as_the_command_does(tmp_path):
+    """garant.estimate(..., temperature=2) gives the command's `thermal` (the same job); a degree that is not a
+    whole number 1 to 3 (True, 4, "2") is refused naming the argument (verify/options.py `degree`)."""
+    import garant
+    from garant.verify.errors import DataError
+    _, data = _session(tmp_path, MEMS, NOISES["uniform"])
+    res = garant.estimate("two-axis", str(data), SIGMA, g=G, temperature=2)
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+    assert res.to_dict()["thermal"] == json.loads((tmp_path / "r.json").read_text())["thermal"]
+    for bad in (True, 4, "2"):
+        with pytest.raises(DataError, match="temperature"):
+            garant.estimate("two-axis", str(data), SIGMA, temperature=bad)

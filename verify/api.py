@@ -23,7 +23,8 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
           "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
-          "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate, "jobs": checks.positive_int}
+          "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate, "jobs": checks.positive_int,
+          "temperature": checks.degree}
 
 
 def _api(fn):
@@ -72,7 +73,7 @@ def plan(model, grid=None, count_seconds=None, max_candidates=None, search_secon
 
 @_api
 def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None, bound=None, fmt=None, sections=None):
+             imu=None, which_run=None, bound=None, fmt=None, sections=None, temperature=None):
     """The verdict, q and guaranteed errors from positions, as `garant estimate --json` (the same
     function: workflows/jobs.py).
 
@@ -87,7 +88,9 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
         error (an override of the description's bounds). bound : {parameter: a-priori bound} (rad or
         dimensionless), over the description's and `prior`, as --bound NAME=VALUE. mount : a mounting like
         "+y+z+x" (two-axis): also the block's physical errors, (28)-(29) of 000. gamma : "lower" or
-        "symmetric", (29).
+        "symmetric", (29). temperature : D (1-3), as --temperature D: each block parameter a polynomial of
+        degree D in T (the data's temp_c column), each q's polynomial with one bound over the range ("thermal",
+        docs/thermal.md).
 
     Returns
     -------
@@ -95,7 +98,7 @@ def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=N
     put beyond what those a-priori bounds allow (then no bound is guaranteed and no calibration given).
     """
     return jobs.estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, imu, which_run, bound=bound,
-                         fmt=fmt, sections=sections)
+                         fmt=fmt, sections=sections, temperature=temperature)
 
 
 @_api

@@ -78,6 +78,14 @@ def positive_int(value):
     return whole(value, 1)
 
 
+def degree(value):
+    """A degree in T of the thermal model: a whole number 1 to 3."""
+    d = whole(value, 1)
+    if d > 3:
+        raise Bad(f"{_shown(value)} is not 1, 2 or 3")
+    return d
+
+
 def seed(value):
     """A random seed, a whole number >= 0."""
     return whole(value, 0)

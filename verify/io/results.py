@@ -111,7 +111,9 @@ class Estimate(Result):
               "units": "unit of each q (1: dimensionless; a bias q is over g)",
               "definitions": "each q in the physical parameters ((4) of 000)",
               "calibration": "the block's garant-calibration-1 dictionary `garant.apply` takes (when consistent and "
-                             "the stand separates the block's errors)"}
+                             "the stand separates the block's errors)",
+              "thermal": "with temperature=D: each q's coefficients in (T - t0_c)^k and one guaranteed bound over "
+                         "range_c, the estimate and bound at each chamber temperature (docs/thermal.md)"}
 
     STATUSES = {"consistent": "the readings fit sigma within the premises: q, the bounds and the calibration hold",
                 "refuted": "the readings refute sigma (or a premise): no bound is given",
