@@ -68,7 +68,8 @@ def from_norm(res, axes):
 
 
 def through_M(G, B, bias_bound):
-    """(M, bound_matrix, bound_bias) of a stand calibration from the block's Gamma estimate G (3 x 3), the
+    """(M, bound_matrix, bound_bias) of a stand calibration from the block's Gamma estimate G (3 x 3, or a stack
+    (N, 3, 3) with B and bias_bound broadcast: one per sample of a calibration over temperature), the
     entrywise bound B of Gamma - G and the bound of the biases (m/s^2). With f = (E + Gamma) a + bias
     and the file's M = (E + G)^-1 (as rounded), a corrected sample is M (f - b) = (E + A) a + eps with
         A = M (E + G) - E + M (Gamma - G),   eps = M (bias - b),
@@ -79,7 +80,7 @@ def through_M(G, B, bias_bound):
     absM = np.abs(M)
     left = np.abs(M @ (np.eye(3) + G) - np.eye(3)) + 8 * np.finfo(float).eps * (absM @ (1 + np.abs(G)))
     bound = (left + absM @ B) * (1 + 1e-12)
-    return M, bound, (absM @ np.asarray(bias_bound, float)) * (1 + 1e-12)
+    return M, bound, (absM @ np.asarray(bias_bound, float)[..., None])[..., 0] * (1 + 1e-12)
 
 
 def from_stand(res):
@@ -219,11 +220,7 @@ def thermal_at(cal, T):
     powers = np.stack([tau ** k for k in range(1, th["degree"] + 1)], axis=1)          # (N, D)
     G = (np.linalg.inv(cal["M"]) - np.eye(3))[None] + np.einsum("nk,kij->nij", powers, th["Gamma"])
     b = cal["b"][None] + powers @ th["bias"]
-    M = np.linalg.inv(np.eye(3)[None] + G)
-    absM = np.abs(M)
-    left = np.abs(M @ (np.eye(3)[None] + G) - np.eye(3)) + 8 * np.finfo(float).eps * (absM @ (1 + np.abs(G)))
-    B = (left + absM @ (th["bound_Gamma_t0"] + th["bound_Gamma"])) * (1 + 1e-12)
-    eb = (absM @ (th["bound_bias_t0"] + th["bound_bias"])) * (1 + 1e-12)
+    M, B, eb = through_M(G, th["bound_Gamma_t0"] + th["bound_Gamma"], th["bound_bias_t0"] + th["bound_bias"])
     return M, b, B, eb
 
 

@@ -12,9 +12,10 @@ that bound, and says so; one the set leaves unbounded is not separated by this s
 import numpy as np
 
 from ..errors import DataError
+from ..io.calibration import BLOCK_NAMES
 from ..solve import hull, taylor
 
-BLOCK = [f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)] + [f"bias{i}" for i in (1, 2, 3)]
+BLOCK = BLOCK_NAMES                     # Gamma11..Gamma33, bias1..bias3
 
 
 def calibration(mod, info, premises):
