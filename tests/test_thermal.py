@@ -28,10 +28,10 @@ def _write(path, P, f, T):
 
 
 def _session(tmp_path, truth, noise):
-    """The two-axis stand's 45 x 90 degree grid at each chamber temperature, the readings of the thermal model
+    """The two-axis stand's quarter turns (16 positions) at each chamber temperature, the readings of the thermal model
     (degree 2 about 20 C) with `noise(P, T)` (units of g, within +-SIGMA) added."""
     mod = models.thermal("two-axis", 2, 20)
-    P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 90)] * len(TEMPS), float)
+    P = np.array([(a, b) for a in range(0, 360, 90) for b in range(0, 360, 90)] * len(TEMPS), float)
     T = np.repeat(TEMPS, len(P) // len(TEMPS))
     p = [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES]
     f = mod.readings(*np.deg2rad(P).T, p, G, temp_c=T).T + G * noise(P, T)
@@ -45,14 +45,39 @@ NOISES = {
 }
 
 
-@pytest.mark.parametrize("noise", NOISES)
-@pytest.mark.parametrize("signs", [1, -1])
+def _estimated(folder, truth, *options):
+    """A chamber session of `truth` (uniform noise) and `estimate --temperature 2 --json r.json` on it, with
+    `options` (paths inside `folder`): (module, data path, the result's JSON)."""
+    mod, data = _session(folder, truth, NOISES["uniform"])
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", "--json", str(folder / "r.json"), *[str(folder / o) if "." in o else o
+                                                                             for o in options]]) == 0
+    return mod, data, json.loads((folder / "r.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def mems(tmp_path_factory):
+    """The MEMS unit's session estimated once, its calibration saved (cal.json)."""
+    folder = tmp_path_factory.mktemp("mems")
+    return (folder,) + _estimated(folder, MEMS, "--save", "cal.json")
+
+
+@pytest.fixture(scope="module")
+def biases_drift(tmp_path_factory):
+    """A unit whose biases alone drift with T (quadratic), estimated once with both autopilot exports."""
+    folder = tmp_path_factory.mktemp("biases")
+    truth = {k: v for k, v in MEMS.items() if not k.startswith("Gamma") or "_T" not in k}
+    return (folder, truth) + _estimated(folder, truth, "--export-ardupilot", "tcal.parm", "--export-px4",
+                                        "tc.params")
+
+
+@pytest.mark.parametrize("signs, noise", [(1, "uniform"), (-1, "tilting"), (1, "bending"), (-1, "bending")])
 def test_the_bound_over_the_range_holds_at_every_temperature_of_it(tmp_path, noise, signs):
     """A MEMS-size unit at the extremes of its thermal coefficients (both signs) and noise at +-sigma that
     tilts or bends the polynomial: |q(T) - q_hat(T)| within the printed bound at every T of [-20, 60] C (401
     temperatures, the chamber's five among them), for every q with a thermal part. Red if the bound were that
     of q at T0 alone (the estimate's own guaranteed error); and it stays within 1.5x of the worst chamber
-    temperature's own bound (red with the range in one piece instead of 8: PIECES = 1 gives 1.7x)."""
+    temperature's own bound (red with the range in one piece instead of 8: PIECES = 1 gives 1.8x)."""
     truth = {k: (signs * v if "_T" in k else v) for k, v in MEMS.items()}
     mod, data = _session(tmp_path, truth, NOISES[noise])
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
@@ -102,19 +127,14 @@ def _ardupilot(parm, imu=1):
     return correct
 
 
-def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them(tmp_path):
+def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them(biases_drift):
     """A unit whose biases alone drift with T (quadratic): ArduPilot's own formula with the exported parameters
     takes each reading to what it was at 20 C, within twice the bias bound over the range plus twice the noise.
     Red on a sign, the 1e6 scaling or the re-expansion about 35 C missing (the quadratic term moves the linear
     coefficient by 2 x 1e-5 x 15 C = 0.3 mg/C between 20 and 35 C: 12 mg over the range, checked by mutation)."""
-    truth = {k: v for k, v in MEMS.items() if not k.startswith("Gamma") or "_T" not in k}
-    mod, data = _session(tmp_path, truth, NOISES["uniform"])
-    parm = tmp_path / "tcal.parm"
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--export-ardupilot", str(parm), "--json", str(tmp_path / "r.json")]) == 0
-    text = parm.read_text()
+    folder, _, _, data, res = biases_drift
+    text = (folder / "tcal.parm").read_text()
     assert "INS_TCAL1_ENABLE 1\nINS_TCAL1_TMIN -20.0\nINS_TCAL1_TMAX 60.0\n" in text
-    res = json.loads((tmp_path / "r.json").read_text())
     bound = G * max(res["thermal"]["bound"][q] for q in ("q7", "q11", "q15"))
     rows = np.loadtxt(data, delimiter=",", skiprows=1)
     raw, T = rows[:, 2:5], rows[:, 5]
@@ -142,11 +162,11 @@ def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
     """`simulate --temperatures` repeats the plan at each temperature with temp_c set, and the truth's thermal
     coefficients are what estimate --temperature finds (within its bounds)."""
     (tmp_path / "t.json").write_text(json.dumps(MEMS))
-    assert main(["simulate", "--model", "two-axis", "--plan", "grid:45x90", "--temperatures=-20,0,20,40,60",
+    assert main(["simulate", "--model", "two-axis", "--plan", "quarter16", "--temperatures=-20,0,20,40,60",
                  "--truth", str(tmp_path / "t.json"), "--sigma", str(SIGMA), "--seed", "3",
                  "-o", str(tmp_path / "d.csv")]) == 0
     rows = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)
-    assert sorted(set(rows[:, -1])) == list(TEMPS) and len(rows) == 5 * 32
+    assert sorted(set(rows[:, -1])) == list(TEMPS) and len(rows) == 5 * 16
     assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA), "--g", "9.81",
                  "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
     th = json.loads((tmp_path / "r.json").read_text())["thermal"]
@@ -201,18 +221,13 @@ def _px4(params, instance=0):
     return correct, values
 
 
-def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(tmp_path):
+def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drift):
     """A unit whose biases alone drift with T: PX4's own formula with the exported TC_A0_* takes each reading to
     its value at TREF within twice the bias bound plus twice the noise (scaled by SCL), and SCL is 1 / (1 + the
     scale q) within that q's bound. Red on a sign, X0 left out, the polynomial about the wrong TREF or SCL
     inverted."""
-    truth = {k: v for k, v in MEMS.items() if not k.startswith("Gamma") or "_T" not in k}
-    mod, data = _session(tmp_path, truth, NOISES["uniform"])
-    out = tmp_path / "tc.params"
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--export-px4", str(out), "--json", str(tmp_path / "r.json")]) == 0
-    correct, values = _px4(out.read_text())
-    res = json.loads((tmp_path / "r.json").read_text())
+    folder, truth, mod, data, res = biases_drift
+    correct, values = _px4((folder / "tc.params").read_text())
     assert values["TC_A_ENABLE"] == 1 and values["TC_A0_TREF"] == 20 and values["TC_A0_TMAX"] == 60
     rows = np.loadtxt(data, delimiter=",", skiprows=1)
     raw, T = rows[:, 2:5], rows[:, 5]
@@ -243,17 +258,15 @@ def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_n
     assert [t["consistent"] for t in found["tried"]] == [False] * (degree - 1) + [True]
 
 
-def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_path, capsys):
+def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_path, capsys, mems):
     """`estimate --temperature 2 --save` holds the block at T0 and its polynomial in T; `apply` on a log with a
     temp_c column corrects each sample at its own temperature: every component within its per-sample bound of
     the true specific force (the readings of a block without errors), at 2,000 random positions and
     temperatures of the range. Red if apply took the calibration at T0 for every sample (the biases drift by
     up to 40 mg, 8x the bound). A sample beyond the range, or a log without temperatures, is refused in one
     line."""
-    mod, data = _session(tmp_path, MEMS, NOISES["uniform"])
-    cal = tmp_path / "cal.json"
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--save", str(cal)]) == 0
+    folder, mod, _, _ = mems
+    cal = folder / "cal.json"
     assert json.loads(cal.read_text())["thermal"]["range_c"] == [-20.0, 60.0]
     rng = np.random.default_rng(1)
     n = 2000
@@ -284,16 +297,14 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
     assert not (tmp_path / "c2.csv").exists()
 
 
-def test_the_api_takes_a_temperature_degree_as_the_command_does(tmp_path):
+def test_the_api_takes_a_temperature_degree_as_the_command_does(mems):
     """garant.estimate(..., temperature=2) gives the command's `thermal` (the same job); a degree that is not a
     whole number 1 to 3 (True, 4, "2") is refused naming the argument (verify/options.py `degree`)."""
     import garant
     from garant.verify.errors import DataError
-    _, data = _session(tmp_path, MEMS, NOISES["uniform"])
+    _, _, data, command = mems
     res = garant.estimate("two-axis", str(data), SIGMA, g=G, temperature=2)
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
-    assert res.to_dict()["thermal"] == json.loads((tmp_path / "r.json").read_text())["thermal"]
+    assert res.to_dict()["thermal"] == command["thermal"]
     for bad in (True, 4, "2"):
         with pytest.raises(DataError, match="temperature"):
             garant.estimate("two-axis", str(data), SIGMA, temperature=bad)

@@ -201,6 +201,38 @@ def bench_guarantee(mod):
             "sampled remainder, 100 draws (no proof)", base)
 
 
+def bench_hull():
+    """A thermal estimate (two-axis, degree 2, 16 positions at each of 5 chamber temperatures): its information
+    set's hulls are batches of LPs proven by duality, each from the last basis; by primal simplex (hull.SIMPLEX)
+    vs by dual simplex."""
+    import tempfile
+
+    from ..models import thermal
+    from ..solve import hull
+    from ..workflows import jobs
+    mod = thermal("two-axis", 2, 20)
+    temps = np.repeat([-20.0, 0.0, 20.0, 40.0, 60.0], 16)
+    P = np.tile([(a, b) for a in range(0, 360, 90) for b in range(0, 360, 90)], (5, 1)).astype(float)
+    p = np.random.default_rng(0).uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    f = mod.readings(*np.deg2rad(P).T, p, 9.81, temp_c=temps).T
+    f += 9.81 * np.random.default_rng(1).uniform(-1e-4, 1e-4, f.shape)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "chamber.csv"
+        path.write_text("alpha_deg,beta_deg,f1,f2,f3,temp_c\n" + "".join(
+            ",".join(repr(float(x)) for x in (*a, *r, t)) + "\n" for a, r, t in zip(P, f, temps)))
+
+        def run(strategy):
+            hull.SIMPLEX, kept = strategy, hull.SIMPLEX
+            try:
+                return jobs.estimate("two-axis", str(path), 1e-4, g=9.81, temperature=2)
+            finally:
+                hull.SIMPLEX = kept
+        t, res = timed(lambda: run(4))
+        base, res1 = timed(lambda: run(1))
+    assert res["consistent"] and res1["consistent"]
+    return ("thermal estimate, 80 positions: hulls by primal simplex", t, "the same by dual simplex", base)
+
+
 def bench_continuum(mod):
     """Exchange method for the 15 two-axis optima vs per-target LPs on a 3-degree grid (all 15
     targets, 14,400 positions, actually run; a 1-degree grid would take minutes)."""
@@ -401,8 +433,8 @@ def main():
     three, _ = timed(lambda: (derive_model.cache_clear(),
                               derive_model(description.load(STANDS_DIR / "three_axis.toml"))))
     rows = [bench_derive(), bench_guaranteed_errors(mod), bench_plan_search(), bench_continuum(mod),
-            bench_certificates(), bench_guarantee(mod), bench_diagnose(mod), *bench_estimate(), *bench_startup(mod),
-            bench_apply(), bench_calibrate_norm(), bench_calibrate_norm(10_000_000)]
+            bench_certificates(), bench_guarantee(mod), bench_hull(), bench_diagnose(mod), *bench_estimate(),
+            *bench_startup(mod), bench_apply(), bench_calibrate_norm(), bench_calibrate_norm(10_000_000)]
     width = max(len(r[0]) for r in rows)
     print(f"medians of {REPEAT} runs on both sides; wall (CPU) seconds")
     print(f"{'figure'.ljust(width)}  {'time, s':>15}  {'baseline, s':>15}  {'speed-up':>9}  baseline")

@@ -85,8 +85,9 @@ def exchange(H, n_angles, targets, start=None, scan_deg=15.0, tol=1e-6, max_iter
         if pairs:
             ks, ts = np.array(pairs).T
             xs, vs = _refine(H, scan[ks].copy(), lam[:, ts], np.deg2rad(scan_deg) / 2, lo, hi)
-            for x, v in zip(xs, vs):
-                if v > 1 + tol and not any(np.allclose(x, y, atol=1e-6) for y in [*new, *X]):
+            for x, v in zip(xs, vs):           # new unless within 1e-6 (+1e-5 relative) of a point kept
+                known = np.vstack([X, *new]) if new else X
+                if v > 1 + tol and not np.any(np.all(np.abs(x - known) <= 1e-6 + 1e-5 * np.abs(known), axis=1)):
                     new.append(x)
         if not new:
             break

@@ -7,6 +7,7 @@
   a^T lambda / max_p sup |H^(p)T lambda|, with the sup bounded by the triangle inequality over the
   proven entry bounds H_SUP. Primal value = this bound closes the optimum on the continuum.
 """
+import weakref
 from fractions import Fraction
 
 import numpy as np
@@ -22,19 +23,10 @@ def exact_columns(mod, angles_deg, mounts=None):
         return integer_columns(mod, angles_deg, mounts)
     except ValueError:
         pass
-    from ..models import symbolic_H
-    from .field import evaluator
-    H, symbols = symbolic_H(mod)
-    try:
-        f = evaluator(list(H), symbols)
-    except ValueError as e:
-        raise ValueError(f"H is not exact in Q(sqrt2, sqrt3) ({e}); exact plan search takes axes and wedges "
-                         "whose components lie there, e.g. [0, 1, 1]") from None
+    f, m, cache = _evaluator(mod)
     P = np.atleast_2d(np.asarray(angles_deg, float))
     mounts = np.zeros(len(P), int) if mounts is None else np.asarray(mounts)
-    m = H.cols
     out = np.empty((len(P), 3, m), dtype=object)
-    cache = {}
     for s, (deg, k) in enumerate(zip(P, mounts)):
         key = tuple(deg)
         if key not in cache:
@@ -51,6 +43,25 @@ def exact_columns(mod, angles_deg, mounts=None):
     if np.abs(check - want).max() > 1e-9:
         raise AssertionError("the exact H disagrees with the generated H")
     return out
+
+
+_EVALUATORS = weakref.WeakKeyDictionary()      # module -> (exact H of a position, m, its values so far)
+
+
+def _evaluator(mod):
+    """(f, m, values): f gives the stand's symbolic H exactly at a position (degrees), m its columns, and
+    `values` the positions evaluated so far (kept with the module: a search evaluates the same ones again)."""
+    if mod not in _EVALUATORS:
+        from ..models import symbolic_H
+        from .field import evaluator
+        H, symbols = symbolic_H(mod)
+        try:
+            f = evaluator(list(H), symbols)
+        except ValueError as e:
+            raise ValueError(f"H is not exact in Q(sqrt2, sqrt3) ({e}); exact plan search takes axes and wedges "
+                             "whose components lie there, e.g. [0, 1, 1]") from None
+        _EVALUATORS[mod] = (f, H.cols, {})
+    return _EVALUATORS[mod]
 
 
 def integer_columns(mod, angles_deg, mounts=None):

@@ -21,6 +21,13 @@ class QF:
     def __init__(self, a=0, b=0, c=0, d=0):
         self.c = (Fraction(a), Fraction(b), Fraction(c), Fraction(d))
 
+    @classmethod
+    def _of(cls, a, b, c, d):
+        """From four Fractions as they are (the results of the operations below: no conversion)."""
+        out = object.__new__(cls)
+        out.c = (a, b, c, d)
+        return out
+
     @staticmethod
     def of(x):
         """A QF from an int, a Fraction or a QF."""
@@ -28,12 +35,15 @@ class QF:
 
     def __add__(self, o):
         o = QF.of(o)
-        return QF(*(x + y for x, y in zip(self.c, o.c)))
+        a, b, c, d = self.c
+        e, f, g, h = o.c
+        return QF._of(a + e, b + f, c + g, d + h)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return QF(*(-x for x in self.c))
+        a, b, c, d = self.c
+        return QF._of(-a, -b, -c, -d)
 
     def __sub__(self, o):
         return self + (-QF.of(o))
@@ -45,14 +55,14 @@ class QF:
         a, b, c, d = self.c
         if not isinstance(o, QF):                                        # a rational: coordinate-wise
             o = Fraction(o)
-            return QF(a * o, b * o, c * o, d * o)
+            return QF._of(a * o, b * o, c * o, d * o)
         e, f, g, h = o.c
         if not (f or g or h):
-            return QF(a * e, b * e, c * e, d * e)
+            return QF._of(a * e, b * e, c * e, d * e)
         if not (b or c or d):
-            return QF(a * e, a * f, a * g, a * h)
-        return QF(a * e + 2 * b * f + 3 * c * g + 6 * d * h, a * f + b * e + 3 * (c * h + d * g),
-                  a * g + c * e + 2 * (b * h + d * f), a * h + d * e + b * g + c * f)
+            return QF._of(a * e, a * f, a * g, a * h)
+        return QF._of(a * e + 2 * b * f + 3 * c * g + 6 * d * h, a * f + b * e + 3 * (c * h + d * g),
+                      a * g + c * e + 2 * (b * h + d * f), a * h + d * e + b * g + c * f)
 
     __rmul__ = __mul__
 

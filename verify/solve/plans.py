@@ -350,14 +350,15 @@ def covering_plans(cols, lams, limit=PLAN_COUNT_LIMIT, seconds=10.0, search_seco
                                 highs.COUNT_NODES if count_nodes is None else count_nodes)
 
 
-def estimator_in(cols, nu, lam):
+def estimator_in(cols, nu, lam, touched=None, memo=None):
     """An optimal estimator of q_nu on the positions of cols: a vertex of {w >= 0 : sum_k w_k sign_k
     H_k = e_nu} over the measurements the dual touches (HiGHS), its support solved again exactly
     (rationals or Q(sqrt2, sqrt3)) and found positive when lambda is exact. [(position, component,
-    weight)], or None when there is none."""
+    weight)], or None when there is none. `touched`: the (measurements, signs) to use, when already known
+    (`touching`); `memo`: a dict keeping each exact solve by its support, for the many plans of one grid."""
     from . import highs
     colsf = _float(cols)
-    cand, signs = touching(cols, lam)
+    cand, signs = touching(cols, lam) if touched is None else touched
     if not cand:
         return None
     V = np.array([colsf[s, p] * g for (s, p), g in zip(cand, signs)], float)          # (C, m)
@@ -373,19 +374,28 @@ def estimator_in(cols, nu, lam):
             chosen.append(int(k))
     if not is_exact(lam):
         return [(cand[k][0], cand[k][1], float(w[k]) * signs[k]) for k in chosen]
-    vecs = [[field.QF.of(h if _algebraic(cols) else int(h)) * signs[k] for h in cols[cand[k]]] for k in chosen]
-    x = field.combination(vecs, [int(j == nu) for j in range(m)])
+    key = (nu, tuple((cand[k], signs[k]) for k in chosen))
+    if memo is not None and key in memo:
+        x = memo[key]
+    else:
+        vecs = [[field.QF.of(h if _algebraic(cols) else int(h)) * signs[k] for h in cols[cand[k]]] for k in chosen]
+        x = field.combination(vecs, [int(j == nu) for j in range(m)])
+        if memo is not None:
+            memo[key] = x
     if x is None or any(v.sign() <= 0 for v in x):
         return None
     return [(cand[k][0], cand[k][1], xi * signs[k]) for k, xi in zip(chosen, x)]
 
 
-def _confirm(cols, lams, plan):
+def _confirm(cols, lams, plan, touched, memo):
     """Every q_nu has an optimal estimator inside the plan (a plan the solver found), exactly where
-    the dual is exact. Returns whether every check was exact."""
-    sub = cols[list(plan)]
+    the dual is exact. `touched`: `touching` of each lambda on all of cols; `memo`: the exact solves of the
+    plans before. Returns whether every check was exact."""
+    inside = set(int(s) for s in plan)
     for nu, lam in enumerate(lams):
-        if estimator_in(sub, nu, lam) is None:
+        cand, signs = touched[nu]
+        keep = [k for k, (s, _) in enumerate(cand) if s in inside]
+        if estimator_in(cols, nu, lam, ([cand[k] for k in keep], [signs[k] for k in keep]), memo) is None:
             raise AssertionError(f"a plan found by the solver is not optimal for q{nu + 1}")
     return all(is_exact(lam) for lam in lams)
 
@@ -434,7 +444,8 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
         left = None if deadline is None else max(deadline - time.perf_counter(), 0.5)
         n, plans, exhaustive, floor, clock = covering_plans(cols, lams, count_limit, count_seconds, left,
                                                             nodes=search_nodes, count_nodes=count_nodes)
-        exact = all([_confirm(cols, lams, plan) for plan in plans])
+        touched, memo = [touching(cols, lam) for lam in lams], {}
+        exact = all([_confirm(cols, lams, plan, touched, memo) for plan in plans])
         method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
                   + ("exactly" if exact else "(in floating point where the dual is not exact)"))
     if not plans:

@@ -550,7 +550,7 @@ def verdict(lin, z, sigma, W=None, steps=8):
     t, _, r = _weighted_minimax(lin.A, y, rb)
     t_lin = highs.chebyshev_fit(lin.A, y)[1]
     consistent = bool(t <= sigma)
-    supported = sigma if consistent else _smallest_sigma(lin.A, y, sigma, t_lin, lambda s: proven(s)[0])
+    supported = sigma if consistent else _smallest_sigma(lin.A, y, sigma, t_lin, lambda s: proven(s)[0], float(t))
     v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
                 minimax_less_remainder=float(t), minimax_linear=t_lin, minimax_exact=lin.minimax_exact,
                 remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
@@ -576,13 +576,26 @@ def _printed(q, e, info):
     return np.where(bad, q - e - pad, lo2), np.where(bad, q + e + pad, hi2)
 
 
-def _smallest_sigma(A, y, refuted, supported, proven):
+def _smallest_sigma(A, y, refuted, supported, proven, guess=None):
     """Bisection (in log) between a refuted sigma and one the data support (the linear minimax
-    residual always is), until the bracket is within SIGMA_TOLERANCE: its upper end."""
+    residual always is), until the bracket is within SIGMA_TOLERANCE: its upper end. `guess`, the fit at
+    the refuted sigma, is tried first with the point SIGMA_TOLERANCE below it: the remainder changes little
+    with sigma, so these two usually close the bracket (each end still decided by its own proof)."""
     lo, hi = refuted, supported
+
+    def fits(s):
+        return _weighted_minimax(A, y, proven(s))[0] <= s
+    if guess is not None and lo < guess < hi:
+        if fits(guess):
+            hi = guess
+            below = guess / (1 + SIGMA_TOLERANCE)
+            if lo < below and not fits(below):
+                lo = below
+        else:
+            lo = guess
     while hi > lo * (1 + SIGMA_TOLERANCE):
         mid = np.sqrt(lo * hi)
-        if _weighted_minimax(A, y, proven(mid))[0] <= mid:
+        if fits(mid):
             hi = mid
         else:
             lo = mid

@@ -116,11 +116,19 @@ def polynomials(mod, degree):
     return out
 
 
+def psi(xs, tau):
+    """psi(tau) = sum_k tau^k xs[k]."""
+    return sum(tau ** k * x for k, x in enumerate(xs))
+
+
 def bernstein(xs, a, b):
-    """The Bernstein control points (rows) on [a, b] of psi(tau) = sum_k tau^k xs[k]."""
+    """The Bernstein control points (rows) on [a, b] of psi(tau) = sum_k tau^k xs[k]; the first and last are
+    psi(a) and psi(b) (so neighbouring pieces share them exactly)."""
     d, h = len(xs) - 1, b - a
     y = [sum(comb(k, m) * a ** (k - m) * h ** m * xs[k] for k in range(m, d + 1)) for m in range(d + 1)]
-    return np.array([sum(comb(i, m) / comb(d, m) * y[m] for m in range(i + 1)) for i in range(d + 1)])
+    pts = np.array([sum(comb(i, m) / comb(d, m) * y[m] for m in range(i + 1)) for i in range(d + 1)])
+    pts[0], pts[-1] = psi(xs, a), psi(xs, b)
+    return pts
 
 
 def summary(mod, info, q, e, T, degree, t0):
@@ -133,27 +141,38 @@ def summary(mod, info, q, e, T, degree, t0):
     q_hat = np.asarray(q, float)
     reach = np.abs(q_hat) + np.asarray(e, float)
     coef, bound, drift, at = {}, {}, {}, {}
+    taus = levels - t0
+    stack, parts = [], {}           # every control point and chamber psi of every q, for one batch of LPs
 
-    def over_range(xs):
-        """The proven sup over the range of |psi(tau)^T (q - q_hat)| for psi = sum_k tau^k xs[k]."""
-        pts = np.vstack([bernstein(xs, a, b) for a, b in zip(cuts[:-1], cuts[1:])])
-        lo, hi = info.ranges(pts)
-        v = pts @ q_hat
-        pad = 1e-12 * (np.abs(pts) @ reach) + 1e-300          # the float rounding of the control points
-        return float(np.max(np.maximum(hi - v, v - lo) + pad))
+    def add(name, what, pts):
+        parts[name, what] = (len(stack), len(pts))
+        stack.extend(pts)
     for name, xs in polys.items():
-        X = np.array(xs)
-        coef[name] = (X @ q_hat).tolist()
-        bound[name] = over_range(xs)
-        drift[name] = over_range((0 * xs[0],) + tuple(xs[1:]))      # of q(T) - q(T0): what a calibration at T0 adds
-        taus = levels - t0
-        psi = np.array([sum(t ** k * X[k] for k in range(degree + 1)) for t in taus])
-        lo_l, hi_l = info.ranges(psi)
-        v_l = psi @ q_hat
+        zero = (0 * xs[0],) + tuple(xs[1:])                     # q(T) - q(T0): what a calibration at T0 adds
+        add(name, "range", np.vstack([bernstein(xs, a, b) for a, b in zip(cuts[:-1], cuts[1:])]))
+        add(name, "drift", np.vstack([bernstein(zero, a, b) for a, b in zip(cuts[:-1], cuts[1:])]))
+        add(name, "at", np.array([psi(xs, t) for t in taus]))
+    C = np.array(stack)
+    nonzero = np.flatnonzero(np.abs(C).max(axis=1) > 0)         # psi of the drift at T0 is 0: no LP
+    U, back = np.unique(C[nonzero], axis=0, return_inverse=True)    # shared ends of pieces, chamber points
+    lo, hi = np.zeros(len(C)), np.zeros(len(C))
+    lo[nonzero], hi[nonzero] = (v[np.ravel(back)] for v in info.ranges(U))
+    v = C @ q_hat
+    pad = 1e-12 * (np.abs(C) @ reach) + 1e-300                  # the float rounding of the control points
+    worst = np.maximum(hi - v, v - lo) + pad
+
+    def over_range(name, what):
+        """The proven sup over the range of |psi(tau)^T (q - q_hat)|: the largest at its control points."""
+        i, n = parts[name, what]
+        return float(worst[i:i + n].max())
+    for name, xs in polys.items():
+        coef[name] = (np.array(xs) @ q_hat).tolist()
+        drift[name] = over_range(name, "drift")
+        i, n = parts[name, "at"]
         at[name] = [(float(t), float(x), float(max(h - x, x - lo_) * (1 + 1e-12)))
-                    for t, x, lo_, h in zip(levels, v_l, lo_l, hi_l)]
+                    for t, x, lo_, h in zip(levels, v[i:i + n], lo[i:i + n], hi[i:i + n])]
         # each proof holds; the range's is never printed below a chamber temperature's own (their LPs' rounding)
-        bound[name] = max(bound[name], max(b for _, _, b in at[name]))
+        bound[name] = max(over_range(name, "range"), max(b for _, _, b in at[name]))
     return {
         "t0_c": t0, "degree": degree, "range_c": [lo_t, hi_t], "temperatures_c": levels.tolist(),
         "q": coef, "bound": bound, "bound_drift": drift,
