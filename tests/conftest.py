@@ -114,7 +114,6 @@ SLOW = {
     "test_report.py::test_next_plots_each_bound_before_and_after",
     "test_report.py::test_the_plan_plot_shows_the_up_direction_of_each_position",
     "test_route.py::test_the_route_of_the_two_axis_plan_is_the_fastest_order",
-    "test_rows_can_fail.py::test_every_group_passes_on_the_true_models",
     "test_rows_can_fail.py::test_norm_plans_red_on_a_plan_missing_a_direction",
     "test_stands.py::test_a_description_is_derived_once_and_again_when_it_changes",
     "test_stands.py::test_any_identifier_a_user_picks_works",

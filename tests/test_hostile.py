@@ -608,8 +608,8 @@ def test_a_forged_plan_certificate_is_rejected(wedge_certificates, capsys, edit,
 def test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected(tmp_path, capsys):
     # Issue 26: single-axis q15's certificate over the whole box of angles (2 + sqrt(2), from 45-degree
     # positions) relabelled "on the 12 candidate positions of the plan search", where the detent optimum is 4.
-    assert main(["verify", "--certificates", str(tmp_path / "c")]) == 0
-    capsys.readouterr()
+    from garant.verify.papers.certificates import certificates
+    assert all(r.passed for r in certificates(tmp_path / "c"))      # what `garant verify --certificates` writes
     path = tmp_path / "c" / "single-axis_q15.json"
     cert = json.loads(path.read_text())
     cert["claim"] = cert["claim"].replace("the whole box of angles", "the 12 candidate positions of the plan search")

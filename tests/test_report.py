@@ -15,6 +15,13 @@ from garant.verify.cli import main
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
 
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory):
+    """One report of each kind, made once: (folder, {report folder name: the input it was made from})."""
+    folder = tmp_path_factory.mktemp("reports")
+    return folder, _reports(folder)
+
+
 def _reports(tmp_path):
     """One report of each kind: estimate, calibrate-norm, diagnose, repeatability -> (folder: an input)."""
     data = tmp_path / "a<b>.csv"                             # a file name that must be escaped
@@ -33,9 +40,8 @@ def _reports(tmp_path):
     return {"e": data, "c": log, "d": hidden, "r": means}
 
 
-def test_each_report_is_one_self_contained_page(tmp_path, capsys):
-    inputs = _reports(tmp_path)
-    capsys.readouterr()
+def test_each_report_is_one_self_contained_page(reports):
+    tmp_path, inputs = reports
     for name, source in inputs.items():
         folder = tmp_path / name
         html = (folder / "index.html").read_text()
@@ -61,12 +67,10 @@ def _chromium():
 
 
 @pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")
-def test_each_report_renders_in_headless_chromium(tmp_path, capsys):
-    _reports(tmp_path)
-    capsys.readouterr()
+def test_each_report_renders_in_headless_chromium(reports):
+    tmp_path, _ = reports
     for name in ("e", "c", "d", "r"):
         page = tmp_path / name / "index.html"
-        shot = tmp_path / f"{name}.png"
         # a copy with a script that records, once loaded, the decoded width and the drawn height of every
         # plot and the drawn height of every table: what a reader sees, not what the file contains
         probe = tmp_path / name / "probe.html"
@@ -78,10 +82,7 @@ def test_each_report_renders_in_headless_chromium(tmp_path, capsys):
         images, tables = (part.split() for part in seen.group(1).split("|"))
         assert len(images) == len(list((tmp_path / name).glob("*.png"))) and len(tables) >= 1
         assert all(int(w) > 0 and float(h) > 50 for w, h in (x.split("x") for x in images)), images
-        assert all(float(h) > 10 for h in tables), tables
-        subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
-                        "--window-size=1000,3000", page.as_uri()], capture_output=True, timeout=120)
-        assert shot.exists() and shot.stat().st_size > 10_000      # something visible was drawn
+        assert all(float(h) > 10 for h in tables), tables        # drawn: the heights are the layout's
 
 
 @pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")

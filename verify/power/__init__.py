@@ -41,16 +41,12 @@ class Lab:
     def __init__(self, stand):
         from .. import models
         self.name, self.base, self.mod = stand, models.stand_model(stand), models.load(stand)
-        self._exact = {}
 
     def exact(self, effects):
-        """The rendered module of the stand with these effects (simulate.exact_module), cached."""
+        """The rendered module of the stand with these effects (simulate.exact_module, which keeps it)."""
+        from garant.derive import effects as catalogue
         from ..workflows import simulate
-        key = tuple(sorted(effects))
-        if key not in self._exact:
-            from garant.derive import effects as catalogue
-            self._exact[key] = simulate.exact_module(catalogue.extend(self.base, list(key)))
-        return self._exact[key]
+        return simulate.exact_module(catalogue.extend(self.base, sorted(effects)))
 
     def unit(self, size, rng):
         """Random values of the base model's parameters, by kind, within SIZES[size]."""

@@ -1,4 +1,5 @@
 """`garant simulate`: readings from the exact nonlinear model, with hidden effects, for testing."""
+import functools
 import math
 import re
 import types
@@ -79,8 +80,10 @@ def parse_effect(text, catalogue, base_angles=None):
     return name, values
 
 
+@functools.lru_cache(maxsize=64)
 def exact_module(model):
-    """The rendered module of a (possibly extended) model, executed in memory."""
+    """The rendered module of a (possibly extended) model, executed in memory (kept per model: a model is
+    frozen, and its module is only read)."""
     from garant.derive import codegen
     files = codegen.model_files(model, "mem", "mem")
     key = f"mem/{model.stand.name}.py"
