@@ -223,7 +223,18 @@ def outputs():
                                             f"derive/norm.py, axes {model.axes}", ".py")
         out[f"docs/derivation_{key}.md"] = render("norm/REPORT.md.jinja", norm_report_context(model),
                                                   f"derive/norm.py, axes {model.axes}", ".md")
+    out["generated/__init__.py"] = render("registry/INIT.py.jinja", {"models": registry()},
+                                          "derive/builtin.py (derive/stands/*.toml and the norm model of 001)", ".py")
     return out
+
+
+def registry():
+    """[(command-line name, entry)] of every built-in model, as generated/__init__.py lists them."""
+    from .builtin import NORM_MODELS
+    entries = [(key.replace("_", "-"), {"module": key, "kind": "stand",
+                                        "remount": f"{key}_remount" if model.remount else None})
+               for key, model in MODELS.items()]
+    return entries + [(key, {"module": key, "kind": "norm", "remount": None}) for key in NORM_MODELS]
 
 
 def write(root=ROOT):

@@ -119,3 +119,23 @@ def test_generated_functions_compute_each_trigonometric_term_once():
                                             and ast.unparse(c.func) not in ("np.array", "np.asarray"))
                 again = [c for c, k in calls.items() if k > 1]
                 assert not again, f"{path.name}:{fn.name} computes {again} more than once"
+
+
+def test_the_registry_names_every_built_in_model_and_its_modules():
+    """generated/__init__.py (rendered by `python -m derive`) lists every description of derive/stands and the norm
+    model of 001, each with a module that loads and its remount module where the description asks for one. Red if
+    a stand were left out of it, or a remount module named that is not there."""
+    import importlib
+
+    from garant.derive.builtin import MODELS as DESCRIBED, STANDS_DIR
+    from garant.generated import MODELS
+    assert [n for n, e in MODELS.items() if e["kind"] == "stand"] == [p.stem.replace("_", "-")
+                                                                       for p in sorted(STANDS_DIR.glob("*.toml"))]
+    assert [n for n, e in MODELS.items() if e["kind"] == "norm"] == ["norm"]
+    for name, e in MODELS.items():
+        mod = importlib.import_module(f"garant.generated.{e['module']}")
+        assert mod.Q_NAMES
+        if e["kind"] == "stand":
+            assert bool(e["remount"]) == DESCRIBED[e["module"]].remount
+        if e["remount"]:
+            assert importlib.import_module(f"garant.generated.{e['remount']}").MOUNTS

@@ -7,12 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
+from garant.generated import MODELS as REGISTRY
+
 from .errors import DataError
 
-MODELS = {"two-axis": "garant.generated.two_axis", "single-axis": "garant.generated.single_axis",
-          "three-axis": "garant.generated.three_axis", "six-face": "garant.generated.six_face",
-          "norm": "garant.generated.norm"}
-STANDS = ["two-axis", "single-axis", "three-axis"]       # models with stand angles (plan, estimate)
+#: The built-in models (the registry `python -m derive` renders in generated/__init__.py): name -> module.
+MODELS = {name: f"garant.generated.{e['module']}" for name, e in REGISTRY.items()}
+STANDS = [name for name, e in REGISTRY.items() if e["kind"] == "stand"]     # stand models (plan, estimate)
 
 
 def load(name):
@@ -228,10 +229,8 @@ def symbolic_H(mod):
 def load_remount(name):
     """The generated remount module (25)-(29) of a built-in model, or None."""
     load(name)
-    try:
-        return importlib.import_module(MODELS[name] + "_remount")
-    except (KeyError, ModuleNotFoundError):
-        return None
+    remount = REGISTRY.get(name, {}).get("remount")
+    return importlib.import_module(f"garant.generated.{remount}") if remount else None
 
 
 def reachable_grid(ranges, detents, step, limit=1_000_000, what="the grid", raise_with=None):

@@ -2,6 +2,7 @@
 import sys
 
 from ..errors import DataError
+from ..models import STANDS
 from ..solve.highs import COUNT_NODES, SEARCH_NODES
 from ..workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS
 from . import args as options
@@ -10,8 +11,8 @@ from . import args as options
 def add(sub):
     """The `garant plan` subcommand and its options."""
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
-    p.add_argument("model", help="a built-in stand (two-axis, single-axis, three-axis), a STAND.toml, or norm "
-                   "(the coarse stand of 001: which orientations to hold the IMU in)")
+    p.add_argument("model", help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or norm (the coarse stand "
+                   "of 001: which orientations to hold the IMU in)")
     options.json(p)
     p.add_argument("--grid", type=options.positive, metavar="STEP", help="search positions every STEP degrees (detents "
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")

@@ -3,8 +3,10 @@
 Both the builder and the checker take H from here, so a certificate is checked against the model it
 names, never against the H it brings along.
 """
-#: Certificate model keys and the models they name.
-MODELS = {"two-axis": "two_axis", "single-axis": "single_axis", "three-axis": "three_axis", "norm": None}
+from garant.generated import MODELS as REGISTRY
+
+#: Certificate model keys and the stand models they name (None: the norm model of 001): every built-in model.
+MODELS = {name: e["module"] if e["kind"] == "stand" else None for name, e in REGISTRY.items()}
 
 
 class UnknownModel(ValueError):
