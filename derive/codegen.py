@@ -223,6 +223,7 @@ def outputs():
                                             f"derive/norm.py, axes {model.axes}", ".py")
         out[f"docs/derivation_{key}.md"] = render("norm/REPORT.md.jinja", norm_report_context(model),
                                                   f"derive/norm.py, axes {model.axes}", ".md")
+    out["generated/_runtime.py"] = render("runtime/RUNTIME.py.jinja", {}, "derive/templates/runtime", ".py")
     out["generated/__init__.py"] = render("registry/INIT.py.jinja", {"models": registry()},
                                           "derive/builtin.py (derive/stands/*.toml and the norm model of 001)", ".py")
     return out

@@ -9,12 +9,19 @@ Linearised residual (2)-(3): z^(p) = H^(p)(angles)^T q + rho^(p), |rho^(p)| <= s
 """
 import numpy as np
 
-__all__ = ["ANGLES", "PARAMETERS", "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES",
-           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "equivalent", "H", "up_nominal",
-           "readings", "residual", "PLAN_DEG", "PSI", "estimate_on_plan", "MOUNTINGS"]
+from garant.generated._runtime import broadcast as _broadcast, by_mount as _by_mount, turn_angle as _turn_angle
+
+__all__ = ["ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS", "PARAMETER_NAMES",
+           "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS", "H_EXACT", "PHYSICAL_TO_Q",
+           "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "MOUNTINGS", "equivalent", "H", "H_SUP", "up_nominal", "readings",
+           "residual", "PLAN_DEG", "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"]
 
 #: Read stand angles, in the order H takes them (rad).
 ANGLES = ("phi",)
+#: Row variables the model depends on besides the angles (time_s in s, temp_c in degrees C).
+VARIABLES = ()
+#: The mountings the block is used in (v_block = Q v_table), by index: `mount` of H, up_nominal and readings.
+MOUNTINGS = ("+x+y+z", "+y+z+x", "+z+x+y")
 #: Values each angle can take, degrees: a continuous range, or detents (empty: the whole range).
 ANGLE_RANGES_DEG = ((0, 360),)
 ANGLE_DETENTS_DEG = ((0, 90, 180, 270),)
@@ -121,7 +128,7 @@ ABSORBED = ("Delta_phi", "theta1", "Delta_g")
 TURN_AXIS = (0.5773502691896257, 0.5773502691896257, 0.5773502691896257)
 
 
-def equivalent(physical):
+def equivalent(physical) -> np.ndarray:
     """The unit that reads the same at every position with ABSORBED at 0 and Gamma' for Gamma.
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
@@ -175,20 +182,6 @@ def equivalent(physical):
     ]
     out[[1, 2, 5]] = 0.0
     return out
-
-
-def _turn_angle(A0, A1, A2):
-    """The root a of A0 + A1 cos a + A2 sin a = 0 nearest 0: the turn about TURN_AXIS that takes the mounting
-    with theta1 folded into the offset to C3(theta3) C2(theta2) (entry (3, 2) of the turned mounting is 0)."""
-    rho = np.hypot(A1, A2)
-    base, half = np.arctan2(A2, A1), np.arccos(np.clip(-A0 / rho, -1.0, 1.0))
-    roots = np.remainder(np.array([base + half, base - half]) + np.pi, 2 * np.pi) - np.pi
-    return roots[np.argmin(np.abs(roots))]
-
-
-def _broadcast(*angles):
-    angles = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in angles))
-    return angles, np.zeros_like(angles[0]), np.ones_like(angles[0])
 
 
 def _H_0(phi):
@@ -500,36 +493,22 @@ def _readings_2(phi, physical, g):
     return g * np.array([Gamma12*t19 + Gamma13*t18 + bias1 + t11*(Gamma11 + 1), Gamma21*t11 + Gamma23*t18 + bias2 + t19*(Gamma22 + 1), Gamma31*t11 + Gamma32*t19 + bias3 + t18*(Gamma33 + 1)])
 
 
-#: The mountings the block is used in (v_block = Q v_table), by index.
-MOUNTINGS = ("+x+y+z", "+y+z+x", "+z+x+y")
-
-
-def _by_mount(funcs, mount, *args):
-    """Evaluate the function of each position's mounting (mount: int or int array like the angles)."""
-    mount = np.asarray(mount)
-    if mount.ndim == 0:
-        return funcs[int(mount)](*args)
-    out = np.stack([f(*args) for f in funcs])
-    idx = np.broadcast_to(mount, out.shape[-mount.ndim:])
-    return np.take_along_axis(out, idx.reshape((1,) * (out.ndim - idx.ndim) + idx.shape), axis=0)[0]
-
-
-def H(phi, mount=0):
+def H(phi, mount=0) -> np.ndarray:
     """H^(p)(angles) of (3) for the block in mounting `mount` (index into MOUNTINGS)."""
     return _by_mount((_H_0, _H_1, _H_2, ), mount, phi)
 
 
-def up_nominal(phi, mount=0):
+def up_nominal(phi, mount=0) -> np.ndarray:
     """Nominal up-vector u in block axes for the block in mounting `mount`, shape (3, ...)."""
     return _by_mount((_up_nominal_0, _up_nominal_1, _up_nominal_2, ), mount, phi)
 
 
-def readings(phi, physical, g, mount=0):
+def readings(phi, physical, g, mount=0) -> np.ndarray:
     """Exact nonlinear readings f (m/s^2) of the block in mounting `mount`, shape (3, ...)."""
     return _by_mount((_readings_0, _readings_1, _readings_2, ), mount, phi, physical, g)
 
 
-def residual(phi, f, g, mount=0):
+def residual(phi, f, g, mount=0) -> np.ndarray:
     """Residual z of (1) of 000 (dimensionless) in block axes: readings f over g minus Q u."""
     return np.asarray(f, dtype=float) / g - up_nominal(phi, mount=mount)
 
@@ -555,7 +534,7 @@ def _psi():
 PSI = _psi()
 
 
-def estimate_on_plan(z):
+def estimate_on_plan(z) -> np.ndarray:
     """q, shape (len(Q_NAMES),), from the residuals z at PLAN_DEG as `residual` returns them, shape
     (3, len(PLAN_DEG)); guaranteed error sigma each. A model whose description gives no plan has none."""
     z = np.asarray(z, dtype=float)

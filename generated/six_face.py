@@ -9,12 +9,19 @@ Linearised residual (2)-(3): z^(p) = H^(p)(angles)^T q + rho^(p), |rho^(p)| <= s
 """
 import numpy as np
 
-__all__ = ["ANGLES", "PARAMETERS", "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES",
-           "Q_DEFINITIONS", "Q_UNITS", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "equivalent", "H", "up_nominal",
-           "readings", "residual", "PLAN_DEG", "PSI", "estimate_on_plan"]
+from garant.generated._runtime import broadcast as _broadcast, by_mount as _by_mount
+
+__all__ = ["ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS", "PARAMETER_NAMES",
+           "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS", "H_EXACT", "PHYSICAL_TO_Q",
+           "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "MOUNTINGS", "equivalent", "H", "H_SUP", "up_nominal", "readings",
+           "residual", "PLAN_DEG", "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"]
 
 #: Read stand angles, in the order H takes them (rad).
 ANGLES = ("az", "el")
+#: Row variables the model depends on besides the angles (time_s in s, temp_c in degrees C).
+VARIABLES = ()
+#: The mountings the block is used in (v_block = Q v_table), by index: `mount` of H, up_nominal and readings.
+MOUNTINGS = ("+x+y+z",)
 #: Values each angle can take, degrees: a continuous range, or detents (empty: the whole range).
 ANGLE_RANGES_DEG = ((0, 360), (0, 360))
 ANGLE_DETENTS_DEG = ((), ())
@@ -107,7 +114,7 @@ ABSORBED = ("phi1", "phi2", "phi3", "dg")
 TURN_AXIS = None
 
 
-def equivalent(physical):
+def equivalent(physical) -> np.ndarray:
     """The unit that reads the same at every position with ABSORBED at 0 and Gamma' for Gamma.
     Estimates bound the q (4) of this unit: no data tell it from the unit itself."""
     out = np.array(physical, dtype=float)
@@ -156,13 +163,8 @@ def equivalent(physical):
     return out
 
 
-def _broadcast(*angles):
-    angles = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in angles))
-    return angles, np.zeros_like(angles[0]), np.ones_like(angles[0])
-
-
-def H(az, el):
-    """H^(p)(angles) of (3): shape (3, 12) + broadcast shape of the angles (rad)."""
+def _H_0(az, el):
+    """H^(p)(angles) of (3): shape (3, 12) + broadcast shape of the angles (rad), mounting +x+y+z."""
     (az, el,), zero, one = _broadcast(az, el)
     t0 = np.sin(el)
     t1 = -t0*np.cos(az)
@@ -223,14 +225,14 @@ H_SUP = np.array([
 ])
 
 
-def up_nominal(az, el):
+def _up_nominal_0(az, el):
     """Nominal up-vector u in instrument axes for an ideal stand at the read angles, shape (3, ...)."""
     (az, el,), zero, one = _broadcast(az, el)
     t0 = np.sin(el)
     return np.array([-t0*np.cos(az), t0*np.sin(az), np.cos(el)])
 
 
-def readings(az, el, physical, g):
+def _readings_0(az, el, physical, g):
     """Exact nonlinear readings f (m/s^2), shape (3, ...), for physical errors `physical`.
 
     `physical` has the order of PARAMETER_NAMES (units there); g is the model gravity in m/s^2.
@@ -259,9 +261,24 @@ def readings(az, el, physical, g):
     return g * np.array([Gamma12*t16 + Gamma13*t9 + bias1 + t17*(Gamma11 + 1), Gamma21*t17 + Gamma23*t9 + bias2 + t16*(Gamma22 + 1), Gamma31*t17 + Gamma32*t16 + bias3 + t9*(Gamma33 + 1)])
 
 
-def residual(az, el, f, g):
-    """Residual z of (1) of 000 (dimensionless): readings f (m/s^2, shape (3, ...)) over g minus u."""
-    return np.asarray(f, dtype=float) / g - up_nominal(az, el)
+def H(az, el, mount=0) -> np.ndarray:
+    """H^(p)(angles) of (3) for the block in mounting `mount` (index into MOUNTINGS)."""
+    return _by_mount((_H_0, ), mount, az, el)
+
+
+def up_nominal(az, el, mount=0) -> np.ndarray:
+    """Nominal up-vector u in block axes for the block in mounting `mount`, shape (3, ...)."""
+    return _by_mount((_up_nominal_0, ), mount, az, el)
+
+
+def readings(az, el, physical, g, mount=0) -> np.ndarray:
+    """Exact nonlinear readings f (m/s^2) of the block in mounting `mount`, shape (3, ...)."""
+    return _by_mount((_readings_0, ), mount, az, el, physical, g)
+
+
+def residual(az, el, f, g, mount=0) -> np.ndarray:
+    """Residual z of (1) of 000 (dimensionless) in block axes: readings f over g minus Q u."""
+    return np.asarray(f, dtype=float) / g - up_nominal(az, el, mount=mount)
 
 
 #: The optimal plan the estimators below use, (angles in degrees) per position.
@@ -285,7 +302,7 @@ def _psi():
 PSI = _psi()
 
 
-def estimate_on_plan(z):
+def estimate_on_plan(z) -> np.ndarray:
     """q, shape (len(Q_NAMES),), from the residuals z at PLAN_DEG as `residual` returns them, shape
     (3, len(PLAN_DEG)); guaranteed error sigma each. A model whose description gives no plan has none."""
     z = np.asarray(z, dtype=float)

@@ -65,7 +65,7 @@ def run(args):
                               "units": {n: units.get(n, "see the effect catalogue") for n in values},
                               "q": dict(zip(mod.Q_NAMES, models.q_of(mod, [values.get(n, 0.0) for n in
                                                                              mod.PARAMETER_NAMES]).tolist())),
-                              "q_absorbs": list(getattr(mod, "ABSORBED", ())),
+                              "q_absorbs": list(mod.ABSORBED),
                               "temperatures_c": args.temperatures})
     print(f"wrote {truth}: the hidden truth (parameters, q, effects)")
     return 0

@@ -48,7 +48,7 @@ def for_stand(key):
 
 def stacked_H(mod):
     """H of a stand module with all mountings stacked as rows: (3 x mountings, m, ...)."""
-    if not hasattr(mod, "MOUNTINGS"):
+    if len(mod.MOUNTINGS) == 1:
         return mod.H
     return lambda *a: np.concatenate([mod.H(*a, mount=k) for k in range(len(mod.MOUNTINGS))], axis=0)
 
@@ -221,7 +221,7 @@ def for_plan(mod, model, r, plan, grid_step=None):
     names = list(mod.ANGLES)
     distinct = sorted({tuple(float(v) for v in a) for a in r.angles_deg})
     domain = {"kind": "positions", "names": names, "positions": [[_angle(v) for v in p] for p in distinct]}
-    if not all(getattr(mod, "ANGLE_DETENTS_DEG", ((),) * len(names))):    # the grid the candidates come from
+    if not all(mod.ANGLE_DETENTS_DEG):    # the grid the candidates come from
         domain["grid_step_deg"] = sp.sstr(sp.Rational(str(grid_step or 90)))
     rows = [[sp.sstr(e) for e in H.row(i)] for i in range(H.rows)]
     sub = exact.exact_columns(mod, r.angles_deg[list(plan)], r.mounts[list(plan)])

@@ -34,8 +34,8 @@ def grid(mod):
 
     Returns (angles in degrees, shape (S, n_angles); mounting index, shape (S,))."""
     names, mounts = layout(mod)
-    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * len(names))
-    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * len(names))
+    ranges = mod.ANGLE_RANGES_DEG
+    detents = mod.ANGLE_DETENTS_DEG
     values = []
     for (lo, hi), det in zip(ranges, detents):
         vals = det or tuple(v for v in (0, 90, 180, 270) if lo <= v <= hi or lo <= v + 360 <= hi)

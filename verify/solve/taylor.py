@@ -232,7 +232,7 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=(), centre=Non
     chunks = [(k, rows[c:c + CHUNK]) for k, rows in groups for c in range(0, len(rows), CHUNK)]
     physical = None if per_position else _linear_jets(L, lo, hi)
     for k, rows in chunks:
-        fn = mod.readings if k is None else getattr(mod, f"_readings_{k}")
+        fn = getattr(mod, f"_readings_{0 if k is None else k}")     # the function itself (its np rebound)
         if per_position:
             physical = _linear_jets(L, lo[:, rows], hi[:, rows])
         extra = [np.asarray(v, float)[rows] for v in variables]
@@ -382,7 +382,7 @@ def jacobian(mod, angles, L, p0, mounts=None, variables=()):
     groups = [(None, np.arange(N))] if mounts is None else [(k, np.flatnonzero(mounts == k))
                                                               for k in np.unique(mounts)]
     for k, rows in groups:
-        fn = mod.readings if k is None else getattr(mod, f"_readings_{k}")
+        fn = getattr(mod, f"_readings_{0 if k is None else k}")     # the function itself (its np rebound)
         fn = types.FunctionType(fn.__code__, {**fn.__globals__, "np": COMPLEX_NUMPY, "abs": _complex_abs},
                                 fn.__name__, fn.__defaults__)
         for b in range(0, len(rows), BLOCK):

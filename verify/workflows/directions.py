@@ -45,7 +45,5 @@ def up_in_block(mod, angles_deg, mounts=None):
     """(S, 3): the nominal up-direction in block axes at each position (degrees; `mounts` the mounting
     index of each, for stands with several): which faces of the block point up there."""
     deg = np.asarray(angles_deg, float).reshape(len(angles_deg), -1)
-    if hasattr(mod, "MOUNTINGS"):
-        mounts = np.zeros(len(deg), int) if mounts is None else np.asarray(mounts, int)
-        return np.asarray(mod.up_nominal(*np.deg2rad(deg.T), mount=mounts), float).reshape(3, -1).T
-    return _up(mod, deg.T).reshape(3, -1).T
+    mounts = 0 if mounts is None else np.asarray(mounts, int)
+    return np.asarray(mod.up_nominal(*np.deg2rad(deg.T), mount=mounts), float).reshape(3, -1).T

@@ -29,7 +29,7 @@ def variable_columns(mod, positions):
     """{name: values (N,)} of the columns the model's VARIABLES need (an extended model's time_s in s or
     temp_c in degrees C), as numbers; DataError naming a column that is missing or not a number."""
     out = {}
-    for v in map(str, getattr(mod, "VARIABLES", ())):
+    for v in map(str, mod.VARIABLES):
         if v not in positions.extra:
             raise DataError(f"{positions.path}: the model needs the column {v} "
                             f"({'s' if v == 'time_s' else 'degrees C'}) "
@@ -101,7 +101,7 @@ def check_residual_size(z, path, limit=0.5):
 
 def choose_estimator(mod, positions, A):
     """Weights (m x 3N) and the method: (23) of 000 near the optimal plan, else the LP (7)-(8)."""
-    plan = getattr(mod, "PLAN_DEG", np.zeros((0, 2)))
+    plan = mod.PLAN_DEG
     match = (nearby.match_plan(positions.alpha_deg, positions.beta_deg, plan)
              if len(plan) and positions.angles_deg.shape[1] == 2 and positions.mounts is None else None)
     if match is not None and match[1] > EXACT_DEG:

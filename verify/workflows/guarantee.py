@@ -37,10 +37,7 @@ ROUNDING = 1e-13           # absolute, on z of size 1: the float value and Jacob
 
 def linear_parameters(mod):
     """Parameters that enter the readings affinely with a constant coefficient: the biases."""
-    kinds = getattr(mod, "PARAMETER_KINDS", None)
-    if kinds:
-        return np.array([k == "bias" for k in kinds])
-    return np.array([n.startswith("bias") for n in mod.PARAMETER_NAMES])
+    return np.array([k == "bias" for k in mod.PARAMETER_KINDS])
 
 
 def coordinates(mod, bounds):
@@ -101,7 +98,7 @@ class Linearisation:
 
 
 def _extra(mod, positions):
-    return [np.asarray(positions.extra[str(v)], float) for v in getattr(mod, "VARIABLES", ())]
+    return [np.asarray(positions.extra[str(v)], float) for v in mod.VARIABLES]
 
 
 def _z_exact(mod, positions, p, g):

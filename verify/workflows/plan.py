@@ -30,7 +30,7 @@ class Plan:
     @property
     def multi(self):
         """Whether the stand uses several mountings."""
-        return len(getattr(self.mod, "MOUNTINGS", ("+x+y+z",))) > 1
+        return len(self.mod.MOUNTINGS) > 1
 
     def position(self, s):
         """Candidate s as angles in degrees, and its mounting when the stand has several."""
@@ -75,7 +75,7 @@ COUNT_SECONDS = 120.0
 def refuse_variables(mod, model):
     """DataError for a model whose H depends on VARIABLES (an extended model's time or temperature):
     which position comes when, or how warm, is not a choice among positions."""
-    variables = tuple(map(str, getattr(mod, "VARIABLES", ())))
+    variables = tuple(map(str, mod.VARIABLES))
     if variables:
         raise DataError(f"{model}: H depends on {', '.join(variables)} (when or how warm each position is measured), "
                         "which a plan of positions cannot choose: plan with the base model, record "
@@ -114,8 +114,8 @@ def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_
                  f"{highs.COUNT_NODES if count_nodes is None else count_nodes:,} counting)")
     r = plans.search(mod, P, M, **work)
     n = len(names)
-    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
-    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
+    ranges = mod.ANGLE_RANGES_DEG
+    detents = mod.ANGLE_DETENTS_DEG
     cont, added = None, 0
     if not all(len(d) for d in detents):    # the continuum of reachable angles: the exchange method there
         sol = continuum.exchange(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
@@ -164,10 +164,9 @@ def candidates(mod, step=None, limit=MAX_CANDIDATES):
     if 360 % step:
         raise DataError(f"{opt('grid')} {step:g}: give a step that divides 360 degrees")
     from ..models import layout, reachable_grid
-    n = len(mod.ANGLES)
     k = len(layout(mod)[1])
-    P = reachable_grid(getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n),
-                       getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n), step, limit=max(limit // k, 1),
+    P = reachable_grid(mod.ANGLE_RANGES_DEG,
+                       mod.ANGLE_DETENTS_DEG, step, limit=max(limit // k, 1),
                        what=f"--grid {step:g}" + (f" (in each of {k} mountings)" if k > 1 else ""),
                        raise_with="--max-candidates")
     return np.tile(P, (k, 1)), np.repeat(np.arange(k), len(P))
@@ -175,7 +174,7 @@ def candidates(mod, step=None, limit=MAX_CANDIDATES):
 
 def _preferred_plan(mod, r):
     """The model's own plan (PLAN_DEG) when it is among the optimal ones, else the first found."""
-    own = getattr(mod, "PLAN_DEG", np.zeros((0, 0)))
+    own = mod.PLAN_DEG
     if len(own):
         idx = tuple(sorted(int(np.flatnonzero(np.all(r.angles_deg == p, axis=1))[0]) for p in own))
         if idx in r.optimal_plans:

@@ -122,12 +122,10 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
     --bound NAME=VALUE of the commands), else `prior` for every stand, mounting, block and effect parameter
     when given (the override), else the description's, else the default of its kind; Delta_g/g from
     `g_uncertainty`, else the default for a stated or assumed g."""
-    kinds = getattr(mod, "PARAMETER_KINDS", None) or tuple(
-        "bias" if n.startswith("bias") else "block" for n in mod.PARAMETER_NAMES)
-    stated = getattr(mod, "PARAMETER_BOUNDS", None) or (None,) * len(kinds)
+    kinds, stated = mod.PARAMETER_KINDS, mod.PARAMETER_BOUNDS
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     default = {"stand": STAND_BOUND, "mounting": MOUNTING_BOUND, "block": BLOCK_BOUND, "effect": BLOCK_BOUND}
-    absorbed = tuple(getattr(mod, "ABSORBED", ()))
+    absorbed = tuple(mod.ABSORBED)
     named = dict(bound or {})
     for name in named:
         if name not in mod.PARAMETER_NAMES:
@@ -159,7 +157,7 @@ def premises(mod, sigma, g, *, g_given=True, g_uncertainty=None, prior=None, sig
             src += ", on the equivalent unit's Gamma'"
         bounds.append(bound), sources.append(src)
     turned = {}
-    if getattr(mod, "TURN_AXIS", None) is not None:
+    if mod.TURN_AXIS is not None:
         turned = _turned(mod.TURN_AXIS, list(mod.PARAMETER_NAMES), kinds, split, bounds, sources)
     return Premises(sigma=sigma, sigma_source=sigma_source, g=g, g_uncertainty=g_unc, g_source=g_src,
                     names=tuple(mod.PARAMETER_NAMES), kinds=tuple(kinds), bounds=np.array(bounds, float),

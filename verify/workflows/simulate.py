@@ -19,15 +19,15 @@ def plan_positions(mod, plan):
     model's own plan), quarter16 / quarter (every quarter turn), grid:AxB (a step per angle) or grid:A
     (one step for every angle); with several mountings, every position in each of them."""
     n = len(mod.ANGLES)
-    ranges = getattr(mod, "ANGLE_RANGES_DEG", ((0, 360),) * n)
-    detents = getattr(mod, "ANGLE_DETENTS_DEG", ((),) * n)
+    ranges = mod.ANGLE_RANGES_DEG
+    detents = mod.ANGLE_DETENTS_DEG
     if str(plan).endswith(".csv"):                          # a plan file, as `garant plan --csv` writes it
         names, mount_names = layout(mod)
         P, mounts = read_plan(plan, names, mount_names if len(mount_names) > 1 else None)
         _check_reachable(mod, ranges, detents, P, plan)
         return P, mounts
     if plan == "optimal10":
-        if not len(getattr(mod, "PLAN_DEG", ())):
+        if not len(mod.PLAN_DEG):
             raise DataError(f"this model has no optimal plan of its own; write one with `garant plan STAND --csv "
                             f"PLAN.csv` and pass {opt('plan')} PLAN.csv, or use quarter or grid:STEP")
         P = np.asarray(mod.PLAN_DEG, float)
@@ -43,8 +43,8 @@ def plan_positions(mod, plan):
         if len(steps) != n or any(s <= 0 or 360 % s for s in steps):
             raise DataError(f"{plan}: give {n} step(s) that divide 360 degrees")
         P = reachable_grid(ranges, detents, steps, what=f"--plan {plan}")
-    mounts = getattr(mod, "MOUNTINGS", None)
-    if mounts is None:
+    mounts = mod.MOUNTINGS
+    if len(mounts) == 1:
         return P, None
     return np.tile(P, (len(mounts), 1)), np.repeat(np.arange(len(mounts)), len(P))
 
@@ -176,7 +176,7 @@ def simulate(base_model, mod, plan, effects, sigma, seed, g=9.81, size=1e-4, tru
         P = np.vstack([P] * len(temperatures))
         mounts = None if mounts is None else np.concatenate([mounts] * len(temperatures))
     sizes = size if isinstance(size, dict) else dict.fromkeys(KINDS, size)
-    kinds = dict(zip(mod.PARAMETER_NAMES, getattr(mod, "PARAMETER_KINDS", ("block",) * len(mod.PARAMETER_NAMES))))
+    kinds = dict(zip(mod.PARAMETER_NAMES, mod.PARAMETER_KINDS))
     values = {p.name: rng.uniform(-1, 1) * sizes.get(kinds.get(p.name, "block"), 0.0) for p in base_model.parameters}
     if truth is not None:
         values = {p.name: truth.get(p.name, 0.0) for p in base_model.parameters}
