@@ -184,3 +184,9 @@ def test_a_description_is_derived_once_and_again_when_it_changes(tmp_path, monke
     (tmp_path / "x.py").write_text("import os\n")
     with pytest.raises(Exception, match="no garant header"):
         models.load(str(tmp_path / "x.py"))
+    # a module of an older garant (before every stand module had MOUNTINGS and the shared runtime) is refused
+    # with what to do, rather than failing later on a missing name
+    old = module.read_text().replace("\nMOUNTINGS = ", "\nMOUNTS_OLD = ")
+    (tmp_path / "old.py").write_text(old)
+    with pytest.raises(Exception, match="written by an older garant; derive it again"):
+        models.load(str(tmp_path / "old.py"))
