@@ -167,3 +167,21 @@ def test_every_result_has_a_status_and_its_message(tmp_path):
     bad = garant.estimate("two-axis", np.column_stack([P, spike]), 1e-5)
     assert (good.status, bad.status) == ("consistent", "refuted") and "no bound" in bad.message
     assert garant.plan("two-axis").status == "done"
+
+
+def test_docs_api_states_each_function_as_it_is():
+    """docs/api.md's table gives each function of the API with its signature as Python reports it (options
+    keyword-only, one order): red if an option is added, renamed or reordered and the page is not."""
+    import inspect
+    api = (ROOT / "docs" / "api.md").read_text()
+    inputs = {"plan": ["model"], "next_position": ["model", "data", "sigma"], "estimate": ["model", "data", "sigma"],
+              "calibrate_norm": ["log"], "calibrate_many": ["logs"], "diagnose": ["model", "data", "sigma"],
+              "apply": ["calibration", "log"]}
+    for name, given in inputs.items():
+        sig = inspect.signature(getattr(garant, name))
+        assert f"`garant.{name}{str(sig).replace(chr(39), chr(34))}`" in api, name
+        positional = [p.name for p in sig.parameters.values() if p.kind != p.KEYWORD_ONLY]
+        assert positional == given, (name, positional)                 # every option by its name
+        options = [p for p in sig.parameters if p not in given]
+        premises = [p for p in ("g", "g_uncertainty", "prior", "bound") if p in options]
+        assert options[:len(premises)] == premises, name                # the premises first, in one order

@@ -253,7 +253,7 @@ def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_n
     positions = jobs.positions_of(models.load("two-axis"), str(data))
     levels = thermal.chamber_levels(positions)
     assert levels == list(TEMPS)
-    found = thermal.degree_needed(levels, lambda d: jobs.estimate("two-axis", str(data), SIGMA, G, temperature=d))
+    found = thermal.degree_needed(levels, lambda d: jobs.estimate("two-axis", str(data), SIGMA, g=G, temperature=d))
     assert found["needed"] == degree
     assert [t["consistent"] for t in found["tried"]] == [False] * (degree - 1) + [True]
 

@@ -95,8 +95,8 @@ def _apply(args, calibration, log, output):
     from ..io.report import write_chunks
     from ..io.text import csv_bytes
     from ..workflows import jobs
-    pieces = jobs.apply(calibration, log, args.format, args.sensor, args.imu, args.trust_units, chunk=CHUNK,
-                        frame=args.frame)
+    pieces = jobs.apply(calibration, log, fmt=args.format, sensor=args.sensor, imu=args.imu,
+                        trust_units=args.trust_units, frame=args.frame, chunk=CHUNK)
     worst, total, n, kind = np.zeros(3), 0.0, 0, ""
 
     def rows():

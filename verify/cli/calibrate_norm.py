@@ -152,8 +152,9 @@ def _csv_cell(text):
 def _run(args, into=None):
     from ..io import report
     from ..workflows import jobs
-    res = jobs.calibrate_norm(args.log, args.g, args.params, args.format, args.sensor, args.imu, args.window, args.k,
-                              args.min_still, args.delta_sigma, args.diagnose, args.g_uncertainty, args.rate)
+    res = jobs.calibrate_norm(args.log, g=args.g, g_uncertainty=args.g_uncertainty, delta_sigma=args.delta_sigma,
+                              params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
+                              window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)

@@ -28,7 +28,8 @@ def run(args):
     from ..workflows import diagnose, jobs
     names = models.layout(models.load(args.model))[0]
     t0 = time.perf_counter()
-    res = jobs.diagnose(args.model, args.data, args.sigma, args.g, args.prior, args.g_uncertainty, dict(args.bound))
+    res = jobs.diagnose(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty, prior=args.prior,
+                        bound=dict(args.bound))
     study = res.study
     print(f"current model: minimax residual less the proven linearisation remainder (<= "
           f"{res['remainder_bound'] / args.sigma:.2f} sigma) is {res['max_residual_before'] / args.sigma:.2f} sigma: "

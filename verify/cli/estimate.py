@@ -66,10 +66,11 @@ def run(args):
         raise DataError("--export-imu-tk/--export-imucal: those files hold no temperature polynomial; with "
                         "--temperature give --save (garant's calibration, which holds it), --export-ardupilot or "
                         "--export-px4")
-    res = jobs.estimate(args.model, args.data, args.sigma, args.g, args.g_uncertainty, args.prior, args.mount,
-                        args.gamma, args.imu, args.which_run,
-                        progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True),
-                        bound=dict(args.bound), fmt=args.format, sections=args.sections, temperature=args.temperature)
+    res = jobs.estimate(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty, prior=args.prior,
+                        bound=dict(args.bound), mount=args.mount, gamma=args.gamma, imu=args.imu,
+                        which_run=args.which_run, fmt=args.format, sections=args.sections,
+                        temperature=args.temperature,
+                        progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     mod = (models.thermal(args.model, args.temperature, res["thermal"]["t0_c"]) if "thermal" in res
            else models.load(args.model))
     if wanted and res["consistent"] and "calibration" not in res and not res.get("premises_refuted"):

@@ -36,9 +36,10 @@ def run(args):
     """`garant next`: parse, call the job, print; the exit status (3 when the data so far refute sigma)."""
     from ..io import report
     from ..workflows import jobs
-    res = jobs.next_position(args.model, args.data, args.sigma, args.target, args.grid, args.g, args.g_uncertainty,
-                             args.prior, args.search_seconds, args.max_candidates, args.mount, args.gamma,
-                             dict(args.bound))
+    res = jobs.next_position(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty,
+                             prior=args.prior, bound=dict(args.bound), mount=args.mount, gamma=args.gamma,
+                             target=args.target, grid=args.grid, search_seconds=args.search_seconds,
+                             max_candidates=args.max_candidates)
     if args.json:
         report.write_json(args.json, res)
     _print(res, args)

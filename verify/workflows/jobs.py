@@ -13,16 +13,48 @@ from ..io import results
 from .premises import G_DEFAULT, premises as make_premises
 
 
-def estimate(model, data, sigma, g=None, g_uncertainty=None, prior=None, mount=None, gamma="lower",
-             imu=None, which_run=None, progress=None, bound=None, fmt=None, sections=None, temperature=None):
-    """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors
-    from positions: a CSV path, a means file (with `imu` and `which_run`), a DataFrame or an array
-    (`positions_of`). g in m/s^2 (None: 9.81 with the uncertainty of an assumed g); the premises of
-    the bounds are in the result. A consistent result with the block's errors holds "calibration",
-    the dictionary `apply` takes. `bound`: {parameter: a-priori bound}, over the description's and `prior`.
-    `temperature` D: each block parameter a polynomial of degree D in T (the temp_c column), each q with one
-    bound over the whole range ("thermal"; workflows/thermal.py); the calibration holds the block at T0 and its
-    polynomial in T ("thermal", io/calibration.py), which `apply` evaluates at each sample's temperature."""
+def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, bound=None, mount=None, gamma="lower",
+             imu=None, which_run=None, fmt=None, sections=None, temperature=None, progress=None):
+    """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors, from
+    positions: `garant estimate --json`.
+
+    Parameters
+    ----------
+    model : str
+        A built-in stand's name or a STAND.toml path.
+    data : path, DataFrame or array
+        A positions CSV, a means file (then `imu` and `which_run`), imucal's session (then fmt="imucal" and
+        `sections`, its section list, unless it has a part column), a DataFrame or an array (N, angles + 3).
+    sigma : float
+        The noise bound (5) of 000, dimensionless (units of g).
+    g : float, optional
+        Local gravity, m/s^2 (None: 9.81, with the uncertainty of an assumed g).
+    g_uncertainty : float, optional
+        The bound on |Delta_g/g|.
+    prior : float, optional
+        One a-priori bound for every stand, mounting and block error (over the description's bounds).
+    bound : dict, optional
+        {parameter: a-priori bound} (rad or dimensionless), over the description's and `prior`, as
+        --bound NAME=VALUE.
+    mount : str, optional
+        A mounting like "+y+z+x" (two-axis): also the block's physical errors, (28)-(29) of 000.
+    gamma : {"lower", "symmetric"}
+        The form of Gamma in (29).
+    imu, which_run, fmt, sections
+        Which IMU and run of a means file; the data's format and imucal's section list.
+    temperature : int, optional
+        D (1-3): each block parameter a polynomial of degree D in T (the temp_c column), each q with one bound
+        over the range ("thermal", docs/thermal.md); the calibration holds the block at T0 and its polynomial.
+    progress : callable, optional
+        Hears a line of progress on long work.
+
+    Returns
+    -------
+    Estimate
+        Its "premises" say what the bounds assume; "premises_refuted" lists each q the readings put beyond what
+        those a-priori bounds allow (then no bound is guaranteed and no calibration given). A consistent result
+        with the block's errors holds "calibration", the dictionary `apply` takes.
+    """
     from . import estimate as est
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
@@ -90,14 +122,37 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
     return Positions(str(data), angles_for(mod, run.nominal, data), np.array([st.mean for st in run.stills]))
 
 
-def calibrate_norm(log, g=None, params=9, fmt=None, sensor=None, imu=None, window=1.0, k=10.0,
-                   min_still=2.0, delta_sigma=None, diagnose=False, g_uncertainty=None, rate=None):
-    """Calibrate a static log (a path, or an array (N, 4): time in s, then the three raw axes) through
-    the norm relation (2.2) of 001: still intervals (moving variance over `window` s below `k` times the
-    first seconds', at least `min_still` s), the verdict, M and b with guaranteed errors. A consistent
-    result holds "calibration", the dictionary `apply` takes; `diagnose` adds the effect catalogue's test.
-    g None: 9.81 assumed, and |Delta_g/g| bounded as every command bounds it (premises.gravity_uncertainty),
-    in the calibration's bounds."""
+def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=9, fmt=None, sensor=None, imu=None,
+                   rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False):
+    """Calibrate a static log through the norm relation (2.2) of 001: `garant calibrate-norm --json`.
+
+    Parameters
+    ----------
+    log : path, array or DataFrame
+        A log path (formats of docs/formats.md), an array (N, 4): time in s, then x, y, z raw, or a pandas
+        DataFrame as `apply` takes it (acc_x, acc_y, acc_z; a time column or `rate`).
+    g : float, optional
+        Local gravity, m/s^2 (None: 9.81 assumed, |Delta_g/g| <= 5e-3 in the calibration's bounds).
+    g_uncertainty : float, optional
+        The bound on |Delta_g/g| (default 1e-5 with g, 5e-3 without).
+    delta_sigma : float, optional
+        A guaranteed bound on |delta_sigma| of (2.2), units of g (None: the noise rule).
+    params : {9, 12}
+        9 (scale, misalignment, bias) or 12 (also the nonlinearity).
+    fmt, sensor, imu, rate
+        The log's format, an OpenAXES accelerometer, an IMU of a multi-IMU stream, Hz for a log of sample
+        indices (--format imucal, a DataFrame without a time column).
+    window, k, min_still : float
+        Still when the moving variance over `window` s is below `k` times the first seconds', for at least
+        `min_still` s.
+    diagnose : bool
+        Also test the effect catalogue.
+
+    Returns
+    -------
+    NormCalibration
+        When consistent, its "calibration" is the dictionary `apply` takes.
+    """
     from ..io import calibration, recordings
     from . import calibrate_norm as cn
     from .premises import gravity_uncertainty
@@ -164,12 +219,36 @@ def _frame(df, rate=None):
     return np.column_stack([t, *(real_array(df[low[n]], f"log: column {n}") for n in acc)])
 
 
-def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertainty=None, prior=None,
-                  search_seconds=None, max_candidates=None, mount=None, gamma="lower", bound=None):
-    """The position to measure next on a stand, from the positions measured so far (a positions CSV,
-    a header alone at the start, or an array; see `positions_of`): next.py's suggestion, and once every
-    q has an estimator the verdict of `estimate` on the data (`consistent`; its `disagreements` when
-    the data refute sigma)."""
+def next_position(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, bound=None, mount=None,
+                  gamma="lower", target=None, grid=None, search_seconds=None, max_candidates=None):
+    """The position to measure next, from the positions measured so far: `garant next --json`.
+
+    Parameters
+    ----------
+    model : str
+        A built-in stand's name or a STAND.toml.
+    data : path, DataFrame or array
+        The positions measured so far (a CSV path, a header alone at the start, a DataFrame or an array of 0 or
+        more rows).
+    sigma : float
+        The noise bound (units of g).
+    g, g_uncertainty, prior, bound
+        The premises of the verdict on the data, as in `estimate`.
+    mount, gamma
+        Target the block's parameters in this mounting ((28)-(29) of 000, two-axis) instead of the q's.
+    target : float, optional
+        The guaranteed error wanted for every q (units of q); None: sigma times the stand's optimal errors.
+    grid : float, optional
+        Candidate step in degrees (at most `max_candidates` positions; None: the command's default).
+    search_seconds : float, optional
+        A safety stop of the search.
+
+    Returns
+    -------
+    NextPosition
+        `next` (None when `done`), `still_needed`, the errors before and after; once every q has an estimator,
+        the verdict of `estimate` on the data (`consistent`; `disagreements` when the data refute sigma).
+    """
     from ..solve import lp
     from .next import next_position as suggest, printed_bounds, target_names
     mod = models.load(model)
@@ -178,7 +257,8 @@ def next_position(model, data, sigma, target=None, grid=None, g=None, g_uncertai
     verdict, printed = None, None
     if len(pos.angles_deg) and (_repeats_refute(pos, sigma, g) or not lp.unidentifiable(
             lp.measurement_matrix(mod, np.deg2rad(pos.angles_deg), pos.mounts))):    # a verdict is possible
-        verdict = estimate(model, data, sigma, g, g_uncertainty, prior, mount, gamma, bound=bound)
+        verdict = estimate(model, data, sigma, g=g, g_uncertainty=g_uncertainty, prior=prior, bound=bound,
+                           mount=mount, gamma=gamma)
     floor = None
     if verdict is not None and verdict["consistent"] and not verdict.get("premises_refuted"):
         printed, floor = printed_bounds(verdict, target_names(mod, model, mount, gamma))
@@ -202,10 +282,27 @@ def _repeats_refute(pos, sigma, g):
     return len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g)) > 0
 
 
-def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=None):
-    """The missing-effect workflow of diagnose.py on positions (see `positions_of`): the verdict of the
-    current model, the catalogue effects the data need, their estimates and what separates the rest.
-    The result's attribute `study` (not a field: not in JSON) is what `diagnose.write_module` needs."""
+def diagnose(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, bound=None):
+    """The missing-effect workflow on positions: `garant diagnose --json`.
+
+    Parameters
+    ----------
+    model : str
+        A built-in stand's name or a STAND.toml.
+    data : path, DataFrame or array
+        Positions, as `estimate` takes them.
+    sigma : float
+        The noise bound (units of g).
+    g, g_uncertainty, prior, bound
+        The premises, as in `estimate`.
+
+    Returns
+    -------
+    Diagnosis
+        The verdict of the current model, the catalogue effects the data need, their estimates and what
+        separates the rest. Its attribute `study` (not a field: not in JSON) is what `diagnose.write_module`
+        needs.
+    """
     from . import diagnose as diagnosis
     mod = models.load(model)
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
@@ -218,19 +315,43 @@ def diagnose(model, data, sigma, g=None, prior=None, g_uncertainty=None, bound=N
         levels = thermal.chamber_levels(positions)
         if len(levels) >= 2:                       # a chamber session: the degree in T its data need
             res["thermal_degree"] = thermal.degree_needed(
-                levels, lambda d: estimate(model, data, sigma, g, g_uncertainty, prior, bound=bound, temperature=d))
+                levels, lambda d: estimate(model, data, sigma, g=g, g_uncertainty=g_uncertainty, prior=prior,
+                                           bound=bound, temperature=d))
     out = results.Diagnosis(res)
     out.study = study
     return out
 
 
-def apply(calibration, log, fmt=None, sensor=None, imu=None, trust_units=False, chunk=None, frame="garant",
-          rate=None):
-    """Correct a raw log with a calibration (a garant-calibration-1 file or the dictionary a result
-    holds), checked as a file is (schema, a well-conditioned M, the log's unit unless `trust_units`).
-    Returns the Correction t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2; with `chunk`, an iterator of
-    Corrections of at most `chunk` samples (the command writes a long log piece by piece). `frame`: garant's,
-    or "imu_tk", that of the imu_tk export (io/calibration.imu_tk_form)."""
+def apply(calibration, log, *, fmt=None, sensor=None, imu=None, rate=None, trust_units=False, frame="garant",
+          chunk=None):
+    """Correct a raw log with a calibration: `garant apply`.
+
+    Parameters
+    ----------
+    calibration : path or dict
+        A garant-calibration-1 file or the dictionary a result's "calibration" holds; either is checked as
+        `garant apply` checks it (schema, a well-conditioned M, the log's unit unless `trust_units`).
+    log : path, array or DataFrame
+        A log path, an array (N, 4): time in s, then x, y, z raw, or a pandas DataFrame with columns acc_x,
+        acc_y, acc_z (or x, y, z, ...) and a time column (time_s, time_ms, ...) or, without one, `rate` (Hz)
+        over its index: then a calibrated copy of the DataFrame is returned (its accelerometer columns
+        corrected, m/s^2, and bound_x, bound_y, bound_z added), as imucal's calibrate_df.
+    fmt, sensor, imu, rate
+        The log's format, an OpenAXES accelerometer, an IMU of a multi-IMU stream, Hz over a sample index.
+    trust_units : bool
+        Skip the check that the log is in the calibration's unit.
+    frame : {"garant", "imu_tk"}
+        M as calibrated, or the frame of the imu_tk export (a norm calibration turned into imu_tk's
+        upper-triangular T).
+    chunk : int, optional
+        Return an iterator of Corrections of at most `chunk` samples (a long log piece by piece).
+
+    Returns
+    -------
+    Correction
+        t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2, the worst-case error of each component; it unpacks as
+        (t, a, bound).
+    """
     from ..io import calibration as cal_io, recordings
     cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
     data = read_log(log, fmt, sensor, imu, rate)
