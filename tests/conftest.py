@@ -1,8 +1,21 @@
 import os
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
+
+#: Where things are, for every test: the repository, the tests' data and stands, and the real recordings of
+#: ../shared beside the clone.
+TESTS = Path(__file__).resolve().parent
+ROOT = TESTS.parent
+DATA = TESTS / "data"
+STANDS = DATA / "stands"
+REAL = ROOT.parent / "shared" / "data" / "real"
+G_REAL = 9.81744                 # the g the recordings' authors used (shared/data/real/README.md), m/s^2
+# Skipped on a machine without shared/, never in CI (CI=true): there the data must be present.
+needs_real = pytest.mark.skipif(not REAL.is_dir() and not os.environ.get("CI"),
+                                reason="../shared/data/real is not present")
 
 # Derived descriptions are cached (verify/models.py); the tests keep theirs apart from the user's, in a
 # folder made once by the process that starts the run (the workers inherit it) and removed at its end.
@@ -16,6 +29,15 @@ from garant.generated import two_axis as two_axis  # noqa: E402  (after the cach
 @pytest.fixture(scope="session")
 def mod():
     return two_axis
+
+
+def C(n, x):
+    """The independent oracle of the rotation chains (numpy, written apart from garant): the passive rotation
+    by x about the unit vector n, cos x E + (1 - cos x) n n^T - sin x [n x] (C1-C3 of section 2 of 000;
+    Rodrigues for a tilted axis)."""
+    n = np.asarray(n, float) / np.linalg.norm(n)
+    K = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
+    return np.cos(x) * np.eye(3) + (1 - np.cos(x)) * np.outer(n, n) - np.sin(x) * K
 
 
 def simulate(mod, positions_deg, physical, sigma, g=9.81, seed=0):
@@ -42,12 +64,12 @@ def write_csv(path, positions_deg, f, extra=None):
 SLOW = {
     "test_report.py::test_a_batch_summary_page_renders_in_headless_chromium",
     "test_batch.py::test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line",
-    "test_any_stand.py::test_diagnose_advises_only_reachable_positions",
+    "test_wedges_axes_detents.py::test_diagnose_advises_only_reachable_positions",
     "test_api.py::test_diagnose_of_the_api_is_the_command",
     "test_api.py::test_every_result_has_a_status_and_its_message",
     "test_api.py::test_plan_of_the_api_is_the_plan_of_the_command",
     "test_arithmetic.py::test_field_arithmetic_is_that_of_the_reals",
-    "test_cache.py::test_a_planted_entry_is_never_run_and_is_replaced",
+    "test_description_cache.py::test_a_planted_entry_is_never_run_and_is_replaced",
     "test_calibrate_norm.py::test_k_batch_is_the_student_t_point",
     "test_calibrate_norm.py::test_noise_rule_holds_on_split_halves_of_every_real_log",
     "test_calibrate_norm.py::test_real_log_bounds_are_the_information_sets",
@@ -75,17 +97,17 @@ SLOW = {
     "test_diagnose.py::test_two_effects_at_two_sigma_are_named_and_no_third",
     "test_diagnose.py::test_two_effects_at_two_sigma_both_named",
     "test_diagnose.py::test_two_hidden_effects_both_named",
-    "test_five_stands.py::test_derive_plan_simulate_estimate_diagnose",
-    "test_five_stands.py::test_two_axis_plans_on_finer_grids_are_the_quarter_turn_plans",
+    "test_described_stands.py::test_derive_plan_simulate_estimate_diagnose",
+    "test_described_stands.py::test_two_axis_plans_on_finer_grids_are_the_quarter_turn_plans",
     "test_formats.py::test_every_result_json_follows_its_published_schema",
     "test_guarantee.py::test_data_that_refute_sigma_get_a_verdict_not_bounds",
     "test_guarantee.py::test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_position_by_position",
     "test_guarantee.py::test_no_false_alarms_on_clean_data",
-    "test_hostile.py::test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected",
-    "test_hostile.py::test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor",
-    "test_hostile.py::test_a_table_with_120_degree_detents_derives_plans_and_certifies",
-    "test_hostile.py::test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_search",
-    "test_hostile.py::test_string_in_a_description_cannot_run_code",
+    "test_hostile_inputs.py::test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected",
+    "test_hostile_inputs.py::test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor",
+    "test_hostile_inputs.py::test_a_table_with_120_degree_detents_derives_plans_and_certifies",
+    "test_hostile_inputs.py::test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_search",
+    "test_hostile_inputs.py::test_string_in_a_description_cannot_run_code",
     "test_hostile_outputs.py::test_next_draws_its_plot_when_done",
     "test_hostile_outputs.py::test_plan_norm_draws_its_plot_and_refuses_a_route",
     "test_identifiability.py::test_detents_that_see_the_whole_circle_give_the_rank_of_every_reachable_position",
@@ -94,8 +116,8 @@ SLOW = {
     "test_next.py::test_a_session_reaches_the_optimal_errors_in_the_fewest_positions",
     "test_next.py::test_data_that_refute_sigma_stop_the_session",
     "test_next.py::test_done_means_estimate_prints_every_bound_at_its_target",
-    "test_norm.py::test_norm_checks_pass",
-    "test_norm.py::test_sigma_expansion_is_H_q_to_first_order",
+    "test_norm_001.py::test_norm_checks_pass",
+    "test_norm_001.py::test_sigma_expansion_is_H_q_to_first_order",
     "test_premises.py::test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound",
     "test_premises.py::test_an_estimate_that_contradicts_the_premises_says_so_instead_of_a_block",
     "test_premises.py::test_item_0_of_the_issue_on_ten_sets",
@@ -115,12 +137,12 @@ SLOW = {
     "test_report.py::test_the_plan_plot_shows_the_up_direction_of_each_position",
     "test_route.py::test_the_route_of_the_two_axis_plan_is_the_fastest_order",
     "test_rows_can_fail.py::test_norm_plans_red_on_a_plan_missing_a_direction",
-    "test_stands.py::test_a_description_is_derived_once_and_again_when_it_changes",
-    "test_stands.py::test_any_identifier_a_user_picks_works",
-    "test_stands.py::test_builtin_stands_plan",
-    "test_stands.py::test_description_file_as_model",
-    "test_stands.py::test_plan_file_travels_to_simulate_and_the_truth_is_saved",
-    "test_stands.py::test_simulate_estimate_round_trip",
+    "test_descriptions.py::test_a_description_is_derived_once_and_again_when_it_changes",
+    "test_descriptions.py::test_any_identifier_a_user_picks_works",
+    "test_descriptions.py::test_builtin_stands_plan",
+    "test_descriptions.py::test_description_file_as_model",
+    "test_descriptions.py::test_plan_file_travels_to_simulate_and_the_truth_is_saved",
+    "test_descriptions.py::test_simulate_estimate_round_trip",
     "test_text.py::test_next_to_every_power_of_ten",
     "test_thermal.py::test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_needs",
     "test_thermal.py::test_simulate_runs_the_plan_at_each_chamber_temperature",
@@ -133,7 +155,7 @@ SLOW = {
     "test_thermal.py::test_too_few_temperatures_for_the_degree_are_refused_naming_what_is_missing",
     "test_information.py::test_96_positions_prove_a_quarter_of_sigma_and_match_an_independent_hull",
     "test_diagnose.py::test_no_effect_no_alarm",
-    "test_verify.py::test_primal_dual_chebyshev_agree_on_a_coarse_grid",
+    "test_stand_000.py::test_primal_dual_chebyshev_agree_on_a_coarse_grid",
     "test_text.py::test_up_never_below_and_nearest_within_half_a_unit",
     "test_hostile_outputs.py::test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one",
 }

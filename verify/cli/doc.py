@@ -1,7 +1,7 @@
 """docs/cli.md from the argument parser itself: every command, every option, its metavar, default and help.
 
 python -m verify.cli.doc            # print it
-python -m verify.cli.doc --check    # fail when docs/cli.md differs (tests/test_cli.py does the same)
+python -m verify.cli.doc --check    # fail when docs/cli.md differs (tests/cli/test_cli.py does the same)
 python -m verify.cli.doc --write    # write docs/cli.md
 """
 import argparse

@@ -250,7 +250,7 @@ def for_plan(mod, model, r, plan, grid_step=None):
 
 #: The certificates of the built-in models, built once and committed: `garant verify` re-checks these
 #: (the check is the proof; building is a search that takes seconds). `python -m verify.proof` rebuilds
-#: them, `--check` fails on any difference, and tests/test_certificates.py does the same.
+#: them, `--check` fails on any difference, and tests/solve/test_certificates.py does the same.
 COMMITTED = Path(__file__).resolve().parent / "certificates"
 
 

@@ -5,7 +5,7 @@ the real function takes on the box: a bound proven this way is a proof, not a sa
 that a dual certificate |H^T lambda| <= 1 holds on a whole continuum (the sphere of 001).
 
 Hand-written rather than mpmath.iv: every operation here acts on whole numpy arrays (thousands of
-positions at once), where mpmath's intervals are scalar Python objects. tests/test_arithmetic.py
+positions at once), where mpmath's intervals are scalar Python objects. tests/solve/test_arithmetic.py
 checks each operation against mpmath at 60 digits.
 """
 import numpy as np

@@ -50,7 +50,7 @@ def chebyshev(A):
     """L_nu and the minimising y (column nu, y_nu = 1) of the Chebyshev polynomial (12): min over y with
     y_nu = 1 of max_k |a_k^T y|. With y_nu fixed that is the minimax fit of the row a_nu by the other rows
     (y_j = -q_j), solved by HiGHS per nu (highs.chebyshev_fit). cvxpy's statement of (12) as one problem is
-    the reference tests/test_verify.py compares this with; `garant verify` need not import cvxpy."""
+    the reference tests/papers/test_stand_000.py compares this with; `garant verify` need not import cvxpy."""
     A = np.asarray(A, float)
     m = A.shape[0]
     L, Y = np.zeros(m), np.zeros((m, m))

@@ -14,7 +14,7 @@ angles (the module's TRIG_DEGREE), `Interpolation` gives the enclosure at any nu
 from the enclosures at a few nodes, exactly.
 
 Hand-written for the same reason as interval.py: jets over all positions at once, as numpy arrays
-(tests/test_arithmetic.py checks them against exact derivatives in mpmath).
+(tests/solve/test_arithmetic.py checks them against exact derivatives in mpmath).
 """
 import functools
 import types

@@ -184,7 +184,7 @@ def parameters(M_total, b, g):
 
 
 #: The noise rule's multiple of the standard error of an interval's mean: with BATCHES = 8 batch means,
-#: the two-sided 99.73 % point of Student's t with 7 degrees of freedom (tests/test_calibrate_norm.py
+#: the two-sided 99.73 % point of Student's t with 7 degrees of freedom (tests/workflows/test_calibrate_norm.py
 #: computes it); with white-noise standard errors only (a means file: no samples), 3.
 K_BATCH = 4.53
 K_SE = 3.0

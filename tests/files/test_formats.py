@@ -1,6 +1,5 @@
 """The examples of docs/formats.md and docs/api.md are read and run, so the docs stay true."""
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -8,9 +7,9 @@ import pytest
 from garant.verify.io import calibration, recordings
 from garant.verify.errors import DataError
 from garant.verify.io.positions import read_positions
+from conftest import ROOT
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
-ROOT = DOCS.parent
+DOCS = ROOT / "docs"
 
 
 def block(doc, tag):

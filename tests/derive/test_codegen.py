@@ -2,13 +2,12 @@
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from garant.derive import codegen
+from conftest import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import write_csv
+from conftest import STANDS, write_csv
 from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.io import calibration
@@ -252,9 +252,8 @@ def test_a_premise_no_data_can_check_is_named():
     # does not join) the mounting's theta1 moves the readings with q held and no plan separates it: named. On
     # the two-axis stand Delta_alpha, the one parameter no plan separates that is not absorbed, enters only with
     # alpha_star: it moves nothing, and nothing is named.
-    from pathlib import Path
     from garant.verify.solve import plans
-    wedge = models.load(str(Path(__file__).resolve().parent / "data" / "stands" / "wedge90.toml"))
+    wedge = models.load(str(STANDS / "wedge90.toml"))
     names, mounts = models.layout(wedge)
     P, M = plans.grid(wedge)
     p = np.zeros(len(wedge.PARAMETER_NAMES))

@@ -8,8 +8,9 @@ import pytest
 from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.errors import DataError
+from conftest import ROOT
 
-STAND = models.Path(__file__).resolve().parents[1] / "derive" / "stands" / "single_axis.toml"
+STAND = ROOT / "derive" / "stands" / "single_axis.toml"
 
 
 @pytest.fixture

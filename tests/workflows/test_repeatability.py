@@ -4,7 +4,6 @@ Real data: ../shared/data/real/mimu4444bt (Carlsson, Skog, Jalden, IEEE Sensors 
 read in place; in CI it must be present."""
 import json
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,9 +14,9 @@ from garant.verify.errors import DataError
 from garant.verify.io import means, mimu
 from garant.verify.io.recordings import Still
 from garant.verify.workflows import repeatability as rp
+from conftest import REAL, ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
-MIMU = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "mimu4444bt"
+MIMU = REAL / "mimu4444bt"
 needs_real = pytest.mark.skipif(not MIMU.is_dir() and not os.environ.get("CI"), reason="mimu4444bt not present")
 G = 9.80665
 COUNT = G / 2048

@@ -1,7 +1,5 @@
 """garant calibrate-norm: synthetic logs with known errors, and the real recordings of shared/data/real."""
 import json
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,12 +8,7 @@ from garant.generated import norm as N
 from garant.verify.io import recordings
 from garant.verify.workflows import calibrate_norm
 from garant.verify.cli import main
-
-REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
-G = 9.81744                      # the value the recordings' authors used (shared/data/real/README.md)
-# Skipped on a machine without shared/, never in CI (CI=true): there the data must be present.
-needs_real = pytest.mark.skipif(not REAL.is_dir() and not os.environ.get("CI"), reason="../shared/data/real is not "
-    "present")
+from conftest import G_REAL as G, REAL, needs_real
 
 
 def synthetic_log(path, params, directions, noise, seed=0, still_s=3.0, move_s=2.0, rate=100):

@@ -9,6 +9,7 @@ import numpy as np
 from garant.verify import models
 from garant.verify.papers import certificates, norm_001, redundancy_003, stand_000
 from garant.verify.solve import plans
+from conftest import ROOT
 
 TWO_AXIS = models.load("two-axis")
 REMOUNT = models.load_remount("two-axis")
@@ -27,7 +28,7 @@ def failed(rows):
 
 
 # The baseline the tests below break, every row passing on the shipped modules, is `garant verify` itself:
-# tests/test_cli.py::test_garant_verify_console_script runs it and requires every row to pass.
+# tests/cli/test_cli.py::test_garant_verify_console_script runs it and requires every row to pass.
 
 
 # ---------------------------------------------------------------- 000
@@ -88,8 +89,7 @@ def test_realised_plan_red_when_the_docs_quote_other_figures(monkeypatch):
 
 
 def test_realised_plan_figures_are_the_ones_the_docs_quote():
-    from pathlib import Path
-    text = (Path(__file__).resolve().parent.parent / "docs" / "mountings_and_realised_plans.md").read_text()
+    text = (ROOT / "docs" / "mountings_and_realised_plans.md").read_text()
     a, b = stand_000.DOCS_REALISED_1DEG
     assert f"about {a} sigma" in text and f"about {b} sigma" in text
 

@@ -1,7 +1,6 @@
 """Issue 15 (part): fixed turns of any angle (a wedge), tilted unit-vector axes, detents and ranges
 honoured by simulate and diagnose. Each generated model is checked against a rotation chain written
 here independently in numpy (passive rotations, C1-C3 of section 2 of 000; Rodrigues for a tilted axis)."""
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,15 +9,9 @@ from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.errors import DataError
 from garant.verify.workflows import simulate
+from conftest import C, STANDS
 
-STANDS = Path(__file__).parent / "data" / "stands"
 
-
-def C(n, x):
-    """Passive rotation by x about unit vector n (numpy): cos x E + (1 - cos x) n n^T - sin x [n x]."""
-    n = np.asarray(n, float) / np.linalg.norm(n)
-    K = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
-    return np.cos(x) * np.eye(3) + (1 - np.cos(x)) * np.outer(n, n) - np.sin(x) * K
 
 
 def theta_turn(t):

@@ -3,24 +3,18 @@
 (numpy, passive rotations C_n(x) = cos x E + (1 - cos x) n n^T - sin x [n x]); each q must lie within
 its guaranteed bound of the truth, and every plan certificate must pass `garant check-certificate`."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from garant.verify import models
 from garant.verify.cli import main
+from conftest import C, STANDS
 
-STANDS = Path(__file__).parent / "data" / "stands"
 G = 9.81
 SIGMA = 1e-5
 X, Y, Z = np.eye(3)
 
-
-def C(n, x):
-    n = np.asarray(n, float) / np.linalg.norm(n)
-    K = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
-    return np.cos(x) * np.eye(3) + (1 - np.cos(x)) * np.outer(n, n) - np.sin(x) * K
 
 
 def mounting(name):

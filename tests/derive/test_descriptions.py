@@ -13,7 +13,7 @@ SIGMA, G = 1e-5, 9.81
 
 
 def test_two_axis_description_reproduces_the_spine(mod):
-    # The TOML of 000 gives the published (3) and (4) (tests/test_derive.py) and the same plans.
+    # The TOML of 000 gives the published (3) and (4) (tests/derive/test_derivation.py) and the same plans.
     r = plans.search(mod)
     assert r.min_positions == 10 and len(r.optimal_plans) == 64 and all(r.proven)
 

@@ -1,6 +1,5 @@
 """Identifiability service and limiting accuracy (003)."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +9,7 @@ from garant.derive import identifiability as I
 from garant.verify.papers import redundancy_003
 from garant.verify.workflows import redundancy as rd
 from garant.verify.cli import main
+from conftest import STANDS
 
 
 def test_example1_dependent_with_printed_relation():
@@ -68,7 +68,7 @@ def test_003_checks_pass(group):
 # with at least 2d + 1 detents (d: the highest harmonic of it in J) sees what its whole circle sees, so
 # the analysis on detents runs only over the angles with fewer; these tests check that claim exactly.
 
-DETENT_STANDS = ["single-axis", *(str(Path(__file__).parent / "data" / "stands" / f"{n}.toml")
+DETENT_STANDS = ["single-axis", *(str(STANDS / f"{n}.toml")
                                   for n in ("wedge45", "wedge90", "table120"))]
 
 
@@ -93,7 +93,7 @@ def test_two_detents_a_half_turn_apart_hide_combinations(tmp_path):
     # detents runs and finds fewer combinations than the circle would give.
     from garant.derive.derivation import derive, reachable_positions
     from garant.verify.models import stand_model
-    text = (Path(__file__).parent / "data" / "stands" / "wedge90.toml").read_text()
+    text = (STANDS / "wedge90.toml").read_text()
     assert "detents_deg = [0, 90, 180, 270]" in text
     (tmp_path / "half.toml").write_text(text.replace("detents_deg = [0, 90, 180, 270]", "detents_deg = [0, 180]"))
     (tmp_path / "full.toml").write_text(text.replace("detents_deg = [0, 90, 180, 270]", "detents_deg = []")

@@ -1,16 +1,14 @@
 """The notebook API and the commands go through the same functions (issue 24): the same results for
 the same inputs, data as arrays as well as files, and docs/api.md's example runs as written."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import garant
-from conftest import write_csv
+from conftest import ROOT, write_csv
 from garant.verify.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
 STANDS = ROOT / "tests" / "data" / "stands"
 
 

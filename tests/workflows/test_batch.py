@@ -5,7 +5,7 @@ import json
 import pytest
 
 from garant.verify.cli import main
-from test_calibrate_norm import REAL, needs_real
+from conftest import REAL, needs_real
 
 SPEC = """[limits]
 scale = 0.01

@@ -13,7 +13,7 @@ from garant.verify.errors import DataError
 from garant.verify.io import calibration, recordings
 from garant.verify.workflows import calibrate_norm
 
-from test_calibrate_norm import G, REAL, needs_real
+from conftest import G_REAL as G, REAL, ROOT, needs_real
 
 
 @needs_real
@@ -220,10 +220,9 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
     # errors 1e-3), estimate --save, then apply to readings at other positions: each corrected reading lies
     # within apply's stated bound of the true specific force in block axes (the same stand with Gamma = 0,
     # bias = 0).
-    from pathlib import Path
     from garant.verify import models
     from garant.verify.workflows.premises import premises
-    root = Path(__file__).resolve().parents[1]
+    root = ROOT
     name = str(root / model) if model.endswith(".toml") else model
     mod = models.load(name)
     names, mounts = models.layout(mod)
@@ -267,10 +266,9 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
 def test_a_stand_that_cannot_separate_the_block_says_so(tmp_path, capsys):
     # The 45-degree wedge on its four detents leaves a block parameter free over the premises: no
     # calibration is written, and the line says which parameter.
-    from pathlib import Path
     from garant.verify import models
     from garant.verify.solve import plans
-    stand = str(Path(__file__).resolve().parents[1] / "tests/data/stands/wedge45.toml")
+    stand = str(ROOT / "tests/data/stands/wedge45.toml")
     mod = models.load(stand)
     P, _ = plans.grid(mod)
     f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T

@@ -11,6 +11,7 @@ import pytest
 from garant.derive.builtin import STANDS_DIR
 from garant.generated import two_axis
 from garant.verify.cli import main
+from conftest import STANDS
 
 BASE = (STANDS_DIR / "single_axis.toml").read_text()
 G = 9.81
@@ -375,7 +376,7 @@ def test_remount_on_a_stand_where_26_does_not_hold_names_the_cause(tmp_path, cap
     # Issue 30: `remount = true` on the 90-degree wedge stopped in derive with the internal
     # "Gamma + hat(theta) is not G(q) ..." and a matrix; it must say what to change in the file.
     desc = tmp_path / "w.toml"
-    desc.write_text((Path(__file__).parent / "data/stands/wedge90.toml").read_text() + "\n[estimation]\nremount = "
+    desc.write_text((STANDS / "wedge90.toml").read_text() + "\n[estimation]\nremount = "
         "true\n")
     refused(["derive", desc, "--out", tmp_path / "out"], capsys, "w.toml: remount = true", "set remount = false",
             outputs=[tmp_path / "out"])
@@ -538,7 +539,6 @@ def test_a_means_file_is_refused_by_size_and_by_rows_before_it_is_read_whole(tmp
 
 # ---------------------------------------------------------------- issue 26: forged plan certificates
 
-STANDS = Path(__file__).parent / "data" / "stands"
 
 
 @pytest.fixture(scope="module")
@@ -694,7 +694,7 @@ def test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor(tmp_
 def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_search(tmp_path, capsys):
     # Issue 26: an axis of 15-digit components searched for 12 s, wrote the plan's JSON, then failed on
     # sqrt(1000110612605718049052708272757) with no word of why.
-    text = (Path(__file__).parent / "data" / "stands" / "tilted_inner.toml").read_text()
+    text = (STANDS / "tilted_inner.toml").read_text()
     assert "axis = [0, 1, 1]" in text
     (tmp_path / "t.toml").write_text(text.replace("axis = [0, 1, 1]", "axis = [0.123456789012345, 0.234567890123456, "
                                                                     "0.964285714285714]"))

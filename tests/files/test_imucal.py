@@ -1,15 +1,15 @@
 """imucal's users (issue 44): its Ferraris session straight in, its calibration file out, and imucal's own
 calibration of the same session inside garant's bounds. imucal is installed by the test extra."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from garant.verify.cli import main
+from conftest import DATA
 
-DATA = Path(__file__).parent / "data" / "imucal"
-SESSION, SECTIONS = DATA / "example_ferraris_session.csv", DATA / "example_ferraris_session_list.json"
+IMUCAL = DATA / "imucal"
+SESSION, SECTIONS = IMUCAL / "example_ferraris_session.csv", IMUCAL / "example_ferraris_session_list.json"
 imucal = pytest.importorskip("imucal")
 pd = pytest.importorskip("pandas")
 
@@ -59,11 +59,11 @@ def test_the_imucal_export_loads_in_imucal_and_corrects_as_garant_apply(calibrat
 def test_an_annotated_session_in_counts_is_refused_by_estimate_in_a_line(tmp_path, capsys):
     # imucal's annotated session (a part column, raw counts): read by label, and refused by estimate with
     # what to do instead, in one line.
-    assert main(["estimate", "--model", "six-face", str(DATA / "annotated_session.csv"), "--format", "imucal",
+    assert main(["estimate", "--model", "six-face", str(IMUCAL / "annotated_session.csv"), "--format", "imucal",
                  "--sigma", "1e-2"]) == 2
     err = capsys.readouterr().err
     # the faces' median norm, from the file by pandas: raw counts, far from g
-    df = pd.read_csv(DATA / "annotated_session.csv")
+    df = pd.read_csv(IMUCAL / "annotated_session.csv")
     faces = df[df["part"].isin(["x_p", "x_a", "y_p", "y_a", "z_p", "z_a"])].groupby("part")[["acc_x", "acc_y", "acc_z"]]
     norm = np.median(np.linalg.norm(faces.mean().to_numpy(), axis=1))
     assert err.count("\n") == 1 and f"the six faces read {norm:.4g} in the file's unit, not about g" in err

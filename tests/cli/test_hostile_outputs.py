@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_hostile import _calibration, _log_file, _plan_rows, _positions, refused, run
+from test_hostile_inputs import _calibration, _log_file, _plan_rows, _positions, refused, run
 
 import garant
 from garant.derive.builtin import STANDS_DIR

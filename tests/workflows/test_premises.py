@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import write_csv
+from conftest import STANDS, write_csv
 from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.io.positions import Positions
@@ -292,8 +292,7 @@ def test_a_turn_about_the_mountings_axis_is_absorbed_where_its_identities_hold()
     # commute with a turn about n, and theta1 joins an instrument-side link about axis 1 with an offset. Both
     # hold on the single-axis example and the 120-degree table: theta1 and the offset are absorbed. The
     # 90-degree wedge's instrument-side link turns about z, which C1(theta1) does not join: only Delta_g.
-    from pathlib import Path
-    stands = Path(__file__).resolve().parent / "data" / "stands"
+    stands = STANDS
     single, table = models.load("single-axis"), models.load(str(stands / "table120.toml"))
     wedge = models.load(str(stands / "wedge90.toml"))
     assert single.ABSORBED == ("Delta_phi", "theta1", "Delta_g") and table.ABSORBED == ("dphi", "theta1", "dg")

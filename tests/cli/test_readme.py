@@ -2,11 +2,10 @@
 calibration runs as written, line by line, from a folder beside the clone's ../shared."""
 import re
 import shlex
-from pathlib import Path
 
 from garant.verify.cli import main
+from conftest import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
 
 
