@@ -64,7 +64,7 @@ def plan(model, *, grid=None, count_seconds=None, max_candidates=None, search_se
     defaults)."""
     from .workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS, norm_plan, plan as search_plan
     mod = models.load(model)
-    if model == "norm":
+    if models.kind(model) == "norm":
         return results.Plan(norm_plan(mod))
     return results.Plan(search_plan(mod, model, grid, count_seconds or COUNT_SECONDS, max_candidates or MAX_CANDIDATES,
                                     search_seconds or SEARCH_SECONDS, search_nodes=search_nodes,

@@ -16,6 +16,14 @@ MODELS = {name: f"garant.generated.{e['module']}" for name, e in REGISTRY.items(
 STANDS = [name for name, e in REGISTRY.items() if e["kind"] == "stand"]     # stand models (plan, estimate)
 
 
+def kind(name):
+    """What a model name is: "stand" (a built-in stand, a STAND.toml or a module `garant derive --out` wrote),
+    "norm" (the norm relation of 001), or None (not a model garant knows)."""
+    if str(name).endswith((".toml", ".py")):
+        return "stand"
+    return REGISTRY.get(name, {}).get("kind")
+
+
 def load(name):
     """The generated module of a built-in model, of a description file (derived, or from the cache), or
     a module `garant derive STAND.toml --out DIR` wrote (DIR/stand.py)."""

@@ -2,7 +2,7 @@
 import sys
 
 from ..errors import DataError
-from ..models import STANDS
+from ..models import STANDS, kind
 from ..solve.highs import COUNT_NODES, SEARCH_NODES
 from ..workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS
 from . import args as options
@@ -56,7 +56,7 @@ def run(args):
         raise DataError("--temperature D applies with --temperatures T1,T2,...")
     if args.temperatures is not None:
         return run_thermal(args)
-    if args.model == "norm":
+    if kind(args.model) == "norm":
         given = [opt for opt, v in (("--grid", args.grid), ("--certificates", args.certificates),
                                     ("--route", args.route or None)) if v is not None]
         if given:

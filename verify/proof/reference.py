@@ -54,10 +54,11 @@ def _reference(key, base=None):
         return ([list(H.row(r)) for r in range(H.rows)],
                 {"kind": "positions", "names": [a.name for a in d.model.stand.angles], **_reach(d)},
                 [f"q{nu + 1}" for nu in range(H.cols)], defs)
-    if key == "norm":
+    if REGISTRY.get(key, {}).get("kind") == "norm":
         # H of (2.2) entry by entry is n1^a n2^b n3^c with the exponents the generated module carries
         # (derive stops unless every entry is such a monomial; `python -m derive --check` proves the module).
-        from garant.generated import norm as mod
+        import importlib
+        mod = importlib.import_module(f"garant.generated.{REGISTRY[key]['module']}")
         n = sp.symbols("n1 n2 n3", real=True)
         return ([[sp.Mul(*(x**e for x, e in zip(n, exps))) for exps in mod.H_EXPONENTS]],
                 {"kind": "sphere", "names": ["n1", "n2", "n3"]}, list(mod.Q_NAMES), None)
