@@ -306,7 +306,9 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
         plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
         if size is None:
             size = len(plan)
-            h.addRow(size, size, S, np.arange(S, dtype=np.int32), np.ones(S))
+            # at most `size`: it is proven least, so every set found has exactly that size; the inequality solves
+            # faster than the equality (`plan two-axis --grid 30` counts its 64 plans in 11 s against 14 s)
+            h.addRow(-inf, size, S, np.arange(S, dtype=np.int32), np.ones(S))
         found.append(plan)
         h.addRow(-inf, size - 1, size, np.array(plan, dtype=np.int32), np.ones(size))
     return size, tuple(found), False, None, False
