@@ -54,6 +54,9 @@ def test_results_are_objects_with_the_documented_fields(tmp_path):
     text = repr(res)
     assert text.startswith("Estimate(\n  consistent: True") and len(text.splitlines()) < 60
     assert "<table>" in res._repr_html_() and "guaranteed_error" in res._repr_html_()
+    rows = res.table("q", "guaranteed_error", "units").splitlines()       # a row per q, the fields side by side
+    assert rows[0].split() == ["name", "q", "guaranteed_error", "units"] and len(rows) == 1 + len(mod.Q_NAMES)
+    assert rows[7].split()[0] == "q7" and float(rows[7].split()[2]) == pytest.approx(res.guaranteed_error["q7"], 1e-5)
     with pytest.raises(AttributeError, match="no field 'nope'"):
         res.nope
     assert all(k in res for k in results.Estimate.FIELDS if k != "thermal")     # thermal: with temperature=D

@@ -70,6 +70,21 @@ class Result(dict):
             files.check_inputs([])
         return None
 
+    def table(self, *fields):
+        """The fields that hold one value per name (q, guaranteed_error, units, ... of an estimate) side by side, a
+        row per name, as text; `fields` picks them (default every such field, in FIELDS order)."""
+        order = fields or [k for k in self.FIELDS if k in self] + [k for k in self.keys() if k not in self.FIELDS]
+        per_name = [k for k in order if isinstance(self.get(k), dict) and self[k]
+                    and not any(isinstance(v, (dict, list, np.ndarray)) for v in self[k].values())]
+        if not per_name:
+            return ""
+        names = list(self[per_name[0]])
+        cols = [k for k in per_name if list(self[k]) == names]
+        rows = [["name", *cols]] + [[str(n)] + [v if isinstance(v, str) else _short(v, 40)
+                                                 for v in (self[k][n] for k in cols)] for n in names]
+        widths = [max(len(r[i]) for r in rows) for i in range(len(cols) + 1)]
+        return "\n".join("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows) + "\n"
+
     def __repr__(self):
         keys = [k for k in self.FIELDS if k in self] + [k for k in self.keys() if k not in self.FIELDS]
         return f"{type(self).__name__}(\n" + "".join(f"  {k}: {_short(self[k])}\n" for k in keys) + ")"
@@ -172,6 +187,9 @@ class Diagnosis(Result):
     STATUSES = {"consistent": "the model fits the data within sigma as it is",
                 "explained": "the effects named close the gap",
                 "unexplained": "no effect of the catalogue closes the gap"}
+    #: Not a field (not in the JSON): the extended models of the study, what `diagnose.write_module` needs to
+    #: write the module of the effects named (`garant diagnose --report`).
+    study = None
 
     @property
     def status(self):
