@@ -8,42 +8,63 @@ zero: no floating point decides anything here.
 """
 from fractions import Fraction
 from functools import lru_cache
-from math import isqrt
+from math import gcd, isqrt, lcm
 
 ROOTS = (2, 3, 6)
 
 
 class QF:
-    """a + b sqrt2 + c sqrt3 + d sqrt6, exact."""
+    """a + b sqrt2 + c sqrt3 + d sqrt6, exact: held as four integers over one positive denominator, in lowest
+    terms (so equal numbers are equal tuples); `c` gives the four rational coordinates."""
 
-    __slots__ = ("c",)
+    __slots__ = ("n", "den")
 
     def __init__(self, a=0, b=0, c=0, d=0):
-        self.c = (Fraction(a), Fraction(b), Fraction(c), Fraction(d))
+        if type(a) is int and type(b) is int and type(c) is int and type(d) is int:
+            self.n, self.den = (a, b, c, d), 1
+            return
+        f = [Fraction(x) for x in (a, b, c, d)]
+        den = lcm(*(x.denominator for x in f))
+        self.n, self.den = _lowest(tuple(x.numerator * (den // x.denominator) for x in f), den)
 
     @classmethod
-    def _of(cls, a, b, c, d):
-        """From four Fractions as they are (the results of the operations below: no conversion)."""
+    def _of(cls, n, den):
+        """From integer coordinates over den > 0, brought to lowest terms."""
         out = object.__new__(cls)
-        out.c = (a, b, c, d)
+        out.n, out.den = _lowest(n, den)
         return out
+
+    @property
+    def c(self):
+        """The rational coordinates (a, b, c, d)."""
+        return tuple(Fraction(x, self.den) for x in self.n)
 
     @staticmethod
     def of(x):
         """A QF from an int, a Fraction or a QF."""
-        return x if isinstance(x, QF) else QF(x)
+        if isinstance(x, QF):
+            return x
+        if type(x) is int:
+            out = object.__new__(QF)
+            out.n, out.den = (x, 0, 0, 0), 1
+            return out
+        return QF(x)
 
     def __add__(self, o):
         o = QF.of(o)
-        a, b, c, d = self.c
-        e, f, g, h = o.c
-        return QF._of(a + e, b + f, c + g, d + h)
+        (a, b, c, d), p = self.n, self.den
+        (e, f, g, h), q = o.n, o.den
+        if p == q:
+            return QF._of((a + e, b + f, c + g, d + h), p)
+        return QF._of((a * q + e * p, b * q + f * p, c * q + g * p, d * q + h * p), p * q)
 
     __radd__ = __add__
 
     def __neg__(self):
-        a, b, c, d = self.c
-        return QF._of(-a, -b, -c, -d)
+        a, b, c, d = self.n
+        out = object.__new__(QF)
+        out.n, out.den = (-a, -b, -c, -d), self.den
+        return out
 
     def __sub__(self, o):
         return self + (-QF.of(o))
@@ -52,17 +73,18 @@ class QF:
         return QF.of(o) - self
 
     def __mul__(self, o):
-        a, b, c, d = self.c
+        (a, b, c, d), p = self.n, self.den
         if not isinstance(o, QF):                                        # a rational: coordinate-wise
             o = Fraction(o)
-            return QF._of(a * o, b * o, c * o, d * o)
-        e, f, g, h = o.c
+            e, q = o.numerator, o.denominator
+            return QF._of((a * e, b * e, c * e, d * e), p * q)
+        (e, f, g, h), q = o.n, o.den
         if not (f or g or h):
-            return QF._of(a * e, b * e, c * e, d * e)
+            return QF._of((a * e, b * e, c * e, d * e), p * q)
         if not (b or c or d):
-            return QF._of(a * e, a * f, a * g, a * h)
-        return QF._of(a * e + 2 * b * f + 3 * c * g + 6 * d * h, a * f + b * e + 3 * (c * h + d * g),
-                      a * g + c * e + 2 * (b * h + d * f), a * h + d * e + b * g + c * f)
+            return QF._of((a * e, a * f, a * g, a * h), p * q)
+        return QF._of((a * e + 2 * b * f + 3 * c * g + 6 * d * h, a * f + b * e + 3 * (c * h + d * g),
+                       a * g + c * e + 2 * (b * h + d * f), a * h + d * e + b * g + c * f), p * q)
 
     __rmul__ = __mul__
 
@@ -90,16 +112,19 @@ class QF:
 
     def is_zero(self):
         """Whether every coefficient is 0."""
-        return not any(self.c)
+        return not any(self.n)
 
     def __bool__(self):
-        return any(self.c)
+        return any(self.n)
 
     def __eq__(self, o):
-        return isinstance(o, (QF, int, Fraction)) and self.c == QF.of(o).c
+        if not isinstance(o, (QF, int, Fraction)):
+            return False
+        o = QF.of(o)
+        return self.n == o.n and self.den == o.den
 
     def __hash__(self):
-        return hash(self.c)
+        return hash((self.n, self.den))
 
     def sign(self):
         """-1, 0 or +1, exactly."""
@@ -147,6 +172,12 @@ class QF:
 
     def __repr__(self):
         return f"QF({', '.join(str(x) for x in self.c)})"
+
+
+def _lowest(n, den):
+    """(n, den) divided by their greatest common divisor."""
+    k = gcd(*n, den)
+    return (n, den) if k == 1 else (tuple(x // k for x in n), den // k)
 
 
 def combination(vectors, target):
