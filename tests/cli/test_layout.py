@@ -259,3 +259,13 @@ def test_ruff_finds_nothing():
     r = subprocess.run([str(ruff), "check", "--no-cache", "--output-format", "concise", str(ROOT)], capture_output=True,
                        text=True, cwd=ROOT)
     assert r.returncode == 0, r.stdout[-3000:]
+
+
+def test_the_bench_runs_its_subprocesses_from_the_repository():
+    """python -m verify.bench times `python -m derive --check` in a subprocess from bench.ROOT: that must be the
+    repository (red as it was when the bench moved into verify/bench/ and ROOT stayed one level short: the
+    subprocess found no module derive and the bench stopped on its first figure)."""
+    from garant.verify import bench
+    from garant.verify.bench import peer
+    assert (bench.ROOT / "derive" / "__main__.py").is_file() and bench.ROOT == ROOT
+    assert peer.ROOT == ROOT

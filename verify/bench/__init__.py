@@ -22,7 +22,7 @@ from ..models import load
 from ..papers import stand_000
 from ..solve import lp, plans
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]      # the repository: where `python -m derive` runs
 
 
 REPEAT = 3
