@@ -49,3 +49,23 @@ def test_chebyshev_fit_of_small_residuals_is_accurate(problem, monkeypatch):
     monkeypatch.setattr(highs, "GENERATE_ABOVE", 10**9)
     q, t, r = highs.chebyshev_fit(A, z)
     assert abs(np.abs(r).max() - t) <= 1e-9 * t
+
+
+def test_the_lps_run_after_a_highs_of_the_callers_own_with_its_default_threads():
+    """A notebook that ran HiGHS itself (highspy with its default threads, or cvxpy's) before calling garant: HiGHS
+    refuses a run that asks for another thread count than its running scheduler (status Not Set), which stopped
+    `python -m verify.bench` and would stop the API. solve/highs.run resets the scheduler and runs again (red
+    without it: LPFailed "dual (9)-(10): Not Set")."""
+    import highspy
+
+    from garant.generated import two_axis as mod
+    from garant.verify.solve import lp
+    g = np.deg2rad(np.arange(0, 360, 90))
+    A = lp.measurement_matrix(mod.H, np.array([(a, b) for a in g for b in g]))
+    for nu in range(2):
+        h = highspy.Highs()                                   # the caller's: default threads
+        h.setOptionValue("output_flag", False)
+        h.addVars(1, np.zeros(1), np.ones(1))
+        h.run()
+        lam, value = lp.dual(A, np.eye(15)[nu])
+        assert value == pytest.approx(1.0)                  # 000, section 4: sigma for every q on quarter turns

@@ -40,6 +40,17 @@ def new(presolve=True):
     return h
 
 
+def run(h):
+    """h.run(), and once more after resetting HiGHS's global thread scheduler when another HiGHS of this process
+    (the caller's own, cvxpy's) started it with more threads than the one asked for here: HiGHS then refuses to
+    run (an error, model status Not Set) rather than change the count."""
+    status = h.run()
+    if status == highspy.HighsStatus.kError and h.getModelStatus() == highspy.HighsModelStatus.kNotset:
+        highspy.Highs.resetGlobalScheduler(True)
+        status = h.run()
+    return status
+
+
 def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
     """(x, row duals, objective) of the LP above; LPFailed unless optimal."""
     M = np.asarray(M, float)
@@ -56,7 +67,7 @@ def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
     lp.a_matrix_.value_ = np.ascontiguousarray(M.T).ravel()
     h = new(presolve=False)
     h.passModel(lp)
-    h.run()
+    run(h)
     status = h.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
         raise LPFailed(f"{what}: {h.modelStatusToString(status)}")
@@ -180,12 +191,12 @@ def _l1(A, T):
     for k in range(T.shape[1]):
         if k:
             h.changeRowsBounds(m, idx, T[:, k], T[:, k])
-        h.run()
+        run(h)
         status = h.getModelStatus()
         if status != highspy.HighsModelStatus.kOptimal:     # a warm start that stalls: once more from scratch
             h.clearSolver()
             h.setOptionValue("presolve", "on")
-            h.run()
+            run(h)
             h.setOptionValue("presolve", "off")
             status = h.getModelStatus()
         if status != highspy.HighsModelStatus.kOptimal:
@@ -283,7 +294,7 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
                 return size, tuple(found), False, None, left > 0
             h.setOptionValue("mip_max_nodes", int(left))
             h.setOptionValue("time_limit", max(seconds - (time.perf_counter() - start), 0.1))
-        h.run()
+        run(h)
         status = h.getModelStatus()
         clock = status == highspy.HighsModelStatus.kTimeLimit
         if found:

@@ -149,11 +149,11 @@ def _solve(h, cost):
     optimum (Empty when it finds the set empty)."""
     cols = len(cost)
     h.changeColsCost(cols, np.arange(cols, dtype=np.int32), cost)
-    h.run()
+    highs.run(h)
     status = h.getModelStatus()
     if status not in (highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible):
         h.clearSolver()                           # a warm start that stalls: once more from scratch
-        h.run()
+        highs.run(h)
         status = h.getModelStatus()
     if status == highspy.HighsModelStatus.kInfeasible:
         raise Empty()
