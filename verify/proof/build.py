@@ -13,6 +13,7 @@ import numpy as np
 import sympy as sp
 
 from .check import as_exact, feasible, make
+from ..models import kind
 from .reference import MODELS, reference
 
 
@@ -199,7 +200,7 @@ def for_norm():
 
 def for_model(name):
     """Every certificate of a built-in model (its q's optimal errors on its plan)."""
-    return for_norm() if MODELS[name] is None else for_stand(MODELS[name])      # None: the norm model of 001
+    return for_norm() if kind(name) == "norm" else for_stand(MODELS[name])
 
 
 def file_name(cert):

@@ -5,6 +5,8 @@ names, never against the H it brings along.
 """
 from garant.generated import MODELS as REGISTRY
 
+from ..models import kind
+
 #: Certificate model keys and the stand models they name (None: the norm model of 001): every built-in model.
 MODELS = {name: e["module"] if e["kind"] == "stand" else None for name, e in REGISTRY.items()}
 
@@ -54,7 +56,7 @@ def _reference(key, base=None):
         return ([list(H.row(r)) for r in range(H.rows)],
                 {"kind": "positions", "names": [a.name for a in d.model.stand.angles], **_reach(d)},
                 [f"q{nu + 1}" for nu in range(H.cols)], defs)
-    if REGISTRY.get(key, {}).get("kind") == "norm":
+    if kind(key) == "norm":
         # H of (2.2) entry by entry is n1^a n2^b n3^c with the exponents the generated module carries
         # (derive stops unless every entry is such a monomial; `python -m derive --check` proves the module).
         import importlib

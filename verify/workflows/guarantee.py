@@ -586,8 +586,11 @@ def _smallest_sigma(A, y, refuted, supported, proven, guess=None):
         if fits(guess):
             hi = guess
             below = guess / (1 + SIGMA_TOLERANCE)
-            if lo < below and not fits(below):
-                lo = below
+            if lo < below:
+                if fits(below):
+                    hi = below
+                else:
+                    lo = below
         else:
             lo = guess
     while hi > lo * (1 + SIGMA_TOLERANCE):
