@@ -6,6 +6,7 @@ rational matrix M whose rows are (component, basis function). Its row space is t
 identifiable functionals; the reduced row-echelon form in the model's preferred order of parameters
 is the canonical choice of q, and its null space lists what no plan can separate.
 """
+import math
 from dataclasses import dataclass
 
 import sympy as sp
@@ -23,21 +24,46 @@ def trig_basis(expr, angles, others=()):
     for k, node in enumerate(sorted(expr.atoms(sp.Abs), key=sp.default_sort_key)):
         absolutes[node] = sp.Symbol(f"abs_{k}")
         absolutes[absolutes[node]] = node
-    poly = sp.expand(expr.subs({k: v for k, v in absolutes.items() if isinstance(k, sp.Abs)}).subs(trig))
+    # xreplace: the nodes cos(a), sin(a), |e| swapped as they stand (subs would try algebra first)
+    poly = sp.expand(expr.xreplace({k: v for k, v in absolutes.items() if isinstance(k, sp.Abs)}).xreplace(trig))
     gens = [v for pair in cs.values() for v in pair] + list(others) + [
         v for k, v in absolutes.items() if isinstance(k, sp.Abs)]
     if poly.free_symbols - set(gens):
         raise ValueError(f"not a trigonometric polynomial in the angles: {expr}")
-    rules = [s**2 + c**2 - 1 for c, s in cs.values()]
-    order = [s for _, s in cs.values()] + [c for c, _ in cs.values()]
-    _, rem = sp.reduced(poly, rules, *order, order="lex") if rules else (None, poly)
+    rem = _reduce_sin_squares(sp.Poly(poly, *gens), len(cs))
     back = {v: f(a) for a, pair in cs.items() for f, v in zip((sp.cos, sp.sin), pair)}
     back.update({v: k for k, v in absolutes.items() if isinstance(k, sp.Abs)})
     out = {}
-    for monom, coeff in sp.Poly(rem, *gens).terms():
-        term = sp.Mul(*[g**k for g, k in zip(gens, monom)]).subs(back)
-        out[term] = sp.nsimplify(coeff)
+    for monom, coeff in rem.terms():
+        term = sp.Mul(*[back.get(g, g)**k for g, k in zip(gens, monom)])
+        out[term] = coeff if coeff.is_Rational else sp.nsimplify(coeff)
     return out
+
+
+def _reduce_sin_squares(poly, n):
+    """The normal form of `poly` modulo s_a^2 + c_a^2 - 1 for its first n angles (generators c_a, s_a in
+    pairs): every s_a^e written s_a^(e mod 2) (1 - c_a^2)^(e div 2). The rules' leading terms s_a^2 are
+    pairwise coprime, so they are a Groebner basis and this remainder is the one sp.reduced gives (lex,
+    s before c), without its general division."""
+    dom, rem = poly.domain, {}
+    for monom, coeff in poly.rep.terms():
+        parts = [(list(monom), coeff)]
+        for a in range(n):
+            h = monom[2 * a + 1] // 2
+            if not h:
+                continue
+            nxt = []
+            for m, c in parts:
+                for j in range(h + 1):            # (1 - c^2)^h = sum_j binom(h, j) (-c^2)^j
+                    m2 = list(m)
+                    m2[2 * a + 1] -= 2 * h
+                    m2[2 * a] += 2 * j
+                    nxt.append((m2, c * dom.convert(math.comb(h, j) * (-1) ** j)))
+            parts = nxt
+        for m, c in parts:
+            key = tuple(m)
+            rem[key] = rem.get(key, dom.zero) + c
+    return sp.Poly.from_dict({k: v for k, v in rem.items() if v}, *poly.gens, domain=dom)
 
 
 def harmonic_degree(J, angle, angles):

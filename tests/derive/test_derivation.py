@@ -130,3 +130,22 @@ def test_trig_degree_counts_links_and_effect_powers():
     exact = np.array(fn(x, y), float)
     assert np.abs(interpolated(x, y, 2) - exact).max() < 1e-12
     assert np.abs(interpolated(x, y, 1) - exact).max() > 1e-4
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.integers(-3, 3), st.integers(0, 4), st.integers(0, 5), st.integers(0, 3),
+                          st.integers(0, 4), st.integers(0, 2)), min_size=1, max_size=6))
+def test_trig_basis_is_the_groebner_remainder_modulo_sin2_plus_cos2(terms):
+    # The canonical basis of identify ((4) of 000) is the unique remainder modulo s^2 + c^2 - 1 per angle;
+    # trig_basis takes it by rewriting s^2 without sp.reduced: both must give the same exact polynomial.
+    from garant.derive.combinations import trig_basis
+    a, b, t = sp.symbols("a b t", real=True)
+    expr = sum(sp.Rational(k, 3) * sp.cos(a)**i * sp.sin(a)**j * sp.cos(b)**m * sp.sin(b)**n * t**e
+               for k, i, j, m, n, e in terms)
+    ca, sa, cb, sb = sp.symbols("ca sa cb sb")
+    poly = sp.expand(expr.xreplace({sp.cos(a): ca, sp.sin(a): sa, sp.cos(b): cb, sp.sin(b): sb}))
+    _, rem = sp.reduced(poly, [sa**2 + ca**2 - 1, sb**2 + cb**2 - 1], sa, sb, ca, cb, t, order="lex")
+    got = sum((c * m for m, c in trig_basis(expr, (a, b), (t,)).items()), sp.Integer(0))
+    want = rem.xreplace({ca: sp.cos(a), sa: sp.sin(a), cb: sp.cos(b), sb: sp.sin(b)})
+    assert sp.expand(got - want) == 0
+    assert all(c.is_Rational for c in trig_basis(expr, (a, b), (t,)).values())
