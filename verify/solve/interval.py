@@ -57,6 +57,8 @@ class Iv:
         return _iv(o) + (-self)
 
     def __mul__(self, o):
+        if self.lo is self.hi and isinstance(o, Iv) and o.lo is not o.hi:
+            return o * self                                 # a number times an interval: the same, in two
         if not isinstance(o, Iv) or o.lo is o.hi:          # a number: two products, not four
             c = o.lo if isinstance(o, Iv) else np.asarray(o, float)
             a, b = self.lo * c, self.hi * c

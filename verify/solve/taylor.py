@@ -36,6 +36,41 @@ def _take(a, idx):
     return Iv(a.lo[idx], a.hi[idx])
 
 
+@functools.lru_cache(maxsize=None)
+def _embedding(sub, sup):
+    """Where a jet on the variables `sub` puts its rows in one on `sup` (sorted tuples, sub within sup):
+    gradient rows, and packed Hessian rows (triangle(len(sup)) is row-major: (r, c) is row
+    r n - r (r - 1) / 2 + c - r)."""
+    pos = np.searchsorted(np.asarray(sup), np.asarray(sub, dtype=int))
+    k, j = triangle(len(sub))
+    n = len(sup)
+    return pos, pos[k] * n - pos[k] * (pos[k] - 1) // 2 + pos[j] - pos[k]
+
+
+def _place(a, idx, rows):
+    """The interval rows of `a` at rows `idx` of `rows` rows, exact zeros elsewhere (a point stays one)."""
+    lo = np.zeros((rows,) + a.lo.shape[1:])
+    lo[idx] = a.lo
+    if a.lo is a.hi:
+        return Iv(lo)
+    hi = np.zeros((rows,) + a.hi.shape[1:])
+    hi[idx] = a.hi
+    return Iv(lo, hi)
+
+
+def _union(a, b):
+    """The sorted union of two supports."""
+    return a if a == b else tuple(sorted(set(a) | set(b)))
+
+
+def _lift(x, s, u, hessian):
+    """Rows of the gradient (or packed Hessian) x on support s, on the larger support u."""
+    if s == u:
+        return x
+    g_idx, h_idx = _embedding(s, u)
+    return _place(x, h_idx, len(u) * (len(u) + 1) // 2) if hessian else _place(x, g_idx, len(u))
+
+
 def _sym(a, b):
     """The packed triangle of outer(a, b) + outer(b, a): a_k b_j + b_k a_j (a_k b_k twice on the diagonal)."""
     k, j = triangle(len(a.lo))
@@ -55,44 +90,59 @@ class Jet2:
 
     `e` (None: 0), a bound (S,) on |f - phi| over the box: the jet is that of a smooth phi, and the
     function f it stands for may differ from phi by at most e (|x| where x may be 0: see __abs__).
-    Each operation carries e, so the Taylor remainder of phi plus e bounds f's."""
+    Each operation carries e, so the Taylor remainder of phi plus e bounds f's.
 
-    __slots__ = ("v", "g", "h", "e")
+    `s`, the support: the variables (sorted indices of the n) the jet depends on; g and h hold the rows
+    of those alone (the others are exactly 0). A reading's factors each depend on a few errors, so
+    most products are of small jets."""
+
+    __slots__ = ("v", "g", "h", "e", "s", "n")
     __array_ufunc__ = None            # ndarray * jet defers to the jet's own __rmul__
 
-    def __init__(self, v, g, h, e=None):
+    def __init__(self, v, g, h, e=None, s=None, n=None):
         self.v, self.g, self.h, self.e = v, g, h, e
+        self.s = tuple(range(len(g.lo))) if s is None else s
+        self.n = len(self.s) if n is None else n
+
+    def _like(self, v, g, h, e):
+        return Jet2(v, g, h, e, self.s, self.n)
 
     @staticmethod
     def variables(lo, hi, shape):
         """One jet per variable k over [lo_k, hi_k], of the given shape (positions; (1,) for none)."""
         n = len(lo)
-        eye = np.eye(n)[:, :, None] * np.ones((1, 1) + shape)
-        zero = Iv(np.zeros((n * (n + 1) // 2,) + shape))
-        return [Jet2(Iv(np.full(shape, lo[k]), np.full(shape, hi[k])), Iv(eye[k]), zero) for k in range(n)]
+        one, zero = Iv(np.ones((1,) + shape)), Iv(np.zeros((1,) + shape))
+        return [Jet2(Iv(np.full(shape, lo[k]), np.full(shape, hi[k])), one, zero, None, (k,), n) for k in range(n)]
 
     def hessian(self):
-        """The full symmetric Hessian, intervals of shape (n, n, S)."""
-        n = len(self.g.lo)
+        """The full symmetric Hessian over all n variables, intervals of shape (n, n, S)."""
+        n, h = self.n, self.packed()
         k, j = triangle(n)
         out = []
-        for half in (self.h.lo, self.h.hi):
+        for half in (h.lo, h.hi):
             full = np.empty((n, n) + half.shape[1:])
             full[k, j] = half
             full[j, k] = half
             out.append(full)
         return Iv(*out)
 
+    def packed(self):
+        """The packed Hessian over all n variables (triangle(n) rows), exact zeros off the support."""
+        return _lift(self.h, self.s, tuple(range(self.n)), hessian=True)
+
     def __add__(self, o):
         if isinstance(o, Jet2):
             e = None if self.e is None and o.e is None else _up(_zero(self.e), _zero(o.e))
-            return Jet2(self.v + o.v, self.g + o.g, self.h + o.h, e)
-        return Jet2(self.v + o, self.g, self.h, self.e)
+            u = _union(self.s, o.s)
+            g = _lift(self.g, self.s, u, False) + _lift(o.g, o.s, u, False)
+            h = _lift(self.h, self.s, u, True) + _lift(o.h, o.s, u, True)
+            return Jet2(self.v + o.v, g, h, e, u, self.n)
+        return self._like(self.v + o, self.g, self.h, self.e)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return Jet2(-self.v, -self.g, -self.h, self.e)
+        return self._like(-self.v, -self.g, -self.h, self.e)
 
     def __sub__(self, o):
         return self + (-o)
@@ -103,20 +153,23 @@ class Jet2:
     def __mul__(self, o):
         if not isinstance(o, Jet2):
             c = Iv(np.asarray(o, float))
-            return Jet2(self.v * c, self.g * c, self.h * c, None if self.e is None else _up(self.e * c.mag()))
+            return self._like(self.v * c, self.g * c, self.h * c, None if self.e is None else _up(self.e * c.mag()))
         e = None                                  # (phi1 + d1)(phi2 + d2) - phi1 phi2 = phi1 d2 + phi2 d1 + d1 d2
         if self.e is not None or o.e is not None:
             e1, e2 = _zero(self.e), _zero(o.e)
             e = _up(self.v.mag() * e2, o.v.mag() * e1, e1 * e2)
-        return Jet2(self.v * o.v, self.g * o.v + o.g * self.v,
-                    self.h * o.v + o.h * self.v + _sym(self.g, o.g), e)
+        u = _union(self.s, o.s)                   # each part on its own support, then lifted to the union
+        g1, g2 = _lift(self.g, self.s, u, False), _lift(o.g, o.s, u, False)
+        g = _lift(self.g * o.v, self.s, u, False) + _lift(o.g * self.v, o.s, u, False)
+        h = _lift(self.h * o.v, self.s, u, True) + _lift(o.h * self.v, o.s, u, True) + _sym(g1, g2)
+        return Jet2(self.v * o.v, g, h, e, u, self.n)
 
     __rmul__ = __mul__
 
     def _chain(self, f1, f2, e=None):
         """f(self) from f = value, f1 = f', f2 = f'' (intervals over the value's box); `e`, f's own error
         bound (self's carried through f by the caller)."""
-        return lambda f0: Jet2(f0, self.g * f1, _square(self.g) * f2 + self.h * f1, e)
+        return lambda f0: self._like(f0, self.g * f1, _square(self.g) * f2 + self.h * f1, e)
 
     def sin(self):
         """sin of the jet (value, first and second derivatives by the chain rule; |sin'| <= 1 carries e)."""
@@ -151,7 +204,7 @@ class Jet2:
         e = None
         if cross.any() or self.e is not None:
             e = np.where(cross, _up(2 * self.v.mag(), 2 * _zero(self.e)), _zero(self.e))
-        return Jet2(self.v * sign, self.g * sign, self.h * sign, e)
+        return self._like(self.v * sign, self.g * sign, self.h * sign, e)
 
 
 def _zero(e):
@@ -239,8 +292,9 @@ def packed_hessian(mod, angles, L, lo, hi, mounts=None, variables=(), centre=Non
         f = with_jets(fn)(*[a[rows] for a in angles], physical, 1.0, *extra)
         for i, fi in enumerate(f):
             if isinstance(fi, Jet2):
-                H_lo[rows, i] = fi.h.lo.T
-                H_hi[rows, i] = fi.h.hi.T
+                h = fi.packed()
+                H_lo[rows, i] = h.lo.T
+                H_hi[rows, i] = h.hi.T
                 if fi.e is not None:
                     E[rows, i] = fi.e
     return H_lo, H_hi, E
@@ -342,9 +396,12 @@ def _linear_jets(L, lo, hi):
     mid, rad = midrad(lo, hi)
     centre = L @ mid
     radius = (np.abs(L) @ (rad + SUM_ERROR * np.abs(mid))) * (1 + SUM_ERROR) + 1e-300
-    zero_h = Iv(np.zeros((nv * (nv + 1) // 2, 1)))
-    return [Jet2(Iv((c - r).reshape(shape), (c + r).reshape(shape)), Iv(row[:, None].copy()), zero_h)
-            if row.any() else 0.0 for row, c, r in zip(L, centre, radius)]
+    out = []
+    for row, c, r in zip(L, centre, radius):
+        s = tuple(int(k) for k in np.flatnonzero(row))          # the support: the variables the row mixes
+        out.append(Jet2(Iv((c - r).reshape(shape), (c + r).reshape(shape)), Iv(row[list(s), None].copy()),
+                        Iv(np.zeros((len(s) * (len(s) + 1) // 2, 1))), None, s, nv) if s else 0.0)
+    return out
 
 
 STEP = 1e-30          # the complex step: Im f(p + i h d) / h is f'(p) d to rounding (h^2 terms are below it)
