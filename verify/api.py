@@ -18,7 +18,7 @@ from .workflows import jobs
 CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravity, "g_uncertainty": checks.small,
           "prior": checks.small, "grid": checks.positive, "target": checks.positive,
           "count_seconds": checks.positive, "search_seconds": checks.positive, "max_candidates": checks.positive_int,
-          "search_nodes": checks.positive_int, "count_nodes": checks.positive_int,
+          "search_nodes": checks.positive_int, "count_nodes": checks.count,
           "window": checks.positive, "k": checks.positive, "min_still": checks.positive,
           "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
@@ -60,8 +60,8 @@ def plan(model, *, grid=None, count_seconds=None, max_candidates=None, search_se
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
     as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
     `max_candidates` bounds the size of the search, `search_nodes` and `count_nodes` its work (the same plan
-    on every machine), `search_seconds` and `count_seconds` are its safety stops (None: the command's
-    defaults)."""
+    on every machine; `count_nodes=0`: the plan alone, the others not counted), `search_seconds` and
+    `count_seconds` are its safety stops (None: the command's defaults)."""
     from .workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS, norm_plan, plan as search_plan
     mod = models.load(model)
     if models.kind(model) == "norm":

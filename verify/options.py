@@ -78,6 +78,11 @@ def positive_int(value):
     return whole(value, 1)
 
 
+def count(value):
+    """A whole number >= 0 (a budget that may be none at all)."""
+    return whole(value, 0)
+
+
 def degree(value):
     """A degree in T of the thermal model: a whole number 1 to 3."""
     d = whole(value, 1)

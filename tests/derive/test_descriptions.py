@@ -19,12 +19,15 @@ def test_two_axis_description_reproduces_the_spine(mod):
 
 
 @pytest.mark.parametrize("name, m, n_min", [("single-axis", 15, 8), ("three-axis", 17, 9)])
-def test_builtin_stands_plan(name, m, n_min, tmp_path):
+def test_builtin_stands_plan(name, m, n_min, tmp_path, capsys):
+    # --count-nodes 0: the fewest positions proven and one plan, no count of the others
     out = tmp_path / "p.json"
-    assert main(["plan", name, "--json", str(out)]) == 0
+    assert main(["plan", name, "--json", str(out), "--count-nodes", "0"]) == 0
     res = json.loads(out.read_text())
-    assert len(res["q_names"]) == m and res["min_positions"] == n_min
+    assert len(res["q_names"]) == m and res["min_positions"] == n_min and res["min_positions_proven"]
     assert all(e >= 1 for e in res["guaranteed_errors"])
+    assert len(res["optimal_plans"]) == 1 and res["count_method"].startswith("a mixed-integer program, the plan")
+    assert "not counted (--count-nodes 0)" in capsys.readouterr().out
 
 
 def write_multi_csv(path, angles, mounts, names, mount_names, f):

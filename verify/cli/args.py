@@ -8,9 +8,9 @@ EXIT_INCONSISTENT = 3
 
 
 #: The argparse types of the shared checks (verify/options.py: the API checks its arguments with the same).
-positive, small, noise, positive_int, seed, gravity, rate = (
-    checks.argtype(k) for k in (checks.positive, checks.small, checks.noise, checks.positive_int, checks.seed,
-                                checks.gravity, checks.rate))
+positive, small, noise, positive_int, count, seed, gravity, rate = (
+    checks.argtype(k) for k in (checks.positive, checks.small, checks.noise, checks.positive_int, checks.count,
+                                checks.seed, checks.gravity, checks.rate))
 
 
 def temperatures(text):

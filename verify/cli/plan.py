@@ -20,9 +20,9 @@ def add(sub):
                    help=f"work allowed for proving the fewest positions: branch-and-bound nodes (default "
                         f"{SEARCH_NODES:,}; the same plan on every machine); when they run out, the plan found is "
                         "printed with a proven lower bound on the fewest")
-    p.add_argument("--count-nodes", type=options.positive_int, default=COUNT_NODES, metavar="N",
+    p.add_argument("--count-nodes", type=options.count, default=COUNT_NODES, metavar="N",
                    help=f"work allowed for counting the optimal plans on a large grid, in nodes (default "
-                        f"{COUNT_NODES:,})")
+                        f"{COUNT_NODES:,}; 0: the plan alone, not counted)")
     p.add_argument("--search-seconds", type=options.positive, default=SEARCH_SECONDS, metavar="S",
                    help=f"safety stop of the search (default {SEARCH_SECONDS:g} s; a stop it causes is said, for it "
                         "depends on the machine)")
@@ -77,7 +77,7 @@ def run(args):
         from ..workflows.plan import route
         d["route"] = route(res)
     certs = _certificates(mod, args, res.search, res.plan) if args.certificates else None   # before any file
-    _print(mod, res, d, args.grid, names)
+    _print(mod, res, d, args.grid, names, counted=args.count_nodes > 0)
     if args.route:
         _print_route(d["route"], names, res.multi)
     if args.json:
@@ -101,8 +101,9 @@ def run(args):
     return 0
 
 
-def _print(mod, res, d, grid, names):
-    """The optimal errors per q (candidates and continuum), the minimal number of positions, the plan."""
+def _print(mod, res, d, grid, names, counted=True):
+    """The optimal errors per q (candidates and continuum), the minimal number of positions, the plan (the
+    plans of that size counted unless `counted` is False: --count-nodes 0)."""
     from ..io import report
     r, cont = res.search, res.continuum
     report.table(("q", "definition", "optimal error on the candidates (sigma)",
@@ -126,6 +127,9 @@ def _print(mod, res, d, grid, names):
                 if r.clock else f"after --search-nodes {res.search_nodes:,}") + "; raise it to prove the fewest)"))
     if r.floor is not None:
         print(f"a plan of {r.min_positions} positions optimal for every q (not proven the fewest), found by {r.method}")
+    elif not (r.exhaustive or counted):
+        print(f"optimal plans of {r.min_positions} positions on that grid: not counted (--count-nodes 0); "
+              f"found by {r.method}")
     else:
         print(f"optimal plans of {r.min_positions} positions on that grid: "
               + (f"{len(r.optimal_plans)}" if r.exhaustive else f"at least {len(r.optimal_plans)} (counting stopped"

@@ -446,8 +446,9 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
                                                             nodes=search_nodes, count_nodes=count_nodes)
         touched, memo = [touching(cols, lam) for lam in lams], {}
         exact = all([_confirm(cols, lams, plan, touched, memo) for plan in plans])
-        method = ("a mixed-integer program re-solved with each plan cut off, each plan then confirmed "
-                  + ("exactly" if exact else "(in floating point where the dual is not exact)"))
+        method = ("a mixed-integer program, the plan then confirmed " if count_nodes == 0 else
+                  "a mixed-integer program re-solved with each plan cut off, each plan then confirmed ") + (
+                  "exactly" if exact else "(in floating point where the dual is not exact)")
     if not plans:
         raise ValueError("no plan on this grid is optimal for every parameter")
     return PlanSearch(np.asarray(angles_deg, float), mounts, n, plans, exhaustive, tuple(per_nu), errors, proven,
