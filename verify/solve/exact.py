@@ -27,18 +27,20 @@ def exact_columns(mod, angles_deg, mounts=None):
     P = np.atleast_2d(np.asarray(angles_deg, float))
     mounts = np.zeros(len(P), int) if mounts is None else np.asarray(mounts)
     out = np.empty((len(P), 3, m), dtype=object)
+    check = np.empty((len(P), 3, m))
     for s, (deg, k) in enumerate(zip(P, mounts)):
         key = tuple(deg)
         if key not in cache:
             try:
-                cache[key] = f(key)
+                vals = f(key)
             except ValueError as e:
                 raise ValueError(f"H is not exact on these positions ({e}); exact plan search takes grids of "
                                  "multiples of 15 degrees and wedges of multiples of 15 degrees") from None
-        vals = cache[key]
+            cache[key] = vals, np.array([float(v) for v in vals])
+        vals, approx = cache[key]
         for p in range(3):
-            out[s, p] = vals[(3 * int(k) + p) * m: (3 * int(k) + p + 1) * m]
-    check = np.vectorize(float, otypes=[float])(out)
+            rows = slice((3 * int(k) + p) * m, (3 * int(k) + p + 1) * m)
+            out[s, p], check[s, p] = vals[rows], approx[rows]
     want = np.moveaxis(H_at(mod, np.deg2rad(P), mounts), -1, 0)
     if np.abs(check - want).max() > 1e-9:
         raise AssertionError("the exact H disagrees with the generated H")
@@ -50,7 +52,8 @@ _EVALUATORS = weakref.WeakKeyDictionary()      # module -> (exact H of a positio
 
 def _evaluator(mod):
     """(f, m, values): f gives the stand's symbolic H exactly at a position (degrees), m its columns, and
-    `values` the positions evaluated so far (kept with the module: a search evaluates the same ones again)."""
+    `values` the positions evaluated so far, exact and as floats (kept with the module: a search evaluates
+    the same ones again)."""
     if mod not in _EVALUATORS:
         from ..models import symbolic_H
         from .field import evaluator

@@ -127,18 +127,18 @@ class QF:
         return hash((self.n, self.den))
 
     def sign(self):
-        """-1, 0 or +1, exactly."""
-        if self.is_zero():
-            return 0
-        if not any(self.c[1:]):
-            return 1 if self.c[0] > 0 else -1
+        """-1, 0 or +1, exactly: that of the integer coordinates (the denominator is positive), with
+        sqrt r between s / 10^k and (s + 1) / 10^k, s = isqrt(r 10^2k), in integers times 10^k."""
+        a, *rest = self.n
+        if not any(rest):
+            return (a > 0) - (a < 0)
         k = 20
         while True:
-            lo = hi = self.c[0]
-            for coef, r in zip(self.c[1:], ROOTS):
-                s = isqrt(r * 10 ** (2 * k))
-                lo_r, hi_r = Fraction(s, 10 ** k), Fraction(s + 1, 10 ** k)
-                lo, hi = (lo + coef * lo_r, hi + coef * hi_r) if coef >= 0 else (lo + coef * hi_r, hi + coef * lo_r)
+            scale = 10 ** k
+            lo = hi = a * scale
+            for coef, r in zip(rest, ROOTS):
+                s = isqrt(r * scale * scale)
+                lo, hi = (lo + coef * s, hi + coef * (s + 1)) if coef >= 0 else (lo + coef * (s + 1), hi + coef * s)
             if lo > 0:
                 return 1
             if hi < 0:
@@ -161,8 +161,8 @@ class QF:
         return (self - o).sign() >= 0
 
     def __float__(self):
-        a, b, c, d = self.c
-        return float(a) + float(b) * 2 ** 0.5 + float(c) * 3 ** 0.5 + float(d) * 6 ** 0.5
+        (a, b, c, d), den = self.n, self.den        # int / int is correctly rounded, as float(Fraction) is
+        return a / den + b / den * 2 ** 0.5 + c / den * 3 ** 0.5 + d / den * 6 ** 0.5
 
     def sympy(self):
         """The number as a SymPy expression."""

@@ -409,19 +409,9 @@ def columns(mod, angles_deg, mounts):
         return np.moveaxis(H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts), -1, 0)
 
 
-def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0,
-           search_seconds=None, search_nodes=None, count_nodes=None):
-    """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans.
-
-    A mixed-integer search (grids beyond the bit masks) is budgeted by work: `search_nodes` nodes to prove
-    the fewest positions (beyond, it keeps the plan it found, with the solver's proven lower bound as
-    `floor`) and `count_nodes` to count the plans of that size; `search_seconds` and `count_seconds` are a
-    safety stop (`clock` says when one fired)."""
-    import time
-    deadline = None if search_seconds is None else time.perf_counter() + search_seconds
-    if angles_deg is None:
-        angles_deg, mounts = grid(mod)
-    mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
+def optimal_errors(mod, angles_deg, mounts):
+    """Each q's optimal guaranteed error on the candidates (units of sigma), from its dual on them:
+    (H columns (S, 3, m), duals, the minimal supports per q, errors, proven on the continuum)."""
     cols = columns(mod, angles_deg, mounts)
     m = cols.shape[2]
     small = len(angles_deg) <= BITMASK_LIMIT
@@ -434,6 +424,23 @@ def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, coun
     proven = tuple(bool(sup is not None and all(isinstance(v, Fraction) for v in lam)
                         and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
                    for nu, lam in enumerate(lams))
+    return cols, lams, per_nu, errors, proven
+
+
+def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0,
+           search_seconds=None, search_nodes=None, count_nodes=None, errors=None):
+    """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans.
+
+    A mixed-integer search (grids beyond the bit masks) is budgeted by work: `search_nodes` nodes to prove
+    the fewest positions (beyond, it keeps the plan it found, with the solver's proven lower bound as
+    `floor`) and `count_nodes` to count the plans of that size; `search_seconds` and `count_seconds` are a
+    safety stop (`clock` says when one fired). `errors`: what optimal_errors gave on these candidates."""
+    import time
+    deadline = None if search_seconds is None else time.perf_counter() + search_seconds
+    if angles_deg is None:
+        angles_deg, mounts = grid(mod)
+    mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
+    cols, lams, per_nu, errors, proven = errors or optimal_errors(mod, angles_deg, mounts)
     S = len(angles_deg)
     floor, clock = None, False
     if S <= BITMASK_LIMIT and all(sets is not None for sets in per_nu):

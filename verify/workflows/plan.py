@@ -112,37 +112,41 @@ def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_
         progress(f"{len(P)} candidate positions, {len(mod.Q_NAMES)} combinations: the fewest positions by a "
                  f"mixed-integer program (up to {search_nodes or highs.SEARCH_NODES:,} nodes, then "
                  f"{highs.COUNT_NODES if count_nodes is None else count_nodes:,} counting)")
-    r = plans.search(mod, P, M, **work)
+    first = plans.optimal_errors(mod, P, M)          # each q's optimal error on the candidates, before any search
     n = len(names)
     ranges = mod.ANGLE_RANGES_DEG
     detents = mod.ANGLE_DETENTS_DEG
-    cont, added = None, 0
+    cont, added, r = None, 0, None
     if not all(len(d) for d in detents):    # the continuum of reachable angles: the exchange method there
         sol = continuum.exchange(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
         cont = sol.values
-        if any(e > c + 1e-7 for e, c in zip(r.errors, cont)):   # the exchange positions become candidates
-            r, added = _with_exchange(mod, r, P, M, sol, ranges, detents, len(mounts), work)
+        if any(e > c + 1e-7 for e, c in zip(first[3], cont)):   # the exchange positions become candidates
+            r, added = _with_exchange(mod, P, M, sol, ranges, detents, len(mounts), work)
+    if r is None:
+        r = plans.search(mod, P, M, **work, errors=first)
     return Plan(model, mod, r, _preferred_plan(mod, r), None if cont is None else list(cont), added, grid,
                 search_seconds, search_nodes or highs.SEARCH_NODES)
 
 
-def _with_exchange(mod, r, P, M, sol, ranges, detents, k, work):
-    """The search again with the exchange method's positions as candidates: exact ones (multiples of 15
-    degrees) first, then all, until the candidates reach the continuum optimum. (search, added)."""
+def _with_exchange(mod, P, M, sol, ranges, detents, k, work):
+    """The search with the exchange method's positions as candidates: exact ones (multiples of 15 degrees)
+    first, then all, until the candidates reach the continuum optimum (each set's errors looked at before
+    the one search). (search, added), or (None, 0) when the exchange adds no position."""
     from ..solve import plans
     X = _snap(np.rad2deg(sol.positions), ranges, detents)
     base = P[M == 0]
     new_all = [x for x in X if not np.any(np.all(np.isclose(base, x), axis=1))]
     exact = [x for x in new_all if np.all(x % 15 == 0)]
-    added = 0
+    chosen, added, errors = None, 0, None
     for new in ([exact, new_all] if exact and len(exact) < len(new_all) else [new_all]):
         if not new:
             continue
         P2 = np.vstack([base, np.array(new)])
-        r, added = plans.search(mod, np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2)), **work), len(new)
-        if all(e <= c + 1e-7 for e, c in zip(r.errors, sol.values)):
+        chosen, added = (np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2))), len(new)
+        errors = plans.optimal_errors(mod, *chosen)
+        if all(e <= c + 1e-7 for e, c in zip(errors[3], sol.values)):
             break
-    return r, added
+    return (None, 0) if chosen is None else (plans.search(mod, *chosen, **work, errors=errors), added)
 
 
 def _snap(X, ranges, detents, step=15.0, tol=1e-6):
