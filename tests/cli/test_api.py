@@ -1,4 +1,4 @@
-"""The notebook API and the commands go through the same functions (issue 24): the same results for
+"""The notebook API and the commands go through the same functions: the same results for
 the same inputs, data as arrays as well as files, and docs/api.md's example runs as written."""
 import json
 
@@ -17,7 +17,7 @@ def test_plan_of_the_api_is_the_plan_of_the_command(tmp_path, capsys, model):
     # tilted_inner: the exchange positions are candidates there; garant.plan gave 8 positions with errors
     # 3.0, 1.414, ... where `garant plan` gave 10 with 2.414, 1.0, ... (the step lived in the command).
     out = tmp_path / "p.json"
-    # the search and the count are budgeted by work (issue 43): the same JSON, whatever the machine's load
+    # the search and the count are budgeted by work: the same JSON, whatever the machine's load
     assert main(["plan", model, "--json", str(out), "--count-nodes", "5"]) == 0
     assert garant.plan(model, count_nodes=5) == json.loads(out.read_text())
 
@@ -115,7 +115,7 @@ def test_diagnose_of_the_api_is_the_command(tmp_path, capsys):
 
 @needs_real
 def test_a_npy_log_calibrates_as_its_text(tmp_path):
-    # Binary input for large logs (issue 27): the same samples as .npy give the same calibration; an object
+    # Binary input for large logs: the same samples as .npy give the same calibration; an object
     # array is refused, never unpickled (a file is data).
     log = REAL / "repeat_session2_acc.txt"
     np.save(tmp_path / "s.npy", np.loadtxt(log)[:, :4])
@@ -127,7 +127,7 @@ def test_a_npy_log_calibrates_as_its_text(tmp_path):
 
 
 def test_an_estimates_q_and_bounds_come_as_named_arrays(tmp_path):
-    # Issue 44, item 6: Estimate.q and its bounds as arrays, in the order of the names beside them.
+    # Estimate.q and its bounds as arrays, in the order of the names beside them.
     from garant.generated import two_axis as mod
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
     f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
@@ -140,7 +140,7 @@ def test_an_estimates_q_and_bounds_come_as_named_arrays(tmp_path):
 
 
 def test_an_error_names_the_option_as_the_caller_spells_it(tmp_path, capsys):
-    # Issue 45: workflows wrote "--imu" into errors and the API rewrote them by regex ("choose one with --imu K"
+    # workflows wrote "--imu" into errors and the API rewrote them by regex ("choose one with --imu K"
     # came out "imu K"). An error now marks its options (errors.opt): the command prints --imu and --run,
     # the API imu= and which_run=, and the error carries the parameter it is about.
     from garant.verify.cli import main
@@ -154,7 +154,7 @@ def test_an_error_names_the_option_as_the_caller_spells_it(tmp_path, capsys):
 
 
 def test_every_result_has_a_status_and_its_message(tmp_path):
-    # Issue 45: like scipy's OptimizeResult, every result says what came out in a word and a line.
+    # Like scipy's OptimizeResult, every result says what came out in a word and a line.
     from garant.verify.io import results
     for cls in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.Correction,
                 results.NextPosition):

@@ -106,12 +106,12 @@ def test_garant_verify_console_script(tmp_path):
 
 
 def test_tables_state_their_model_and_human_units(tmp_path, capsys, mod):
-    # Issue 25: every printed table states its model equation and units; --units human adds ppm, urad/mrad
+    # Every printed table states its model equation and units; --units human adds ppm, urad/mrad
     # and mg/ug beside SI. 2e-4 as a scale error is +200 ppm; 1e-4 rad is +100 urad; a bias of 1e-3 g is 1 mg.
     from garant.verify.io.report import human
     assert human(2e-4, "1") == "+200 ppm" and human(1e-4, "rad") == "+100 urad" and human(2e-3, "rad") == "+2 mrad"
     assert human(1e-3, "1", bias=True) == "+1 mg" and human(9.80665e-6, "m/s^2", bias=True) == "+1 ug"
-    assert human(1.2e-2, "1") == "+1.2 %" and human(-1.2e-4, "1") == "-120 ppm"     # issue 45: not +1.2e+04 ppm
+    assert human(1.2e-2, "1") == "+1.2 %" and human(-1.2e-4, "1") == "-120 ppm"     # not +1.2e+04 ppm
     p = truth(4)
     f = simulate(mod, PLAN10, p, SIGMA, seed=4)
     path = write_csv(tmp_path / "d.csv", PLAN10, f)
@@ -123,14 +123,14 @@ def test_tables_state_their_model_and_human_units(tmp_path, capsys, mod):
 
 
 def test_docs_cli_is_the_parser():
-    # Issue 45: docs/cli.md is generated from argparse (python -m verify.cli.doc --write); it drifts, this fails.
+    # docs/cli.md is generated from argparse (python -m verify.cli.doc --write); it drifts, this fails.
     from garant.verify.cli import doc
     assert doc.PATH.read_text() == doc.markdown()
     assert all(f"## garant {name}" in doc.markdown() for name in doc.COMMANDS)
 
 
 def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
-    # Issue 45: estimate printed lines of 330 characters, verify 659. On a terminal every line now wraps at 100
+    # estimate printed lines of 330 characters, verify 659. On a terminal every line now wraps at 100
     # columns (continuations indented), a word longer than that (a path) is not cut; into a file, nothing wraps.
     import io
 

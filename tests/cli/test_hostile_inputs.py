@@ -1,4 +1,4 @@
-"""Hostile and malformed inputs (issue 14): no code runs from a user's file, and every bad file ends
+"""Hostile and malformed inputs: no code runs from a user's file, and every bad file ends
 with exit status 2, exactly one line on stderr naming the file or option and the problem, no output
 file, and in bounded time."""
 import json
@@ -49,7 +49,7 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     old_title = 'title = "Single-axis indexing table, block in three mountings"'
     assert old_unit in BASE and old_title in BASE
     title = 'Tri"""ple \\ quoted """'
-    # a unit is one of a whitelist (issue 43), so the hostile text goes where free text may: the meaning
+    # a unit is one of a whitelist, so the hostile text goes where free text may: the meaning
     hostile = HOSTILE_UNIT + ' a """ b end'
     text = BASE.replace(old_unit, 'unit = "rad"\nmeaning = ' + json.dumps(hostile), 1)
     text = text.replace(old_title, f"title = {json.dumps(title)}", 1)
@@ -83,7 +83,7 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     ('detents_deg = [0, 90, 180, 270]', 'detents_deg = [0, 90.0000001, 180, 270]', "to at most 6 decimals"),
     ('[[parameter]]\nname = "kappa"', '[[angle]]\nname = "phi"\n\n[[parameter]]\nname = "kappa"', "declared twice"),
     ('remount', 'remount', ""),
-    # issue 26: integers of 400 digits ended in "OverflowError: int too large to convert to float"
+    # Integers of 400 digits ended in "OverflowError: int too large to convert to float"
     ('detents_deg = [0, 90, 180, 270]', 'detents_deg = [0, 90, 180, '
                                         '1111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111111]', "angle[1].detents_deg"),  # noqa: E501
     ('detents_deg = [0, 90, 180, 270]', 'range_deg = [0, '
@@ -203,7 +203,7 @@ def _csv(path, header, cols):
     ("csv", lambda p: _csv(p, "time_s,x,x,z", [_log()[0], *_log()[1].T]), ("duplicate",)),
     ("imu_tk", lambda p: p.write_bytes(b"0 1 2 \xff\n" * 200), ("not a number",)),
     ("imu_tk", lambda p: p.write_text("0 1 2 3\n" * 50), ("only 50 samples",)),
-    # issue 30: a 1e308 reading ended in "found only 0 still interval(s)", which named no cause
+    # A 1e308 reading ended in "found only 0 still interval(s)", which named no cause
     ("imu_tk", lambda p: p.write_text("".join(f"{k} 0 0 9.81\n" for k in range(300)) + "300 1e308 0 0\n"),
      ("line 301: 1e+308 is beyond any reading",)),
 ])
@@ -269,7 +269,7 @@ def _plan_rows():
 
 @pytest.mark.parametrize("case", ["two rows 1000 sigma apart", "one outlier among 100,000 copies"])
 def test_repeated_readings_that_disagree_refute_sigma(tmp_path, capsys, case):
-    # Issue 30: two rows at (0, 0) with f3 of +0.1 and -0.1 m/s^2 (1000 sigma each), or one 0.05 g
+    # Two rows at (0, 0) with f3 of +0.1 and -0.1 m/s^2 (1000 sigma each), or one 0.05 g
     # outlier among 100,000 copies of a good row, were averaged away ("consistent ... 0.96 sigma", exit 0).
     # Readings at one position are each within sigma of the same value: they may differ by 2 sigma at most.
     P, f = _plan_rows()
@@ -314,7 +314,7 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
       "is not a writable folder"),
     (["plan", "norm", "--certificates", "{tmp}/c", "--grid", "5"], "apply to a stand with angles"),
     (["calibrate-norm", "{data}", "--delta-sigma", "1e308", "--json", "{tmp}/r.json"], "must be < 1"),
-    # Issue 30: each of these ended in a traceback or a message that named no cause.
+    # Each of these ended in a traceback or a message that named no cause.
     (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--g", "5e-324", "--json", "{tmp}/r.json"],
      "must be a gravity in m/s^2 between 0.1 and 100"),
     (["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--seed", "-1", "-o", "{tmp}/d.csv"],
@@ -332,7 +332,7 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
     (["repeatability", "--format", "means", "{data}", "--rate", "1e-300"], "must be a sample rate in Hz"),
 ])
 def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
-    # Issue 30: simulate with an infinite effect said "nothing written" and left d.csv full of inf; --prior 2
+    # simulate with an infinite effect said "nothing written" and left d.csv full of inf; --prior 2
     # wrote a calibration apply refuses; diagnose --report under a file ran the whole diagnosis first.
     P, f = _plan_rows()
     data = tmp_path / "in" / "d.csv"
@@ -350,7 +350,7 @@ def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
 
 
 def test_a_table_with_120_degree_detents_derives_plans_and_certifies(tmp_path, capsys):
-    # Issue 30: detents [0, 120] stopped code generation with "Exceeds the limit (4300 digits) for integer
+    # Detents [0, 120] stopped code generation with "Exceeds the limit (4300 digits) for integer
     # string conversion": H on the reachable set grew integers of 650,000 digits from unsimplified radicals.
     text = (STANDS_DIR / "single_axis.toml").read_text().replace("detents_deg = [0, 90, 180, 270]",
                                                                   "detents_deg = [0, 120]")
@@ -365,7 +365,7 @@ def test_a_table_with_120_degree_detents_derives_plans_and_certifies(tmp_path, c
 
 
 def test_a_window_longer_than_the_log_is_refused_by_name(tmp_path, capsys):
-    # Issue 30: --window 1e308 ended in "OverflowError: cannot convert float infinity to integer".
+    # --window 1e308 ended in "OverflowError: cannot convert float infinity to integer".
     path = _csv(tmp_path / "log.csv", "time_s,x,y,z", [_log()[0], *_log()[1].T])
     refused(["calibrate-norm", path, "--window", "1e308", "--json", tmp_path / "r.json"], capsys,
             "--window 1e+308 s: the moving-variance window must be under a quarter of the log's 19.99 s",
@@ -373,7 +373,7 @@ def test_a_window_longer_than_the_log_is_refused_by_name(tmp_path, capsys):
 
 
 def test_remount_on_a_stand_where_26_does_not_hold_names_the_cause(tmp_path, capsys):
-    # Issue 30: `remount = true` on the 90-degree wedge stopped in derive with the internal
+    # `remount = true` on the 90-degree wedge stopped in derive with the internal
     # "Gamma + hat(theta) is not G(q) ..." and a matrix; it must say what to change in the file.
     desc = tmp_path / "w.toml"
     desc.write_text((STANDS / "wedge90.toml").read_text() + "\n[estimation]\nremount = "
@@ -382,7 +382,7 @@ def test_remount_on_a_stand_where_26_does_not_hold_names_the_cause(tmp_path, cap
             outputs=[tmp_path / "out"])
 
 
-# ---------------------------------------------------------------- issue 26: calibration files, inputs and outputs
+# ---------------------------------------------------------------- calibration files, inputs and outputs
 
 def _calibration(tmp_path):
     """A good norm calibration near the identity, every field as calibrate-norm writes it (the files
@@ -425,7 +425,7 @@ def _log_file(tmp_path, scale=1.0):
     ("NaN", "not a JSON calibration file (NaN is not a number JSON allows)"),
 ])
 def test_a_calibration_file_is_checked_against_its_schema(tmp_path, capsys, change, words):
-    # Issue 26: apply accepted kind "banana", g true, a singular or 1e308 M, strings and booleans, negative
+    # apply accepted kind "banana", g true, a singular or 1e308 M, strings and booleans, negative
     # bounds, pendulosity axes that wrap or truncate, and printed ANSI escapes; 400-digit integers ended in
     # tracebacks. Each is one line naming the field (schema docs/schemas/calibration.schema.json).
     cal = _calibration(tmp_path)
@@ -465,7 +465,7 @@ def test_the_calibration_schema_passes_a_good_file_and_the_api_checks_a_dictiona
 
 @pytest.mark.parametrize("scale, unit, looks", [(1000.0, "m/s^2", "raw counts"), (1.0, "count", "m/s^2")])
 def test_apply_refuses_a_log_of_another_unit_unless_told(tmp_path, capsys, scale, unit, looks):
-    # Issue 26: a calibration made in m/s^2 applied to a raw-count log (and the reverse), silently.
+    # A calibration made in m/s^2 applied to a raw-count log (and the reverse), silently.
     cal = _calibration(tmp_path)
     cal["raw_unit"] = unit
     path = tmp_path / "c.json"
@@ -506,7 +506,7 @@ def _positions(tmp_path):
     (lambda d, t: ["plan", t / "s.toml", "--csv", t / "s.toml"], "over an input"),
 ])
 def test_no_output_ever_replaces_an_input_or_a_special_file(tmp_path, capsys, make_argv, words):
-    # Issue 26: every command wrote over its own input when an output option named it (also through a
+    # Every command wrote over its own input when an output option named it (also through a
     # symlink), onto a FIFO or /proc/self/fd/1; two outputs to one path kept one silently; a FIFO input
     # hung forever and /dev/zero never ended.
     import os
@@ -522,7 +522,7 @@ def test_no_output_ever_replaces_an_input_or_a_special_file(tmp_path, capsys, ma
 
 
 def test_a_means_file_is_refused_by_size_and_by_rows_before_it_is_read_whole(tmp_path, capsys, monkeypatch):
-    # Issue 30: a 60 MB means file of 30 M short lines needed 4.9 GB before the row limit refused it. The
+    # A 60 MB means file of 30 M short lines needed 4.9 GB before the row limit refused it. The
     # same file made small: the limits lowered 30,000 times; a sparse file stands for the large one.
     from garant.verify.io import means
     monkeypatch.setattr(means, "MAX_ROWS", 1000)
@@ -537,7 +537,7 @@ def test_a_means_file_is_refused_by_size_and_by_rows_before_it_is_read_whole(tmp
             "the means file is 0.3 MB, over the limit of 0.2 MB")
 
 
-# ---------------------------------------------------------------- issue 26: forged plan certificates
+# ---------------------------------------------------------------- forged plan certificates
 
 
 
@@ -596,7 +596,7 @@ def _fake_lines(cert):
     (_fake_lines, "the claim is not of the form"),
 ])
 def test_a_forged_plan_certificate_is_rejected(wedge_certificates, capsys, edit, words):
-    # Issue 26: each of these passed `check-certificate` (exit 0).
+    # Each of these passed `check-certificate` (exit 0).
     name = sorted(p.name for p in (wedge_certificates / "c").glob("*.json"))[0]
     code, out = _checked(_forged(wedge_certificates, name, edit), capsys)
     assert code == 1 and "certificate REJECTED" in out and words in out, out
@@ -606,7 +606,7 @@ def test_a_forged_plan_certificate_is_rejected(wedge_certificates, capsys, edit,
 
 
 def test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected(tmp_path, capsys):
-    # Issue 26: single-axis q15's certificate over the whole box of angles (2 + sqrt(2), from 45-degree
+    # single-axis q15's certificate over the whole box of angles (2 + sqrt(2), from 45-degree
     # positions) relabelled "on the 12 candidate positions of the plan search", where the detent optimum is 4.
     from garant.verify.papers.certificates import certificates
     assert all(r.passed for r in certificates(tmp_path / "c"))      # what `garant verify --certificates` writes
@@ -619,7 +619,7 @@ def test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected(tmp_pat
 
 
 def test_an_angle_named_pi_is_refused_in_a_description_and_a_certificate(tmp_path, capsys, wedge_certificates):
-    # Issue 26: an angle named `pi` was read as the constant by the certificate grammar.
+    # An angle named `pi` was read as the constant by the certificate grammar.
     desc = tmp_path / "p.toml"
     desc.write_text((STANDS / "wedge45.toml").read_text().replace('name = "phi"', 'name = "pi"')
                     .replace("phi", "pi"))
@@ -630,7 +630,7 @@ def test_an_angle_named_pi_is_refused_in_a_description_and_a_certificate(tmp_pat
 
 
 def test_a_certificate_with_a_5000_digit_integer_is_one_line(tmp_path, capsys):
-    # Issue 30: "Exceeds the limit (4300 digits) for integer string conversion" named no file.
+    # "Exceeds the limit (4300 digits) for integer string conversion" named no file.
     path = tmp_path / "c.json"
     path.write_text('{"format": "garant-certificate-1", "junk": ' + "1" * 5000 + "}")
     refused(["check-certificate", path], capsys, "c.json: not a valid certificate: an integer of 5000 digits")
@@ -642,7 +642,7 @@ def test_a_certificate_with_a_5000_digit_integer_is_one_line(tmp_path, capsys):
     (lambda c: c.update(value=1), "value"),
     (lambda c: c["domain"].update(kind="box"), "domain.kind"),
     (lambda c: c.update(format="garant-certificate-2"), "format"),
-    # Issue 26: a 44 MB certificate was validated item by item for 32 s before its length was refused;
+    # A 44 MB certificate was validated item by item for 32 s before its length was refused;
     # sqrt(-1) was read as I and the check went on.
     (lambda c: c.update(primal=c["primal"] * 6_000), "primal: has 12,000 items, at most 10,000"),
     (lambda c: c.update(primal=c["primal"] * 20_000), "over the limit of 2 MB"),
@@ -650,7 +650,7 @@ def test_a_certificate_with_a_5000_digit_integer_is_one_line(tmp_path, capsys):
     (lambda c: c.update(value="sqrt(10**16000 + 1)"), "value: exponent 16000 is beyond 16"),
 ])
 def test_a_certificate_is_checked_against_its_published_schema(tmp_path, capsys, change, words):
-    # docs/schemas/certificate.schema.json (issue 26): the form first, in one line naming the field (and the
+    # docs/schemas/certificate.schema.json: the form first, in one line naming the field (and the
     # schema where it decides), exit 2 (malformed), before any exact check.
     from garant.verify.proof import build
     cert = json.loads((build.COMMITTED / "two-axis_q1.json").read_text())
@@ -674,8 +674,8 @@ def _mountings(n):
 
 
 def test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor(tmp_path, capsys):
-    # Issue 26: a four-detent table in all 24 mountings ran for minutes with no word. The search now says
-    # its size first, keeps its best plan after --search-nodes (issue 43: work, not seconds, so the same on
+    # A four-detent table in all 24 mountings ran for minutes with no word. The search now says
+    # its size first, keeps its best plan after --search-nodes (work, not seconds, so the same on
     # every machine), and says it is not proven the fewest. Twelve of the mountings (48 candidates, past the
     # bit masks) take the same road as 24, with a quarter of the derivation.
     old = 'mountings = ["+x+y+z", "+y+z+x", "+z+x+y"]'
@@ -693,7 +693,7 @@ def test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor(tmp_
 
 
 def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_search(tmp_path, capsys):
-    # Issue 26: an axis of 15-digit components searched for 12 s, wrote the plan's JSON, then failed on
+    # An axis of 15-digit components searched for 12 s, wrote the plan's JSON, then failed on
     # sqrt(1000110612605718049052708272757) with no word of why.
     text = (STANDS / "tilted_inner.toml").read_text()
     assert "axis = [0, 1, 1]" in text
@@ -704,7 +704,7 @@ def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_
 
 
 def test_more_runs_than_the_limit_are_refused_by_name(tmp_path, capsys):
-    # Issue 26: 1,000 runs in a means file ran past 60 s (the effect test grows with their square).
+    # 1,000 runs in a means file ran past 60 s (the effect test grows with their square).
     rows = ["exp,imu,f_x,f_y,f_z,std_x,std_y,std_z,n_samples"]
     for run_ in range(1, 61):
         rows += [f"{run_},1,{9.81 * x},{9.81 * y},{9.81 * z},0.01,0.01,0.01,1000"
@@ -715,7 +715,7 @@ def test_more_runs_than_the_limit_are_refused_by_name(tmp_path, capsys):
 
 
 def test_a_positions_file_over_its_row_limit_is_refused_before_parsing(tmp_path, capsys, monkeypatch):
-    # Issue 26: 1e7 distinct positions ended in a MemoryError traceback. The cap (2e6 rows) is made 100 here.
+    # 1e7 distinct positions ended in a MemoryError traceback. The cap (2e6 rows) is made 100 here.
     from garant.verify.io import positions
     monkeypatch.setattr(positions, "MAX_ROWS", 100)
     path = tmp_path / "d.csv"
@@ -728,7 +728,7 @@ def test_a_positions_file_over_its_row_limit_is_refused_before_parsing(tmp_path,
     lambda p: ["calibrate-norm", p, "--format", "csv"],
 ])
 def test_a_header_line_of_a_megabyte_is_refused_by_every_reader(tmp_path, capsys, command):
-    # Issue 26: a data row hidden after 1 MB of spaces in the header was read by one reader and not the other.
+    # A data row hidden after 1 MB of spaces in the header was read by one reader and not the other.
     path = tmp_path / "d.csv"
     path.write_text("alpha_deg,beta_deg,f1,f2,f3" + " " * (1 << 20) + "0,0,0,0,9.81\n0,90,0,0,9.81\n")
     refused(command(str(path)), capsys, "the header line is longer than 65,536 characters")

@@ -1,4 +1,4 @@
-"""Hostile inputs, round three (issue 42): one writer for every output (never through a link, never over
+"""Hostile inputs, round three: one writer for every output (never through a link, never over
 an input, nothing left by a failing command), the API checking its arguments as the command checks its
 options, and the silent, hanging and traceback cases of the round, each one line and exit status 2."""
 import json
@@ -25,7 +25,7 @@ def _untouched(paths):
 
 @pytest.mark.parametrize("make", ["data named as the module", "symlink", "hard link"])
 def test_a_report_folder_never_replaces_an_input_or_follows_a_link(tmp_path, capsys, make, monkeypatch):
-    # Issue 42: diagnose --report wrote the generated module two_axis.py in place, over the data file of
+    # diagnose --report wrote the generated module two_axis.py in place, over the data file of
     # that name, through a symlink or a hard link to the data: refused now before any work, data unchanged.
     monkeypatch.chdir(tmp_path)
     data = _positions(tmp_path)
@@ -47,7 +47,7 @@ def test_a_report_folder_never_replaces_an_input_or_follows_a_link(tmp_path, cap
 
 
 def test_derive_never_writes_over_its_description_through_a_hard_link(tmp_path, capsys):
-    # Issue 42: `derive s.toml --out out` with out/single_axis.py hard-linked to s.toml replaced it.
+    # `derive s.toml --out out` with out/single_axis.py hard-linked to s.toml replaced it.
     stand = tmp_path / "s.toml"
     stand.write_text((STANDS_DIR / "single_axis.toml").read_text())
     (tmp_path / "out").mkdir()
@@ -58,7 +58,7 @@ def test_derive_never_writes_over_its_description_through_a_hard_link(tmp_path, 
 
 
 def test_an_output_that_is_a_link_is_refused_even_one_to_standard_output(tmp_path, capsys):
-    # Issue 42: --json dev/stdout, dev/stdout a link to /proc/self/fd/1, replaced the link.
+    # --json dev/stdout, dev/stdout a link to /proc/self/fd/1, replaced the link.
     data = _positions(tmp_path)
     (tmp_path / "dev").mkdir()
     (tmp_path / "dev" / "stdout").symlink_to("/proc/self/fd/1")
@@ -78,7 +78,7 @@ def test_an_output_that_is_a_link_is_refused_even_one_to_standard_output(tmp_pat
       "{t}/rep/residuals.png"], "lies inside the report folder"),
 ])
 def test_two_outputs_of_one_command_never_collide(tmp_path, capsys, argv, words):
-    # Issue 42: an output inside another's folder was overwritten by the folder's own file, exit 0.
+    # An output inside another's folder was overwritten by the folder's own file, exit 0.
     data = _positions(tmp_path)
     for sub in ("rep", "c", "certs"):
         (tmp_path / sub).mkdir()
@@ -87,7 +87,7 @@ def test_two_outputs_of_one_command_never_collide(tmp_path, capsys, argv, words)
 
 
 def test_a_folder_swapped_for_a_link_during_the_run_is_not_written_through(tmp_path):
-    # Issue 42: swapping rep/ for a symlink while the command ran sent the report elsewhere.
+    # Swapping rep/ for a symlink while the command ran sent the report elsewhere.
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     with pytest.raises(garant.DataError, match="changed during the run"):
@@ -100,7 +100,7 @@ def test_a_folder_swapped_for_a_link_during_the_run_is_not_written_through(tmp_p
 
 
 def test_a_result_never_writes_over_the_file_it_was_computed_from(tmp_path):
-    # Issue 42: garant.estimate(...).to_json("d.csv") replaced the data; the result remembers its inputs.
+    # garant.estimate(...).to_json("d.csv") replaced the data; the result remembers its inputs.
     data = _positions(tmp_path)
     before = _untouched([data])
     res = garant.estimate("two-axis", str(data), 1e-5)
@@ -114,7 +114,7 @@ def test_a_result_never_writes_over_the_file_it_was_computed_from(tmp_path):
 # ---------------------------------------------------------------- a failing command writes nothing
 
 def test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one(tmp_path, capsys, monkeypatch):
-    # Issue 42: estimate wrote r.json and residuals.png, then failed on the report, leaving them (and the
+    # estimate wrote r.json and residuals.png, then failed on the report, leaving them (and the
     # report folder) behind. Now each output is held complete beside its name until the command succeeds.
     from garant.verify.io import report
     data = _positions(tmp_path)
@@ -130,7 +130,7 @@ def test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one
 
 
 def test_a_write_past_ulimit_f_keeps_the_old_file(tmp_path):
-    # Issue 42: `ulimit -f` truncated an output in place (and killed the process with SIGXFSZ).
+    # `ulimit -f` truncated an output in place (and killed the process with SIGXFSZ).
     import resource
     data = _positions(tmp_path)
     out = tmp_path / "r.json"
@@ -148,7 +148,7 @@ def test_a_write_past_ulimit_f_keeps_the_old_file(tmp_path):
 # ---------------------------------------------------------------- calibration files
 
 def test_a_calibration_with_a_key_twice_is_refused(tmp_path, capsys):
-    # Issue 42: duplicate keys were accepted, the last one winning.
+    # Duplicate keys were accepted, the last one winning.
     text = json.dumps(_calibration(tmp_path))
     path = tmp_path / "c.json"
     path.write_text(text.replace('"g": 9.81', '"g": 9.81, "g": 1.0'))
@@ -157,7 +157,7 @@ def test_a_calibration_with_a_key_twice_is_refused(tmp_path, capsys):
 
 
 def test_nan_in_a_calibrations_bounds_is_refused_by_name(tmp_path):
-    # Issue 42: NaN passed the schema (it compares false against minimum and maximum) and gave NaN bounds.
+    # NaN passed the schema (it compares false against minimum and maximum) and gave NaN bounds.
     cal = _calibration(tmp_path)
     cal["bound_bias"][1] = float("nan")
     t = np.arange(3000) * 0.01
@@ -197,7 +197,7 @@ _LOG = np.column_stack([np.arange(3000) * 0.01, np.zeros((3000, 2)), np.full(300
     (lambda: garant.apply({}, _LOG, sensor="../../etc"), "sensor: '../../etc' is not one of"),
 ])
 def test_the_api_refuses_what_the_command_refuses_with_a_data_error(call, words):
-    # Issue 42: the API accepted complex arrays (imaginary part dropped), NaN or negative sigma and
+    # The API accepted complex arrays (imaginary part dropped), NaN or negative sigma and
     # seconds, max_candidates=0, a sensor "../../etc", sigma as text, and ended in TypeError,
     # ZeroDivisionError or a hang; the same check (verify/options.py) now serves the option and the argument.
     with pytest.raises(garant.DataError, match=words.replace("(", r"\(").replace(")", r"\)")
@@ -208,21 +208,21 @@ def test_the_api_refuses_what_the_command_refuses_with_a_data_error(call, words)
 # ---------------------------------------------------------------- silent, hanging and traceback cases
 
 def test_a_route_at_a_speed_of_5e_324_is_refused(tmp_path, capsys):
-    # Issue 42: a speed of 5e-324 deg/s gave a 1-position route and "total 0 s".
+    # A speed of 5e-324 deg/s gave a 1-position route and "total 0 s".
     text = (STANDS_DIR / "two_axis.toml").read_text().replace("[[angle]]\n", "[[angle]]\nspeed_deg_s = 5e-324\n", 1)
     (tmp_path / "s.toml").write_text(text)
     refused(["plan", tmp_path / "s.toml", "--route"], capsys, "speed_deg_s: 5e-324 is not a deg/s figure")
 
 
 def test_plan_norm_draws_its_plot_and_refuses_a_route(tmp_path, capsys):
-    # Issue 42: `plan norm --route --plot` ignored both options.
+    # `plan norm --route --plot` ignored both options.
     refused(["plan", "norm", "--route"], capsys, "--route applies to a stand with angles")
     assert main(["plan", "norm", "--plot", str(tmp_path / "n.png")]) == 0
     assert (tmp_path / "n.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_next_draws_its_plot_when_done(tmp_path, capsys):
-    # Issue 42: `next` at "done" ignored --plot.
+    # `next` at "done" ignored --plot.
     data = _positions(tmp_path)
     assert main(["next", "--model", "two-axis", str(data), "--sigma", "1e-5", "--target", "1",
                  "--plot", str(tmp_path / "n.png")]) == 0
@@ -231,7 +231,7 @@ def test_next_draws_its_plot_when_done(tmp_path, capsys):
 
 
 def test_next_stops_when_repeated_readings_already_refute_sigma(tmp_path, capsys):
-    # Issue 42: readings repeated 2000 sigma apart, before every q has an estimator, still gave a position.
+    # Readings repeated 2000 sigma apart, before every q has an estimator, still gave a position.
     P, f = _plan_rows()
     rows = np.column_stack([P[:5], f[:5]])
     rows = np.vstack([rows, rows[:1] + [0, 0, 0, 0, 2000 * 1e-5 * 9.81]])
@@ -243,7 +243,7 @@ def test_next_stops_when_repeated_readings_already_refute_sigma(tmp_path, capsys
 
 
 def test_next_finds_20000_measured_positions_among_the_candidates_in_one_pass():
-    # Issue 42: `next` on 20,000 positions ran past 30 s: each measured position was looked for by a scan
+    # `next` on 20,000 positions ran past 30 s: each measured position was looked for by a scan
     # of every candidate and appended one vstack at a time. Now one look-up each (workflows/next.py).
     from garant.verify.workflows.next import _with_measured
     grid = np.array([(a, b) for a in np.arange(0, 360, 2.5) for b in np.arange(0, 360, 2.5)])
@@ -261,7 +261,7 @@ def test_next_finds_20000_measured_positions_among_the_candidates_in_one_pass():
     (["check-certificate", "{sine}"], "sin(1) is not a number of Q(sqrt2, sqrt3)"),
 ])
 def test_each_case_of_round_three_is_one_line(tmp_path, capsys, argv, words):
-    # Issue 42: OverflowError (a 5e-324 grid; a .npy header with a 30-digit dimension), a hang (sigma
+    # OverflowError (a 5e-324 grid; a .npy header with a 30-digit dimension), a hang (sigma
     # 5e-324), AssertionError (an angle of 1e300), a certificate with heavy radicals checked for 30 s.
     data = _positions(tmp_path)
     (tmp_path / "huge.csv").write_text("alpha_deg,beta_deg,f1,f2,f3\n1e300,0,0,0,9.81\n")
@@ -277,7 +277,7 @@ def test_each_case_of_round_three_is_one_line(tmp_path, capsys, argv, words):
 
 
 def test_a_noise_bound_below_what_doubles_resolve_is_refused(tmp_path, capsys):
-    # Issue 42: `estimate --sigma 5e-324` hung; the floor is options.SIGMA_MIN (1e-12 of g).
+    # `estimate --sigma 5e-324` hung; the floor is options.SIGMA_MIN (1e-12 of g).
     with pytest.raises(SystemExit) as e:
         main(["estimate", "--model", "two-axis", str(_positions(tmp_path)), "--sigma", "5e-324"])
     err = capsys.readouterr().err
@@ -285,7 +285,7 @@ def test_a_noise_bound_below_what_doubles_resolve_is_refused(tmp_path, capsys):
 
 
 def test_a_file_name_of_nested_mathtext_draws_as_written(tmp_path, capsys):
-    # Issue 42: a file name with nested $\sqrt{...}$ ended every plot in RecursionError.
+    # A file name with nested $\sqrt{...}$ ended every plot in RecursionError.
     name = "a$" + "\\sqrt{" * 30 + "x" + "}" * 30 + "$.csv"
     data = _positions(tmp_path).rename(tmp_path / name)
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--plot",

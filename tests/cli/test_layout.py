@@ -178,7 +178,7 @@ def test_import_garant_is_light_and_gives_the_api():
 
 
 def test_the_command_uses_one_blas_thread_unless_told_otherwise():
-    # Issue 27: the command's thin least-squares fits cost about twice the CPU with threaded BLAS. The
+    # The command's thin least-squares fits cost about twice the CPU with threaded BLAS. The
     # command module sets one thread before numpy loads (numpy must not be loaded by then, or the setting
     # is too late); a user's own setting wins.
     import os

@@ -1,4 +1,4 @@
-"""The README is a front page (issue 45): at most about 100 lines of at most 120 characters, and its first
+"""The README is a front page: at most about 100 lines of at most 120 characters, and its first
 calibration runs as written, line by line, from a folder beside the clone's ../shared."""
 import re
 import shlex

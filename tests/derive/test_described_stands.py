@@ -1,4 +1,4 @@
-"""Issue 15, Done when: five stands that are not built in run derive -> plan -> simulate -> estimate
+"""The target: five stands that are not built in run derive -> plan -> simulate -> estimate
 -> diagnose. The readings are made here by an exact rotation chain written independently of garant
 (numpy, passive rotations C_n(x) = cos x E + (1 - cos x) n n^T - sin x [n x]); each q must lie within
 its guaranteed bound of the truth, and every plan certificate must pass `garant check-certificate`."""
@@ -110,7 +110,7 @@ def test_a_plan_certificate_is_tied_to_its_description(tmp_path, capsys):
 
 
 def test_two_axis_plans_on_finer_grids_are_the_quarter_turn_plans(capsys):
-    """Issue 15: the number of optimal 10-position plans on the 30-degree grid, exactly confirmed: the
+    """The number of optimal 10-position plans on the 30-degree grid, exactly confirmed: the
     same 64 as on quarter turns (Table 2 of 000), every one on quarter turns."""
     assert main(["plan", "two-axis", "--grid", "30", "--count-nodes", "5000"]) == 0
     out = capsys.readouterr().out

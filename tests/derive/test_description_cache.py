@@ -1,4 +1,4 @@
-"""The cache of derived descriptions runs no one else's code (issue 42): one entry per key, verified before it
+"""The cache of derived descriptions runs no one else's code: one entry per key, verified before it
 is executed, in a folder only its owner can write."""
 import hashlib
 import os

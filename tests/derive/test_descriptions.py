@@ -112,7 +112,7 @@ def test_builtin_files_are_the_registered_models():
 
 @pytest.mark.parametrize("name", ["single-axis", "two-axis"])
 def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, capsys):
-    # Issue 16: `plan --csv` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
+    # `plan --csv` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
     # the data; `estimate` on the data then bounds every q of the saved truth.
     plan, data, est = tmp_path / "p.csv", tmp_path / "d.csv", tmp_path / "e.json"
     assert main(["plan", name, "--csv", str(plan)]) == 0
@@ -126,7 +126,7 @@ def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, ca
 
 
 def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
-    # Issue 15: identify works for every stand; an encoder effect on an angle the stand lacks is named as such.
+    # identify works for every stand; an encoder effect on an angle the stand lacks is named as such.
     assert main(["identify", "single-axis"]) == 0
     assert "Delta_g + phi[Gamma11]" in capsys.readouterr().out.replace("phi[Delta_g] + phi[Gamma11]", "Delta_g + "
         "phi[Gamma11]")
@@ -137,7 +137,7 @@ def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
 
 
 def test_any_identifier_a_user_picks_works(tmp_path, capsys):
-    # Issue 25: t1 (tilt 1) and all-capital names (K, DG) were refused as "reserved" because the generated
+    # t1 (tilt 1) and all-capital names (K, DG) were refused as "reserved" because the generated
     # code used such names itself. Now the code keeps its own names apart: the single-axis description
     # with its angle named g, its parameters named t1, DG, K and np, derives, plans, simulates and estimates.
     import re
@@ -164,7 +164,7 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
 
 
 def test_a_description_is_derived_once_and_again_when_it_changes(tmp_path, monkeypatch, capsys):
-    # Issue 25: a TOML stand was re-derived by SymPy on every command (6-15 s for three angles). Its module
+    # A TOML stand was re-derived by SymPy on every command (6-15 s for three angles). Its module
     # is now cached by the SHA-256 of the description and of the generator: the second load derives nothing
     # (derivation made to fail shows it), an edited description is derived again, and the module
     # `garant derive --out` writes is accepted as --model.

@@ -64,7 +64,7 @@ def test_003_checks_pass(group):
     assert rows and all(r.passed for r in rows), [r for r in rows if not r.passed]
 
 
-# Issue 26: a table of 72 x 72 detents spent minutes in nsimplify on every reachable position. An angle
+# A table of 72 x 72 detents spent minutes in nsimplify on every reachable position. An angle
 # with at least 2d + 1 detents (d: the highest harmonic of it in J) sees what its whole circle sees, so
 # the analysis on detents runs only over the angles with fewer; these tests check that claim exactly.
 

@@ -1,4 +1,4 @@
-"""Issue 15 (part): fixed turns of any angle (a wedge), tilted unit-vector axes, detents and ranges
+"""Fixed turns of any angle (a wedge), tilted unit-vector axes, detents and ranges
 honoured by simulate and diagnose. Each generated model is checked against a rotation chain written
 here independently in numpy (passive rotations, C1-C3 of section 2 of 000; Rodrigues for a tilted axis)."""
 

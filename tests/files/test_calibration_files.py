@@ -1,4 +1,4 @@
-"""Calibrations the engineer can use (issue 16): saved as garant JSON and in imu_tk's form, read back,
+"""Calibrations the engineer can use: saved as garant JSON and in imu_tk's form, read back,
 and applied to the raw log with a worst-case error per sample that the corrected still intervals
 respect (|a| = g within the stated bound)."""
 import json
@@ -29,7 +29,7 @@ def test_round_trip_norm_calibration(tmp_path, name):
     calibration.write_imu_tk(tmp_path / "c.calib", cal)
     back = calibration.read(tmp_path / "c.json")
     M, b = calibration.read_imu_tk(tmp_path / "c.calib")
-    # imu_tk's convention (issue 25): T upper-triangular with a unit diagonal written as 1; the frame of a
+    # imu_tk's convention: T upper-triangular with a unit diagonal written as 1; the frame of a
     # norm calibration is free, so imu_tk's T K (X - B) has the norm of M (X - b) for every X.
     T = np.array((tmp_path / "c.calib").read_text().split()[:9], float).reshape(3, 3)
     assert np.all(np.diag(T) == 1.0) and np.all(np.tril(T, -1) == 0.0)
@@ -77,7 +77,7 @@ def test_bad_calibration_file_one_line(tmp_path, capsys, edit, words):
 
 
 def test_stand_estimate_applied_at_new_positions(tmp_path, capsys):
-    # Issue 16: a simulated stand data set, its estimate saved as a calibration, applied to readings at
+    # A simulated stand data set, its estimate saved as a calibration, applied to readings at
     # positions the estimate never saw: the corrected specific force is within the stated bound of the
     # true one, (1 - Delta_g) g u in block axes (the readings of the same stand with Gamma = 0, bias = 0).
     # The block frame is garant's convention: Gamma lower-triangular (axis 1 defines x, axis 2 the xy
@@ -126,7 +126,7 @@ def _kalibr_fields(path):
 
 @needs_real
 def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
-    # Issue 44: --export-kalibr wrote the nested imu0: layout of Kalibr's output, which its input reader
+    # --export-kalibr wrote the nested imu0: layout of Kalibr's output, which its input reader
     # (ImuParameters: flat rostopic, update_rate and four noise figures, each > 0) cannot read. Now the flat
     # keys; what an accelerometer log does not measure is a comment, never a number made up.
     from garant.verify.io.calibration import KALIBR_KEYS
@@ -148,7 +148,7 @@ def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
 
 @needs_real
 def test_apply_in_the_imu_tk_frame_is_the_imu_tk_file(tmp_path, capsys):
-    # Issue 44: the imu_tk file holds a norm calibration turned into imu_tk's upper-triangular T, while apply
+    # The imu_tk file holds a norm calibration turned into imu_tk's upper-triangular T, while apply
     # corrected into garant's frame: up to 0.42 m/s^2 apart on the Xsens log. apply --frame imu_tk gives the
     # file's frame (to the CSV's 8 digits), its bound carried through the turn; the default is garant's.
     log = REAL / "imu_tk_xsens_acc.txt"
@@ -170,7 +170,7 @@ def test_apply_in_the_imu_tk_frame_is_the_imu_tk_file(tmp_path, capsys):
 
 
 def test_outputs_honour_the_umask(tmp_path):
-    # Issue 25: every output was created 0600 whatever the umask (colleagues could not read a calibration
+    # Every output was created 0600 whatever the umask (colleagues could not read a calibration
     # in a shared folder). Under umask 022 a written file is 0644, as open() would make it; under 077, 0600.
     import os
     import stat
@@ -189,7 +189,7 @@ def test_outputs_honour_the_umask(tmp_path):
 
 
 def test_a_known_g_keeps_the_scale_factor_bounds_of_the_estimate(tmp_path, capsys):
-    # Issue 25: Delta_g cannot be separated from the scale factors, so a stand calibration's diagonal bound
+    # Delta_g cannot be separated from the scale factors, so a stand calibration's diagonal bound
     # carries Delta_g's a-priori bound; it came from --prior (1e-3) while the estimate said 1.3e-5. With
     # --g-uncertainty 1e-6 the saved bounds are within 10 % of the estimate's own; with an assumed g
     # (no --g), its uncertainty (5e-3) is what the file must say.
@@ -215,7 +215,7 @@ def test_a_known_g_keeps_the_scale_factor_bounds_of_the_estimate(tmp_path, capsy
 
 @pytest.mark.parametrize("model", ["single-axis", "three-axis", "tests/data/stands/wedge90.toml"])
 def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, capsys, model):
-    # Issue 25: only the two-axis stand could save a calibration. Any stand now: readings at the stand's
+    # Only the two-axis stand could save a calibration. Any stand now: readings at the stand's
     # grid (errors within the premises: stand and mounting errors within the description's bounds, block
     # errors 1e-3), estimate --save, then apply to readings at other positions: each corrected reading lies
     # within apply's stated bound of the true specific force in block axes (the same stand with Gamma = 0,
@@ -249,7 +249,7 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
     # A Gamma entry whose range reaches a bounded parameter's bound says so. On the single-axis stand, with theta1
     # and the turn about the mountings' axis absorbed, q2 fixes theta3 and no entry does (before, each
     # off-diagonal entry carried theta3's bound of 1e-3); on the three-axis stand, with the instrument-side
-    # offset Delta_phi absorbed (issue 40), Gamma31 no longer carries its bound.
+    # offset Delta_phi absorbed, Gamma31 no longer carries its bound.
     assert ("confounded" in capsys.readouterr().out) == model.endswith("wedge90.toml")
     np.testing.assert_allclose(calibration.read_imu_tk(tk)[0], calibration.read(cal)["M"], rtol=1e-12)
     pick = rng.permutation(len(P))[:20]

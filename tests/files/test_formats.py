@@ -45,7 +45,7 @@ def test_calibration_and_imu_tk_examples_agree(tmp_path):
 
 
 def test_api_example_runs(capsys):
-    # Issue 45: the example needs no file beside the clone (it made a log of 001's plan in memory).
+    # The example needs no file beside the clone (it made a log of 001's plan in memory).
     exec(compile(block("api.md", "python"), "docs/api.md", "exec"), {})
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("10 [1.0, 1.0, 1.0]") and out[1].startswith("consistent noise rule")
@@ -138,7 +138,7 @@ def _outputs(tmp_path):
 
 
 def test_every_result_json_follows_its_published_schema(tmp_path, capsys):
-    # Issue 26: docs/schemas/{estimate,plan,calibrate-norm}.schema.json describe what the commands write.
+    # docs/schemas/{estimate,plan,calibrate-norm}.schema.json describe what the commands write.
     out = _outputs(tmp_path)
     capsys.readouterr()
     for kind, doc in out.items():

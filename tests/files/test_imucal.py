@@ -1,4 +1,4 @@
-"""imucal's users (issue 44): its Ferraris session straight in, its calibration file out, and imucal's own
+"""imucal's users: its Ferraris session straight in, its calibration file out, and imucal's own
 calibration of the same session inside garant's bounds. imucal is installed by the test extra."""
 import json
 
@@ -25,7 +25,7 @@ def calibrated(tmp_path_factory):
 
 
 def test_imucals_own_calibration_lies_inside_garants_bounds(calibrated):
-    # Issue 44: the session, read with no conversion; imucal's Ferraris calibration of it (K_a R_a, b_a) is
+    # The session, read with no conversion; imucal's Ferraris calibration of it (K_a R_a, b_a) is
     # garant's block model f = (E + Gamma) a + bias with E + Gamma = K_a R_a: every entry within the bound.
     from imucal import FerrarisCalibration, ferraris_regions_from_section_list
     df = pd.read_csv(SESSION, header=0, index_col=0)
@@ -41,7 +41,7 @@ def test_imucals_own_calibration_lies_inside_garants_bounds(calibrated):
 
 
 def test_the_imucal_export_loads_in_imucal_and_corrects_as_garant_apply(calibrated, tmp_path, capsys):
-    # Issue 44: --export-imucal writes imucal's FerrarisCalibrationInfo; imucal's load_calibration_info reads
+    # --export-imucal writes imucal's FerrarisCalibrationInfo; imucal's load_calibration_info reads
     # it and its calibrate_df gives `garant apply`'s output.
     from imucal.management import load_calibration_info
     info = load_calibration_info(calibrated / "i.json")
@@ -70,7 +70,7 @@ def test_an_annotated_session_in_counts_is_refused_by_estimate_in_a_line(tmp_pat
 
 
 def test_imucals_session_through_the_norm_says_what_six_faces_cannot_identify(capsys):
-    # Issue 43 item 5 on imucal's own session (issue 44: read as a log with --format imucal --rate): the norm
+    # On imucal's own session (read as a log with --format imucal --rate): the norm
     # fit set a misalignment to 1.6 rad at its first step and went on to M -> 0. It stops there and says why.
     assert main(["calibrate-norm", str(SESSION), "--format", "imucal"]) == 2
     assert "give --rate HZ" in capsys.readouterr().err
@@ -82,7 +82,7 @@ def test_imucals_session_through_the_norm_says_what_six_faces_cannot_identify(ca
 
 
 def test_a_dataframe_in_gives_a_calibrated_copy_out(calibrated):
-    # Issue 44, item 6: imucal's habit, calibrate_df: a DataFrame with acc_x, acc_y, acc_z (no time: rate over
+    # imucal's habit, calibrate_df: a DataFrame with acc_x, acc_y, acc_z (no time: rate over
     # its index) is corrected into a copy, its other columns kept, the bounds beside.
     import garant
     df = pd.read_csv(SESSION, header=0, index_col=0)

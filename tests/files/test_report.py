@@ -1,4 +1,4 @@
-"""--report DIR (issue 28): one self-contained index.html beside report.md, with the tables, the
+"""--report DIR: one self-contained index.html beside report.md, with the tables, the
 premises, every plot embedded, the command, garant's version and the inputs' SHA-256; rendered in
 headless Chromium where it is installed."""
 import hashlib
@@ -86,7 +86,7 @@ def test_each_report_renders_in_headless_chromium(reports):
 
 @pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")
 def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
-    # Issue 46: the batch's summary page (each unit's row) is one self-contained page a browser draws.
+    # The batch's summary page (each unit's row) is one self-contained page a browser draws.
     logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3)]
     assert main(["calibrate-norm", *logs, "--g", "9.81", "--out", str(tmp_path / "b"), "--jobs", "1"]) == 0
     page = tmp_path / "b" / "index.html"

@@ -50,7 +50,7 @@ def test_derived_bound_holds_at_the_worst_vertices(label):
 
 
 def test_vertex_search_refutes_the_printed_bound_in_the_mems_box():
-    # Audit of issue 13: |delta_sigma| = 1.0944e-3 against the printed (2.4) 1.0600e-3, at a vertex of
+    # An audit: |delta_sigma| = 1.0944e-3 against the printed (2.4) 1.0600e-3, at a vertex of
     # the MEMS box; random sampling inside the box missed it. The search must find it by itself.
     box = norm_001.BOXES["MEMS"]
     found = norm_001.worst_remainder(N, box, seed=5)
@@ -102,7 +102,7 @@ def test_printed_bound_fails_in_smaller_boxes_too(scale, ratio):
 
 
 def test_plan_norm_command(tmp_path, capsys):
-    # Issue 15: `garant plan norm` was a traceback; now it gives the orientations to hold the IMU in.
+    # `garant plan norm` was a traceback; now it gives the orientations to hold the IMU in.
     from garant.verify.cli import main
     out = tmp_path / "p.json"
     assert main(["plan", "norm", "--json", str(out)]) == 0

@@ -1,4 +1,4 @@
-"""Every row of `garant verify` can fail (issue 13): for each check group, a wrong input (a perturbed
+"""Every row of `garant verify` can fail: for each check group, a wrong input (a perturbed
 value, a wrong count, a broken estimator) turns its rows red. Each test names the wrong input."""
 import json
 import dataclasses

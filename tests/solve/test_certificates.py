@@ -1,5 +1,5 @@
 """Optimality certificates: produced for the optimal values, re-checked independently, and a wrong
-one is rejected with the reason (issue 8)."""
+one is rejected with the reason."""
 import copy
 import json
 
@@ -72,7 +72,7 @@ def test_check_certificate_cli(two_axis, tmp_path, capsys):
 
 
 def test_forged_certificate_with_scaled_H_is_rejected(two_axis):
-    # Issue 14: doubling H and halving the weights kept (a) and made (b) read 1/2 for q7 (true optimum 1).
+    # Doubling H and halving the weights kept (a) and made (b) read 1/2 for q7 (true optimum 1).
     cert = copy.deepcopy(two_axis[6])
     cert["H"] = [[f"2*({e})" for e in row] for row in cert["H"]]
     for t in cert["primal"]:
@@ -98,11 +98,11 @@ def test_certificate_not_of_its_model_is_rejected(two_axis, tamper, reason):
 
 @pytest.mark.parametrize("definition, holds", [
     (None, True),                                   # the claim as built
-    ("bias1 + bias2 + bias3", False),               # issue 42: another definition for q1 "held"
+    ("bias1 + bias2 + bias3", False),               # another definition for q1 "held"
     ("kappa + 0", True),                            # the same definition, written otherwise
     ("kappa + epsilon", False), ("Gamma11", False), ("kappa + pi", False)])
 def test_a_claim_must_state_its_q_as_the_model_defines_it(two_axis, definition, holds):
-    # Issue 42: the definition in a claim was never compared with the model's: two-axis q1 claiming
+    # The definition in a claim was never compared with the model's: two-axis q1 claiming
     # "q1 = bias1 + bias2 + bias3" held. Both are parsed (whitelist grammar) and compared exactly.
     cert = copy.deepcopy(two_axis[0])
     if definition is not None:
@@ -112,7 +112,7 @@ def test_a_claim_must_state_its_q_as_the_model_defines_it(two_axis, definition, 
 
 
 def test_a_sphere_certificate_must_sit_on_the_sphere_and_keep_its_domain(norm):
-    # Issue 42: a norm certificate whose estimator sat at n = (+-2, 0, 0) "proved" an optimal error of 1/4 for
+    # A norm certificate whose estimator sat at n = (+-2, 0, 0) "proved" an optimal error of 1/4 for
     # lambda1_star (the optimum is 1); one relabelled to a finite domain crashed the checker (KeyError).
     cert = copy.deepcopy(norm[0])
     assert all(ok for _, ok, _ in check.check(cert))

@@ -1,4 +1,4 @@
-"""A production line in one command (issue 46): many logs in one process, every core, a guaranteed pass
+"""A production line in one command: many logs in one process, every core, a guaranteed pass
 or fail against the unit's specification, one bad log a row of the summary."""
 import json
 

@@ -162,7 +162,7 @@ def split_half_exceedances(rule):
 
 @needs_real
 def test_noise_rule_holds_on_split_halves_of_every_real_log():
-    # Issue 23, item 4: the noise rule must hold for correlated noise. Split each still interval of every
+    # The noise rule must hold for correlated noise. Split each still interval of every
     # real log in two: if the rule bounds the error of each half's mean, the two means differ by no more
     # than the rules combined. The batch-means rule (K_BATCH standard errors from 8 batch means, plus half
     # a count) is exceeded on at most 1 % of interval-axes; the white-noise rule (3 std / sqrt(n) plus
@@ -190,7 +190,7 @@ def test_k_batch_is_the_student_t_point():
 
 
 def test_orientations_are_suggested_only_when_they_shrink_a_bound(tmp_path):
-    # Issue 25: a log already on the optimal plan of 001 (18 directions) was still told to "add"
+    # A log already on the optimal plan of 001 (18 directions) was still told to "add"
     # orientations. Now: on the optimal plan, nothing to add (no bound shrinks); on 12 of its directions
     # plus 3 more, the 6 missing ones are suggested with the factor they shrink the worst-served bound by.
     truth = np.zeros(16)
@@ -216,8 +216,8 @@ def test_median_is_numpys_median():
 
 
 def test_a_12_parameter_calibration_file_takes_out_its_nonlinearity(tmp_path):
-    # Issue 41: --params 12 calibration files stored the nonlinearity's bound but not its estimate, so apply left
-    # delta1 g = 2e-3 in every sample: 5.4x outside its bound here (9.8e-3 m/s^2 against 4.2e-3 in the issue).
+    # --params 12 calibration files stored the nonlinearity's bound but not its estimate, so apply left
+    # delta1 g = 2e-3 in every sample: 5.4x outside its bound here (9.8e-3 m/s^2).
     # The file now carries the estimate (`delta`), apply takes it out as the fit did, and the bound holds for
     # every direction of a block whose nonlinearity is (1.3)'s with the fitted axes.
     from garant.verify.io import calibration
@@ -239,7 +239,7 @@ def test_a_12_parameter_calibration_file_takes_out_its_nonlinearity(tmp_path):
 
 @pytest.mark.parametrize("scale", [-5e-2, -2e-2])
 def test_the_noise_premise_is_the_one_the_bound_needs(scale):
-    # Issue 41: "each interval's mean within delta_sigma_max of the truth" was met exactly by a unit with scale
+    # "each interval's mean within delta_sigma_max of the truth" was met exactly by a unit with scale
     # errors of -5e-2 and lambda1 fell 4.1 % outside its bound (-2e-2: 0.9 %): calibrated, the unit reads the
     # noise 1/(1 + lambda) larger. The stated bound is now one of the raw mean's error in norm, carried through M
     # (|M^T n| D per interval). Still intervals whose means are off by exactly D g, along their direction with
@@ -262,7 +262,7 @@ def test_the_noise_premise_is_the_one_the_bound_needs(scale):
 
 
 def test_each_intervals_remainder_holds_at_the_vertices():
-    # Issue 41: the remainder of (2.2) per interval (calibrate_norm.remainder_per_interval) against the exact one,
+    # The remainder of (2.2) per interval (calibrate_norm.remainder_per_interval) against the exact one,
     # for blocks at the vertices of the box of the correction (where the worst cases live) and noise at its bound
     # in random directions: q absorbs the second-order part in the span of H' exactly (the shift s, computed here
     # from the true A and eps, within its bound), and what is left, sigma_k - H'^T (q - s) - n_k^T u / |F_k|, is
@@ -303,7 +303,7 @@ def test_each_intervals_remainder_holds_at_the_vertices():
 @pytest.mark.parametrize("name", ["repeat_session2_acc.txt", "repeat_session3_acc.txt", "repeat_session4_acc.txt",
                                   "imu_tk_xsens_acc.txt"])
 def test_real_log_bounds_are_the_information_sets(name):
-    # Issue 41, done when: on sessions 2-4 and the Xsens log every q's printed bound is within 1.25x of an LP over
+    # The target: on sessions 2-4 and the Xsens log every q's printed bound is within 1.25x of an LP over
     # the information set computed independently (cvxpy: the intervals' fitted directions, the noise rule per
     # interval, linearised at the fit, no remainder), and the remainder is at most 0.1 x delta_sigma_max. Before,
     # the printed bounds were 1.8x (session 2), 14x (3), 5.7x (4) and 25x (Xsens) that LP, the remainder up to

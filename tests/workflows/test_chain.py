@@ -1,4 +1,4 @@
-"""What a user chains (issue 43): simulate -> diagnose -> estimate with the extended model, for every effect
+"""What a user chains: simulate -> diagnose -> estimate with the extended model, for every effect
 of the catalogue; the truth of the simulation inside every printed bound."""
 import json
 
@@ -16,7 +16,7 @@ EFFECTS = cat.applicable(MODELS["two_axis"])
 
 @pytest.mark.parametrize("name", EFFECTS)
 def test_every_effects_extended_model_estimates_and_bounds_the_truth(tmp_path, capsys, name):
-    # Issue 43: estimate with diagnose's extended model ended in "TypeError: unsupported operand type(s) for
+    # estimate with diagnose's extended model ended in "TypeError: unsupported operand type(s) for
     # ** or pow(): 'Jet2' and 'int'" (scale_quadratic) and "bad operand type for abs(): 'Jet2'"
     # (scale_asymmetry); a time or temperature effect could not identify its own parameters (estimate
     # averaged the rows and dropped the column). Each module is rendered as diagnose renders it.
@@ -43,7 +43,7 @@ def test_every_effects_extended_model_estimates_and_bounds_the_truth(tmp_path, c
 
 
 def test_a_time_effects_model_is_refused_by_plan_in_one_line(tmp_path, capsys):
-    # Issue 43: `garant plan` on a bias_drift model ended in ZeroDivisionError (H at time 0 has no drift).
+    # `garant plan` on a bias_drift model ended in ZeroDivisionError (H at time 0 has no drift).
     files = codegen.model_files(cat.extend(MODELS["two_axis"], ["bias_drift"]), str(tmp_path), str(tmp_path))
     for path, text in files.items():
         open(path, "w").write(text)
@@ -61,7 +61,7 @@ def _simulated(tmp_path, *options):
 
 
 def test_a_mems_size_unit_from_a_truth_file_is_bounded_with_the_built_in_premises(tmp_path, capsys):
-    # Issue 43: --size was one bound for stand and block errors; above 1e-4 the stand's broke the built-in
+    # --size was one bound for stand and block errors; above 1e-4 the stand's broke the built-in
     # bound and estimate rejected simulate's own output. A truth file sets a MEMS unit (1.2 % scale, 50 mg).
     (tmp_path / "unit.json").write_text('{"kappa": 5e-5, "Gamma11": 1.2e-2, "Gamma22": -8e-3, "bias1": 0.05}')
     data, truth = _simulated(tmp_path, "--truth", str(tmp_path / "unit.json"))
@@ -89,7 +89,7 @@ def test_sizes_per_kind_draw_each_kind_within_its_own_bound(tmp_path, capsys):
 # ---------------------------------------------------------------- a stand error past its stated bound
 
 def test_a_stand_error_past_its_bound_names_the_parameter_and_a_wider_bound_passes(tmp_path, capsys):
-    # Issue 43: an axis tilt of 1.6e-4 rad on the built-in stand (bound 1e-4, stand description) ended in
+    # An axis tilt of 1.6e-4 rad on the built-in stand (bound 1e-4, stand description) ended in
     # "the data contradict a premise" with no table and no name, though q1 is kappa itself.
     (tmp_path / "unit.json").write_text('{"kappa": 1.6e-4, "epsilon": 5e-5, "Gamma11": 8e-5, "Gamma12": -6e-5, '
                                         '"theta1": 7e-5, "bias2": 1e-4}')
@@ -113,7 +113,7 @@ def test_a_stand_error_past_its_bound_names_the_parameter_and_a_wider_bound_pass
 
 
 def test_a_unit_other_than_rad_or_1_is_refused(tmp_path, capsys):
-    # Issue 43: unit = "mrad" printed a value computed in rad with "mrad" after it.
+    # Unit = "mrad" printed a value computed in rad with "mrad" after it.
     from garant.derive.builtin import STANDS_DIR
     text = (STANDS_DIR / "single_axis.toml").read_text().replace('unit = "rad"', 'unit = "mrad"', 1)
     (tmp_path / "s.toml").write_text(text)
@@ -124,7 +124,7 @@ def test_a_unit_other_than_rad_or_1_is_refused(tmp_path, capsys):
 # ---------------------------------------------------------------- g, next at done, the command's own
 
 def test_an_assumed_g_is_said_on_its_own_line_by_estimate_and_calibrate_norm(tmp_path, capsys):
-    # Issue 43: without --g, estimate widened its saved bounds by 5e-3 inside a 300-character premise;
+    # Without --g, estimate widened its saved bounds by 5e-3 inside a 300-character premise;
     # calibrate-norm said nothing and saved the bounds of an exact g. One rule, one line, for both.
     data, _ = _simulated(tmp_path)
     capsys.readouterr()
@@ -150,7 +150,7 @@ def test_an_assumed_g_is_said_on_its_own_line_by_estimate_and_calibrate_norm(tmp
 
 
 def test_next_at_done_says_the_verdict_and_the_command_that_calibrates(tmp_path, capsys):
-    # Issue 43: `next` at "done" printed no verdict and no next step.
+    # `next` at "done" printed no verdict and no next step.
     data, _ = _simulated(tmp_path)
     capsys.readouterr()
     assert main(["next", "--model", "two-axis", str(data), "--sigma", "1e-5", "--g", "9.81", "--target", "1"]) == 0
@@ -188,7 +188,7 @@ def _session(path, tilt_deg, seed=0):
 
 
 def test_a_six_face_session_names_what_it_cannot_identify(tmp_path, capsys):
-    # Issue 43: imucal's six-face session (all faces within 3 degrees of the axes) ran the fit to M -> 0 and
+    # imucal's six-face session (all faces within 3 degrees of the axes) ran the fit to M -> 0 and
     # b ~ 1e22, then said all nine parameters "cannot be identified". Six faces identify the scales and
     # biases; the misalignments enter the norm only at second order (001, (2.2)): named, with what to add.
     log = _session(tmp_path / "six.csv", 0.3)
@@ -202,7 +202,7 @@ def test_a_six_face_session_names_what_it_cannot_identify(tmp_path, capsys):
 
 
 def test_a_norm_fit_that_runs_away_stops_with_a_line():
-    # Issue 43: the fit set a misalignment to 1.6 rad at its first step and went on for 60 steps.
+    # The fit set a misalignment to 1.6 rad at its first step and went on for 60 steps.
     from garant.verify.workflows import calibrate_norm as cn
     faces = np.tile(np.vstack([np.eye(3), -np.eye(3)]), (2, 1)) * 9.81
     faces[6:] += np.random.default_rng(1).normal(0, 1e-3, (6, 3))

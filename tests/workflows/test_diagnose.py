@@ -101,7 +101,7 @@ def test_bad_arguments(capsys, argv, message):
     ("three-axis", "grid:90x45x90", "bias_drift", [1e-4 / 5000, 0, 0]),
 ])
 def test_diagnose_described_stands(tmp_path, capsys, stand, plan, effect, values):
-    # garant simulate and garant diagnose on the example stands of derive/stands/ (issue 7).
+    # garant simulate and garant diagnose on the example stands of derive/stands/.
     data, out = tmp_path / "d.csv", tmp_path / "r.json"
     assert main(["simulate", "--model", stand, "--plan", plan, "--effect", f"{effect}=" + ",".join(map(str, values)),
                  "--sigma", str(S), "--seed", "1", "-o", str(data)]) == 0
@@ -115,7 +115,7 @@ def test_diagnose_described_stands(tmp_path, capsys, stand, plan, effect, values
                                                                                   "bias_temperature"), 1),
                                         (("beta_encoder_harmonic", "scale_asymmetry"), 2)])
 def test_two_effects_at_two_sigma_both_named(tmp_path, pair, seed):
-    # Issue 12: two effects at once, each with a signature of 2 sigma (the largest change of a reading
+    # Two effects at once, each with a signature of 2 sigma (the largest change of a reading
     # it makes), default prior 1e-3: both are named.
     scaled = []
     for name in pair:
@@ -130,7 +130,7 @@ def test_two_effects_at_two_sigma_both_named(tmp_path, pair, seed):
     assert set(pair) <= named and res["consistent_after"]
 
 
-# Issue 29: at the noise floor for MEMS-size units, the fewest effects, random directions. The sets are
+# At the noise floor for MEMS-size units, the fewest effects, random directions. The sets are
 # those of python -m verify.power: a unit with random errors, the positions in a random order, each effect
 # in a random direction of its parameters scaled to a signature (largest change of a reading) of a x sigma.
 def _lab():

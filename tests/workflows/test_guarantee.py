@@ -1,4 +1,4 @@
-"""Guaranteed means guaranteed (issue 12): the linearisation remainder is bounded by a proof that a
+"""Guaranteed means guaranteed: the linearisation remainder is bounded by a proof that a
 search never beats (and beats by at most 3x), the verdict refutes a sigma the data do not support,
 and the printed bounds contain the truth with errors as large as the prior."""
 import dataclasses
@@ -98,7 +98,7 @@ def simulate_file(tmp_path, mod, p, sigma, seed=0, step=(30, 45)):
 
 
 def test_data_that_refute_sigma_get_a_verdict_not_bounds(tmp_path, capsys):
-    # Issue 12: noise 1e-5, claimed sigma 1e-6: every bound was violated and printed as guaranteed.
+    # Noise 1e-5, claimed sigma 1e-6: every bound was violated and printed as guaranteed.
     mod = models.load("two-axis")
     p = np.random.default_rng(3).uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
     path = simulate_file(tmp_path, mod, p, 1e-5, seed=3)

@@ -1,4 +1,4 @@
-"""Bounds over the information set (issue 40): what the readings prove, not only what the plan guarantees.
+"""Bounds over the information set: what the readings prove, not only what the plan guarantees.
 
 The printed bound of each q is the half-width of the set of q that fit every reading within sigma plus the
 proven remainder, each end proven by weak duality (verify/solve/hull.py); the a-priori bound of the LP
@@ -42,7 +42,7 @@ def test_a_proof_from_any_multipliers_bounds_the_lp_and_fails_when_cut():
 
 
 def test_96_positions_prove_a_quarter_of_sigma_and_match_an_independent_hull():
-    # Issue 40, done when: on the 12 x 8 grid, uniform noise within sigma, a small unit, the median printed bound
+    # The target: on the 12 x 8 grid, uniform noise within sigma, a small unit, the median printed bound
     # is at most 0.25 sigma and within 5 % of an LP hull of the same set computed independently (cvxpy, H of (3)
     # at zero errors, no remainder); the truth inside every bound.
     import cvxpy as cp
@@ -87,7 +87,7 @@ def test_more_readings_never_widen_a_bound(tmp_path):
 
 @pytest.mark.parametrize("model, mount", [("two-axis", "+x+y+z"), ("three-axis", None)])
 def test_apply_bound_holds_for_scale_errors_of_two_percent(tmp_path, model, mount):
-    # Issue 40's counterexample: the per-sample bound treated M (Gamma - Gamma_hat) as bounded by the bound of
+    # A counterexample: the per-sample bound treated M (Gamma - Gamma_hat) as bounded by the bound of
     # Gamma - Gamma_hat, leaving out M = (E + Gamma_hat)^-1, about 1 / (1 + Gamma_ii): with scale errors of -2e-2
     # the truth was 1.9 % (two-axis) and 2.0 % (three-axis) outside it. Readings at the stand's grid, noise at
     # +-sigma, the saved file applied at other positions: every corrected sample within its bound of the truth.
@@ -123,7 +123,7 @@ def test_apply_bound_holds_for_scale_errors_of_two_percent(tmp_path, model, moun
 
 
 def test_the_split_without_g_carries_delta_g(tmp_path):
-    # Issue 40's counterexample: without --g, Delta_g/g may be up to 5e-3 (the printed premise), and the physical
+    # A counterexample: without --g, Delta_g/g may be up to 5e-3 (the printed premise), and the physical
     # split (29) of 000 left it out of Gamma_ii's bounds: Gamma11 7.1x outside on 12 of 24 runs. A unit with
     # Delta_g/g = 4e-3 (g = 9.81 assumed, the true one 0.4 % off): every Gamma entry within its bound.
     mod = models.load("two-axis")
@@ -145,9 +145,9 @@ def test_the_split_without_g_carries_delta_g(tmp_path):
 
 @pytest.mark.parametrize("name", ["single-axis", "three-axis"])
 def test_the_block_calibration_is_bounded_over_the_information_set(name):
-    # Issue 40: the block's Gamma bounds were 6-13x the q bounds (the a-priori bounds composed with the q's; on
+    # The block's Gamma bounds were 6-13x the q bounds (the a-priori bounds composed with the q's; on
     # three-axis Gamma13 and Gamma31 carried the offset Delta_phi's bound, 11-13x the others). Over the
-    # information set, Delta_phi absorbed, with --g given and a MEMS-size unit of issue 23: no entry is
+    # information set, Delta_phi absorbed, with --g given and a MEMS-size unit (mounting to 5e-3 rad): no entry is
     # confounded, and each Gamma entry's bound is within 1.5x of the largest bound of the q that hold it.
     from garant.verify import power
     mod = models.load(name)
@@ -192,7 +192,7 @@ def test_the_per_sample_bound_holds_at_the_vertices_of_the_calibration_bounds(sc
 
 @pytest.mark.parametrize("name, offset", [("two-axis", "Delta_beta"), ("three-axis", "Delta_phi")])
 def test_the_instrument_side_offset_is_no_premise(name, offset):
-    # Issue 40: Delta_beta (two-axis) and Delta_phi (three-axis) turn the block about its own axis before any other
+    # Delta_beta (two-axis) and Delta_phi (three-axis) turn the block about its own axis before any other
     # link, C_k(read - offset) = C_k(-offset) C_k(read): a unit reads exactly like the one with the offset folded
     # into Gamma'. They were premises no data can check: 1.5e-4 against their bound of 1e-4 gave exit 0 and q10
     # 1.064x (two-axis), q9 1.08x and the block's Gamma31 1.31x (three-axis) outside. Now absorbed: not in the
@@ -215,7 +215,7 @@ def test_the_instrument_side_offset_is_no_premise(name, offset):
 
 
 def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
-    # Issue 40's done-when: the MEMS example's calibration file (issue 23: two-axis, the 30 x 45 grid, --g) has
+    # The target: the MEMS example's calibration file (two-axis, the 30 x 45 grid, --g) has
     # Gamma bounds within 1.5x of the bounds of the q they are made of. Before, the linear split (29) of 000 paid
     # |Gamma'| times the mounting's a-priori bound for its second-order gap: 6.7e-4 against q bounds of 1.6e-6.
     # Now Gamma is the lower-triangular factor of E + Gamma' (LQ, exact), enclosed in interval arithmetic; the
@@ -247,7 +247,7 @@ def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
 
 
 def test_a_premise_no_data_can_check_is_named():
-    # Issue 40, item 3: where a premise remains that the data cannot refute, the premises line names it. On the
+    # Where a premise remains that the data cannot refute, the premises line names it. On the
     # 90-degree wedge (only Delta_g absorbed: its instrument-side link turns about z, which the mounting's theta1
     # does not join) the mounting's theta1 moves the readings with q held and no plan separates it: named. On
     # the two-axis stand Delta_alpha, the one parameter no plan separates that is not absorbed, enters only with

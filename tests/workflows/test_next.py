@@ -1,4 +1,4 @@
-"""garant next (issue 28): a calibration session led position by position reaches the target in the
+"""garant next: a calibration session led position by position reaches the target in the
 fewest positions of the plan search ((7)-(12) of 000: on the two-axis stand 10, since no plan of 9 serves
 every q), every suggestion reachable, and data that refute sigma stop it."""
 import json
@@ -103,9 +103,9 @@ def test_a_session_for_the_block_parameters_reaches_their_targets(tmp_path, caps
 
 
 def test_done_means_estimate_prints_every_bound_at_its_target(tmp_path):
-    # Issue 40: next said "done" on 10 positions where estimate on the same readings printed a q9 bound 1.22x the
+    # next said "done" on 10 positions where estimate on the same readings printed a q9 bound 1.22x the
     # target (next planned with the nominal H; estimate linearises where the unit is and adds the remainder). A
-    # MEMS-size unit (issue 23) at a vertex of its bounds, noise at +-sigma with the signs of the estimator whose
+    # MEMS-size unit at a vertex of its bounds, noise at +-sigma with the signs of the estimator whose
     # bound the unit moves most on the plan next led to before (there estimate printed 1.036x its target): a
     # session led by next to "done", and estimate on that file prints every bound at or below next's target.
     from conftest import write_csv

@@ -1,4 +1,4 @@
-"""Guaranteed for MEMS units too (issue 23): the estimate is linearised at the exact-model fit, every
+"""Guaranteed for MEMS units too: the estimate is linearised at the exact-model fit, every
 a-priori bound is a stated premise, and the printed bounds contain the truth whenever the premises
 hold, on every built-in stand, without becoming vacuous."""
 import json
@@ -18,8 +18,8 @@ from garant.verify.workflows.premises import premises
 def test_mems_unit_bounds_contain_the_truth_and_stay_useful(name):
     # Monte Carlo and adversarial: truths at box vertices, noise at +-sigma with the signs of an
     # estimator's weights (its worst case). 0 truths outside a printed bound with a verdict of consistent;
-    # every bound within 3x of the same run with block errors of 1e-4 (not vacuous). Before issue 23 the
-    # two-axis MEMS case printed bounds the truth exceeded by 1.3-1.75x (linearised at zero errors).
+    # every bound within 3x of the same run with block errors of 1e-4 (not vacuous). Linearised at zero
+    # errors instead of at the fit, the two-axis MEMS case prints bounds the truth exceeds by 1.3-1.75x.
     mod = models.load(name)
     P, m = grid(mod)
     rng = np.random.default_rng(23)
@@ -49,7 +49,7 @@ def a_priori(r):
 
 
 def test_the_mems_case_of_the_issue_through_the_command(tmp_path):
-    # Item 0 of issue 23 as a user runs it: `garant estimate --g 9.81` on a MEMS block, stand errors of
+    # As a user runs it: `garant estimate --g 9.81` on a MEMS block, stand errors of
     # 2e-5 rad, the 30x45 grid, noise at +-sigma: exit 0, every q inside its bound, the premises in the
     # JSON (the noise bound and its source, each a-priori bound and its source, the statement).
     mod = models.load("two-axis")
@@ -66,7 +66,7 @@ def test_the_mems_case_of_the_issue_through_the_command(tmp_path):
     d = json.loads(out.read_text())
     q = np.array([d["q"][n] for n in mod.Q_NAMES])
     e = np.array([d["guaranteed_error"][n] for n in mod.Q_NAMES])
-    assert np.all(np.abs(q - models.q_of(mod, p)) <= e) and e.max() <= 1e-4      # issue 23: 10 sigma
+    assert np.all(np.abs(q - models.q_of(mod, p)) <= e) and e.max() <= 1e-4      # 10 sigma
     prem = d["premises"]
     assert prem["sigma"] == 1e-5 and prem["sigma_source"] == "--sigma"
     assert prem["g_uncertainty"] == 1e-5 and "local --g" in prem["g_source"]
@@ -79,10 +79,10 @@ def test_the_mems_case_of_the_issue_through_the_command(tmp_path):
 
 
 def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path, capsys):
-    # Item 1 of issue 23: scale errors and Delta_g of 5e-3, no noise, sigma 1e-6, a local --g, once printed
+    # Scale errors and Delta_g of 5e-3, no noise, sigma 1e-6, a local --g, once printed
     # a bound the truth exceeded 8x. Delta_g is now absorbed into Gamma exactly (no premise): every q of
     # the equivalent unit is inside its bound. The instrument-side encoder offset Delta_beta is absorbed too
-    # (issue 40: it is one more fixed turn beside the mounting), so Delta_beta of 5e-3 against the 1e-4 the
+    # (it is one more fixed turn beside the mounting), so Delta_beta of 5e-3 against the 1e-4 the
     # description states, with scale errors of 2e-2, is no premise: exit 0 and every q inside its bound (before,
     # the unit was beyond a premise no data can check, and q10 1.064x outside its bound at 1.5e-4). A stand error
     # that remains a premise (kappa, stated 1e-4) is named in it; with --prior 6e-3 it holds.
@@ -114,7 +114,7 @@ def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path,
     assert np.all(np.abs(q - models.q_of(mod, p)) <= e)
     p[mod.PARAMETER_NAMES.index("kappa")] = 5e-3
     data = write_csv(tmp_path / "d.csv", P, readings(mod, P, None, p, 0.0))
-    # --prior 6e-3 bounds Gamma21 (2e-2) too: the readings refute it (issue 43) and name q9 and its parameters
+    # --prior 6e-3 bounds Gamma21 (2e-2) too: the readings refute it and name q9 and its parameters
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-6", "--g", "9.81",
                  "--prior", "6e-3"]) == 3
     assert "q9 = Gamma21 + Delta_beta - theta3 = +2.49" in capsys.readouterr().out
@@ -145,7 +145,7 @@ PLAN10 = np.array([[0, 0], [0, 180], [180, 90], [180, 270], [90, 90], [270, 90],
 
 
 def test_a_minimal_plan_says_which_estimators_it_cannot_check(tmp_path, capsys):
-    # Item 6 of issue 23: on the 10-position plan of 000, offsets of 10 sigma shaped like q3's estimator are
+    # On the 10-position plan of 000, offsets of 10 sigma shaped like q3's estimator are
     # fitted exactly, so the verdict passes and q3 misses its bound: the output must say that
     # those bounds rest on sigma. The 96-position grid has redundancy along every estimator: no such line.
     mod = models.load("two-axis")
@@ -188,9 +188,9 @@ def test_remainder_part_per_q_against_the_worst_nonlinear_error_found(name):
     # worst cases live (vertices of the last box, single-sign flips): on the 10-position plan of 000 (the
     # grids of `grid` on the other stands), a precision block. Every bound holds the worst found (soundness),
     # and every q's is within
-    # 3x of the larger of that and 1 % of sigma times its linear factor (the issue's target). Before the
-    # mounting and Delta_g were absorbed into Gamma, the stand and bias combinations were 7-13x (the Hessian's
-    # width over the mounting's box); before issue 23, over 4,000x. A looser bound turns this red.
+    # 3x of the larger of that and 1 % of sigma times its linear factor. Without the mounting and Delta_g
+    # absorbed into Gamma, the stand and bias combinations are 7-13x (the Hessian's width over the
+    # mounting's box); linearised at zero errors, over 4,000x. A looser bound turns this red.
     from garant.verify.solve import lp, worst
     from garant.verify.workflows import estimate as workflow, guarantee
     mod = models.load(name)
@@ -223,7 +223,7 @@ def test_remainder_part_per_q_against_the_worst_nonlinear_error_found(name):
 
 
 def test_item_0_of_the_issue_on_ten_sets():
-    # Done-when of issue 23, item 0: MEMS-size blocks (mounting to 5e-3 rad, stand errors to 2e-5 rad), --g,
+    # The target: MEMS-size blocks (mounting to 5e-3 rad, stand errors to 2e-5 rad), --g,
     # the defaults, noise at +-sigma = 1e-5: bounds on at least 8 of 10 sets, each containing the truth (the
     # q of the unit with the mounting and Delta_g absorbed), the largest at most 1e-4 (10 sigma).
     from garant.verify import power
@@ -351,7 +351,7 @@ def _single_axis_csv(path, mod, p):
 def test_an_estimate_that_contradicts_the_premises_says_so_instead_of_a_block(tmp_path, capsys):
     # The table's tilt kappa at 5e-4 against its stated bound of 1e-4: the readings fit, but put q1 = kappa
     # beyond it, so no bound is guaranteed and no block is calibrated: the premise is named with its source
-    # and how to widen it, exit 3 (issue 43; it once said "unbounded", then "contradict a premise" without a
+    # and how to widen it, exit 3 (it once said "unbounded", then "contradict a premise" without a
     # name); kappa at 5e-5 gives the block.
     mod = models.load("single-axis")
     for kappa, block in ((5e-4, False), (5e-5, True)):

@@ -1,4 +1,4 @@
-"""Issue 18: the MIMU4444BT stream, means files, the fixture stand and `garant repeatability`.
+"""The MIMU4444BT stream, means files, the fixture stand and `garant repeatability`.
 
 Real data: ../shared/data/real/mimu4444bt (Carlsson, Skog, Jalden, IEEE Sensors J. 21(6), 2021; MIT),
 read in place; in CI it must be present."""
@@ -54,7 +54,7 @@ def test_mimu_stream_checksum_axis_map_and_time(tmp_path):
 
 
 def test_mimu_time_stamps_that_reset_or_go_back_are_counted_and_said(tmp_path, capsys):
-    # Issue 26: stamps going back every packet, or reset to 0 mid-stream, were accepted without a word.
+    # Stamps going back every packet, or reset to 0 mid-stream, were accepted without a word.
     acc = np.arange(24).reshape(8, 3) * 7 - 80
     for stamps, want in (([5_000_000 + k * 1_024_000 for k in range(3)] + [k * 1_024_000 for k in range(3)], 1),
                          ([9_000_000 - (k % 2) * 1_024_000 for k in range(6)], 3)):
@@ -151,7 +151,7 @@ def test_raw_stream_agrees_with_the_published_means():
 
 @needs_real
 def test_repeatability_on_mimu4444bt_runs_1_to_5(tmp_path):
-    """The issue's Done-when figures: with the envelope >= 95 % of comparisons inside, every exceedance of
+    """The target figures: with the envelope >= 95 % of comparisons inside, every exceedance of
     the per-run bounds explained by the named effect."""
     out = tmp_path / "rep.json"
     code = main(["repeatability", str(MIMU / "static_positions_runs1-5.csv"), "--imu", "all", "--g", str(G),
@@ -212,7 +212,7 @@ def test_the_published_repeatability_tables_are_what_the_command_writes(tmp_path
 
 @needs_real
 def test_apply_reads_one_imu_of_a_mimu_stream(tmp_path, capsys):
-    # Issue 25: `garant apply cal.json data.bin --format mimu --imu 3 -o x.csv` said "unrecognized arguments".
+    # `garant apply cal.json data.bin --format mimu --imu 3 -o x.csv` said "unrecognized arguments".
     # The calibration of IMU 3 applied to IMU 3's samples: every sample corrected, |a| near g when still.
     log, cal, out = MIMU / "raw" / "exp_1" / "data.bin", tmp_path / "c.json", tmp_path / "x.csv"
     tk, kalibr = tmp_path / "c.calib", tmp_path / "imu.yaml"
@@ -233,7 +233,7 @@ def test_apply_reads_one_imu_of_a_mimu_stream(tmp_path, capsys):
 
 @needs_real
 def test_a_refused_run_is_left_out_and_the_others_compared(tmp_path, capsys):
-    # Issue 25: one unusable log (session 1 has one still interval) aborted the whole comparison. Now it is
+    # One unusable log (session 1 has one still interval) aborted the whole comparison. Now it is
     # said in one line and left out; sessions 2-4 are compared.
     real = MIMU.parent
     logs = [str(real / f"repeat_session{i}_acc.txt") for i in (1, 2, 3, 4)]
@@ -249,7 +249,7 @@ def test_a_refused_run_is_left_out_and_the_others_compared(tmp_path, capsys):
 
 @needs_real
 def test_the_fixture_ends_in_a_calibration_that_holds_on_another_run(tmp_path, capsys):
-    # Issue 25: the icosahedral fixture (a means file with known directions) could not save a calibration.
+    # The icosahedral fixture (a means file with known directions) could not save a calibration.
     # Now run 1 of IMU 1 gives one (sigma 0.02, as above), exported to imu_tk too; applied to run 2's
     # means, each corrected reading's norm is g within apply's bound (the per-sample bound plus the run's
     # own noise, 0.02 g).

@@ -1,4 +1,4 @@
-"""garant plan --route (issue 28): the order of a plan's positions of least total stand time, exact by
+"""garant plan --route: the order of a plan's positions of least total stand time, exact by
 Held-Karp (checked against every order by brute force), the trapezoidal move times, the schedule printed
 and carried by --csv."""
 import itertools
