@@ -38,10 +38,32 @@ def number_or_none(value):
     return "None" if value is None else repr(float(value))
 
 
-ENV.filters.update(py=py_literal, doc=doc_text, number=number_or_none)
+def names_literal(names, indent=11, tuple=False):
+    """Names as a Python list (or tuple) of strings, wrapped to 116 columns, the continuation lines indented."""
+    import textwrap
+    lines = textwrap.wrap(", ".join(f'"{n}"' for n in names), width=116 - indent, break_long_words=False,
+                          break_on_hyphens=False)
+    return ("(" if tuple else "[") + ("\n" + " " * indent).join(lines) + (")" if tuple else "]")
+
+
+ENV.filters.update(py=py_literal, doc=doc_text, number=number_or_none, names=names_literal)
 HEADER = {
     ".py": "# {line}\n",
     ".md": "<!-- {line} -->\n",
+}
+
+
+#: The protocol of each kind of model: what every generated module of that kind exports (its __all__),
+#: rendered into the registry (generated/__init__.py) too, so that verify checks a module against it at load.
+API = {
+    "stand": ("ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS",
+              "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS",
+              "H_EXACT", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "MOUNTINGS", "equivalent", "H",
+              "H_SUP", "up_nominal", "readings", "residual", "PLAN_DEG", "ESTIMATOR_TERMS", "PSI",
+              "estimate_on_plan"),
+    "norm": ("AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
+             "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
+             "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"),
 }
 
 
@@ -55,7 +77,7 @@ def header(source, template, suffix):
 def render(template, context, source, suffix):
     """Header plus the rendered template: the one way every generated file is made. A Python file
     is compiled before it is returned, so a description can never yield a module that does not parse."""
-    text = header(source, template, suffix) + ENV.get_template(template).render(**context)
+    text = header(source, template, suffix) + ENV.get_template(template).render(api=API, **context)
     if suffix == ".py":
         compile(text, template, "exec")
     return text
@@ -224,7 +246,7 @@ def outputs():
         out[f"docs/derivation_{key}.md"] = render("norm/REPORT.md.jinja", norm_report_context(model),
                                                   f"derive/norm.py, axes {model.axes}", ".md")
     out["generated/_runtime.py"] = render("runtime/RUNTIME.py.jinja", {}, "derive/templates/runtime", ".py")
-    out["generated/__init__.py"] = render("registry/INIT.py.jinja", {"models": registry()},
+    out["generated/__init__.py"] = render("registry/INIT.py.jinja", {"models": registry(), "kinds": API},
                                           "derive/builtin.py (derive/stands/*.toml and the norm model of 001)", ".py")
     return out
 

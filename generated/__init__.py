@@ -10,7 +10,7 @@ description's stand model; "norm": the norm relation (2.2) of 001) and its remou
 000) or None.
 """
 
-__all__ = ["MODELS"]
+__all__ = ["MODELS", "API"]
 
 #: name -> {"module", "kind", "remount"}
 MODELS = {
@@ -19,4 +19,16 @@ MODELS = {
     "three-axis": {"module": "three_axis", "kind": "stand", "remount": None},
     "two-axis": {"module": "two_axis", "kind": "stand", "remount": "two_axis_remount"},
     "norm": {"module": "norm", "kind": "norm", "remount": None},
+}
+
+#: kind -> the names every module of that kind exports (its __all__): verify checks a module against it at load
+API = {
+    "stand": ("ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS",
+              "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS",
+              "H_EXACT", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "MOUNTINGS", "equivalent", "H",
+              "H_SUP", "up_nominal", "readings", "residual", "PLAN_DEG", "ESTIMATOR_TERMS", "PSI",
+              "estimate_on_plan"),
+    "norm": ("AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
+              "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
+              "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"),
 }

@@ -11,10 +11,10 @@ import numpy as np
 
 from garant.generated._runtime import broadcast as _broadcast, by_mount as _by_mount
 
-__all__ = ["ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS", "PARAMETER_NAMES",
-           "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS", "H_EXACT", "PHYSICAL_TO_Q",
-           "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "MOUNTINGS", "equivalent", "H", "H_SUP", "up_nominal", "readings",
-           "residual", "PLAN_DEG", "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"]
+__all__ = ["ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS",
+           "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS",
+           "H_EXACT", "PHYSICAL_TO_Q", "UNSEPARABLE", "ABSORBED", "TURN_AXIS", "MOUNTINGS", "equivalent", "H",
+           "H_SUP", "up_nominal", "readings", "residual", "PLAN_DEG", "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"]
 
 #: Read stand angles, in the order H takes them (rad).
 ANGLES = ("alpha", "beta")

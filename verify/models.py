@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from garant.generated import MODELS as REGISTRY
+from garant.generated import API, MODELS as REGISTRY
 
 from .errors import DataError
 
@@ -26,15 +26,23 @@ def kind(name):
 
 def load(name):
     """The generated module of a built-in model, of a description file (derived, or from the cache), or
-    a module `garant derive STAND.toml --out DIR` wrote (DIR/stand.py)."""
+    a module `garant derive STAND.toml --out DIR` wrote (DIR/stand.py); checked once here against the
+    protocol of its kind (API: the names every module of that kind exports), so no caller needs a default."""
     if str(name).endswith(".toml"):
-        return from_description(name)
-    if str(name).endswith(".py"):
-        return from_generated_file(name)
-    if name not in MODELS:
+        mod = from_description(name)
+    elif str(name).endswith(".py"):
+        mod = from_generated_file(name)
+    elif name in MODELS:
+        mod = importlib.import_module(MODELS[name])
+    else:
         raise DataError(f"unknown model {name!r}; built-in models: {', '.join(MODELS)}, a STAND.toml, or the "
                         f"STAND.py `garant derive --out` writes")
-    return importlib.import_module(MODELS[name])
+    missing = [n for n in API[kind(name)] if not hasattr(mod, n)]
+    if missing:
+        more = ", ..." if len(missing) > 3 else ""
+        raise DataError(f"{name}: not a {kind(name)} model of this garant (no {', '.join(missing[:3])}{more}); "
+                        "derive it again (`garant derive STAND.toml --out DIR`)")
+    return mod
 
 
 def cache_dir():

@@ -193,3 +193,7 @@ def test_a_description_is_derived_once_and_again_when_it_changes(tmp_path, monke
     (tmp_path / "old.py").write_text(old)
     with pytest.raises(Exception, match="written by an older garant; derive it again"):
         models.load(str(tmp_path / "old.py"))
+    # every name of the stand protocol (generated/__init__.py API) is checked at load, not found missing later
+    (tmp_path / "no_sup.py").write_text(module.read_text().replace("\nH_SUP = ", "\nH_SUP_OLD = "))
+    with pytest.raises(Exception, match=r"not a stand model of this garant \(no H_SUP\); derive it again"):
+        models.load(str(tmp_path / "no_sup.py"))

@@ -34,7 +34,7 @@ def for_stand(key):
     rows = [[sp.sstr(e) for e in row] for row in H]
     m = d.ident.H.cols
     out = []
-    if len(getattr(mod, "ESTIMATOR_TERMS", ())):       # derived closed forms with the duals e_nu
+    if len(mod.ESTIMATOR_TERMS):       # derived closed forms with the duals e_nu
         for nu in range(m):
             primal = [([_angle(v) for v in mod.PLAN_DEG[s]], p, Fraction(num, den))
                       for s, p, num, den in mod.ESTIMATOR_TERMS[nu]]

@@ -420,7 +420,7 @@ def optimal_errors(mod, angles_deg, mounts):
         bad = ", ".join(f"q{nu + 1}" for nu, sets in enumerate(per_nu) if sets == [])
         raise ValueError(f"the grid has no optimal estimator of {bad} (not identifiable there?)")
     errors = tuple(float(lam[nu]) for nu, lam in enumerate(lams))          # a^T lambda with a = e_nu
-    sup = getattr(mod, "H_SUP", None)
+    sup = mod.H_SUP
     proven = tuple(bool(sup is not None and all(isinstance(v, Fraction) for v in lam)
                         and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
                    for nu, lam in enumerate(lams))

@@ -349,7 +349,7 @@ class Interpolation:
     def usable(cls, mod, angles, variables):
         """Whether the identity applies (and pays): a trigonometric polynomial, no row variables, the
         angles within range and more positions than nodes."""
-        degrees = getattr(mod, "TRIG_DEGREE", None)
+        degrees = mod.TRIG_DEGREE
         if degrees is None or variables or len(degrees) > 3 or max(degrees, default=0) > cls.MAX_DEGREE:
             return False
         nodes = int(np.prod([2 * d + 1 for d in degrees]))

@@ -217,7 +217,7 @@ def route(res):
         stand = None
     r = res.search
     P, M = r.angles_deg[res.plan], r.mounts[res.plan]
-    ranges = getattr(res.mod, "ANGLE_RANGES_DEG", ((0, 360),) * len(res.mod.ANGLES))
+    ranges = res.mod.ANGLE_RANGES_DEG
     C = rt.costs(P, M, ranges, motion)
     order, method, bound = rt.order(C, bottleneck=not motion.timed)
     moves = [0.0] + [float(C[a, b]) for a, b in zip(order, order[1:])]
