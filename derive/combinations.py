@@ -6,7 +6,6 @@ rational matrix M whose rows are (component, basis function). Its row space is t
 identifiable functionals; the reduced row-echelon form in the model's preferred order of parameters
 is the canonical choice of q, and its null space lists what no plan can separate.
 """
-import math
 from dataclasses import dataclass
 
 import sympy as sp
@@ -30,7 +29,7 @@ def trig_basis(expr, angles, others=()):
         v for k, v in absolutes.items() if isinstance(k, sp.Abs)]
     if poly.free_symbols - set(gens):
         raise ValueError(f"not a trigonometric polynomial in the angles: {expr}")
-    rem = _reduce_sin_squares(sp.Poly(poly, *gens), len(cs))
+    rem = reduce_squares(sp.Poly(poly, *gens), [(s, 1 - c**2) for c, s in cs.values()])
     back = {v: f(a) for a, pair in cs.items() for f, v in zip((sp.cos, sp.sin), pair)}
     back.update({v: k for k, v in absolutes.items() if isinstance(k, sp.Abs)})
     out = {}
@@ -40,30 +39,24 @@ def trig_basis(expr, angles, others=()):
     return out
 
 
-def _reduce_sin_squares(poly, n):
-    """The normal form of `poly` modulo s_a^2 + c_a^2 - 1 for its first n angles (generators c_a, s_a in
-    pairs): every s_a^e written s_a^(e mod 2) (1 - c_a^2)^(e div 2). The rules' leading terms s_a^2 are
-    pairwise coprime, so they are a Groebner basis and this remainder is the one sp.reduced gives (lex,
-    s before c), without its general division."""
-    dom, rem = poly.domain, {}
-    for monom, coeff in poly.rep.terms():
-        parts = [(list(monom), coeff)]
-        for a in range(n):
-            h = monom[2 * a + 1] // 2
-            if not h:
-                continue
-            nxt = []
-            for m, c in parts:
-                for j in range(h + 1):            # (1 - c^2)^h = sum_j binom(h, j) (-c^2)^j
-                    m2 = list(m)
-                    m2[2 * a + 1] -= 2 * h
-                    m2[2 * a] += 2 * j
-                    nxt.append((m2, c * dom.convert(math.comb(h, j) * (-1) ** j)))
-            parts = nxt
-        for m, c in parts:
-            key = tuple(m)
-            rem[key] = rem.get(key, dom.zero) + c
-    return sp.Poly.from_dict({k: v for k, v in rem.items() if v}, *poly.gens, domain=dom)
+def reduce_squares(poly, rules):
+    """The normal form of the Poly `poly` modulo x^2 - r for each rule (x, r): every x^e written
+    x^(e mod 2) r^(e div 2), where no r holds any rule's x (sin_a^2 -> 1 - cos_a^2; m3^2 -> 1 - m1^2 - m2^2 on
+    the unit sphere). The rules' leading terms x^2 (lex, each x first) are pairwise coprime, so they are a
+    Groebner basis and this is the remainder sp.reduced gives, without its general division."""
+    for x, r in rules:
+        i = poly.gens.index(x)
+        if poly.degree(x) < 2:                       # nothing to rewrite (most entries of a Jacobian)
+            continue
+        r = sp.Poly(r, *poly.gens, domain=poly.domain)
+        groups = {}                                  # x^(2h + b) t -> (h: {x^b t: coefficient})
+        for monom, coeff in poly.rep.terms():
+            m = list(monom)
+            h, m[i] = divmod(m[i], 2)
+            groups.setdefault(h, {})[tuple(m)] = coeff
+        poly = sum((sp.Poly.from_dict(part, *poly.gens, domain=poly.domain) * r**h
+                    for h, part in sorted(groups.items())), sp.Poly(0, *poly.gens, domain=poly.domain))
+    return poly
 
 
 def harmonic_degree(J, angle, angles):

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .combinations import reduce_squares
+
 
 @dataclass(frozen=True)
 class Relation:
@@ -63,7 +65,7 @@ def canonical(expr, trig, solve_for=None):
     if cs:
         gens = sorted(expr.free_symbols, key=str)
         order = [s for _, s in cs.values()] + [g for g in gens if g not in {s for _, s in cs.values()}]
-        _, expr = sp.reduced(expr, [c**2 + s**2 - 1 for c, s in cs.values()], *order, order="lex")
+        expr = reduce_squares(sp.Poly(expr, *order), [(s, 1 - c**2) for c, s in cs.values()]).as_expr()
     return sp.expand(expr)
 
 

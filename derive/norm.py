@@ -11,6 +11,8 @@ from functools import lru_cache
 
 import sympy as sp
 
+from .combinations import reduce_squares
+
 SQ2, SQ3 = sp.sqrt(2), sp.sqrt(3)
 
 
@@ -103,8 +105,7 @@ def on_sphere(expr):
     num, _ = sp.fraction(sp.together(expr))
     num = sp.expand(num)
     rest = sorted((x for x in num.free_symbols if x not in m_sym), key=str)
-    _, r = sp.reduced(num, [m3**2 + m1**2 + m2**2 - 1], m3, m1, m2, *rest, order="lex")
-    return sp.expand(r)
+    return sp.expand(reduce_squares(sp.Poly(num, m3, m1, m2, *rest), [(m3, 1 - m1**2 - m2**2)]).as_expr())
 
 
 @lru_cache(maxsize=None)
