@@ -213,13 +213,11 @@ def cone_error(mod, directions, dsig, dmax):
 
 def _tilt(n0, phi, azimuth):
     """Directions at angle phi from n0 (columns), turned towards the given azimuths (radians)."""
-    out = []
-    for v, az in zip(n0.T, azimuth):
-        a = np.cross(v, [0.3, 0.5, 0.8])
-        a /= np.linalg.norm(a)
-        b = np.cross(v, a)
-        out.append(np.cos(phi) * v + np.sin(phi) * (np.cos(az) * a + np.sin(az) * b))
-    return np.array(out).T
+    v, az = n0.T, np.asarray(azimuth)[:, None]          # all directions at once: (18, 3), (18, 1)
+    a = np.cross(v, [0.3, 0.5, 0.8])
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.cross(v, a)
+    return (np.cos(phi) * v + np.sin(phi) * (np.cos(az) * a + np.sin(az) * b)).T
 
 
 def published_cone_bound(phi, dsig, dmax):
