@@ -260,7 +260,7 @@ def test_next_finds_20000_measured_positions_among_the_candidates_in_one_pass():
     (["check-certificate", "{radical}"], "the root sqrt(5) is not sqrt(2), sqrt(3) or sqrt(6)"),
     (["check-certificate", "{sine}"], "sin(1) is not a number of Q(sqrt2, sqrt3)"),
 ])
-def test_each_case_of_round_three_is_one_line(tmp_path, capsys, argv, words):
+def test_overflow_hang_and_heavy_radical_inputs_end_in_one_line(tmp_path, capsys, argv, words):
     # OverflowError (a 5e-324 grid; a .npy header with a 30-digit dimension), a hang (sigma
     # 5e-324), AssertionError (an angle of 1e300), a certificate with heavy radicals checked for 30 s.
     data = _positions(tmp_path)

@@ -43,7 +43,7 @@ def test_section6_some_biased_some_not(mod):
 
 
 @pytest.mark.parametrize("group", [stand_000.remount_round_trip, stand_000.ignoring_the_stand])
-def test_issue3_checks_pass(mod, group):
+def test_remount_and_stand_blind_checks_pass(mod, group):
     rows = list(group(mod, rm))
     assert rows and all(r.passed for r in rows)
 

@@ -48,7 +48,7 @@ def a_priori(r):
     return np.array(list(r["a_priori"]["guaranteed_error"].values()))
 
 
-def test_the_mems_case_of_the_issue_through_the_command(tmp_path):
+def test_a_mems_block_through_the_command_is_bounded_with_its_premises(tmp_path):
     # As a user runs it: `garant estimate --g 9.81` on a MEMS block, stand errors of
     # 2e-5 rad, the 30x45 grid, noise at +-sigma: exit 0, every q inside its bound, the premises in the
     # JSON (the noise bound and its source, each a-priori bound and its source, the statement).
@@ -222,7 +222,7 @@ def test_remainder_part_per_q_against_the_worst_nonlinear_error_found(name):
     assert np.all(ratio <= 3), ratio
 
 
-def test_item_0_of_the_issue_on_ten_sets():
+def test_mems_blocks_on_ten_sets_are_bounded_within_ten_sigma():
     # The target: MEMS-size blocks (mounting to 5e-3 rad, stand errors to 2e-5 rad), --g,
     # the defaults, noise at +-sigma = 1e-5: bounds on at least 8 of 10 sets, each containing the truth (the
     # q of the unit with the mounting and Delta_g absorbed), the largest at most 1e-4 (10 sigma).
