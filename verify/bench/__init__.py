@@ -8,6 +8,13 @@ minimal-plan proof, an imu_tk-style fit for calibrate-norm, and a naive Jacobian
 docs/bench.md says what each baseline is and why.
 """
 import os
+
+# One BLAS thread, as the command runs (verify/cli/__init__.py), set before numpy loads: the in-process rows
+# and baselines then measure what `garant` does, not threads waiting on small matrices (a user's setting wins).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
 import subprocess
 import sys
 import time
