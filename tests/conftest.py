@@ -5,11 +5,12 @@ from pathlib import Path
 # One BLAS thread a process, as the command sets it (verify/cli/__init__.py), here before numpy loads (the
 # xdist workers and the commands tests start inherit it): in-process tests then compute as `garant` does, and
 # BLAS threads on these small matrices only competed with the other worker (whole suite 189 s -> 161 s).
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
+import numpy as np
+import pytest
 
 #: Where things are, for every test: the repository, the tests' data and stands, and the real recordings of
 #: ../shared beside the clone.

@@ -14,10 +14,11 @@ import warnings
 # One BLAS thread for the command: its least-squares fits are thin (3N x 15), where threads cost more CPU
 # than they save (estimate on 10,000 positions: 0.70-0.80 s of CPU instead of 1.26-1.42 s, the same wall
 # time). Set before numpy loads (no command module imports it before this line); a user's setting wins.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-from ..errors import DataError, LPFailed  # noqa: E402  (after the BLAS setting)
+from ..errors import DataError, LPFailed
 
 #: The subcommands, in the order of `garant --help`: command name -> its module.
 COMMANDS = {"verify": "verify", "plan": "plan", "next": "next", "estimate": "estimate",
