@@ -14,6 +14,7 @@ Grids where H is not integer (15-, 30-, 45-degree steps, wedges) are exact in Q(
 (field.py).
 """
 from dataclasses import dataclass
+from typing import NamedTuple
 from fractions import Fraction
 from itertools import combinations, product
 from math import comb
@@ -409,9 +410,18 @@ def columns(mod, angles_deg, mounts):
         return np.moveaxis(H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts), -1, 0)
 
 
+class Optimal(NamedTuple):
+    """Each q's optimal guaranteed error on a set of candidates, from its dual there (optimal_errors)."""
+
+    cols: np.ndarray          # H^(p) at the candidates (S, 3, m), exact where the stand allows
+    duals: tuple              # per q: the dual vector lambda
+    minimal: tuple            # per q: the minimal supports of its optimal estimators (None beyond bit masks)
+    errors: tuple             # per q: optimal guaranteed error (units of sigma)
+    proven: tuple             # per q: that error holds on the whole continuum
+
+
 def optimal_errors(mod, angles_deg, mounts):
-    """Each q's optimal guaranteed error on the candidates (units of sigma), from its dual on them:
-    (H columns (S, 3, m), duals, the minimal supports per q, errors, proven on the continuum)."""
+    """Each q's optimal guaranteed error on the candidates (units of sigma), from its dual on them (Optimal)."""
     cols = columns(mod, angles_deg, mounts)
     m = cols.shape[2]
     small = len(angles_deg) <= BITMASK_LIMIT
@@ -424,23 +434,23 @@ def optimal_errors(mod, angles_deg, mounts):
     proven = tuple(bool(sup is not None and all(isinstance(v, Fraction) for v in lam)
                         and dual_lower_bound(sup, np.eye(m, dtype=int)[nu], lam) == lam[nu])
                    for nu, lam in enumerate(lams))
-    return cols, lams, per_nu, errors, proven
+    return Optimal(cols, lams, per_nu, errors, proven)
 
 
 def search(mod, angles_deg=None, mounts=None, count_limit=PLAN_COUNT_LIMIT, count_seconds=10.0,
-           search_seconds=None, search_nodes=None, count_nodes=None, errors=None):
+           search_seconds=None, search_nodes=None, count_nodes=None, optimal=None):
     """Optimal guaranteed errors, the minimal number of positions optimal for all q, and the plans.
 
     A mixed-integer search (grids beyond the bit masks) is budgeted by work: `search_nodes` nodes to prove
     the fewest positions (beyond, it keeps the plan it found, with the solver's proven lower bound as
     `floor`) and `count_nodes` to count the plans of that size; `search_seconds` and `count_seconds` are a
-    safety stop (`clock` says when one fired). `errors`: what optimal_errors gave on these candidates."""
+    safety stop (`clock` says when one fired). `optimal`: what optimal_errors gave on these candidates."""
     import time
     deadline = None if search_seconds is None else time.perf_counter() + search_seconds
     if angles_deg is None:
         angles_deg, mounts = grid(mod)
     mounts = np.zeros(len(angles_deg), int) if mounts is None else np.asarray(mounts)
-    cols, lams, per_nu, errors, proven = errors or optimal_errors(mod, angles_deg, mounts)
+    cols, lams, per_nu, errors, proven = optimal or optimal_errors(mod, angles_deg, mounts)
     S = len(angles_deg)
     floor, clock = None, False
     if S <= BITMASK_LIMIT and all(sets is not None for sets in per_nu):

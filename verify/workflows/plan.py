@@ -120,10 +120,10 @@ def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_
     if not all(len(d) for d in detents):    # the continuum of reachable angles: the exchange method there
         sol = continuum.exchange(build.stacked_H(mod), n, np.eye(len(mod.Q_NAMES)), ranges_deg=ranges)
         cont = sol.values
-        if any(e > c + 1e-7 for e, c in zip(first[3], cont)):   # the exchange positions become candidates
+        if any(e > c + 1e-7 for e, c in zip(first.errors, cont)):   # the exchange positions become candidates
             r, added = _with_exchange(mod, P, M, sol, ranges, detents, len(mounts), work)
     if r is None:
-        r = plans.search(mod, P, M, **work, errors=first)
+        r = plans.search(mod, P, M, **work, optimal=first)
     return Plan(model, mod, r, _preferred_plan(mod, r), None if cont is None else list(cont), added, grid,
                 search_seconds, search_nodes or highs.SEARCH_NODES)
 
@@ -137,16 +137,16 @@ def _with_exchange(mod, P, M, sol, ranges, detents, k, work):
     base = P[M == 0]
     new_all = [x for x in X if not np.any(np.all(np.isclose(base, x), axis=1))]
     exact = [x for x in new_all if np.all(x % 15 == 0)]
-    chosen, added, errors = None, 0, None
+    chosen, added, optimal = None, 0, None
     for new in ([exact, new_all] if exact and len(exact) < len(new_all) else [new_all]):
         if not new:
             continue
         P2 = np.vstack([base, np.array(new)])
         chosen, added = (np.tile(P2, (k, 1)), np.repeat(np.arange(k), len(P2))), len(new)
-        errors = plans.optimal_errors(mod, *chosen)
-        if all(e <= c + 1e-7 for e, c in zip(errors[3], sol.values)):
+        optimal = plans.optimal_errors(mod, *chosen)
+        if all(e <= c + 1e-7 for e, c in zip(optimal.errors, sol.values)):
             break
-    return (None, 0) if chosen is None else (plans.search(mod, *chosen, **work, errors=errors), added)
+    return (None, 0) if chosen is None else (plans.search(mod, *chosen, **work, optimal=optimal), added)
 
 
 def _snap(X, ranges, detents, step=15.0, tol=1e-6):
