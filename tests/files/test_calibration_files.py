@@ -213,33 +213,42 @@ def test_a_known_g_keeps_the_scale_factor_bounds_of_the_estimate(tmp_path, capsy
             assert np.all(saved >= diagonal)
 
 
-@pytest.mark.parametrize("model", ["single-axis", "three-axis", "tests/data/stands/wedge90.toml"])
-def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, capsys, model):
-    # Only the two-axis stand could save a calibration. Any stand now: readings at the stand's
-    # grid (errors within the premises: stand and mounting errors within the description's bounds, block
-    # errors 1e-3), estimate --save, then apply to readings at other positions: each corrected reading lies
-    # within apply's stated bound of the true specific force in block axes (the same stand with Gamma = 0,
-    # bias = 0).
+def _stand_readings(tmp_path, model, rng, g=9.81, set_=None):
+    """A stand's module, its premises, true parameters (stand and mounting errors within the description's
+    bounds, block errors 1e-3; `set_` overrides by name), a function of the readings at positions and a CSV of
+    them at the stand's whole grid with noise within sigma = 1e-5."""
     from garant.verify import models
+    from garant.verify.solve import plans
     from garant.verify.workflows.premises import premises
-    root = ROOT
-    name = str(root / model) if model.endswith(".toml") else model
+    name = str(ROOT / model) if model.endswith(".toml") else model
     mod = models.load(name)
     names, mounts = models.layout(mod)
-    prem = premises(mod, 1e-5, 9.81)
-    rng = np.random.default_rng(11)
+    prem = premises(mod, 1e-5, g)
     p = np.array([rng.uniform(-1e-3, 1e-3) if k in ("block", "bias") else rng.uniform(-b, b)
                   for k, b in zip(prem.kinds, np.minimum(prem.bounds, 1e-3))])
-    def kw(m):
-        return {"mount": m} if len(mounts) > 1 else {}
-    from garant.verify.solve import plans
+    for n, v in (set_ or {}).items():
+        p[list(mod.PARAMETER_NAMES).index(n)] = v
+
+    def readings(P, M, par=p):
+        return mod.readings(*np.deg2rad(P).T, par, g, **({"mount": M} if len(mounts) > 1 else {})).T
     P, M = plans.grid(mod)
-    f = mod.readings(*np.deg2rad(P).T, p, 9.81, **kw(M)).T + 9.81 * rng.uniform(-1e-5, 1e-5, (len(P), 3))
+    f = readings(P, M) + g * rng.uniform(-1e-5, 1e-5, (len(P), 3))
     data = tmp_path / "d.csv"
     cols = [f"{a}_deg" for a in names] + ["f1", "f2", "f3"] + (["mount"] if len(mounts) > 1 else [])
     rows = [[*map(repr, map(float, P[k])), *map(repr, map(float, f[k])), *([mounts[M[k]]] if len(mounts) > 1 else [])]
             for k in range(len(P))]
     data.write_text(",".join(cols) + "\n" + "\n".join(",".join(r) for r in rows) + "\n")
+    # the true specific force in the block's axes: the same stand with Gamma = 0, bias = 0
+    clean = np.array([0.0 if k in ("block", "bias") else v for k, v in zip(prem.kinds, p)])
+    return name, mod, (P, M, mounts), readings, clean, data
+
+
+@pytest.mark.parametrize("model", ["single-axis", "three-axis", "tests/data/stands/wedge90.toml"])
+def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, capsys, model):
+    # Any stand: readings at the stand's grid, estimate --save, then apply to readings at other positions: each
+    # corrected reading lies within apply's stated bound of the true specific force in block axes.
+    rng = np.random.default_rng(11)
+    name, mod, (P, M, mounts), readings, clean, data = _stand_readings(tmp_path, model, rng)
     cal, tk = tmp_path / "c.json", tmp_path / "c.calib"
     assert main(["plan", name, "--json", str(tmp_path / "plan.json"), "--count-nodes", "0"]) == 0   # its optimal plan
     plan = json.loads((tmp_path / "plan.json").read_text())
@@ -256,11 +265,38 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
     held = P[pick] + rng.uniform(-20, 20, (len(pick), P.shape[1])) * (
         np.array([len(d) == 0 for d in mod.ANGLE_DETENTS_DEG]))          # off the grid where an angle is continuous
     mh = M[pick] if len(mounts) > 1 else None
-    clean = np.array([0.0 if k in ("block", "bias") else v for k, v in zip(prem.kinds, p)])
-    f_new = mod.readings(*np.deg2rad(held).T, p, 9.81, **kw(mh)).T
-    a, bound = calibration.apply(calibration.read(cal), f_new)
-    w = mod.readings(*np.deg2rad(held).T, clean, 9.81, **kw(mh)).T
-    assert np.all(np.abs(a - w) <= bound) and bound.max() < 0.1
+    a, bound = calibration.apply(calibration.read(cal), readings(held, mh))
+    assert np.all(np.abs(a - readings(held, mh, clean)) <= bound) and bound.max() < 0.1
+
+
+@pytest.mark.parametrize("model", ["single-axis", "three-axis", "two-axis"])
+@pytest.mark.parametrize("scale", [0.09, -0.09])
+def test_an_assumed_g_is_carried_as_the_error_it_is(tmp_path, capsys, model, scale):
+    # Without --g the block's Gamma is relative to g = 9.81 and |Delta_g/g| <= 5e-3 (the printed default). The
+    # error that premise allows in a corrected sample is g_t - g along it, whatever the block's scale; it had
+    # been added to Gamma's diagonal and scaled by M (about 1 / (1 + Gamma_ii)), so with scale errors +0.09 and
+    # Delta_g/g = +5e-3 a corrected sample missed apply's bound by 1.08x (single- and three-axis). Red when the
+    # uncertainty of g goes through M again, or is dropped.
+    rng = np.random.default_rng(5)
+    name, mod, (P, M, mounts), readings, clean, data = _stand_readings(
+        tmp_path, model, rng, set_={"Gamma11": scale, "Gamma22": scale, "Gamma33": scale, "Delta_g": 5e-3})
+    cal = tmp_path / "c.json"
+    assert main(["estimate", "--model", name, str(data), "--sigma", "1e-5", "--save", str(cal)]) == 0
+    assert "|Delta_g/g| <= 0.005" in capsys.readouterr().out
+    pick = rng.permutation(len(P))[:40]
+    a, bound = calibration.apply(calibration.read(cal), readings(P[pick], M[pick] if len(mounts) > 1 else None))
+    truth = readings(P[pick], M[pick] if len(mounts) > 1 else None, clean)
+    if model == "two-axis":
+        # its file is in the frame the data define (M lower-triangular): with the true E + Gamma = L Q (L lower,
+        # Q a turn), the truth there is Q times the specific force in the block's axes
+        p = readings.__defaults__[0]
+        C = np.eye(3) + np.array([[p[mod.PARAMETER_NAMES.index(f"Gamma{i}{j}")] for j in (1, 2, 3)] for i in (1, 2, 3)])
+        Q1, U = np.linalg.qr(C.T)
+        truth = truth @ (Q1 @ np.diag(np.sign(np.diag(U))))
+    err = np.abs(a - truth)
+    assert err.max() > 0.045                    # the whole g x Delta_g/g (0.049 m/s^2) is in the samples
+    assert np.all(err <= bound)
+    assert bound.max() < 1.02 * 9.81 * 5e-3 / (1 - 5e-3) + 2e-3      # and the bound is not loose by much
 
 
 def test_a_stand_that_cannot_separate_the_block_says_so(tmp_path, capsys):

@@ -67,19 +67,26 @@ def from_norm(res, axes):
             "premises": res["premises"]}
 
 
-def through_M(G, B, bias_bound):
+def through_M(G, B, bias_bound, g_uncertainty=0.0):
     """(M, bound_matrix, bound_bias) of a stand calibration from the block's Gamma estimate G (3 x 3, or a stack
     (N, 3, 3) with B and bias_bound broadcast: one per sample of a calibration over temperature), the
     entrywise bound B of Gamma - G and the bound of the biases (m/s^2). With f = (E + Gamma) a + bias
     and the file's M = (E + G)^-1 (as rounded), a corrected sample is M (f - b) = (E + A) a + eps with
         A = M (E + G) - E + M (Gamma - G),   eps = M (bias - b),
     so |A| <= |M (E + G) - E| + |M| B and |eps| <= |M| bias_bound: the factor M (about 1 / (1 + Gamma_ii))
-    is in the bound, not left out."""
+    is in the bound, not left out.
+
+    Where Gamma is relative to the g given (the block absorbs Delta_g, `g_uncertainty` u its bound on
+    |Delta_g/g|), the data fix E + Gamma = c (E + Gamma_t) with c = g_t / g in [1 - u, 1 + u] and Gamma_t the
+    block's own errors: a corrected sample is M (E + Gamma) a / c + eps, so
+        |A| <= (|M (E + G) - E| + |M| B) / (1 - u) + u / (1 - u) E,
+    the error of g itself not scaled by M (it is g_t - g in the sample, whatever the block's scale)."""
     G, B = np.asarray(G, float), np.asarray(B, float)
     M = np.linalg.inv(np.eye(3) + G)
     absM = np.abs(M)
     left = np.abs(M @ (np.eye(3) + G) - np.eye(3)) + 8 * np.finfo(float).eps * (absM @ (1 + np.abs(G)))
-    bound = (left + absM @ B) * (1 + 1e-12)
+    u = float(g_uncertainty)
+    bound = ((left + absM @ B) / (1 - u) + u / (1 - u) * np.eye(3)) * (1 + 1e-12)
     return M, bound, (absM @ np.asarray(bias_bound, float)[..., None])[..., 0] * (1 + 1e-12)
 
 
@@ -104,32 +111,32 @@ def from_block(res):
     the information set (workflows/block.py); a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2.
     Each bound already holds the a-priori bounds of what the parameter is confounded with (Delta_g on the
     diagonal); where the block absorbs Delta_g (its Gamma is relative to the g given) the uncertainty of g
-    is added to the diagonal, so the per-sample bound is one in m/s^2; both reach the sample through M
-    (`through_M`)."""
+    enters the per-sample bound as the relative error of g it is, after M (`through_M`), so the bound is one
+    in m/s^2 of the true specific force."""
     blk, prem = res["block"], res["premises"]
     G, g = np.asarray(blk["Gamma"]), res["g"]
-    gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
-    M, B, eb = through_M(G, _gamma_bound(res), g * np.asarray(blk["bias_bound"]))
+    u = _g_uncertainty(res)
+    M, B, eb = through_M(G, blk["Gamma_bound"], g * np.asarray(blk["bias_bound"]), u)
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
             "M": M.tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
             "bound_matrix": B.tolist(), "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
             "pendulosity_axes": [2, 3, 1], "g": g, "source": f"{res['model']} estimate",
-            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = |M (E + Gamma) - E| + |M| (the bounds of "
-                    "Gamma, each with the a-priori bounds of what it is confounded with" + (
-                        ", and on its diagonal the uncertainty of g)" if gravity else ")")
-                    + ", bound_bias = |M| (the bounds of the biases)",
+            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = " + (
+                        "(" if u else "") + "|M (E + Gamma) - E| + |M| (the bounds of Gamma, each with the a-priori "
+                    "bounds of what it is confounded with)" + (
+                        f") / (1 - u) + u / (1 - u) E, u = {u:g} the bound of |Delta_g/g| (Gamma is relative to g = "
+                        f"{g:g} m/s^2)" if u else "") + ", bound_bias = |M| (the bounds of the biases)",
             "premises": " ".join(filter(None, (prem["statement"] + ".", prem.get("meaning"))))}
 
 
 BLOCK_NAMES = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
 
 
-def _gamma_bound(res):
-    """The bound of the block's Gamma at the estimate, with the uncertainty of g on its diagonal where the block
-    absorbs Delta_g."""
+def _g_uncertainty(res):
+    """The bound of |Delta_g/g| where the block absorbs Delta_g (its Gamma is relative to the g given), else 0."""
     prem = res["premises"]
     gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
-    return np.asarray(res["block"]["Gamma_bound"], float) + (prem["g_uncertainty"] * np.eye(3) if gravity else 0.0)
+    return float(prem["g_uncertainty"]) if gravity else 0.0
 
 
 def thermal_section(res):
@@ -157,7 +164,7 @@ def thermal_section(res):
     return {"t0_c": th["t0_c"], "range_c": th["range_c"], "degree": D, "Gamma": gamma, "bias": bias,
             "bound_Gamma": [[th["bound_drift"][owner[f"Gamma{i}{j}"]] for j in (1, 2, 3)] for i in (1, 2, 3)],
             "bound_bias": [g * th["bound_drift"][owner[f"bias{i}"]] for i in (1, 2, 3)],
-            "bound_Gamma_t0": _gamma_bound(res).tolist(),
+            "bound_Gamma_t0": np.asarray(blk["Gamma_bound"], float).tolist(), "g_uncertainty": _g_uncertainty(res),
             "bound_bias_t0": (g * np.asarray(blk["bias_bound"], float)).tolist()}
 
 
@@ -220,7 +227,8 @@ def thermal_at(cal, T):
     powers = np.stack([tau ** k for k in range(1, th["degree"] + 1)], axis=1)          # (N, D)
     G = (np.linalg.inv(cal["M"]) - np.eye(3))[None] + np.einsum("nk,kij->nij", powers, th["Gamma"])
     b = cal["b"][None] + powers @ th["bias"]
-    M, B, eb = through_M(G, th["bound_Gamma_t0"] + th["bound_Gamma"], th["bound_bias_t0"] + th["bound_bias"])
+    M, B, eb = through_M(G, th["bound_Gamma_t0"] + th["bound_Gamma"], th["bound_bias_t0"] + th["bound_bias"],
+                         th.get("g_uncertainty", 0.0))
     return M, b, B, eb
 
 
