@@ -78,8 +78,10 @@ def calibrate_many(logs, *, g=None, g_uncertainty=None, delta_sigma=None, params
     results whatever it is), as `garant calibrate-norm LOG... --out DIR`: a list of rows, one per log in
     order, each {"log", "status" (consistent, refuted or error), "message", "result" (the calibration's
     dictionary, or None)} and, with `spec` (a SPEC.toml path: [limits] and [bound_limits] of scale,
-    misalignment, bias), "verdict" (pass: every guaranteed interval within its limit; fail; undecided) and
-    "reason". A log that cannot be calibrated is its row, never the end of the batch."""
+    misalignment, bias, and [nominal] sensitivity for logs in raw counts), "verdict" (pass: every guaranteed
+    interval within its limit; fail: one wholly outside; undecided; retest: the log could not be calibrated or
+    refutes its noise bound, so it proves nothing of the unit) and "reason". A log that cannot be calibrated is
+    its row, never the end of the batch."""
     from .workflows import batch
     if not isinstance(logs, (list, tuple)) or not logs:
         raise DataError("logs: a list of log paths or arrays")

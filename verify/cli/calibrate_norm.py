@@ -51,7 +51,9 @@ def add(sub):
     p.add_argument("--jobs", type=options.positive_int, metavar="N",
                    help="processes for a batch (default: every core); the files are the same whatever N")
     p.add_argument("--spec", metavar="SPEC.toml", help="the unit's specification ([limits], [bound_limits] of "
-                   "scale, misalignment, bias): each unit a guaranteed pass, a fail or undecided, with the reason")
+                   "scale, misalignment, bias; [nominal] sensitivity, counts per g, for logs in raw counts): each "
+                   "unit a guaranteed pass, a fail or undecided, or retest where the log proves nothing, with the "
+                   "reason")
     return p
 
 
@@ -97,8 +99,7 @@ def run(args):
 
 def _batch(args):
     """Many logs in one process (workflows/batch.py): each unit's calibration file in --out, the summary as
-    CSV and a page, a progress line on standard error; the exit status counts the units that failed (a
-    log that could not be calibrated, refuted its noise bound, or failed its specification), at most 125."""
+    CSV and a page, a progress line on standard error; the exit status is `batch_status`'s."""
     from ..io import files, report
     from ..workflows import batch
     single = [o for o in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report", "json")
@@ -117,20 +118,20 @@ def _batch(args):
                                 sensor=args.sensor, imu=imu, window=args.window, k=args.k, min_still=args.min_still,
                                 delta_sigma=args.delta_sigma, g_uncertainty=args.g_uncertainty, rate=args.rate)
     folder = files.make_folder(args.out)
-    for stem, row in zip(batch.stems(args.logs), rows):
+    names = batch.stems(args.logs)
+    for stem, row in zip(names, rows):
         if row["result"] and row["result"].get("calibration"):
-            report.write_json(folder / f"{stem}.json", row["result"]["calibration"])
+            row["file"] = f"{stem}.json"
+            report.write_json(folder / row["file"], row["result"]["calibration"])
     head, table = batch.summary_rows(rows)
-    report.write_text(folder / "summary.csv", "\n".join(",".join(_csv_cell(c) for c in r) for r in [head,
-                                                                                                    *table]) + "\n")
+    report.write_text(folder / "summary.csv", _csv_text([head, *table]))
     counts = {s: sum(r["status"] == s for r in rows) for s in ("consistent", "refuted", "error")}
-    verdicts = {v: sum(r.get("verdict") == v for r in rows) for v in ("pass", "fail", "undecided")} if spec else {}
+    verdicts = {v: sum(r.get("verdict") == v for r in rows) for v in batch.VERDICTS} if spec else {}
     said = (f"{len(rows)} logs: {counts['consistent']} calibrated, {counts['refuted']} refuted their noise bound, "
-            f"{counts['error']} could not be calibrated" + (f"; against {args.spec}: {verdicts['pass']} pass "
-                                                            f"(guaranteed), "
-                                                             f"{verdicts['fail']} fail, {verdicts['undecided']} "
-                                                             f"undecided"
-                                                             if spec else ""))
+            f"{counts['error']} could not be calibrated" + (
+                f"; against {args.spec}: {verdicts['pass']} pass (guaranteed), {verdicts['fail']} fail, "
+                f"{verdicts['undecided']} undecided, {verdicts['retest']} retest (the recording proves nothing of "
+                "the unit)" if spec else ""))
     report.write_page(folder, f"Batch: {len(rows)} logs", report.command_line(args, "garant calibrate-norm ..."),
                       [("Summary", said), ("Each unit (parameters of (1.3) of 001 with their guaranteed errors; "
                                             "biases over g)", report.Table(head, table))], args.logs)
@@ -139,14 +140,29 @@ def _batch(args):
                                                   f": {row['message']}" if row["message"] else ""))
     print(said)
     print(f"wrote {folder}/summary.csv, {folder}/index.html and {counts['consistent']} calibration file(s)")
-    failed = sum(r["status"] != "consistent" or r.get("verdict") == "fail" for r in rows)
-    return min(failed, 125)
+    return batch_status(rows, spec is not None)
 
 
-def _csv_cell(text):
-    """A CSV cell: quoted when it holds a comma or a quote."""
-    text = str(text)
-    return '"' + text.replace('"', '""') + '"' if ("," in text or '"' in text) else text
+#: A batch's exit statuses, apart from 1 (a check failed), 2 (bad input) and 3 (refuted) of one log.
+BATCH_JUDGED, BATCH_FAILED, BATCH_UNJUDGED = 0, 4, 5
+
+
+def batch_status(rows, judged):
+    """0 every unit has a verdict (pass, fail or undecided; without --spec: every log calibrated), 4 some unit
+    failed its specification, 5 some log could not be judged (not calibrated, or refuted its noise bound:
+    retest), which outranks 4."""
+    if any(r["status"] != "consistent" for r in rows):
+        return BATCH_UNJUDGED
+    return BATCH_FAILED if judged and any(r.get("verdict") == "fail" for r in rows) else BATCH_JUDGED
+
+
+def _csv_text(rows):
+    """CSV text by the csv module: a cell with a comma, a quote or a line break is quoted."""
+    import csv
+    import io
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows(rows)
+    return buf.getvalue()
 
 
 def _run(args, into=None):

@@ -2,8 +2,10 @@
 core, each unit judged against its specification by its guaranteed intervals.
 
 A unit passes only if every parameter's whole guaranteed interval lies within its limit (a guaranteed
-pass), fails if some parameter's whole interval lies outside it, and is undecided otherwise; each verdict
-says why. One bad log is a row of the summary, never the end of the batch.
+pass), fails if some parameter's whole interval lies outside it, and is undecided otherwise. A log that
+proves nothing of the unit (it could not be calibrated, or its data refute the noise bound, so no interval
+is guaranteed) is neither: its verdict is retest. Each verdict says why. One bad log is a row of the
+summary, never the end of the batch.
 """
 import os
 import sys
@@ -19,15 +21,21 @@ SPEC_KEYS = {"scale": (("lambda1", "lambda2", "lambda3"), "1"),
              "bias": (("eps1/g", "eps2/g", "eps3/g"), "1 (over g)")}
 
 
+#: The verdicts, in the order the summary counts them: retest is a recording's, not the unit's.
+VERDICTS = ("pass", "fail", "undecided", "retest")
+
+
 def read_spec(path):
     """A unit's specification: [limits] (|value| <= limit for the whole guaranteed interval) and, optionally,
-    [bound_limits] (the guaranteed error itself at most this), each with keys scale, misalignment, bias."""
+    [bound_limits] (the guaranteed error itself at most this), each with keys scale, misalignment, bias; and,
+    for logs in raw counts, [nominal] sensitivity (counts per g: one number, or one per axis), to which the
+    scale is relative, and offset (counts, the reading at zero: the biases are relative to it; default 0)."""
     from ..io import files
     files.regular(path, "the specification", 1_000_000)
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as e:
         raise DataError(f"{path}: not valid TOML ({str(e)[:120]})") from None
     out = {}
     for table in ("limits", "bound_limits"):
@@ -40,20 +48,43 @@ def read_spec(path):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
                 raise DataError(f"{path}: [{table}] {key} = {str(value)[:30]} must be a number > 0 and < 1")
         out[table] = {k: float(v) for k, v in given.items()}
-    unknown = set(data) - {"limits", "bound_limits"}
+    nominal = data.get("nominal", {})
+    if not isinstance(nominal, dict) or set(nominal) - {"sensitivity", "offset"} or (
+            "offset" in nominal and "sensitivity" not in nominal):
+        raise DataError(f"{path}: [nominal] holds sensitivity (counts per g) and optionally offset (counts), of a "
+                        "log in raw counts")
+    for key, low in (("sensitivity", 0.0), ("offset", -1e12)):
+        if key in nominal:
+            S = nominal[key]
+            S = [S] * 3 if not isinstance(S, list) else S
+            if len(S) != 3 or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not low < v < 1e12
+                                  for v in S):
+                raise DataError(f"{path}: [nominal] {key} = {str(nominal[key])[:40]} must be a number"
+                                + (" > 0 (counts per g)" if key == "sensitivity" else " (counts)")
+                                + " or a list of three")
+            out[key] = [float(v) for v in S]
+    unknown = set(data) - {"limits", "bound_limits", "nominal"}
     if unknown or not out["limits"]:
-        raise DataError(f"{path}: a specification has [limits] (and optionally [bound_limits]) of "
+        raise DataError(f"{path}: a specification has [limits] (and optionally [bound_limits] and [nominal]) of "
                         f"{', '.join(SPEC_KEYS)}" + (f"; unknown: {', '.join(sorted(unknown))}" if unknown else ""))
     return out
 
 
 def judge(res, spec):
-    """(verdict, reason): pass, fail or undecided for one calibrated unit against `spec`."""
+    """(verdict, reason): pass, fail or undecided for one calibrated unit against `spec`; retest when the log
+    proves nothing of the unit (its data refute the noise bound: no interval is guaranteed)."""
     if not res.get("consistent"):
-        return "fail", "the log refutes its noise bound: no guaranteed interval"
+        where = res.get("disagreements") or []
+        return "retest", ("the log refutes its noise bound" + (
+            f" at still interval(s) {', '.join(map(str, where[:8]))}" + (" ..." if len(where) > 8 else "")
+            if where else "") + ": no interval is guaranteed, so nothing is proven of the unit; record it again")
     pars, errs = res.get("parameters"), res.get("guaranteed_error")
     if not pars:
-        return "undecided", "a log in raw counts: its parameters are relative to the raw axes, not the spec's"
+        counts = res.get("raw_axes_counts")
+        if "sensitivity" not in spec or not counts:
+            return "undecided", ("a log in raw counts: its parameters are relative to the raw axes; give the nominal "
+                                 "sensitivity (counts per g) as [nominal] sensitivity in the spec")
+        pars, errs = nominal_parameters(counts, spec["sensitivity"], spec.get("offset", [0.0] * 3))
     fails, open_ = [], []
     for key, limit in spec["limits"].items():
         for name in SPEC_KEYS[key][0]:
@@ -71,6 +102,20 @@ def judge(res, spec):
     if open_:
         return "undecided", "; ".join(open_)
     return "pass", "every guaranteed interval within its limit"
+
+
+def nominal_parameters(counts, S, offset):
+    """The parameters of (1.3) of 001 and their guaranteed errors for a log in raw counts, relative to the
+    nominal sensitivity S (counts per g, per axis) and zero offset (counts): lambda_i = S_ii / S_i - 1, the
+    misalignments S_ij / S_i (i the row's axis), eps_i/g = (b_i - offset_i) / S_i; each exactly linear in the
+    raw-axes parameters, so each interval is theirs divided by S_i."""
+    sens, err = counts["sensitivity"], counts["error"]
+    rows = {"lambda1": ("S11", 0, 1.0), "lambda2": ("S22", 1, 1.0), "lambda3": ("S33", 2, 1.0),
+            "alpha": ("S21", 1, 0.0), "beta": ("S31", 2, 0.0), "gamma": ("S32", 2, 0.0),
+            "eps1/g": ("b1", 0, 0.0), "eps2/g": ("b2", 1, 0.0), "eps3/g": ("b3", 2, 0.0)}
+    pars = {n: (sens[c] - (offset[i] if c[0] == "b" else 0.0)) / S[i] - one for n, (c, i, one) in rows.items()}
+    errs = {n: err[c] / S[i] * (1 + 1e-12) for n, (c, i, _) in rows.items()}
+    return pars, errs
 
 
 def _one(job):
@@ -125,34 +170,49 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
         status = "error" if res is None else ("consistent" if res["consistent"] else "refuted")
         row = {"log": path, "status": status, "message": error or "", "result": res}
         if spec is not None:
-            row["verdict"], row["reason"] = ("fail", f"not calibrated: {error}") if res is None else judge(res, spec)
+            row["verdict"], row["reason"] = (("retest", f"not calibrated: {error}") if res is None
+                                             else judge(res, spec))
+            if res and res.get("consistent") and not res.get("parameters") and "sensitivity" in spec:
+                row["nominal"] = nominal_parameters(res["raw_axes_counts"], spec["sensitivity"],
+                                                    spec.get("offset", [0.0] * 3))
         rows.append(row)
     return rows
 
 
 def stems(paths):
-    """A file name stem for each log, unique in the batch (a repeated stem gets _2, _3, ...)."""
-    seen, out = {}, []
-    for p in paths:
-        stem = os.path.splitext(os.path.basename(str(p)))[0] or "log"
-        seen[stem] = seen.get(stem, 0) + 1
-        out.append(stem if seen[stem] == 1 else f"{stem}_{seen[stem]}")
+    """A file name stem for each log, unique in the batch: a repeated stem gets _2, _3, ..., past any stem the
+    batch already holds (a/u.txt, b/u.txt, c/u_2.txt give u, u_3, u_2)."""
+    base = [os.path.splitext(os.path.basename(str(p)))[0] or "log" for p in paths]
+    taken, out = set(), [None] * len(base)
+    for k, stem in enumerate(base):               # a log keeps its own stem where no earlier log has it
+        if stem not in taken:
+            taken.add(stem)
+            out[k] = stem
+    for k, stem in enumerate(base):
+        if out[k] is None:
+            n = 2
+            while f"{stem}_{n}" in taken or f"{stem}_{n}" in base:
+                n += 1
+            out[k] = f"{stem}_{n}"
+            taken.add(out[k])
     return out
 
 
 def summary_rows(rows):
-    """The summary table: per log its status, verdict, noise bound, still intervals and each parameter with
-    its guaranteed error (empty where the log was not calibrated)."""
+    """The summary table: per log its status, verdict, noise bound, still intervals, each parameter with its
+    guaranteed error (empty where the log was not calibrated; a log in raw counts relative to the spec's
+    [nominal]) and the name of its calibration file."""
     from .calibrate_norm import PARAM_LABELS
     head = ["log", "status", "verdict", "reason", "delta_sigma_max", "intervals"]
-    head += [x for name in PARAM_LABELS[:9] for x in (name, f"{name}_bound")]
+    head += [x for name in PARAM_LABELS[:9] for x in (name, f"{name}_bound")] + ["calibration_file"]
     table = []
     for r in rows:
         res = r["result"] or {}
-        pars, errs = res.get("parameters") or {}, res.get("guaranteed_error") or {}
+        pars, errs = r.get("nominal") or (res.get("parameters") or {}, res.get("guaranteed_error") or {})
         cells = [r["log"], r["status"], r.get("verdict", ""), r.get("reason") or r["message"],
                  _num(res.get("delta_sigma_max")), str(res.get("intervals", ""))]
         cells += [x for name in PARAM_LABELS[:9] for x in (_num(pars.get(name)), _num(errs.get(name)))]
+        cells.append(r.get("file", ""))
         table.append(cells)
     return head, table
 

@@ -220,6 +220,9 @@ def noise_rule_name(stills, quantum=0.0):
 
 PARAM_LABELS = ("lambda1", "lambda2", "lambda3", "alpha", "beta", "gamma", "eps1/g", "eps2/g", "eps3/g",
                 "delta1*g", "delta2*g", "delta3*g")
+#: A log in raw counts, relative to its raw axes: P = M^-1 in counts per g (the sensitivities S11-S33 on the
+#: diagonal, the cross-sensitivities S21, S31, S32 below) and the biases b1-b3 in counts.
+COUNT_LABELS = ("S11", "S22", "S33", "S21", "S31", "S32", "b1", "b2", "b3")
 
 
 def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
@@ -475,14 +478,20 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
     dq, half = taylor.midrad(lo, hi)
     M, b, delta = fold(res["M"], res["b"], res["delta"], dq, g)
     si = raw_unit(raw, g) == "m/s^2"
-    q = parameters(M, b, g).tolist() + delta.tolist()[: params - 9] if si else None
-    if si:                                   # each printed parameter is affine in q: its range over the set
-        J = parameter_map(res["M"], params)
-        A = mod.H(res["n"])[:params]
-        s = res["sigma"]
-        p_lo, p_hi = hull.ranges(A.T, s - noise - rb, s + noise + rb, lo, hi, J)
-        p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + taylor.SUM_ERROR),
-                            parameter_bounds(res["M"], half))
+    # relative to the raw axes; a log in counts in counts per g (its sensitivities P g) and counts (biases): the
+    # same parameters of M / g and b g, whose map from q is as exactly linear (fold)
+    unit = 1.0 if si else 1.0 / g
+    p = parameters(M * unit, b / unit, g).tolist() + delta.tolist()[: params - 9]
+    J = parameter_map(res["M"] * unit, params)        # each printed parameter is affine in q: its range over the set
+    A = mod.H(res["n"])[:params]
+    s = res["sigma"]
+    p_lo, p_hi = hull.ranges(A.T, s - noise - rb, s + noise + rb, lo, hi, J)
+    p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + taylor.SUM_ERROR),
+                        parameter_bounds(res["M"] * unit, half))
+    q = p if si else None
+    counts = None if si else {"sensitivity": dict(zip(COUNT_LABELS, (np.array(p[:9]) + [1, 1, 1, 0, 0, 0, 0, 0, 0])
+                                                        .tolist())),
+                              "error": dict(zip(COUNT_LABELS, p_half[:9].tolist()))}
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
@@ -500,6 +509,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
         "guaranteed_error_q_a_priori": dict(zip(PARAM_LABELS, bound.tolist())),
         "directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
         "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN},
+        "raw_axes_counts": counts,
     }
 
 
