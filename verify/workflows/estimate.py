@@ -44,15 +44,18 @@ def variable_columns(mod, positions):
 
 
 def distinct_positions(positions, decimals=6, variables=None):
-    """Rows at the same position (angles equal to 1e-6 degree, same mounting) averaged into one, and the
-    spread (largest less smallest reading, m/s^2, per component) of the rows averaged: (positions, spread).
+    """Rows at the same position (angles equal to 1e-6 degree, same mounting) joined into one, the spread
+    (largest less smallest reading, m/s^2, per component) of the rows joined, and how far the true reading
+    can move between them (units of g: 2 g per radian of each angle's own spread in the group, 0 where the
+    rows' angles agree exactly): (positions, spread, moved).
 
-    The average of readings whose noise is within +-sigma is within +-sigma too: the bound (5) holds
-    for each averaged residual (worst case; no independence of the noise is assumed), and the LP and
-    the remainder are then solved once per distinct position. Averaging is sound only for readings
-    that agree: `repeated_disagree` checks the spread first. The model's `variables` ({name: values}, see
-    `variable_columns`) are part of a position (rows at other times are other positions) and kept; other
-    columns are dropped."""
+    Readings each within +-sigma of one truth hold it in the intersection of their intervals, [max -
+    sigma, min + sigma]: the midrange (max + min) / 2, within sigma - spread / 2 (`sharper` says how much
+    below sigma); the joined reading is that midrange, so the information set is the rows' own, and the LP
+    and the remainder are solved once per distinct position (worst case; no independence of the noise is
+    assumed). Joining is sound only for readings that agree: `repeated_disagree` checks the spread first.
+    The angles are averaged. The model's `variables` ({name: values}, see `variable_columns`) are part of a
+    position (rows at other times are other positions) and kept; other columns are dropped."""
     variables = variables or {}
     key = np.round(positions.angles_deg, decimals)
     if positions.mounts is not None:
@@ -63,22 +66,28 @@ def distinct_positions(positions, decimals=6, variables=None):
     new = np.r_[True, np.any(key[order[1:]] != key[order[:-1]], axis=1)]
     if new.all():
         return Positions(positions.path, positions.angles_deg, positions.f, positions.mounts,
-                         dict(variables)), np.zeros((len(key), 3))
+                         dict(variables)), np.zeros((len(key), 3)), np.zeros(len(key))
     starts = np.flatnonzero(new)
     counts = np.diff(np.r_[starts, len(key)])
     inverse = np.empty(len(key), int)
     inverse[order] = np.cumsum(new) - 1
-    f = np.column_stack([np.bincount(inverse, weights=positions.f[:, i]) for i in range(3)]) / counts[:, None]
     angles = np.column_stack([np.bincount(inverse, weights=positions.angles_deg[:, i])
                               for i in range(positions.angles_deg.shape[1])]) / counts[:, None]
-    spread = np.empty((len(starts), 3))
+    spread, f = np.empty((len(starts), 3)), np.empty((len(starts), 3))
     for i in range(3):
         column = positions.f[order, i]
-        spread[:, i] = np.maximum.reduceat(column, starts) - np.minimum.reduceat(column, starts)
+        top, bottom = np.maximum.reduceat(column, starts), np.minimum.reduceat(column, starts)
+        # the spread as computed, less its rounding: never more than the readings' true spread
+        spread[:, i] = np.maximum(top - bottom - 4 * np.finfo(float).eps * (np.abs(top) + np.abs(bottom)), 0.0)
+        f[:, i] = 0.5 * top + 0.5 * bottom
+    moved = np.zeros(len(starts))
+    for i in range(positions.angles_deg.shape[1]):
+        column = positions.angles_deg[order, i]
+        moved += 2 * np.deg2rad(np.maximum.reduceat(column, starts) - np.minimum.reduceat(column, starts))
     n = positions.angles_deg.shape[1]
     mounts = None if positions.mounts is None else key[order[starts], n].astype(int)
     kept = {v: np.asarray(x)[order[starts]] for v, x in variables.items()}
-    return Positions(positions.path, angles, f, mounts, kept), spread
+    return Positions(positions.path, angles, f, mounts, kept), spread, moved * (1 + 1e-9)
 
 
 def repeated_disagree(positions, spread, sigma, g, decimals=6):
@@ -87,6 +96,24 @@ def repeated_disagree(positions, spread, sigma, g, decimals=6):
     move a reading (at most 2 g per radian of each angle): such readings refute sigma themselves."""
     slack = 2 * np.deg2rad(0.5 * 10.0 ** -decimals) * positions.angles_deg.shape[1]
     return np.argwhere(spread / g > 2 * sigma * (1 + 1e-9) + slack)
+
+
+def _sharper(spread, moved, g, Q, positions):
+    """`sharper` in the axes of z: the table axes turn the components by Q^-1, a signed permutation for every
+    mounting of (26) of 000 (any other turn: 0, sigma as stated)."""
+    r = sharper(spread, moved, g).reshape(-1, 3)
+    if np.array_equal(Q, np.eye(3)) or positions.mounts is not None:
+        return r.reshape(-1)
+    if not np.all(np.isin(np.abs(Q), (0.0, 1.0))):
+        return np.zeros(r.size)
+    return (np.abs(Q.T) @ r.T).T.reshape(-1)
+
+
+def sharper(spread, moved, g):
+    """Per residual component (3N,), units of g: how much below sigma the joined reading of repeated rows is
+    known, spread / 2 less how far the truth moves between the rows (the true reading at their average angles
+    is within sigma + moved of each row); 0 for a position read once, and where the rows agree exactly."""
+    return np.where(spread > 0, spread / g / 2 - moved[:, None], 0.0).reshape(-1)
 
 
 def check_residual_size(z, path, limit=0.5):
@@ -138,7 +165,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     premises = premises or make_premises(mod, sigma, g)
     Q = remount.MOUNTS[mount] if mount else np.eye(3)
     rows, all_rows = len(positions.f), positions
-    positions, spread = distinct_positions(positions, variables=variable_columns(mod, positions))
+    positions, spread, moved = distinct_positions(positions, variables=variable_columns(mod, positions))
     distinct = len(positions.f)
     bad = repeated_disagree(positions, spread, sigma, g)
     if len(bad):
@@ -157,7 +184,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     say("the optimal estimators (LP (7)-(8)) at the linearisation")
     W, method = choose_estimator(mod, positions, lin.A)
     say("the verdict and the proven remainder")
-    v = guarantee.verdict(lin, z.reshape(-1), sigma, W)
+    v = guarantee.verdict(lin, z.reshape(-1), sigma, W, sharper=_sharper(spread, moved, g, Q, positions))
     out = {                                    # arrays stay arrays until a JSON file is written
         "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma,
         "premises": unrefutable_premises(lin, premises.to_dict()),

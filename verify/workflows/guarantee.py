@@ -460,11 +460,14 @@ BOX_GAIN = 0.001
 INFO_GAIN = 0.01
 
 
-def verdict(lin, z, sigma, W=None, steps=8):
+def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
     """The consistency verdict on the residuals z and, with an estimator W (m x 3N, q = q0 + W (z - z0)),
-    the guaranteed errors with the proven remainder."""
+    the guaranteed errors with the proven remainder. `sharper` (3N, units of g): how much below the noise
+    bound each residual is known (repeated readings joined by their intersection, estimate.sharper); a
+    noise bound s then bounds residual k by s - sharper_k (none below what the repeats themselves allow)."""
     rem = Remainder(lin, boxes=[box(lin)])
     y = z - lin.z0
+    sharp = np.zeros(len(y)) if sharper is None else np.asarray(sharper, float)
     m = lin.A.shape[0]
     if W is not None:
         support = np.flatnonzero(np.abs(W).reshape(m, -1, 3).max(axis=(0, 2)) > 0)
@@ -480,14 +483,15 @@ def verdict(lin, z, sigma, W=None, steps=8):
         left = np.minimum(np.abs(W) @ rb, functional) if functional is not None else np.abs(W) @ rb
         absorbed = np.abs(WA) @ cb
         beyond = absorbed + unseparable
-        r = s * np.abs(W).sum(axis=1) + left + beyond
+        linear = np.abs(W) @ (s - sharp)
+        r = linear + left + beyond
         # W A^T = I only to rounding: |(W A^T - I) dq_true| with |dq_true| <= |dq| + e, e <= r + E (|dq| + e)
         norm = E.sum(axis=1).max()
         e_max = (r.max() + (E @ np.abs(dq)).max()) / max(1 - norm, 1e-3)
         rounding = E @ (np.abs(dq) + e_max)
         parts = {"left_after_absorption": left, "absorbed_into_q": absorbed, "unseparable": unseparable,
                  "rounding": rounding}
-        return s * np.abs(W).sum(axis=1), left + beyond + rounding, parts, beyond + rounding
+        return linear, left + beyond + rounding, parts, beyond + rounding
 
     def proven(s):
         """(r per reading, C bound, the errors) when the noise bound is s: over the a-priori box; with an
@@ -525,7 +529,8 @@ def verdict(lin, z, sigma, W=None, steps=8):
             functional = rem.functional(W, lo, hi, support) + t_res + np.abs(W).sum(axis=1) * ROUNDING
         errs = errors(s, rb_all + rem.t_residual, cb, functional)
         # what these readings prove: the information set, its box contracting the remainder in turn
-        info = InformationSet(lin, y, s + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q, W)
+        info = InformationSet(lin, y, s - sharp + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q,
+                              W)
         for _ in range(steps):
             ql, qh = info.q
             half = 0.5 * (qh - ql)
@@ -539,18 +544,21 @@ def verdict(lin, z, sigma, W=None, steps=8):
             lo, hi = lo2, hi2
             rb_n, cb_n = rem(lo, hi)
             rb_all, cb = np.minimum(rb_all, rb_n), np.minimum(cb, cb_n)
-            info = InformationSet(lin, y, s + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q, W,
-                                  info.binding)
+            info = InformationSet(lin, y, s - sharp + rb_all + rem.t_residual,
+                                  cb * (1 + taylor.SUM_ERROR) + unseparable_q, W, info.binding)
         return rb_all + rem.t_residual, cb, (errs, (lo, hi), info)
     rb, cb, out = proven(sigma)
     errs, last_box, info = out if out is not None else (None, None, None)
-    t, _, r = _weighted_minimax(lin.A, y, rb)
+    # the slack of each residual is its remainder less what the repeats sharpen: |r_k| <= s - sharper_k + rb_k
+    t, _, r = _weighted_minimax(lin.A, y, rb - sharp)
     t_lin = highs.chebyshev_fit(lin.A, y)[1]
-    consistent = bool(t <= sigma)
-    supported = sigma if consistent else _smallest_sigma(lin.A, y, sigma, t_lin, lambda s: proven(s)[0], float(t))
+    floor = float(sharp.max(initial=0.0))      # below it the repeats alone refute the noise bound
+    consistent = bool(t <= sigma) and floor <= sigma
+    supported = sigma if consistent else _smallest_sigma(
+        lin.A, y, sigma, max(t_lin + floor, floor), lambda s: proven(s)[0] - sharp, float(t), floor)
     v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
                 minimax_less_remainder=float(t), minimax_linear=t_lin, minimax_exact=lin.minimax_exact,
-                remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb > sigma * (1 + 1e-9)), residual=r)
+                remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb + sharp > sigma * (1 + 1e-9)), residual=r)
     if W is not None:
         v.error_linear, v.error_remainder, v.parts, v.q_shift = errs
         v.box, v.info = last_box, info
@@ -558,7 +566,8 @@ def verdict(lin, z, sigma, W=None, steps=8):
         v.interval = _printed(q_apriori, v.guaranteed_error, info)
         if consistent:                               # a sensitivity: sigma larger, the remainder as proven for sigma
             wider = info.widened((SIGMA_WIDER - 1) * sigma)
-            v.interval_wider = _printed(q_apriori, v.guaranteed_error + (SIGMA_WIDER - 1) * v.error_linear, wider)
+            more = (SIGMA_WIDER - 1) * sigma * np.abs(W).sum(axis=1)
+            v.interval_wider = _printed(q_apriori, v.guaranteed_error + more, wider)
     return v
 
 
@@ -573,15 +582,16 @@ def _printed(q, e, info):
     return np.where(bad, q - e - pad, lo2), np.where(bad, q + e + pad, hi2)
 
 
-def _smallest_sigma(A, y, refuted, supported, proven, guess=None):
+def _smallest_sigma(A, y, refuted, supported, proven, guess=None, floor=0.0):
     """Bisection (in log) between a refuted sigma and one the data support (the linear minimax
-    residual always is), until the bracket is within SIGMA_TOLERANCE: its upper end. `guess`, the fit at
-    the refuted sigma, is tried first with the point SIGMA_TOLERANCE below it: the remainder changes little
-    with sigma, so these two usually close the bracket (each end still decided by its own proof)."""
+    residual, plus `floor`, always is), until the bracket is within SIGMA_TOLERANCE: its upper end. `guess`,
+    the fit at the refuted sigma, is tried first with the point SIGMA_TOLERANCE below it: the remainder
+    changes little with sigma, so these two usually close the bracket (each end still decided by its own
+    proof). `proven(s)`: each residual's slack at s; below `floor` the repeated readings refute s."""
     lo, hi = refuted, supported
 
     def fits(s):
-        return _weighted_minimax(A, y, proven(s))[0] <= s
+        return s >= floor and _weighted_minimax(A, y, proven(s))[0] <= s
     if guess is not None and lo < guess < hi:
         if fits(guess):
             hi = guess

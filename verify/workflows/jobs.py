@@ -278,7 +278,7 @@ def next_position(model, data, sigma, *, g=None, g_uncertainty=None, prior=None,
 def _repeats_refute(pos, sigma, g):
     """Whether readings repeated at one position already refute sigma (no estimator needed for that)."""
     from .estimate import distinct_positions, repeated_disagree
-    distinct, spread = distinct_positions(pos)
+    distinct, spread, _ = distinct_positions(pos)
     return len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g)) > 0
 
 

@@ -171,17 +171,21 @@ def _turned(axis, names, kinds, split, bounds, sources):
     N = C3(theta3) C2(theta2) C1(theta1 - s offset) turns by at most w, the sum of the four bounds, and the
     absorbed turn R(n, a) is the root of g(a) = e3^T R N e2 nearest 0. |g(0)| = |e3 . (N e2 - e2)| <= w;
     R^T e3 runs on a circle of radius r0 = |n x e3| at unit rate, so g'(a) is within r0 (w + |a|) of
-    (n x e3) . e2 = -n1 (k0 = |n1|). With A = 2 w / (k0 - r0 w) and r0 A <= (k0 - r0 w) / 2, |g'| >= (k0 - r0 w) / 2
-    on [-A, A], which carries g across 0 there: |a| <= A. The turned mounting C3(theta3') C2(theta2') = R N
-    turns by at most A + w, and each of theta2', theta3' (within pi/2) by at most its turn. Returns the stated
-    bounds replaced, {name: (bound, source)}."""
+    (n x e3) . e2 = -n1 (k0 = |n1|). On [-A, A] then |g'| >= k - r0 A (k = k0 - r0 w), one sign, so g moves by at
+    least A (k - r0 A) from 0 to either end; that is at least w, hence g crosses 0 there (once: |a| <= A), for
+    every A between the roots of r0 A^2 - k A + w: the smaller, A = 2 w / (k + sqrt(k^2 - 4 r0 w)) (w / k0 when
+    r0 = 0; below k / (2 r0), so |g'| > 0 there). The turned mounting C3(theta3') C2(theta2') = R N turns by at
+    most A + w, and each of theta2', theta3' (within pi/2) by at most its turn. Returns the stated bounds
+    replaced, {name: (bound, source)}."""
     n = np.asarray(axis, float)
     k0, r0 = abs(n[0]), float(np.hypot(n[0], n[1]))
     gone = [name for name in split if kinds[names.index(name)] != "gravity"]
     kept = [k for k, kind in enumerate(kinds) if kind == "mounting" and names[k] not in split]
     w = sum(split[name][0] for name in gone) + sum(bounds[k] for k in kept)
-    A = 2 * w / (k0 - r0 * w) if k0 > r0 * w else np.inf
-    if not r0 * A <= (k0 - r0 * w) / 2:
+    k = k0 - r0 * w
+    disc = k * k - 4 * r0 * w
+    A = 2 * w / (k + np.sqrt(disc)) if k > 0 and disc >= 0 else np.inf
+    if not np.isfinite(A):
         raise DataError(f"the a-priori bounds of the mounting and {', '.join(gone)} (their sum {w:g} rad) are too "
                         f"wide to bound the turn about the mountings' axis: state smaller ones (description or "
                         f"{opt('prior')})")
