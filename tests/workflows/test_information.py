@@ -159,6 +159,27 @@ def test_a_stand_under_a_prior_contracts_and_more_readings_never_widen(model, pr
         assert np.all(e1 <= bounds(1, np.array(plan)) * (1 + 1e-3))
 
 
+def test_every_interval_is_cut_by_the_premise_box_it_prints():
+    # kappa's stated bound (1e-4, the stand description) is a premise of every printed bound, yet its
+    # interval ran past it (1.9x the hull of the set within the premises). At sigma = 1e-4 on the 10-position
+    # plan every stand q's interval now lies within what the premises allow (|R| times the stated bounds), the
+    # truth inside, the line saying the bound rests on that premise. Red if the cut is dropped, or taken
+    # tighter than the premises (the truth at its bound falls outside).
+    mod = models.load("two-axis")
+    rng = np.random.default_rng(2)
+    P = np.asarray(mod.PLAN_DEG, float)
+    p = _small_unit(mod, rng)
+    p[mod.PARAMETER_NAMES.index("kappa")] = -1e-4                 # the truth at its stated bound
+    f = mod.readings(*np.deg2rad(P).T, p, G).T + G * rng.uniform(-10 * SIGMA, 10 * SIGMA, (len(P), 3))
+    r = estimate(mod, Positions("plan", P, f, None), 10 * SIGMA, G)
+    q, e = (np.array([r[k][n] for n in mod.Q_NAMES]) for k in ("q", "guaranteed_error"))
+    e_ap = np.array([r["a_priori"]["guaranteed_error"][n] for n in mod.Q_NAMES])
+    assert np.all(np.abs(q - models.q_of(mod, p)) <= e)
+    assert abs(q[0]) + e[0] <= 1e-4 * (1 + 1e-9) and e[0] < 0.7 * e_ap[0]
+    assert any(w.startswith("q1 = ") and "cut by what the a-priori bounds allow (1.00e-04, from kappa)" in w
+               for w in r["warnings"])
+
+
 @pytest.mark.parametrize("model, mount", [("two-axis", "+x+y+z"), ("three-axis", None)])
 def test_apply_bound_holds_for_scale_errors_of_two_percent(tmp_path, model, mount):
     # A counterexample: the per-sample bound treated M (Gamma - Gamma_hat) as bounded by the bound of

@@ -357,6 +357,12 @@ def near_prior(lin, q, e):
     for nu in np.flatnonzero((np.abs(q) + e > NEAR_EDGE * allowed) & (np.abs(q) - e <= allowed * (1 + 1e-9))
                              & ~biases):
         names = [prem.names[k] for k in np.flatnonzero(R[nu]) if 0 < lin.stated_bounds[k] < np.inf]
+        if np.abs(q[nu]) + e[nu] >= allowed[nu] * (1 - 1e-9):
+            out.append(f"{mod.Q_NAMES[nu]} = {q[nu]:+.3e} +- {e[nu]:.1e}: its interval is cut by what the a-priori "
+                       f"bounds allow ({allowed[nu]:.2e}, from {', '.join(names)}), so this bound rests on them; if "
+                       "the unit may be larger, raise them (--bound NAME=VALUE, the description's `bound`, --prior, "
+                       "or --g-uncertainty for Delta_g)")
+            continue
         out.append(f"{mod.Q_NAMES[nu]} = {q[nu]:+.3e} +- {e[nu]:.1e} is beyond {NEAR_EDGE:g} of what the a-priori "
                    f"bounds allow ({allowed[nu]:.2e}, from {', '.join(names)}): if the unit may be larger, raise "
                    "their bounds (--bound NAME=VALUE, the description's `bound`, --prior, or --g-uncertainty for "

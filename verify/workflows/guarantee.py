@@ -97,6 +97,14 @@ class Linearisation:
         return np.abs(np.asarray(self.mod.PHYSICAL_TO_Q, float)) @ self.stated_bounds
 
 
+    @property
+    def q_box(self):
+        """(lo, hi) of each q that the premises allow: +-q_prior, unbounded for a q that holds a bias."""
+        biases = np.asarray(self.mod.PHYSICAL_TO_Q, float)[:, linear_parameters(self.mod)].any(axis=1)
+        qp = np.where(biases, np.inf, self.q_prior * (1 + 1e-12))
+        return -qp, qp
+
+
 def _extra(mod, positions):
     return [np.asarray(positions.extra[str(v)], float) for v in mod.VARIABLES]
 
@@ -298,6 +306,10 @@ class InformationSet:
     Q can only shrink."""
 
     def __init__(self, lin, y, s, shift, W, start=()):
+        """The set of the readings y within s (per reading) and what q absorbs (`shift`), within the premises:
+        each q in the box they allow (`Linearisation.q_box`: a premise the bounds print, so it cuts them),
+        where that box meets the estimator's (else a premise is refuted, and the estimator's box alone is
+        kept: the caller says so)."""
         self.lin, self.A, self.y, self.s, self.shift = lin, lin.A, y, s, shift
         self.start = start                      # rows that bound a previous set's hull: where this one starts
         m = self.A.shape[0]
@@ -308,6 +320,12 @@ class InformationSet:
         e_max = (e.max() + (E @ np.abs(Wy)).max()) / max(1 - E.sum(axis=1).max(), 1e-3)
         e = (e + E @ (np.abs(Wy) + e_max)) * (1 + 1e-9) + 1e-300
         self.w_lo, self.w_hi = Wy - e, Wy + e
+        # q = q0 + w - u, |u| <= shift: the premises' box of q is one of w, widened by shift and rounding
+        q_lo, q_hi = lin.q_box
+        pad = shift + taylor.SUM_ERROR * (np.abs(lin.q0) + np.where(np.isfinite(q_hi), q_hi, 0.0)) + 1e-300
+        w_lo, w_hi = np.maximum(self.w_lo, q_lo - lin.q0 - pad), np.minimum(self.w_hi, q_hi - lin.q0 + pad)
+        if np.all(w_lo <= w_hi):
+            self.w_lo, self.w_hi = w_lo, w_hi
         self._reach = absW.sum(axis=1) / max(1 - E.sum(axis=1).max(), 1e-3) * (1 + 1e-9)   # w's box per unit of s
         self._q = None
 
@@ -563,23 +581,28 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
         v.error_linear, v.error_remainder, v.parts, v.q_shift = errs
         v.box, v.info = last_box, info
         q_apriori = lin.q0 + dq
-        v.interval = _printed(q_apriori, v.guaranteed_error, info)
+        v.interval = _printed(q_apriori, v.guaranteed_error, info.q, lin.q_box)
         if consistent:                               # a sensitivity: sigma larger, the remainder as proven for sigma
             wider = info.widened((SIGMA_WIDER - 1) * sigma)
             more = (SIGMA_WIDER - 1) * sigma * np.abs(W).sum(axis=1)
-            v.interval_wider = _printed(q_apriori, v.guaranteed_error + more, wider)
+            v.interval_wider = _printed(q_apriori, v.guaranteed_error + more, wider, lin.q_box)
     return v
 
 
-def _printed(q, e, info):
-    """(lo, hi) per q: the information set's hull (`info`, or its (lo, hi)) within the a-priori interval
-    q +- e of the estimator (both hold; where they do not meet, a premise fails, and the a-priori interval
-    is kept)."""
+def _printed(q, e, hull, box):
+    """(lo, hi) per q: the information set's hull (lo, hi) within the a-priori interval q +- e of the
+    estimator and within the box the premises allow q (`Linearisation.q_box`): all three hold. Where the
+    first two do not meet, a premise fails, and the a-priori interval is kept; where the box does not meet
+    them, the data put q beyond its premises, and their interval is kept (the caller says the premise is
+    refuted)."""
     pad = 4 * EPS * (np.abs(q) + e)
-    lo, hi = info.q if isinstance(info, InformationSet) else info
+    lo, hi = hull
     lo2, hi2 = np.maximum(lo, q - e - pad), np.minimum(hi, q + e + pad)
     bad = lo2 > hi2
-    return np.where(bad, q - e - pad, lo2), np.where(bad, q + e + pad, hi2)
+    lo2, hi2 = np.where(bad, q - e - pad, lo2), np.where(bad, q + e + pad, hi2)
+    lo3, hi3 = np.maximum(lo2, box[0]), np.minimum(hi2, box[1])
+    out = lo3 > hi3
+    return np.where(out, lo2, lo3), np.where(out, hi2, hi3)
 
 
 def _smallest_sigma(A, y, refuted, supported, proven, guess=None, floor=0.0):
