@@ -233,13 +233,29 @@ def _print(res, args):
     options.say_gravity(res["g_given"], res)
     print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
           + ("consistent" if res["consistent"] else
-             f"INCONSISTENT: the data refute this noise bound (they support delta_sigma >= "
-             f"{res['sigma_min_supported']:.3e}); no bound is given. Intervals that disagree: "
-             + ", ".join(map(str, res["disagreements"][:12])) + ". Try --diagnose, or give --delta-sigma."))
+             f"INCONSISTENT: {len(res['disagreements'])} still interval(s) lie beyond their own noise bound plus the "
+             "remainder at the best fit, so the data refute the noise bound there; no bound is given. A uniform "
+             f"--delta-sigma would need at least {res['sigma_min_supported']:.3e} (units of g). Try --diagnose."))
+    if not res["consistent"]:
+        print(refutations(res))
     if res["consistent"]:
         _print_bounds(res, args)
     if "diagnosis" in res:
         _print_diagnosis(res["diagnosis"], args.params)
+
+
+def refutations(res, count=12):
+    """The intervals that refute their noise bound, each with its residual at the best fit and its own bound (the
+    noise rule's or the stated one, and the remainder), units of g."""
+    rows = res["per_interval"]
+    parts = []
+    for k in res["disagreements"][:count]:
+        r = rows[k - 1]
+        parts.append(f"{k} ({r['start_s']:.1f}-{r['stop_s']:.1f} s): |{r['residual_after_ms2'] / res['g']:.3e}| > "
+                     f"{r['noise_bound']:.3e} ({r['noise_source']}) + {res['remainder_bound']:.1e}")
+    more = len(res["disagreements"]) - count
+    return "refuting intervals (residual at the best fit > its noise bound + remainder, units of g): " + "; ".join(
+        parts) + (f"; and {more} more" if more > 0 else "")
 
 
 def _print_diagnosis(d, params):
@@ -291,15 +307,22 @@ def _print_bounds(res, args=None):
           "[beta, gamma, lambda3]], w the specific force in block axes; the calibration inverts it, a = M (raw - b) "
           "with M ~ E - A: lambda1 > 0 means accelerometer 1 reads high, and M11 < 1")
     human = getattr(args, "units", "si") == "human"
-    report.table(("parameter", "estimate", "guaranteed error", "a priori", "on the optimal plan", "unit")
+    wider = f"delta_sigma x{res['sigma_wider']:g}"
+    report.table(("parameter", "estimate", "guaranteed error", "a priori", wider, "on the optimal plan", "unit")
                  + (("estimate", "guaranteed error") if human else ()),
                  [(k, f"{pars[k]:+.4e}" if pars else "(raw units)", f"{v:.3e}",
-                   f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
+                   f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_sigma_wider'][k]:.3e}",
+                   f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
                    _unit(k)) + ((_side(k, pars[k]) if pars else "", _side(k, v).lstrip("+")) if human else ())
                   for k, v in res["guaranteed_error"].items()])
-    print("guaranteed error: over the information set (every correction of the fit that meets each interval's noise "
-          "bound plus its remainder); a priori: the LP estimator's, what these orientations guarantee for any data "
-          "within the noise bound")
+    print(f"guaranteed error: over the information set (every correction of the fit that meets each interval's noise "
+          f"bound plus its remainder); a priori: the LP estimator's, what these orientations guarantee for any data "
+          f"within the noise bound; {wider}: the guaranteed error had every interval's noise bound been that much "
+          f"larger (a sensitivity, the remainder as proven). The data fit within a noise bound of "
+          f"{res['sigma_min_supported']:.3e} (units of g, {res['sigma_min_supported'] / res['delta_sigma_max']:.2f} "
+          "delta_sigma_max): the smaller the set, the more it rests on the noise bound being right")
+    for line in leaning(res):
+        print(f"note: {line}")
     gain = res["directions_gain"]
     if res["directions_to_add"]:
         print(f"\nadding {len(res['directions_to_add'])} orientation(s) would shrink the bound of {gain['parameter']} "
@@ -312,6 +335,28 @@ def _print_bounds(res, args=None):
         print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by "
               f"{gain['threshold']:g} "
               f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
+
+
+#: A set this many times below the a-priori bounds (median over the parameters) is said: it rests on the noise bound.
+FAR_BELOW = 5.0
+
+
+def leaning(res):
+    """Lines for a set far below what the orientations guarantee a priori (the median ratio at least FAR_BELOW):
+    the readings pin the parameters only as far as every interval's noise bound holds, and how much 10 % more
+    would widen them."""
+    import numpy as np
+    e = np.array(list(res["guaranteed_error"].values()))
+    a = np.array([res["guaranteed_error_a_priori"][k] for k in res["guaranteed_error"]])
+    w = np.array([res["guaranteed_error_sigma_wider"][k] for k in res["guaranteed_error"]])
+    ratio = float(np.median(a / np.maximum(e, 1e-300)))
+    if ratio < FAR_BELOW:
+        return []
+    return [f"the bounds are {ratio:.1f}x below what these orientations guarantee a priori (median): the readings "
+            f"pin them only as far as every interval's noise bound holds; with each {res['sigma_wider']:g}x larger "
+            f"they would be up to {float(np.max(w / np.maximum(e, 1e-300))):.1f}x wider. "
+            + ("The stated --delta-sigma must hold for every interval" if res["delta_sigma_source"] == "--delta-sigma"
+               else "State the noise bound you can stand behind (--delta-sigma) if the rule's is not")]
 
 
 def _log_of(args):

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import DataError, opt
 from ..io.recordings import BATCHES, median, raw_unit
 from ..solve import highs, lp, taylor
+from .guarantee import SIGMA_WIDER
 
 MAX_ITER = 60
 #: The largest correction one step of the fit may make (a scale of 50 %, half a radian): a larger one is
@@ -286,9 +287,12 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
                      + "); the orientations are still" + _premise_box(premise)),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
-                          "noise_rule": float(nr), "residual_before_ms2": float(g * sb),
+                          "noise_rule": float(nr), "noise_bound": float(nb),
+                          "noise_source": "its noise rule" if delta_sigma is None and nb == nr else source,
+                          "residual_before_ms2": float(g * sb),
                           "residual_after_ms2": float(g * sa), "direction": d.tolist()}
-                         for s, nr, sb, sa, d in zip(stills, rule, before, res["sigma"], res["n"].T)],
+                         for s, nr, nb, sb, sa, d in zip(stills, rule, np.broadcast_to(noise, rule.shape), before,
+                                                         res["sigma"], res["n"].T)],
     }
     if not consistent:
         out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > noise + rb)]
@@ -488,6 +492,18 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
     p_lo, p_hi = hull.ranges(A.T, s - noise - rb, s + noise + rb, lo, hi, J)
     p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + taylor.SUM_ERROR),
                         parameter_bounds(res["M"] * unit, half))
+    # had each interval's noise bound been SIGMA_WIDER times larger (the remainder as proven): the ranges
+    # over that wider set, within the LP estimator's box for it
+    wider = SIGMA_WIDER * noise + rb
+    centre, e_w = Phi.T @ s, (np.abs(Phi).T @ np.broadcast_to(wider, s.shape)) * (1 + 1e-9) + 1e-15
+    C = J if si else np.eye(params)
+    try:
+        w_lo, w_hi = hull.ranges(A.T, s - wider, s + wider, centre - e_w, centre + e_w, C)
+    except hull.Empty:                           # it holds the set the verdict found a fit in
+        w_lo, w_hi = C @ (centre - e_w), C @ (centre + e_w)
+    mid = C @ dq
+    p_wider = np.minimum(np.maximum(w_hi - mid, mid - w_lo) * (1 + taylor.SUM_ERROR),
+                         parameter_bounds(res["M"] * unit, e_w) if si else e_w)
     q = p if si else None
     counts = None if si else {"sensitivity": dict(zip(COUNT_LABELS, (np.array(p[:9]) + [1, 1, 1, 0, 0, 0, 0, 0, 0])
                                                         .tolist())),
@@ -506,6 +522,8 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
         "guaranteed_error_optimal_plan": dict(zip(PARAM_LABELS, (parameter_bounds(res["M"], best * dsig) if si
                                                                  else best * dsig).tolist())),
         "guaranteed_error_q": dict(zip(PARAM_LABELS, half.tolist())),
+        "sigma_wider": SIGMA_WIDER,
+        "guaranteed_error_sigma_wider": dict(zip(PARAM_LABELS, p_wider.tolist())),
         "guaranteed_error_q_a_priori": dict(zip(PARAM_LABELS, bound.tolist())),
         "directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
         "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN},
