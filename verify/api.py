@@ -80,7 +80,8 @@ def calibrate_many(logs, *, g=None, g_uncertainty=None, delta_sigma=None, params
     dictionary, or None)} and, with `spec` (a SPEC.toml path: [limits] and [bound_limits] of scale,
     misalignment, bias, and [nominal] sensitivity for logs in raw counts), "verdict" (pass: every guaranteed
     interval within its limit; fail: one wholly outside; undecided; retest: the log could not be calibrated or
-    refutes its noise bound, so it proves nothing of the unit) and "reason". A log that cannot be calibrated is
+    refutes its noise bound, so it proves nothing of the unit) and "reason", and for a log in raw counts judged
+    against [nominal] "nominal" (the parameters and bounds relative to it). A log that cannot be calibrated is
     its row, never the end of the batch."""
     from .workflows import batch
     if not isinstance(logs, (list, tuple)) or not logs:

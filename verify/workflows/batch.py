@@ -71,20 +71,23 @@ def read_spec(path):
 
 
 def judge(res, spec):
-    """(verdict, reason): pass, fail or undecided for one calibrated unit against `spec`; retest when the log
-    proves nothing of the unit (its data refute the noise bound: no interval is guaranteed)."""
+    """(verdict, reason, nominal): pass, fail or undecided for one calibrated unit against `spec`; retest when
+    the log proves nothing of the unit (its data refute the noise bound: no interval is guaranteed). `nominal`:
+    for a log in raw counts judged against the spec's [nominal], the parameters and bounds it was judged by
+    (`nominal_parameters`), else None."""
+    nominal = None
     if not res.get("consistent"):
         where = res.get("disagreements") or []
         return "retest", ("the log refutes its noise bound" + (
             f" at still interval(s) {', '.join(map(str, where[:8]))}" + (" ..." if len(where) > 8 else "")
-            if where else "") + ": no interval is guaranteed, so nothing is proven of the unit; record it again")
+            if where else "") + ": no interval is guaranteed, so nothing is proven of the unit; record it again"), None
     pars, errs = res.get("parameters"), res.get("guaranteed_error")
     if not pars:
         counts = res.get("raw_axes_counts")
         if "sensitivity" not in spec or not counts:
             return "undecided", ("a log in raw counts: its parameters are relative to the raw axes; give the nominal "
-                                 "sensitivity (counts per g) as [nominal] sensitivity in the spec")
-        pars, errs = nominal_parameters(counts, spec["sensitivity"], spec.get("offset", [0.0] * 3))
+                                 "sensitivity (counts per g) as [nominal] sensitivity in the spec"), None
+        nominal = pars, errs = nominal_parameters(counts, spec["sensitivity"], spec.get("offset", [0.0] * 3))
     fails, open_ = [], []
     for key, limit in spec["limits"].items():
         for name in SPEC_KEYS[key][0]:
@@ -98,10 +101,10 @@ def judge(res, spec):
             if errs[name] > limit:
                 open_.append(f"{name}'s guaranteed error {errs[name]:.2g} above {limit:g}")
     if fails:
-        return "fail", "; ".join(fails)
+        return "fail", "; ".join(fails), nominal
     if open_:
-        return "undecided", "; ".join(open_)
-    return "pass", "every guaranteed interval within its limit"
+        return "undecided", "; ".join(open_), nominal
+    return "pass", "every guaranteed interval within its limit", nominal
 
 
 def nominal_parameters(counts, S, offset):
@@ -170,11 +173,10 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
         status = "error" if res is None else ("consistent" if res["consistent"] else "refuted")
         row = {"log": path, "status": status, "message": error or "", "result": res}
         if spec is not None:
-            row["verdict"], row["reason"] = (("retest", f"not calibrated: {error}") if res is None
-                                             else judge(res, spec))
-            if res and res.get("consistent") and not res.get("parameters") and "sensitivity" in spec:
-                row["nominal"] = nominal_parameters(res["raw_axes_counts"], spec["sensitivity"],
-                                                    spec.get("offset", [0.0] * 3))
+            row["verdict"], row["reason"], nominal = (("retest", f"not calibrated: {error}", None) if res is None
+                                                      else judge(res, spec))
+            if nominal is not None:
+                row["nominal"] = nominal
         rows.append(row)
     return rows
 

@@ -288,7 +288,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "noise_bound": float(nb),
-                          "noise_source": "its noise rule" if delta_sigma is None and nb == nr else source,
+                          "noise_source": "its noise rule" if delta_sigma is None else source,
                           "residual_before_ms2": float(g * sb),
                           "residual_after_ms2": float(g * sa), "direction": d.tolist()}
                          for s, nr, nb, sb, sa, d in zip(stills, rule, np.broadcast_to(noise, rule.shape), before,
