@@ -258,6 +258,16 @@ def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_n
     assert [t["consistent"] for t in found["tried"]] == [False] * (degree - 1) + [True]
 
 
+def _lower_turn(truth):
+    """The turn from the block's axes into the frame the data define (the lower-triangular frame of (29) of 000):
+    with E + Gamma(t0) = L0 R0 R^T... the unit's E + Gamma at t0 is L0 R', L0 lower-triangular with a positive
+    diagonal (the Cholesky factor of (E + Gamma)(E + Gamma)^T), so a sample's specific force in that frame is
+    L0^-1 (E + Gamma) times its specific force in the block's axes."""
+    EG = np.eye(3) + np.array([[truth.get(f"Gamma{i}{j}", 0.0) for j in (1, 2, 3)] for i in (1, 2, 3)])
+    L0 = np.linalg.cholesky(EG @ EG.T)
+    return np.linalg.solve(L0, EG)
+
+
 def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_path, capsys, mems):
     """`estimate --temperature 2 --save` holds the block at T0 and its polynomial in T; `apply` on a log with a
     temp_c column corrects each sample at its own temperature: every component within its per-sample bound of
@@ -273,8 +283,9 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
     angles, T = rng.uniform(0, 360, (n, 2)), rng.uniform(-20, 60, n)
     p = [MEMS.get(k, 0.0) for k in mod.PARAMETER_NAMES]
     ideal = [0.0 if k.startswith(("Gamma", "bias")) else v for k, v in zip(mod.PARAMETER_NAMES, p)]
-    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T + G * rng.uniform(-SIGMA, SIGMA, (n, 3))
-    a_true = mod.readings(*np.deg2rad(angles).T, ideal, G, temp_c=T).T
+    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T          # the bound is the calibration's, not the noise's
+    a_block = mod.readings(*np.deg2rad(angles).T, ideal, G, temp_c=T).T
+    a_true = a_block @ _lower_turn(MEMS).T
     log = tmp_path / "log.csv"
     np.savetxt(log, np.column_stack([np.arange(n) * 0.01, f, T]), delimiter=",", header="time_s,ax,ay,az,temp_c",
                comments="", fmt="%.12g")
@@ -295,6 +306,77 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
     assert "the calibration holds a temperature polynomial; the log needs each sample's temperature" in \
         capsys.readouterr().err
     assert not (tmp_path / "c2.csv").exists()
+
+
+def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_constant_one(tmp_path, mems):
+    """The thermal file is written in the frame the data define (lower-triangular at t0, as the constant file),
+    so no mounting premise lands in it: at t0 its per-sample bounds are within 3x of those of the constant file
+    made from the same unit's readings at t0 alone (measured 1.5x median, 2.2x largest), and so are its
+    off-diagonal bounds. Red on the block's own axes (the mounting's a-priori bound, 5e-3, in every
+    off-diagonal entry: 48x)."""
+    from garant.verify.io import calibration
+    folder, mod, data, _ = mems
+    rows = np.loadtxt(data, delimiter=",", skiprows=1)
+    at_t0 = rows[rows[:, 5] == 20.0]
+    assert len(at_t0) == 16
+    np.savetxt(tmp_path / "t0.csv", at_t0[:, :5], delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="",
+               fmt="%.17g")
+    assert main(["estimate", "--model", "two-axis", str(tmp_path / "t0.csv"), "--sigma", str(SIGMA), "--g", str(G),
+                 "--save", str(tmp_path / "c0.json")]) == 0
+    thermal_cal, constant = calibration.read(folder / "cal.json"), calibration.read(tmp_path / "c0.json")
+    th = thermal_cal["thermal"]
+    assert th["frame"] == "lower" and np.all(np.triu(np.linalg.inv(thermal_cal["M"]), 1) == 0)
+    rng = np.random.default_rng(3)
+    angles = rng.uniform(0, 360, (500, 2))
+    p = [MEMS.get(k, 0.0) for k in mod.PARAMETER_NAMES]
+    T = np.full(len(angles), 20.0)
+    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T
+    ratio = calibration.apply_thermal(thermal_cal, f, T)[1] / calibration.apply(constant, f)[1]
+    assert ratio.max() <= 3.0, ratio.max()
+    piece = np.searchsorted(th["pieces_c"], 20.0, side="right") - 1
+    lower = np.tril_indices(3, -1)
+    assert np.all(th["bound_Gamma"][piece][lower] <= 3 * constant["bound_matrix"][lower])
+
+
+@pytest.mark.parametrize("mount", ["+y+z+x", "-x-y+z"])
+def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mount):
+    """`--mount` with `--temperature`: the block mounted by Q reads Q times the readings of the unit with
+    Gamma' = Q^T Gamma Q, bias' = Q^T bias and theta' = Q^T theta ((26)-(27) of 000, at every T); its file, in
+    the block's axes and the frame the data define, corrects the block's own readings at 1,000 random
+    positions and temperatures within each per-sample bound. Red when the mounting is ignored (the file would
+    be the equivalent unit's) or refused."""
+    from garant.verify.io import calibration
+    rm = models.load_remount("two-axis")
+    Q = np.asarray(rm.MOUNTS[mount], float)
+    mod = models.thermal("two-axis", 2, 20)
+
+    def equivalent(truth):
+        out = dict(truth)
+        for suffix in ("", "_T1", "_T2"):
+            Gm = np.array([[truth.get(f"Gamma{i}{j}{suffix}", 0.0) for j in (1, 2, 3)] for i in (1, 2, 3)])
+            b = np.array([truth.get(f"bias{i}{suffix}", 0.0) for i in (1, 2, 3)])
+            Gm, b = Q.T @ Gm @ Q, Q.T @ b
+            out.update({f"Gamma{i + 1}{j + 1}{suffix}": Gm[i, j] for i in range(3) for j in range(3)})
+            out.update({f"bias{i + 1}{suffix}": b[i] for i in range(3)})
+        th = Q.T @ np.array([truth.get(f"theta{i}", 0.0) for i in (1, 2, 3)])
+        out.update({f"theta{i + 1}": th[i] for i in range(3)})
+        return [out.get(n, 0.0) for n in mod.PARAMETER_NAMES]
+
+    def block(angles, T, truth):
+        return (Q @ mod.readings(*np.deg2rad(angles).T, equivalent(truth), G, temp_c=T)).T
+    P = np.array([(a, b) for a in range(0, 360, 90) for b in range(0, 360, 90)] * len(TEMPS), float)
+    T = np.repeat(TEMPS, 16)
+    f = block(P, T, MEMS) + G * np.random.default_rng(5).uniform(-SIGMA, SIGMA, (len(P), 3))
+    data = _write(tmp_path / "chamber.csv", P, f, T)
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
+                 "--temperature", "2", f"--mount={mount}", "--save", str(tmp_path / "cal.json")]) == 0
+    cal = calibration.read(tmp_path / "cal.json")
+    rng = np.random.default_rng(2)
+    angles, T = rng.uniform(0, 360, (1000, 2)), rng.uniform(-20, 60, 1000)
+    ideal = {k: v for k, v in MEMS.items() if not k.startswith(("Gamma", "bias"))}
+    a, bound = calibration.apply_thermal(cal, block(angles, T, MEMS), T)
+    truth = block(angles, T, ideal) @ _lower_turn(MEMS).T
+    assert np.all(np.abs(a - truth) <= bound) and bound.max() < 1e-2
 
 
 def test_the_api_takes_a_temperature_degree_as_the_command_does(mems):

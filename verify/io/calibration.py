@@ -115,7 +115,7 @@ def from_block(res):
     in m/s^2 of the true specific force."""
     blk, prem = res["block"], res["premises"]
     G, g = np.asarray(blk["Gamma"]), res["g"]
-    u = _g_uncertainty(res)
+    u = g_uncertainty(res)
     M, B, eb = through_M(G, blk["Gamma_bound"], g * np.asarray(blk["bias_bound"]), u)
     return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
             "M": M.tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
@@ -132,40 +132,11 @@ def from_block(res):
 BLOCK_NAMES = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
 
 
-def _g_uncertainty(res):
+def g_uncertainty(res):
     """The bound of |Delta_g/g| where the block absorbs Delta_g (its Gamma is relative to the g given), else 0."""
     prem = res["premises"]
     gravity = any(prem["a_priori"][n]["kind"] == "gravity" for n in prem.get("absorbed", ()))
     return float(prem["g_uncertainty"]) if gravity else 0.0
-
-
-def thermal_section(res):
-    """The `thermal` field of a calibration from an estimate --temperature: each Gamma_ij and bias_i (m/s^2) as
-    a polynomial in T - t0 (the coefficients k = 1..degree; k = 0 is the file's M and b), the bounds of the
-    drift part q(T) - q(t0) over the range (each over the information set), and the bounds at t0 apply adds
-    them to. A q that holds one block parameter with coefficient 1 carries its polynomial."""
-    import re
-    th, g, blk = res["thermal"], res["g"], res["block"]
-    owner = {}
-    for q, d in res["definitions"].items():
-        if q not in th["q"]:
-            continue
-        terms = re.findall(r"([+-]?)\s*([A-Za-z_]\w*)", d)
-        block = [(sign, name) for sign, name in terms if name in BLOCK_NAMES]
-        if len(block) == 1 and block[0][0] in ("", "+"):
-            owner[block[0][1]] = q
-    missing = [n for n in BLOCK_NAMES if n not in owner]
-    if missing:
-        raise DataError(f"--save with --temperature: this stand's q do not hold {', '.join(missing)} alone; the "
-                        "calibration's temperature polynomial needs each block parameter")
-    D = th["degree"]
-    gamma = [[[th["q"][owner[f"Gamma{i}{j}"]][k] for j in (1, 2, 3)] for i in (1, 2, 3)] for k in range(1, D + 1)]
-    bias = [[g * th["q"][owner[f"bias{i}"]][k] for i in (1, 2, 3)] for k in range(1, D + 1)]
-    return {"t0_c": th["t0_c"], "range_c": th["range_c"], "degree": D, "Gamma": gamma, "bias": bias,
-            "bound_Gamma": [[th["bound_drift"][owner[f"Gamma{i}{j}"]] for j in (1, 2, 3)] for i in (1, 2, 3)],
-            "bound_bias": [g * th["bound_drift"][owner[f"bias{i}"]] for i in (1, 2, 3)],
-            "bound_Gamma_t0": np.asarray(blk["Gamma_bound"], float).tolist(), "g_uncertainty": _g_uncertainty(res),
-            "bound_bias_t0": (g * np.asarray(blk["bias_bound"], float)).tolist()}
 
 
 def write(path, cal):
@@ -211,8 +182,13 @@ def checked(data, path="calibration"):
     if "thermal" in data:
         th = data["thermal"]
         lo, hi = th["range_c"]
+        cuts = th["pieces_c"]
         if not (lo <= th["t0_c"] <= hi) or len(th["Gamma"]) != th["degree"] or len(th["bias"]) != th["degree"]:
             raise DataError(f"{path}: thermal: t0_c must lie in range_c and Gamma and bias hold one term per degree")
+        if (cuts[0] != lo or cuts[-1] != hi or any(x >= y for x, y in zip(cuts, cuts[1:]))
+                or len(th["bound_Gamma"]) != len(cuts) - 1 or len(th["bound_bias"]) != len(cuts) - 1):
+            raise DataError(f"{path}: thermal: pieces_c must rise from range_c's first to its last temperature and "
+                            "bound_Gamma and bound_bias hold one bound per piece")
         out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
     return out
 
@@ -220,15 +196,18 @@ def checked(data, path="calibration"):
 def thermal_at(cal, T):
     """Per sample at temperatures T (C): (M (N, 3, 3), b (N, 3), bound_matrix (N, 3, 3), bound_bias (N, 3)) of a
     calibration with a temperature polynomial: Gamma(T) = Gamma(t0) + sum_k Gamma_k (T - t0)^k with Gamma(t0) =
-    M^-1 - E of the file, b(T) likewise, through `through_M` with the bound at t0 plus that of the drift over the
-    range (each over the estimate's information set; their sum bounds the whole)."""
+    M^-1 - E of the file, b(T) likewise, through `through_M` with the bounds of the piece of the range that
+    holds T (each over the estimate's information set and the whole piece, workflows/thermal_file.py; a T at a
+    cut lies in both pieces, and either bound holds there)."""
     th = cal["thermal"]
-    tau = np.asarray(T, float) - th["t0_c"]
+    T = np.asarray(T, float)
+    tau = T - th["t0_c"]
     powers = np.stack([tau ** k for k in range(1, th["degree"] + 1)], axis=1)          # (N, D)
     G = (np.linalg.inv(cal["M"]) - np.eye(3))[None] + np.einsum("nk,kij->nij", powers, th["Gamma"])
     b = cal["b"][None] + powers @ th["bias"]
-    M, B, eb = through_M(G, th["bound_Gamma_t0"] + th["bound_Gamma"], th["bound_bias_t0"] + th["bound_bias"],
-                         th.get("g_uncertainty", 0.0))
+    cuts = th["pieces_c"]
+    piece = np.clip(np.searchsorted(cuts, T, side="right") - 1, 0, len(cuts) - 2)
+    M, B, eb = through_M(G, th["bound_Gamma"][piece], th["bound_bias"][piece], th.get("g_uncertainty", 0.0))
     return M, b, B, eb
 
 

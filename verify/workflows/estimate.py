@@ -229,7 +229,33 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         out["thermal"] = th.summary(mod, v.info, q, e, np.asarray(positions.extra["temp_c"], float), *thermal)
     if not out["premises_refuted"]:                # else no block split: it rests on the refuted bounds
         out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
+        if thermal is not None:
+            out.update(_thermal_file(mod, v, q, positions, thermal, g, premises, remount, out))
     return out
+
+
+def _thermal_file(mod, v, q, positions, thermal, g, premises, remount, out):
+    """{"thermal_file": the temperature part of the calibration (workflows/thermal_file.py)}, or why there is
+    none ("block_not_separated")."""
+    from . import thermal_file
+    T = np.asarray(positions.extra["temp_c"], float)
+    degree, t0 = thermal
+    if "physical" in out:
+        if out["gamma"] != "lower":
+            return {"block_not_separated": "a calibration over temperature is written in the frame the data define "
+                                           "(--gamma lower); with --gamma symmetric none is written"}
+        own = dict(zip(premises.names, premises.physical()))
+        return {"thermal_file": thermal_file.lower_section(
+            mod, remount, out["mount"], v.info, q, v.interval, T, t0, degree, own.get("Delta_g", 0.0), g,
+            out["physical"]["Gamma"], out["physical"]["bias"])}
+    if "block" in out:
+        from ..io.calibration import g_uncertainty
+        try:
+            return {"thermal_file": thermal_file.block_section(mod, v.info, q, T, t0, degree, g, out["block"],
+                                                               g_uncertainty(out))}
+        except DataError as err:
+            return {"block_not_separated": str(err)}
+    return {}
 
 
 def unrefutable_premises(lin, stated):

@@ -61,12 +61,10 @@ def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
     thermal = None
     if temperature is not None:
         from . import thermal as th
-        if mount:
-            raise DataError(f"{opt('temperature')} and {opt('mount')}: one at a time")
         base = positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections)
         T = th.temperatures(base, base.path)
         thermal = (temperature, th.reference(T, temperature, base.path))
-        mod, remount = models.thermal(model, *thermal), None
+        mod = models.thermal(model, *thermal)
     if mount and (remount is None or mount not in remount.MOUNTS):
         raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {mount!r}")
@@ -75,11 +73,16 @@ def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
     res = est.estimate(mod, positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections), sigma, prem.g,
                        remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress, thermal=thermal)
+    section = res.pop("thermal_file", None)
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
         res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
         if "thermal" in res:
-            res["calibration"]["thermal"] = calibration.thermal_section(res)
+            if section is None:
+                del res["calibration"]
+            else:
+                res["calibration"]["thermal"] = {"t0_c": res["thermal"]["t0_c"], "range_c": res["thermal"]["range_c"],
+                                                 "degree": res["thermal"]["degree"], **section}
     return results.Estimate(res)
 
 

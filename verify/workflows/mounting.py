@@ -34,6 +34,9 @@ def recover(remount, mount, gamma, info, g, q_shift=0.0, neglected=None, q_box=N
     theta_k of the axis along the table's), added to those bounds: a premise, printed with them. Returns
     (values, bounds, note, the part of each bound the premises alone set: no readings reduce it)."""
     K = remount.recovery_matrix(mount, gamma)
+    nq = info.A.shape[0]
+    if nq > K.shape[1]:                          # a thermal extension: its first q are the base model's, at t0
+        K = np.hstack([K, np.zeros((len(K), nq - K.shape[1]))])
     names = list(remount.OUTPUTS)
     exact = gamma == "lower" and q_box is not None
     rows = [k for k, n in enumerate(names) if not (exact and n.startswith("Gamma"))]

@@ -1,0 +1,193 @@
+"""The temperature part of a stand calibration file: Gamma(T) and the biases over T, bounded piece by piece.
+
+The file corrects a sample taken at T by a = (E + Gamma_hat(T))^-1 (f - b_hat(T)), with Gamma_hat and b_hat
+polynomials in tau = T - t0. Each of their errors is bounded over the information set of the estimate (the
+q that fit every reading, guarantee.InformationSet) and over each piece of the range at once, not as the
+bound at t0 plus that of the drift.
+
+In the frame the data define (`lower`, two-axis, the convention of `--gamma`): the stand proves the matrix
+M(T) = Q (E + G(q(T))) Q^T = s (E + Gamma(T)) R of the unit in mounting Q (s = 1 - Delta_g/g, R the
+mounting's rotation, (26)-(29) of 000). With M(t0) = L0 R0 (a lower-triangular L0 with a positive diagonal
+and a rotation R0: LQ, unique), the unit's frame is the one R0 turns the stand's into, and there
+
+    E + Gamma'(T) = M(T) R0^T / s = L0 / s + Delta(T) W,   Delta(T) = M(T) - M(t0),   W = R0^T / s,
+
+so no mounting premise enters Gamma' (the constant file's frame, mounting.exact_gamma). The file holds
+Gamma_hat(T) = Gamma'_hat(t0) + Delta_hat(T) W_hat, and for every entry
+
+    Gamma'(T) - Gamma_hat(T) = l^T (x - x_hat) + rho + (Delta(T) - Delta_hat(T)) W_hat + Delta(T) (W - W_hat)
+                               + (f(x_hat) - Gamma'_hat(t0)),
+
+x = (G(q(t0)), s), f(x) = L0 / s - E, l its gradient at x_hat, rho the mean-value remainder (the gradient
+enclosed over the box of x in interval arithmetic, solve/interval.py). The first and third terms are one
+linear function of q, psi(tau)^T (q - q_hat), whose sup over the set and a piece is the largest end of its
+Bernstein control points (thermal.py); the others are bounded in interval arithmetic over the box.
+Elsewhere (`block`): the block's Gamma at t0 over the information set (workflows/block.py) plus the drift
+of each entry over the piece, both over the set.
+"""
+import numpy as np
+
+from ..errors import DataError
+from ..io.calibration import BLOCK_NAMES
+from ..solve import interval
+from . import thermal
+
+PAD = 1 + 1e-12
+
+
+def pieces(lo, hi):
+    """The cut temperatures (C) of the range's pieces: thermal.PIECES equal ones."""
+    return np.linspace(lo, hi, thermal.PIECES + 1)
+
+
+def _series(mod, degree):
+    """(nq, degree + 1, nq): for every q its coefficient vectors x_k (q(T) = sum tau^k x_k^T q); a q without a
+    block part does not move with T (x_0 = e_q)."""
+    nq = len(mod.Q_NAMES)
+    polys = thermal.polynomials(mod, degree)
+    S = np.zeros((nq, degree + 1, nq))
+    for nu, name in enumerate(mod.Q_NAMES):
+        S[nu] = np.array(polys[name]) if name in polys else np.vstack([np.eye(nq)[nu], np.zeros((degree, nq))])
+    return S
+
+
+def _worst(info, q_hat, rows, cuts):
+    """rows: (n, degree + 1, nq) polynomials psi(tau) = sum tau^k rows[:, k]. Per piece of `cuts` (relative to
+    t0) and row, the proven sup of |psi(tau)^T (q - q_hat)| over the set and the piece: the largest end of its
+    Bernstein control points. Returns (pieces, n)."""
+    n, d1, _ = rows.shape
+    C = np.vstack([thermal.bernstein(list(r), a, b) for a, b in zip(cuts[:-1], cuts[1:]) for r in rows])
+    live = np.flatnonzero(np.abs(C).max(axis=1) > 0)
+    U, back = np.unique(C[live], axis=0, return_inverse=True)
+    lo, hi = np.zeros(len(C)), np.zeros(len(C))
+    lo[live], hi[live] = (v[np.ravel(back)] for v in info.ranges(U))
+    v = C @ q_hat
+    pad = 1e-12 * (np.abs(C) @ np.abs(q_hat)) + 1e-300
+    worst = np.maximum(hi - v, v - lo) + pad
+    return worst.reshape(len(cuts) - 1, n, d1).max(axis=2)
+
+
+def _control_mag(coef, cuts):
+    """(pieces, ...) the largest |p(tau)| over each piece of a polynomial with (degree + 1, ...) coefficients:
+    the largest magnitude of its Bernstein control points."""
+    coef = np.asarray(coef, float)
+    flat = coef.reshape(len(coef), -1)
+    out = [np.abs(thermal.bernstein(list(flat), a, b)).max(axis=0) for a, b in zip(cuts[:-1], cuts[1:])]
+    return np.array(out).reshape((len(cuts) - 1,) + coef.shape[1:]) * PAD
+
+
+def _lq(G, s, Q):
+    """(f, W) of x = (G (3 x 3 of the equivalent unit), s): f = L / s - E (lower entries, row-major 6) and
+    W = R^T / s (3 x 3) for Q (E + G) Q^T = L R (LQ); G and s numbers, or interval.Grad over a box."""
+    pairs = [(i, j) for i in range(3) for j in range(3)]
+    EG = [[G[i][j] + (1.0 if i == j else 0.0) for j in range(3)] for i in range(3)]
+    M = [[sum(EG[i][j] * float(Q[a, i] * Q[b, j]) for i, j in pairs if Q[a, i] and Q[b, j]) for b in range(3)]
+         for a in range(3)]
+    A = [[M[a][0] * M[b][0] + M[a][1] * M[b][1] + M[a][2] * M[b][2] for b in range(3)] for a in range(3)]
+    L11 = A[0][0].sqrt()
+    r11 = L11.recip()
+    L21, L31 = A[1][0] * r11, A[2][0] * r11
+    L22 = (A[1][1] - L21 * L21).sqrt()
+    r22 = L22.recip()
+    L32 = (A[2][1] - L31 * L21) * r22
+    L33 = (A[2][2] - L31 * L31 - L32 * L32).sqrt()
+    r33 = L33.recip()
+    R0 = [M[0][b] * r11 for b in range(3)]
+    R1 = [(M[1][b] - L21 * R0[b]) * r22 for b in range(3)]
+    R2 = [(M[2][b] - L31 * R0[b] - L32 * R1[b]) * r33 for b in range(3)]
+    r = s.recip()
+    f = [L11 * r + (-1.0), L21 * r, L31 * r, L22 * r + (-1.0), L32 * r, L33 * r + (-1.0)]
+    W = [[R[a] * r for R in (R0, R1, R2)] for a in range(3)]
+    return f, W
+
+
+LOWER = [(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)]
+
+
+def lower_section(mod, remount, mount, info, q_hat, interval_q, T, t0, degree, u, g, G0, b0):
+    """The thermal section of a two-axis calibration in the frame the data define (module docstring): G0
+    (3 x 3) and b0 (3, m/s^2) the file's Gamma and biases at t0 (the constant calibration's, `from_stand`);
+    interval_q the box of q holding the set; u the bound of |Delta_g/g| (s within 1 +- u)."""
+    Q = np.asarray(remount.MOUNTS[mount], float)
+    idx = np.asarray(remount.G_INDEX)
+    nq = len(q_hat)
+    S = _series(mod, degree)                                           # (nq, D + 1, nq)
+    # Delta(T) in block axes: (Q G_drift Q^T)_ab, coefficient vectors (3, 3, D + 1, nq), k = 0 part zero
+    Gs = S[idx]                                                        # (3, 3, D + 1, nq): G(q(T)), stand axes
+    Mb = np.einsum("ai,bj,ijkn->abkn", Q, Q, Gs)
+    Dl = Mb.copy()
+    Dl[:, :, 0] = 0.0
+    # f and W at the estimate, and their gradients over the box (G's 9 entries and s)
+    g_hat = q_hat[idx]
+    lo, hi = interval_q
+    lo_g, hi_g = np.minimum(lo[idx], g_hat), np.maximum(hi[idx], g_hat)
+    c = [*g_hat.ravel(), 1.0]
+    point = interval.box_variables([np.atleast_1d(x) for x in c], [np.atleast_1d(x) for x in c])
+    box = interval.box_variables([np.atleast_1d(x) for x in [*lo_g.ravel(), 1 - u]],
+                                 [np.atleast_1d(x) for x in [*hi_g.ravel(), 1 + u]])
+    split = lambda x: _lq([x[0:3], x[3:6], x[6:9]], x[9], Q)            # noqa: E731
+    f_pt, W_pt = split(point)
+    f_box, W_box = split(box)
+    W_hat = np.array([[float(np.mean([w.v.lo[0], w.v.hi[0]])) for w in row] for row in W_pt])
+    W_err = np.array([[max(w.v.hi[0] - W_hat[a, b], W_hat[a, b] - w.v.lo[0]) for b, w in enumerate(row)]
+                      for a, row in enumerate(W_box)])
+    radius = np.append(np.maximum(hi_g - g_hat, g_hat - lo_g).ravel(), u)
+    # the linear function of q of each entry of Gamma': l^T G(q(t0)) (lower entries) + (Delta(T) W_hat)_ab
+    rows = np.einsum("amkn,mb->abkn", Dl, W_hat)
+    offset, rho = np.zeros((3, 3)), np.zeros((3, 3))
+    for (a, b), fp, fb in zip(LOWER, f_pt, f_box):
+        ell = np.array([(d.lo[0] + d.hi[0]) / 2 for d in fp.d])
+        rows[a, b, 0] = np.einsum("ij,ijn->n", ell[:9].reshape(3, 3), S[idx, 0])
+        spread = np.array([max(d.hi[0] - e, e - d.lo[0]) for d, e in zip(fb.d, ell)])
+        spread[9] = max(abs(fb.d[9].lo[0]), abs(fb.d[9].hi[0]))       # s enters only here: |df/ds| u
+        rho[a, b] = spread @ radius
+        offset[a, b] = max(fp.v.hi[0] - G0[a][b], G0[a][b] - fp.v.lo[0])
+    cuts = pieces(*(np.array([T.min(), T.max()]) - t0))
+    linear = _worst(info, q_hat, rows.reshape(9, degree + 1, nq), cuts).reshape(-1, 3, 3)
+    # |Delta(T)| over each piece: the estimate's largest value there plus the drift's bound over the set
+    drift_hat = np.einsum("abkn,n->kab", Dl, q_hat)
+    drift_mag = _control_mag(drift_hat, cuts) + _worst(info, q_hat, Dl.reshape(9, degree + 1, nq),
+                                                       cuts).reshape(-1, 3, 3)
+    turn = np.einsum("pam,mb->pab", drift_mag, W_err)
+    bound_G = (linear + (offset + rho)[None] + turn) * PAD
+    # the biases in block axes: K's bias rows of the remount formulas, each q its polynomial
+    K = np.zeros((len(remount.OUTPUTS), nq))
+    K[:, :remount.recovery_matrix(mount).shape[1]] = remount.recovery_matrix(mount)
+    rb = [list(remount.OUTPUTS).index(f"bias{i}") for i in (1, 2, 3)]
+    brows = np.einsum("rn,nkm->rkm", K[rb], S)
+    bias_hat = np.einsum("rkm,m->kr", brows, q_hat) * g
+    b_off = np.abs(bias_hat[0] - np.asarray(b0, float))
+    bound_b = (g * _worst(info, q_hat, brows, cuts) + b_off[None]) * PAD
+    return {"frame": "lower", "pieces_c": (cuts + t0).tolist(),
+            "Gamma": np.einsum("kam,mb->kab", drift_hat, W_hat)[1:].tolist(),
+            "bias": bias_hat[1:].tolist(), "bound_Gamma": bound_G.tolist(), "bound_bias": bound_b.tolist()}
+
+
+def block_section(mod, info, q_hat, T, t0, degree, g, block, u):
+    """The thermal section in the block's own axes (a stand without the remount formulas): Gamma and the
+    biases at t0 from the block's calibration over the set (`block`, workflows/block.py), each entry's drift
+    from the q that holds that block parameter alone; per piece, the bound at t0 plus that of the drift over
+    the set and the piece. u: the bound of |Delta_g/g| where Gamma is relative to the g given."""
+    R = np.asarray(mod.PHYSICAL_TO_Q, float)
+    names = list(mod.PARAMETER_NAMES)
+    cols = [names.index(n) for n in BLOCK_NAMES]
+    owner = {}
+    for nu in range(len(mod.Q_NAMES)):
+        used = [k for k in cols if R[nu, k] != 0]
+        if len(used) == 1 and R[nu, used[0]] == 1:
+            owner.setdefault(names[used[0]], nu)
+    missing = [n for n in BLOCK_NAMES if n not in owner]
+    if missing:
+        raise DataError(f"--save with --temperature: this stand's q do not hold {', '.join(missing)} alone; the "
+                        "calibration's temperature polynomial needs each block parameter")
+    S = _series(mod, degree)
+    rows = np.array([S[owner[n]] for n in BLOCK_NAMES])
+    rows[:, 0] = 0.0                                                  # the drift: q(T) - q(t0)
+    cuts = pieces(*(np.array([T.min(), T.max()]) - t0))
+    drift = _worst(info, q_hat, rows, cuts)                          # (pieces, 12)
+    coef = np.einsum("pkn,n->kp", rows, q_hat)                        # (D + 1, 12)
+    return {"frame": "block", "pieces_c": (cuts + t0).tolist(),
+            "Gamma": coef[1:, :9].reshape(-1, 3, 3).tolist(), "bias": (g * coef[1:, 9:]).tolist(),
+            "bound_Gamma": ((np.asarray(block["Gamma_bound"])[None] + drift[:, :9].reshape(-1, 3, 3)) * PAD).tolist(),
+            "bound_bias": (g * (np.asarray(block["bias_bound"])[None] + drift[:, 9:]) * PAD).tolist(),
+            "g_uncertainty": u}
