@@ -84,19 +84,7 @@ def exact_gamma(remount, mount, q_lo, q_hi, u):
     pairs = [(i, j) for i in range(3) for j in range(3)]
 
     def split(*x):
-        G, s = x[:9], x[9]
-        EG = [[G[3 * i + j] + (1.0 if i == j else 0.0) for j in range(3)] for i in range(3)]
-        M = [[sum(EG[i][j] * (Q[a, i] * Q[b, j]) for i, j in pairs if Q[a, i] and Q[b, j]) for b in range(3)]
-             for a in range(3)]
-        A = [[M[a][0] * M[b][0] + M[a][1] * M[b][1] + M[a][2] * M[b][2] for b in range(3)] for a in range(3)]
-        L11 = A[0][0].sqrt()
-        r11 = L11.recip()
-        L21, L31 = A[1][0] * r11, A[2][0] * r11
-        L22 = (A[1][1] - L21 * L21).sqrt()
-        L32 = (A[2][1] - L31 * L21) * L22.recip()
-        L33 = (A[2][2] - L31 * L31 - L32 * L32).sqrt()
-        r = s.recip()
-        return [L11 * r + (-1.0), L21 * r, L31 * r, L22 * r + (-1.0), L32 * r, L33 * r + (-1.0)]
+        return lq([x[0:3], x[3:6], x[6:9]], x[9], Q)[0]
 
     def enclose(lo, hi):                  # the box is a few sigma wide: the natural enclosure is tight enough
         return split(*(interval.Iv(np.atleast_1d(a), np.atleast_1d(b)) for a, b in zip(lo, hi)))
@@ -109,6 +97,33 @@ def exact_gamma(remount, mount, q_lo, q_hi, u):
         # s alone moves L / s by at most |L| u / (1 - u): what no readings reduce
         premised[i, j] = min(abs(value[i, j] + (i == j)) * u / (1 - u), bound[i, j])
     return value, bound, premised
+
+
+def lq(G, s, Q):
+    """(f, W) of x = (G (3 x 3 of the equivalent unit), s): f = L / s - E (lower entries, row-major 6) and
+    W = R^T / s (3 x 3) for Q (E + G) Q^T = L R (LQ); G and s intervals
+    (solve/interval.py) or interval.Grad over a box: every operation is theirs, so each result encloses the
+    exact one."""
+    pairs = [(i, j) for i in range(3) for j in range(3)]
+    EG = [[G[i][j] + (1.0 if i == j else 0.0) for j in range(3)] for i in range(3)]
+    M = [[sum(EG[i][j] * float(Q[a, i] * Q[b, j]) for i, j in pairs if Q[a, i] and Q[b, j]) for b in range(3)]
+         for a in range(3)]
+    A = [[M[a][0] * M[b][0] + M[a][1] * M[b][1] + M[a][2] * M[b][2] for b in range(3)] for a in range(3)]
+    L11 = A[0][0].sqrt()
+    r11 = L11.recip()
+    L21, L31 = A[1][0] * r11, A[2][0] * r11
+    L22 = (A[1][1] - L21 * L21).sqrt()
+    r22 = L22.recip()
+    L32 = (A[2][1] - L31 * L21) * r22
+    L33 = (A[2][2] - L31 * L31 - L32 * L32).sqrt()
+    r33 = L33.recip()
+    R0 = [M[0][b] * r11 for b in range(3)]
+    R1 = [(M[1][b] - L21 * R0[b]) * r22 for b in range(3)]
+    R2 = [(M[2][b] - L31 * R0[b] - L32 * R1[b]) * r33 for b in range(3)]
+    r = s.recip()
+    f = [L11 * r + (-1.0), L21 * r, L31 * r, L22 * r + (-1.0), L32 * r, L33 * r + (-1.0)]
+    W = [[R[a] * r for R in (R0, R1, R2)] for a in range(3)]
+    return f, W
 
 
 def literal_gap(mod, premises, gamma_bound):

@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import DataError
 from ..io.calibration import BLOCK_NAMES
 from ..solve import interval
-from . import thermal
+from . import mounting, thermal
 
 PAD = 1 + 1e-12
 
@@ -76,31 +76,6 @@ def _control_mag(coef, cuts):
     return np.array(out).reshape((len(cuts) - 1,) + coef.shape[1:]) * PAD
 
 
-def _lq(G, s, Q):
-    """(f, W) of x = (G (3 x 3 of the equivalent unit), s): f = L / s - E (lower entries, row-major 6) and
-    W = R^T / s (3 x 3) for Q (E + G) Q^T = L R (LQ); G and s numbers, or interval.Grad over a box."""
-    pairs = [(i, j) for i in range(3) for j in range(3)]
-    EG = [[G[i][j] + (1.0 if i == j else 0.0) for j in range(3)] for i in range(3)]
-    M = [[sum(EG[i][j] * float(Q[a, i] * Q[b, j]) for i, j in pairs if Q[a, i] and Q[b, j]) for b in range(3)]
-         for a in range(3)]
-    A = [[M[a][0] * M[b][0] + M[a][1] * M[b][1] + M[a][2] * M[b][2] for b in range(3)] for a in range(3)]
-    L11 = A[0][0].sqrt()
-    r11 = L11.recip()
-    L21, L31 = A[1][0] * r11, A[2][0] * r11
-    L22 = (A[1][1] - L21 * L21).sqrt()
-    r22 = L22.recip()
-    L32 = (A[2][1] - L31 * L21) * r22
-    L33 = (A[2][2] - L31 * L31 - L32 * L32).sqrt()
-    r33 = L33.recip()
-    R0 = [M[0][b] * r11 for b in range(3)]
-    R1 = [(M[1][b] - L21 * R0[b]) * r22 for b in range(3)]
-    R2 = [(M[2][b] - L31 * R0[b] - L32 * R1[b]) * r33 for b in range(3)]
-    r = s.recip()
-    f = [L11 * r + (-1.0), L21 * r, L31 * r, L22 * r + (-1.0), L32 * r, L33 * r + (-1.0)]
-    W = [[R[a] * r for R in (R0, R1, R2)] for a in range(3)]
-    return f, W
-
-
 LOWER = [(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)]
 
 
@@ -125,7 +100,7 @@ def lower_section(mod, remount, mount, info, q_hat, interval_q, T, t0, degree, u
     point = interval.box_variables([np.atleast_1d(x) for x in c], [np.atleast_1d(x) for x in c])
     box = interval.box_variables([np.atleast_1d(x) for x in [*lo_g.ravel(), 1 - u]],
                                  [np.atleast_1d(x) for x in [*hi_g.ravel(), 1 + u]])
-    split = lambda x: _lq([x[0:3], x[3:6], x[6:9]], x[9], Q)            # noqa: E731
+    split = lambda x: mounting.lq([x[0:3], x[3:6], x[6:9]], x[9], Q)            # noqa: E731
     f_pt, W_pt = split(point)
     f_box, W_box = split(box)
     W_hat = np.array([[float(np.mean([w.v.lo[0], w.v.hi[0]])) for w in row] for row in W_pt])
