@@ -264,11 +264,22 @@ def _print_diagnosis(d, params):
           + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
     for step in d["scores"]:
         print("  try: " + ", ".join(f"{k} {v:.1f}" for k, v in sorted(step.items(), key=lambda kv: kv[1])))
-    for group in d["indistinguishable"]:
-        print("  indistinguishable with these orientations: " + " / ".join(group))
-    print("  added: " + (", ".join(d["effects"]) or "nothing") + f"; worst now {d['max_residual_after']:.1f} -> "
-          + ("consistent" if d["consistent_after"] else "still INCONSISTENT: an effect outside the catalogue, "
-             "or a noise bound too tight"))
+    if d["named"]:
+        print("  named: " + ", ".join(d["named"]) + f", the fewest effects that make the data consistent (worst now "
+              f"{d['max_residual_after']:.1f})")
+        for e, others in d["equivalent"].items():
+            if others:
+                print(f"  {e}: these orientations cannot tell it from {', '.join(others)} (beside the base model, "
+                      "one's columns of (2.2) of 001 lie in the other's span); the data name the family, not the "
+                      "member")
+    elif not d["consistent_before"]:
+        print("  named: nothing in the catalogue makes the data consistent (sets of up to three tried; worst "
+              f"{d['max_residual_after']:.1f}): an effect outside the catalogue, or a noise bound too tight")
+    if d["unseen"]:
+        print("  unseen here: " + ", ".join(d["unseen"]) + " (the base parameters absorb them on these orientations)")
+    for e, why in d["skipped"].items():
+        if why != "needs stand angles":
+            print(f"  not tried: {e} ({why})")
 
 
 def _save(res, args):

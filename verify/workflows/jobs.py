@@ -179,8 +179,11 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
         res["calibration"] = calibration.from_norm(res, mod.AXES)
     if diagnose:
         raw = np.array([st.mean for st in stills])
-        res["diagnosis"] = cn.diagnose_norm(mod, stills, cn.fit(mod, raw, g, params), g, params,
-                                            recordings.quantum(data))
+        from . import diagnose_norm
+        temps = None if data.temp is None else [float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)]))
+                                                for st in stills]
+        res["diagnosis"] = diagnose_norm.diagnose(mod, stills, cn.fit(mod, raw, g, params), g, params,
+                                                  recordings.quantum(data), temps)
     return results.NormCalibration(res)
 
 

@@ -1,0 +1,109 @@
+"""The model-discrepancy test of a static log through the norm relation (2.2) of 001.
+
+Is the calibrated norm model consistent with each interval's own noise (the noise rule), and which effects of
+the catalogue (derive/effects.py) make it so? Each effect enters (2.2) through its first-order columns
+(derive/norm.py `effect_columns`: n . d(term)/d(parameter) at w = n), evaluated at each still interval's
+direction, mid-time and mean temperature (where the log has a temperature column). What the norm relation
+cannot tell apart on these orientations is decided exactly, as identifiability is: two effects are
+equivalent here when one's columns lie in the span of the base model's and the other's (on the sphere
+w_i^3 = g^2 w_i - w_i w_j^2 - w_i w_k^2, so a quadratic scale factor is a case of cross-coupling), and an effect
+is unseen when its columns lie in the base model's span (the base parameters absorb it).
+The effects named are the fewest that make the data consistent (every interval within its noise bound).
+"""
+from itertools import combinations
+
+import numpy as np
+
+from .calibrate_norm import noise_rule, noise_rule_name, weighted_fit
+
+LARGEST_SET = 3          # effects named together at most
+RANK_TOL = 1e-9          # relative to the largest singular value of the unit-norm columns
+
+
+def _rank(rows):
+    """The rank of the columns (rows of `rows`, each a column over the intervals) scaled to unit norm."""
+    X = np.asarray(rows, float)
+    X = X / np.maximum(np.linalg.norm(X, axis=1, keepdims=True), 1e-300)
+    sv = np.linalg.svd(X, compute_uv=False)
+    return int(np.count_nonzero(sv > RANK_TOL * sv[0])) if sv.size else 0
+
+
+def columns(mod, n, t_mid, temps):
+    """({effect: its columns (k, intervals)}, {effect: why skipped}) on these intervals."""
+    import sympy as sp
+    from garant.derive.effects import CATALOGUE
+    from garant.derive.norm import NormModel, effect_columns, n_sym
+    cols, skipped = {}, {}
+    values = {"time_s": t_mid, "temp_c": temps}
+    for name in CATALOGUE:
+        out = effect_columns(NormModel(mod.AXES), name)
+        if out is None:
+            skipped[name] = "needs stand angles"
+            continue
+        _, exprs = out
+        extra = sorted({sym.name for e in exprs for sym in e.free_symbols} - {s.name for s in n_sym})
+        if any(values.get(v) is None for v in extra):
+            skipped[name] = "the log has no temperature column" if "temp_c" in extra else f"needs {', '.join(extra)}"
+            continue
+        f = sp.lambdify([*n_sym, *[sp.Symbol(v, real=True) for v in extra]], exprs, "numpy")
+        cols[name] = np.array([np.broadcast_to(v, t_mid.shape) for v in f(*n, *[values[v] for v in extra])], float)
+    return cols, skipped
+
+
+def equivalence(base, cols):
+    """({effect: [the effects these orientations cannot tell from it: beside the base model, one's columns lie in
+    the span of the other's (the same space, or one a case of the other)]}, [effects unseen: in the base model's
+    span])."""
+    r0 = _rank(base)
+    own = {e: _rank(np.vstack([base, c])) for e, c in cols.items()}
+    unseen = [e for e in cols if own[e] == r0]
+    seen = [e for e in cols if e not in unseen]
+    same = {e: [f for f in seen if f != e and _rank(np.vstack([base, cols[e], cols[f]])) == max(own[e], own[f])]
+            for e in seen}
+    return same, unseen
+
+
+def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
+    """The diagnosis of a log's norm calibration (res: calibrate_norm.fit of its still intervals): the worst
+    residual in units of each interval's noise bound before and after; `named`, the fewest effects that make the
+    data consistent (the smallest worst residual among the sets of that size); `equivalent`, per named effect
+    the effects these orientations cannot tell from it; `unseen`, the effects the base model absorbs here; the
+    greedy search's scores as before (`effects`, `scores`, `indistinguishable`). temps: each interval's mean
+    temperature (C), or None."""
+    s, n = res["sigma"], res["n"]
+    bounds = noise_rule(stills, res["M"], n, g, quantum)
+    t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
+    base = mod.H(n)[:params]
+    _, t0 = weighted_fit(base, s, bounds)
+    cols, skipped = columns(mod, n, t_mid, None if temps is None else np.asarray(temps, float))
+    same, unseen = equivalence(base, cols)
+    usable = [e for e in cols if e not in unseen]
+
+    def score(names):
+        return weighted_fit(np.vstack([base] + [cols[c] for c in names]), s, bounds)[1]
+    named, after = [], t0
+    if t0 > 1:
+        for size in range(1, min(LARGEST_SET, len(usable)) + 1):
+            tried = {names: score(names) for names in combinations(usable, size)}
+            best = min(tried, key=tried.get, default=None)
+            if best is not None and tried[best] <= 1:
+                named, after = list(best), tried[best]
+                break
+    chosen, greedy, history, tied = [], t0, [], []
+    while greedy > 1 and len(chosen) < len(usable):
+        scores = {e: score(chosen + [e]) for e in usable if e not in chosen}
+        best = min(scores, key=scores.get)
+        history.append(scores)
+        if scores[best] >= greedy * 0.95:
+            break
+        tied += [[best] + same[best]] if same[best] else []
+        chosen.append(best)
+        greedy = scores[best]
+    if not named:
+        after = greedy
+    return {"noise_bound": "the " + noise_rule_name(stills, quantum) + (" plus half a count" if quantum else ""),
+            "consistent_before": bool(t0 <= 1), "max_residual_before": t0,
+            "named": named, "equivalent": {e: same[e] for e in named}, "unseen": unseen,
+            "consistent_after": bool(after <= 1), "max_residual_after": after,
+            "effects": chosen, "indistinguishable": tied,
+            "scores": [{k: float(v) for k, v in h.items()} for h in history], "skipped": skipped}
