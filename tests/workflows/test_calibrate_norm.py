@@ -49,7 +49,26 @@ def test_synthetic_log_recovers_errors_within_bounds(tmp_path):
 def test_too_few_intervals_is_refused(tmp_path, capsys):
     path = synthetic_log(tmp_path / "log.txt", np.zeros(16), [np.array([0, 0, 1.0])] * 3, noise=1e-5)
     assert main(["calibrate-norm", str(path)]) == 2
-    assert "found only" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "found only 3 still interval(s) with --still-factor 10" in err
+    assert "no other stillness threshold tried finds that many: record more orientations" in err
+
+
+def test_too_few_intervals_say_the_threshold_that_finds_them(tmp_path, capsys):
+    # The first seconds quieter than the rest (a unit set down, then turned by a shakier hand): at the default
+    # threshold (10x their variance) no later orientation is still. The hint pointed the wrong way ("or lower
+    # --k", which finds fewer); now the line gives the threshold that finds enough and the exact command, and
+    # that command gets past the count to a verdict.
+    rng = np.random.default_rng(3)
+    path = synthetic_log(tmp_path / "log.txt", np.zeros(16), list(rng.normal(size=(16, 3))), noise=4e-5)
+    data = np.loadtxt(path)
+    first = data[:, 0] < 3.0
+    data[first, 1:] = np.mean(data[first, 1:], axis=0) + 9.81 * rng.uniform(-1e-5, 1e-5, (first.sum(), 3))
+    np.savetxt(path, data)
+    assert main(["calibrate-norm", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "--still-factor 20 the detector finds" in err and f"garant calibrate-norm {path} --still-factor 20" in err
+    assert main(["calibrate-norm", str(path), "--still-factor", "20"]) in (0, 3)          # a verdict, not a refusal
 
 
 def test_bad_log_one_line(tmp_path, capsys):

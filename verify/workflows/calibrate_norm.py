@@ -236,7 +236,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     need = params + 3
     if len(stills) < need:
         raise DataError(f"{path}: found only {len(stills)} still interval(s); a {params}-parameter "
-                        f"calibration needs at least {need} (record more orientations, or lower {opt('k')})")
+                        f"calibration needs at least {need} (record more orientations, each held still for at least "
+                        f"{opt('min_still')} s)")
     raw = np.array([s.mean for s in stills])
     M0, b0, _ = initial_map(raw, g)
     before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))

@@ -164,6 +164,8 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
+    if len(stills) < params + 3:
+        raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
     res["premises"] += (f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} "
@@ -185,6 +187,35 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
         res["diagnosis"] = diagnose_norm.diagnose(mod, stills, cn.fit(mod, raw, g, params), g, params,
                                                   recordings.quantum(data), temps)
     return results.NormCalibration(res)
+
+
+#: The stillness thresholds tried when a log yields too few still intervals (--still-factor, --min-still).
+STILL_TRIES = ((20.0, None), (50.0, None), (5.0, None), (10.0, 1.0), (20.0, 1.0))
+
+
+def _too_few_stills(data, found, params, window, k, min_still):
+    """The one line for a log with too few still intervals: what was found with the thresholds used and, where
+    other thresholds find enough, the exact command (a higher --still-factor merges more samples into stillness
+    and may join two orientations; a lower one splits or drops them: the count says which helps here)."""
+    from ..io import recordings
+    need = params + 3
+    for k2, ms in STILL_TRIES:
+        ms = min_still if ms is None else ms
+        if (k2, ms) == (k, min_still):
+            continue
+        try:
+            count = len(recordings.still_intervals(data, window=window, k=k2, min_still=ms)[0])
+        except DataError:
+            continue
+        if count >= need:
+            option = f"--still-factor {k2:g}" + (f" --min-still {ms:g}" if ms != min_still else "")
+            return (f"{data.path}: found only {found} still interval(s) with {opt('k')} {k:g} and {opt('min_still')} "
+                    f"{min_still:g} s; a {params}-parameter calibration needs at least {need}. With {option} the "
+                    f"detector finds {count}: garant calibrate-norm {data.path} {option} (check that each is one "
+                    "orientation held still), or record more orientations")
+    return (f"{data.path}: found only {found} still interval(s) with {opt('k')} {k:g} and {opt('min_still')} "
+            f"{min_still:g} s; a {params}-parameter calibration needs at least {need}, and no other stillness "
+            f"threshold tried finds that many: record more orientations, each held still for at least {min_still:g} s")
 
 
 def read_log(log, fmt=None, sensor=None, imu=None, rate=None):
