@@ -57,8 +57,9 @@ def test_too_few_intervals_is_refused(tmp_path, capsys):
 def test_too_few_intervals_say_the_threshold_that_finds_them(tmp_path, capsys):
     # The first seconds quieter than the rest (a unit set down, then turned by a shakier hand): at the default
     # threshold (10x their variance) no later orientation is still. The hint pointed the wrong way ("or lower
-    # --k", which finds fewer); now the line gives the threshold that finds enough and the exact command, and
-    # that command gets past the count to a verdict.
+    # --k", which finds fewer); now the line gives the threshold that finds enough and the option to add, and
+    # the command with it gets past the count to a verdict. Red with the old hint, or a threshold that finds
+    # fewer than 12.
     rng = np.random.default_rng(3)
     path = synthetic_log(tmp_path / "log.txt", np.zeros(16), list(rng.normal(size=(16, 3))), noise=4e-5)
     data = np.loadtxt(path)
@@ -67,7 +68,7 @@ def test_too_few_intervals_say_the_threshold_that_finds_them(tmp_path, capsys):
     np.savetxt(path, data)
     assert main(["calibrate-norm", str(path)]) == 2
     err = capsys.readouterr().err
-    assert "--still-factor 20 the detector finds" in err and f"garant calibrate-norm {path} --still-factor 20" in err
+    assert "With --still-factor 20 the detector finds 16: run the same command with --still-factor 20 added" in err
     assert main(["calibrate-norm", str(path), "--still-factor", "20"]) in (0, 3)          # a verdict, not a refusal
 
 
@@ -128,7 +129,7 @@ def test_real_diagnosis_is_reported(tmp_path):
     assert main(["calibrate-norm", str(REAL / "openaxes_imu9.csv"), "--sensor", "bmi160", "--g", str(G),
                  "--diagnose", "--json", str(out)]) == 3
     d = json.loads(out.read_text())["diagnosis"]
-    assert not d["consistent_before"] and d["effects"][0] == "bias_drift" and d["consistent_after"]
+    assert not d["consistent_before"] and d["named"] == ["bias_drift"] and d["consistent_after"]
     assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--diagnose",
                  "--json", str(out)]) == 0
     assert json.loads(out.read_text())["diagnosis"]["consistent_before"]

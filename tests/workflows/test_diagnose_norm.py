@@ -66,8 +66,16 @@ def test_a_hidden_effect_is_named_or_listed_as_what_the_orientations_cannot_tell
 
 
 def test_without_a_temperature_column_the_temperature_effects_are_said_not_tried(tmp_path, capsys):
+    # The line and the JSON say the same, and the JSON follows its published schema (docs/schemas).
+    import json
+
+    from garant.verify.io import schemas
     log = static_log(tmp_path / "log.csv", "bias_drift", temperature=False)
-    assert main(["calibrate-norm", str(log), "--g", str(G), "--diagnose"]) == 3
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--diagnose", "--json", str(tmp_path / "r.json")]) == 3
     out = capsys.readouterr().out
     assert "named: bias_drift, the fewest effects that make the data consistent" in out
     assert "not tried: bias_temperature (the log has no temperature column)" in out
+    res = json.loads((tmp_path / "r.json").read_text())
+    schemas.validate(res, "calibrate-norm", "r.json")
+    d = res["diagnosis"]
+    assert d["named"] == ["bias_drift"] and d["skipped"]["bias_temperature"] == "the log has no temperature column"

@@ -311,7 +311,7 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
 def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_constant_one(tmp_path, mems):
     """The thermal file is written in the frame the data define (lower-triangular at t0, as the constant file),
     so no mounting premise lands in it: at t0 its per-sample bounds are within 3x of those of the constant file
-    made from the same unit's readings at t0 alone (measured 1.5x median, 2.2x largest), and so are its
+    made from the same unit's readings at t0 alone (measured 1.53x median, 2.16x largest), and so are its
     off-diagonal bounds. Red on the block's own axes (the mounting's a-priori bound, 5e-3, in every
     off-diagonal entry: 48x)."""
     from garant.verify.io import calibration
@@ -332,7 +332,7 @@ def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_consta
     T = np.full(len(angles), 20.0)
     f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T
     ratio = calibration.apply_thermal(thermal_cal, f, T)[1] / calibration.apply(constant, f)[1]
-    assert ratio.max() <= 3.0, ratio.max()
+    assert ratio.max() <= 3.0 and np.median(ratio) < 1.6, (ratio.max(), np.median(ratio))
     piece = np.searchsorted(th["pieces_c"], 20.0, side="right") - 1
     lower = np.tril_indices(3, -1)
     assert np.all(th["bound_Gamma"][piece][lower] <= 3 * constant["bound_matrix"][lower])

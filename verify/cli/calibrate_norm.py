@@ -263,7 +263,9 @@ def _print_diagnosis(d, params):
     print(f"  {params}-parameter model: worst {d['max_residual_before']:.1f} -> "
           + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
     for step in d["scores"]:
-        print("  try: " + ", ".join(f"{k} {v:.1f}" for k, v in sorted(step.items(), key=lambda kv: kv[1])))
+        ranked = sorted(step.items(), key=lambda kv: kv[1])
+        print("  try: " + "; ".join(f"{k} {v:.1f}" for k, v in ranked[:6])
+              + (f"; and {len(ranked) - 6} more sets" if len(ranked) > 6 else ""))
     if d["named"]:
         print("  named: " + ", ".join(d["named"]) + f", the fewest effects that make the data consistent (worst now "
               f"{d['max_residual_after']:.1f})")
@@ -273,7 +275,7 @@ def _print_diagnosis(d, params):
                       "one's columns of (2.2) of 001 lie in the other's span); the data name the family, not the "
                       "member")
     elif not d["consistent_before"]:
-        print("  named: nothing in the catalogue makes the data consistent (sets of up to three tried; worst "
+        print("  named: nothing in the catalogue makes the data consistent (sets of up to three tried; best worst "
               f"{d['max_residual_after']:.1f}): an effect outside the catalogue, or a noise bound too tight")
     if d["unseen"]:
         print("  unseen here: " + ", ".join(d["unseen"]) + " (the base parameters absorb them on these orientations)")

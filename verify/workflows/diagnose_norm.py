@@ -67,9 +67,9 @@ def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
     """The diagnosis of a log's norm calibration (res: calibrate_norm.fit of its still intervals): the worst
     residual in units of each interval's noise bound before and after; `named`, the fewest effects that make the
     data consistent (the smallest worst residual among the sets of that size); `equivalent`, per named effect
-    the effects these orientations cannot tell from it; `unseen`, the effects the base model absorbs here; the
-    greedy search's scores as before (`effects`, `scores`, `indistinguishable`). temps: each interval's mean
-    temperature (C), or None."""
+    the effects these orientations cannot tell from it; `unseen`, the effects the base model absorbs here;
+    `scores`, each set tried with its worst residual, size by size. temps: each interval's mean temperature (C),
+    or None."""
     s, n = res["sigma"], res["n"]
     bounds = noise_rule(stills, res["M"], n, g, quantum)
     t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
@@ -78,32 +78,18 @@ def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
     cols, skipped = columns(mod, n, t_mid, None if temps is None else np.asarray(temps, float))
     same, unseen = equivalence(base, cols)
     usable = [e for e in cols if e not in unseen]
-
-    def score(names):
-        return weighted_fit(np.vstack([base] + [cols[c] for c in names]), s, bounds)[1]
-    named, after = [], t0
-    if t0 > 1:
-        for size in range(1, min(LARGEST_SET, len(usable)) + 1):
-            tried = {names: score(names) for names in combinations(usable, size)}
-            best = min(tried, key=tried.get, default=None)
-            if best is not None and tried[best] <= 1:
-                named, after = list(best), tried[best]
-                break
-    chosen, greedy, history, tied = [], t0, [], []
-    while greedy > 1 and len(chosen) < len(usable):
-        scores = {e: score(chosen + [e]) for e in usable if e not in chosen}
-        best = min(scores, key=scores.get)
-        history.append(scores)
-        if scores[best] >= greedy * 0.95:
+    named, after, history = [], t0, []
+    for size in range(1, min(LARGEST_SET, len(usable)) + 1 if t0 > 1 else 0):
+        tried = {names: weighted_fit(np.vstack([base] + [cols[c] for c in names]), s, bounds)[1]
+                 for names in combinations(usable, size)}
+        history.append(tried)
+        best = min(tried, key=tried.get)
+        after = min(after, tried[best])
+        if tried[best] <= 1:
+            named = list(best)
             break
-        tied += [[best] + same[best]] if same[best] else []
-        chosen.append(best)
-        greedy = scores[best]
-    if not named:
-        after = greedy
     return {"noise_bound": "the " + noise_rule_name(stills, quantum) + (" plus half a count" if quantum else ""),
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0,
             "named": named, "equivalent": {e: same[e] for e in named}, "unseen": unseen,
             "consistent_after": bool(after <= 1), "max_residual_after": after,
-            "effects": chosen, "indistinguishable": tied,
-            "scores": [{k: float(v) for k, v in h.items()} for h in history], "skipped": skipped}
+            "scores": [{", ".join(k): float(v) for k, v in h.items()} for h in history], "skipped": skipped}

@@ -64,7 +64,10 @@ def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
         base = positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections)
         T = th.temperatures(base, base.path)
         thermal = (temperature, th.reference(T, temperature, base.path))
+        base_q = mod.Q_DEFINITIONS
         mod = models.thermal(model, *thermal)
+        if tuple(mod.Q_DEFINITIONS[:len(base_q)]) != tuple(base_q):     # the remount formulas index the base's q
+            raise RuntimeError(f"the thermal extension of {model} does not keep the base model's q first")
     if mount and (remount is None or mount not in remount.MOUNTS):
         raise DataError(f"{opt('mount')} needs a model with the remount formulas (two-axis) and a mounting like "
                         f"+y+z+x; got {mount!r}")
@@ -195,7 +198,7 @@ STILL_TRIES = ((20.0, None), (50.0, None), (5.0, None), (10.0, 1.0), (20.0, 1.0)
 
 def _too_few_stills(data, found, params, window, k, min_still):
     """The one line for a log with too few still intervals: what was found with the thresholds used and, where
-    other thresholds find enough, the exact command (a higher --still-factor merges more samples into stillness
+    other thresholds find enough, the options to add (a higher --still-factor merges more samples into stillness
     and may join two orientations; a lower one splits or drops them: the count says which helps here)."""
     from ..io import recordings
     need = params + 3
@@ -211,8 +214,8 @@ def _too_few_stills(data, found, params, window, k, min_still):
             option = f"--still-factor {k2:g}" + (f" --min-still {ms:g}" if ms != min_still else "")
             return (f"{data.path}: found only {found} still interval(s) with {opt('k')} {k:g} and {opt('min_still')} "
                     f"{min_still:g} s; a {params}-parameter calibration needs at least {need}. With {option} the "
-                    f"detector finds {count}: garant calibrate-norm {data.path} {option} (check that each is one "
-                    "orientation held still), or record more orientations")
+                    f"detector finds {count}: run the same command with {option} added (check that each interval is "
+                    "one orientation held still), or record more orientations")
     return (f"{data.path}: found only {found} still interval(s) with {opt('k')} {k:g} and {opt('min_still')} "
             f"{min_still:g} s; a {params}-parameter calibration needs at least {need}, and no other stillness "
             f"threshold tried finds that many: record more orientations, each held still for at least {min_still:g} s")

@@ -131,6 +131,20 @@ def bernstein(xs, a, b):
     return pts
 
 
+def controls(info, q_hat, C, reach=None):
+    """(lo, hi, v, worst) per row c of C (control points): the proven ends of c^T q over the information set
+    `info`, v = c^T q_hat and worst = max |c^T (q - q_hat)| over the set, padded by the float rounding of the
+    rows (reach: a bound of |q|, default |q_hat|). A row of zeros (psi of the drift at T0) takes no LP, and rows
+    shared by neighbouring pieces or chamber points one pair."""
+    nonzero = np.flatnonzero(np.abs(C).max(axis=1) > 0)
+    U, back = np.unique(C[nonzero], axis=0, return_inverse=True)
+    lo, hi = np.zeros(len(C)), np.zeros(len(C))
+    lo[nonzero], hi[nonzero] = (x[np.ravel(back)] for x in info.ranges(U))
+    v = C @ q_hat
+    pad = 1e-12 * (np.abs(C) @ (np.abs(q_hat) if reach is None else reach)) + 1e-300
+    return lo, hi, v, np.maximum(hi - v, v - lo) + pad
+
+
 def summary(mod, info, q, e, T, degree, t0):
     """The thermal part of an estimate: per q its coefficients (lowest first, per C^k), q(T0) and one
     guaranteed bound over [Tmin, Tmax]; the estimate and bound at each chamber temperature beside it."""
@@ -152,14 +166,7 @@ def summary(mod, info, q, e, T, degree, t0):
         add(name, "range", np.vstack([bernstein(xs, a, b) for a, b in zip(cuts[:-1], cuts[1:])]))
         add(name, "drift", np.vstack([bernstein(zero, a, b) for a, b in zip(cuts[:-1], cuts[1:])]))
         add(name, "at", np.array([psi(xs, t) for t in taus]))
-    C = np.array(stack)
-    nonzero = np.flatnonzero(np.abs(C).max(axis=1) > 0)         # psi of the drift at T0 is 0: no LP
-    U, back = np.unique(C[nonzero], axis=0, return_inverse=True)    # shared ends of pieces, chamber points
-    lo, hi = np.zeros(len(C)), np.zeros(len(C))
-    lo[nonzero], hi[nonzero] = (v[np.ravel(back)] for v in info.ranges(U))
-    v = C @ q_hat
-    pad = 1e-12 * (np.abs(C) @ reach) + 1e-300                  # the float rounding of the control points
-    worst = np.maximum(hi - v, v - lo) + pad
+    lo, hi, v, worst = controls(info, q_hat, np.array(stack), reach)
 
     def over_range(name, what):
         """The proven sup over the range of |psi(tau)^T (q - q_hat)|: the largest at its control points."""

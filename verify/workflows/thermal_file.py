@@ -57,14 +57,7 @@ def _worst(info, q_hat, rows, cuts):
     Bernstein control points. Returns (pieces, n)."""
     n, d1, _ = rows.shape
     C = np.vstack([thermal.bernstein(list(r), a, b) for a, b in zip(cuts[:-1], cuts[1:]) for r in rows])
-    live = np.flatnonzero(np.abs(C).max(axis=1) > 0)
-    U, back = np.unique(C[live], axis=0, return_inverse=True)
-    lo, hi = np.zeros(len(C)), np.zeros(len(C))
-    lo[live], hi[live] = (v[np.ravel(back)] for v in info.ranges(U))
-    v = C @ q_hat
-    pad = 1e-12 * (np.abs(C) @ np.abs(q_hat)) + 1e-300
-    worst = np.maximum(hi - v, v - lo) + pad
-    return worst.reshape(len(cuts) - 1, n, d1).max(axis=2)
+    return thermal.controls(info, q_hat, C)[3].reshape(len(cuts) - 1, n, d1).max(axis=2)
 
 
 def _control_mag(coef, cuts):
