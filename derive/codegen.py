@@ -63,7 +63,10 @@ API = {
               "estimate_on_plan"),
     "norm": ("AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
              "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
-             "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"),
+             "ESTIMATOR_TERMS", "PSI", "estimate_on_plan", "EFFECTS", "EFFECT_UNITS", "EFFECT_PHYSICS",
+             "EFFECT_VARIABLES", "STAND_EFFECTS",
+             "effect_basis",
+             "effect_jacobian_bound"),
 }
 
 
@@ -337,7 +340,33 @@ def norm_context(model):
         plan_exact=[", ".join(str(v) for v in d) for d in norm.plan(model)],
         duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
         estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
+        effects=_effects_context(),
+        stand_effects=[n for n in _catalogue() if n not in {e[0] for e in _effects_context()}],
     )
+
+
+def _catalogue():
+    from .effects import CATALOGUE
+    return list(CATALOGUE)
+
+
+def _effects_context():
+    """The catalogue effects the norm relation can carry (derive/norm.py `effect_basis`, `effect_lipschitz`):
+    (name, function name, parameter names, basis code (P x 3), Jacobian bound code (P x 3 x 3), the variables it
+    reads, the parameters' units, its physics in one line)."""
+    from . import norm
+    from .effects import CATALOGUE
+    out = []
+    for name in CATALOGUE:
+        basis = norm.effect_basis(name)
+        if basis is None:
+            continue
+        names, phi = basis
+        variables = sorted({x.name for row in phi for v in row for x in v.free_symbols} - {x.name for x in norm.n_sym})
+        out.append((name, name.replace("-", "_"), names, [[pycode(v) for v in row] for row in phi],
+                    [[[pycode(v) for v in row] for row in b] for b in norm.effect_jacobian_bound(name)[1]], variables,
+                    [p.unit for p in CATALOGUE[name].params], CATALOGUE[name].physics))
+    return out
 
 
 def _cse_code(exprs, array=False):

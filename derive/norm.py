@@ -254,18 +254,52 @@ def estimators(model):
     return out
 
 
-def effect_columns(model, name):
-    """First-order columns of sigma(n) for a catalogue effect: n . d(term)/d(parameter) at w = n.
-
-    A reading error dF (units of g) changes sigma by n . dF to first order ((2.2)); sensor effects are
-    functions of the true specific force, here w/g = n. Time enters as the symbol time_s. Returns
-    (parameter names, expressions in n1, n2, n3, time_s) or None when the effect has no meaning here
-    (encoder harmonics need stand angles)."""
+def effect_basis(name):
+    """A catalogue effect's addition to the reading over g, term(w) = sum_j theta_j phi_j(w, time_s, temp_c), as
+    the basis (phi_1, ..., phi_P), each a 3-vector in the true specific force over g, w = (n1, n2, n3), and the
+    symbols time_s, temp_c; or None when the effect has no meaning without a stand (encoder harmonics need stand
+    angles). Returns (parameter names, [phi_j as 3 expressions])."""
     from .effects import CATALOGUE
     e = CATALOGUE[name]
     if e.term is None:
         return None
     syms = {p.name: p.symbol for p in e.params}
+    term = e.term(sp.Matrix(n_sym), syms)
+    return [p.name for p in e.params], [[sp.expand(v) for v in term.diff(p.symbol)] for p in e.params]
+
+
+def effect_columns(model, name):
+    """First-order columns of sigma(n) for a catalogue effect: n . phi_j(n) (`effect_basis`) at w = n.
+
+    A reading error dF (units of g) changes sigma by n . dF to first order ((2.2)); sensor effects are
+    functions of the true specific force, here w/g = n. Returns (parameter names, expressions in n1, n2, n3,
+    time_s, temp_c) or None (no meaning without a stand)."""
+    out = effect_basis(name)
+    if out is None:
+        return None
+    names, basis = out
     n = sp.Matrix(n_sym)
-    term = e.term(n, syms)
-    return [p.name for p in e.params], [sp.expand((n.T * term.diff(p.symbol))[0]) for p in e.params]
+    return names, [sp.expand((n.T * sp.Matrix(phi))[0]) for phi in basis]
+
+
+def _unit_ball_bound(expr):
+    """A bound of |expr| over the unit ball |w| <= 1, expr a polynomial in n1, n2, n3 and sign(n_i) (the
+    derivative of |n_i|) with coefficients in time_s and temp_c: the sum of the coefficients' absolute values
+    (each monomial and each sign is at most 1 in size there)."""
+    signs = {sp.sign(v): sp.Symbol(f"s_{v.name}", real=True) for v in n_sym}
+    poly = sp.Poly(sp.expand(expr.xreplace(signs)), *n_sym, *signs.values())
+    return sum((sp.Abs(c) for c in poly.coeffs()), sp.Integer(0))
+
+
+def effect_jacobian_bound(name):
+    """Per parameter j, the 3 x 3 matrix b_j(time_s, temp_c) >= 0 that bounds |d phi_j / d w| entrywise over the
+    unit ball (`_unit_ball_bound`). For w1, w2 in the ball (the segment between them stays in it) the mean-value
+    theorem gives |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= B |w1 - w2| entrywise, B = sum_j |theta_j| b_j, so in
+    norm at most ||B||_2 |w1 - w2|: the effect at the truth's direction m and at the reading's differ by that."""
+    out = effect_basis(name)
+    if out is None:
+        return None
+    names, basis = out
+    w = sp.Matrix(n_sym)
+    return names, [[[_unit_ball_bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()]
+                   for phi in basis]

@@ -12,7 +12,8 @@ import numpy as np
 
 __all__ = ["AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
            "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
-           "ESTIMATOR_TERMS", "PSI", "estimate_on_plan"]
+           "ESTIMATOR_TERMS", "PSI", "estimate_on_plan", "EFFECTS", "EFFECT_UNITS", "EFFECT_PHYSICS",
+           "EFFECT_VARIABLES", "STAND_EFFECTS", "effect_basis", "effect_jacobian_bound"]
 
 #: Pendulosity axes (i, j, k) of B(w) in (1.3) this module was derived for.
 AXES = (2, 3, 1)
@@ -245,3 +246,268 @@ def estimate_on_plan(z):
     if z.shape != (len(PLAN),):
         raise ValueError(f"z must have shape ({len(PLAN)},) as residual() returns it at PLAN, not {z.shape}")
     return PSI @ z
+
+
+#: The catalogue effects (derive/effects.py) the norm relation can carry: name -> parameter names. Each adds
+#: sum_j theta_j phi_j(w, time_s, temp_c) to the reading over g (w the true specific force over g, block axes;
+#: time_s in s, temp_c in C); encoder harmonics need a stand and are not here.
+EFFECTS = {
+    "scale_quadratic": ("K2_1", "K2_2", "K2_3"),
+    "scale_asymmetry": ("A_1", "A_2", "A_3"),
+    "cross_coupling": ("C_12", "C_13", "C_21", "C_23", "C_31", "C_32"),
+    "bias_drift": ("D_1", "D_2", "D_3"),
+    "bias_temperature": ("T_1", "T_2", "T_3"),
+    "scale_temperature": ("S_1", "S_2", "S_3"),
+}
+#: The units of each effect's parameters (over g: a term of 1e-3 adds 1e-3 g to the reading).
+EFFECT_UNITS = {
+    "scale_quadratic": ("1", "1", "1"),
+    "scale_asymmetry": ("1", "1", "1"),
+    "cross_coupling": ("1", "1", "1", "1", "1", "1"),
+    "bias_drift": ("1/s", "1/s", "1/s"),
+    "bias_temperature": ("1/degC", "1/degC", "1/degC"),
+    "scale_temperature": ("1/degC", "1/degC", "1/degC"),
+}
+#: Each effect's physics in one line (derive/effects.py).
+EFFECT_PHYSICS = {
+    "scale_quadratic": "f_i += K2_i w_i^2 / g (second-order scale factor)",
+    "scale_asymmetry": "f_i += A_i |w_i| (scale factor differs for + and - inputs)",
+    "cross_coupling": "f_i += sum_{j != i} C_ij w_i w_j / g (pendulosity; B(w)w of 001 is a case)",
+    "bias_drift": "f_i += g D_i t (bias drifting linearly in time; t = column time_s, s)",
+    "bias_temperature": "f_i += g T_i (T - 20 C) (bias temperature coefficient; T = column temp_c)",
+    "scale_temperature": "f_i += S_i (T - 20 C) w_i (scale-factor temperature coefficient; T = column temp_c)",
+}
+#: Catalogue effects with no meaning without a stand (they need its angles).
+STAND_EFFECTS = ("alpha_encoder_harmonic", "beta_encoder_harmonic")
+#: What each effect reads beside w: time_s (s, the row's time) and temp_c (C, its temperature).
+EFFECT_VARIABLES = {
+    "scale_quadratic": (),
+    "scale_asymmetry": (),
+    "cross_coupling": (),
+    "bias_drift": ("time_s",),
+    "bias_temperature": ("temp_c",),
+    "scale_temperature": ("temp_c",),
+}
+
+
+def _stack(rows, *like):
+    """Rows of numbers and arrays, each broadcast to the shape of `like` together: (len(rows), len(rows[0]), ...)."""
+    shape = np.broadcast_shapes(*(np.shape(x) for x in like))
+    return np.array([[np.broadcast_to(np.asarray(v, dtype=float), shape) for v in row] for row in rows])
+
+
+def effect_basis(name, w, time_s=0.0, temp_c=20.0):
+    """phi_j of the effect `name` (EFFECTS), shape (P, 3, ...), at w, shape (3, ...), and time_s, temp_c
+    (numbers or arrays broadcast with w's trailing shape)."""
+    n1, n2, n3 = np.asarray(w, dtype=float)
+    return _BASIS[name](n1, n2, n3, np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float))
+
+
+def effect_jacobian_bound(name, time_s=0.0, temp_c=20.0):
+    """b_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= b_j entrywise over the unit ball (derive/norm.py
+    `effect_jacobian_bound`), so |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= ||sum_j |theta_j| b_j||_2 |w1 - w2|."""
+    return _JACOBIAN[name](np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float))
+
+
+def _basis_scale_quadratic(n1, n2, n3, time_s, temp_c):
+    return _stack([
+        [n1**2, 0, 0],
+        [0, n2**2, 0],
+        [0, 0, n3**2],
+    ], n1, time_s, temp_c)
+
+
+def _jacobian_scale_quadratic(time_s, temp_c):
+    return np.array([
+        _stack([
+            [2, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 2, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 2],
+        ], time_s, temp_c),
+    ])
+
+
+def _basis_scale_asymmetry(n1, n2, n3, time_s, temp_c):
+    return _stack([
+        [abs(n1), 0, 0],
+        [0, abs(n2), 0],
+        [0, 0, abs(n3)],
+    ], n1, time_s, temp_c)
+
+
+def _jacobian_scale_asymmetry(time_s, temp_c):
+    return np.array([
+        _stack([
+            [1, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 1, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 1],
+        ], time_s, temp_c),
+    ])
+
+
+def _basis_cross_coupling(n1, n2, n3, time_s, temp_c):
+    return _stack([
+        [n1*n2, 0, 0],
+        [n1*n3, 0, 0],
+        [0, n1*n2, 0],
+        [0, n2*n3, 0],
+        [0, 0, n1*n3],
+        [0, 0, n2*n3],
+    ], n1, time_s, temp_c)
+
+
+def _jacobian_cross_coupling(time_s, temp_c):
+    return np.array([
+        _stack([
+            [1, 1, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [1, 0, 1],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [1, 1, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 1, 1],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [1, 0, 1],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 1, 1],
+        ], time_s, temp_c),
+    ])
+
+
+def _basis_bias_drift(n1, n2, n3, time_s, temp_c):
+    return _stack([
+        [time_s, 0, 0],
+        [0, time_s, 0],
+        [0, 0, time_s],
+    ], n1, time_s, temp_c)
+
+
+def _jacobian_bias_drift(time_s, temp_c):
+    return np.array([
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+    ])
+
+
+def _basis_bias_temperature(n1, n2, n3, time_s, temp_c):
+    return _stack([
+        [temp_c - 20, 0, 0],
+        [0, temp_c - 20, 0],
+        [0, 0, temp_c - 20],
+    ], n1, time_s, temp_c)
+
+
+def _jacobian_bias_temperature(time_s, temp_c):
+    return np.array([
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+    ])
+
+
+def _basis_scale_temperature(n1, n2, n3, time_s, temp_c):
+    return _stack([
+        [n1*temp_c - 20*n1, 0, 0],
+        [0, n2*temp_c - 20*n2, 0],
+        [0, 0, n3*temp_c - 20*n3],
+    ], n1, time_s, temp_c)
+
+
+def _jacobian_scale_temperature(time_s, temp_c):
+    return np.array([
+        _stack([
+            [abs(temp_c - 20), 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, abs(temp_c - 20), 0],
+            [0, 0, 0],
+        ], time_s, temp_c),
+        _stack([
+            [0, 0, 0],
+            [0, 0, 0],
+            [0, 0, abs(temp_c - 20)],
+        ], time_s, temp_c),
+    ])
+
+
+_BASIS = {
+    "scale_quadratic": _basis_scale_quadratic,
+    "scale_asymmetry": _basis_scale_asymmetry,
+    "cross_coupling": _basis_cross_coupling,
+    "bias_drift": _basis_bias_drift,
+    "bias_temperature": _basis_bias_temperature,
+    "scale_temperature": _basis_scale_temperature,
+}
+_JACOBIAN = {
+    "scale_quadratic": _jacobian_scale_quadratic,
+    "scale_asymmetry": _jacobian_scale_asymmetry,
+    "cross_coupling": _jacobian_cross_coupling,
+    "bias_drift": _jacobian_bias_drift,
+    "bias_temperature": _jacobian_bias_temperature,
+    "scale_temperature": _jacobian_scale_temperature,
+}

@@ -6,7 +6,7 @@ import pytest
 
 from garant.generated import norm as N
 from garant.verify.io import recordings
-from garant.verify.workflows import calibrate_norm
+from garant.verify.workflows import calibrate_norm, norm_information
 from garant.verify.cli import main
 from conftest import G_REAL as G, REAL, needs_real
 
@@ -282,7 +282,7 @@ def test_the_noise_premise_is_the_one_the_bound_needs(scale):
 
 
 def test_each_intervals_remainder_holds_at_the_vertices():
-    # The remainder of (2.2) per interval (calibrate_norm.remainder_per_interval) against the exact one,
+    # The remainder of (2.2) per interval (norm_information.remainder_per_interval) against the exact one,
     # for blocks at the vertices of the box of the correction (where the worst cases live) and noise at its bound
     # in random directions: q absorbs the second-order part in the span of H' exactly (the shift s, computed here
     # from the true A and eps, within its bound), and what is left, sigma_k - H'^T (q - s) - n_k^T u / |F_k|, is
@@ -312,7 +312,7 @@ def test_each_intervals_remainder_holds_at_the_vertices():
         shift = np.r_[np.diag(P) + 0.5 * e @ e, P[0, 1] + P[1, 0], P[0, 2] + P[2, 0], P[1, 2] + P[2, 1],
                       A.T @ e + A @ e]
         left = np.abs(sigma - H.T @ (q - shift) - np.einsum("ki,ki->k", n, u) / f)
-        bound, shift_bound = calibrate_norm.remainder_per_interval(F, A_box, reach[6:9], nu)
+        bound, shift_bound = norm_information.remainder_per_interval(F, A_box, reach[6:9], nu)
         assert np.all(np.abs(shift) <= shift_bound)
         assert np.all(left <= bound), (left / bound).max()
         worst = max(worst, (left / bound).max())

@@ -109,4 +109,14 @@ def _apply(args, calibration, log, output):
     write_chunks(output, rows())
     return (f"wrote {output}: {n} samples corrected by {calibration} ({kind} calibration); worst-case error per "
             f"component up to {worst.max():.3e} m/s^2 (mean {total / max(3 * n, 1):.3e}); frame: "
-            f"{_frame_said(args, calibration)}")
+            f"{_frame_said(args, calibration)}{_effects_said(calibration)}")
+
+
+def _effects_said(path):
+    """The catalogue effects the file takes out of each sample and those it does not carry, or nothing."""
+    from ..io import calibration
+    eff = calibration.read(path).get("effects")
+    if not eff:
+        return ""
+    return ("; effects taken out of each sample: " + (", ".join(eff["names"]) or "none")
+            + "".join(f"; not applied: {name} ({why})" for name, why in eff["not_applied"].items()))

@@ -28,6 +28,10 @@ def add(sub):
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
                    help="test the model against each interval's noise and try the effect catalogue")
+    p.add_argument("--effect", metavar="NAME[,NAME...]",
+                   help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
+                        "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature; "
+                        "--diagnose names the ones the data need)")
     options.units(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
@@ -104,6 +108,7 @@ def _batch(args):
     from ..workflows import batch
     single = [o for o in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report", "json")
               if getattr(args, o)]
+    single += ["effect"] if args.effect else []
     if single or args.imu == "all" or args.diagnose:
         raise DataError(f"--{(single or ['imu all' if args.imu == 'all' else 'diagnose'])[0].replace('_', '-')} "
                         "concerns one log: a batch writes each unit's files to --out DIR")
@@ -170,7 +175,8 @@ def _run(args, into=None):
     from ..workflows import jobs
     res = jobs.calibrate_norm(args.log, g=args.g, g_uncertainty=args.g_uncertainty, delta_sigma=args.delta_sigma,
                               params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
-                              window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose)
+                              window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose,
+                              effects=args.effect)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)
@@ -241,7 +247,7 @@ def _print(res, args):
     if res["consistent"]:
         _print_bounds(res, args)
     if "diagnosis" in res:
-        _print_diagnosis(res["diagnosis"], args.params)
+        _print_diagnosis(res["diagnosis"], args.params, args)
 
 
 def refutations(res, count=12):
@@ -258,7 +264,25 @@ def refutations(res, count=12):
         parts) + (f"; and {more} more" if more > 0 else "")
 
 
-def _print_diagnosis(d, params):
+def _with_effect(args, names):
+    """The user's command with --diagnose dropped and --effect NAMES set: what to run next."""
+    import shlex
+    argv = list(getattr(args, "argv", None) or ["calibrate-norm", args.log])
+    out, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+            continue
+        if a == "--diagnose" or a.startswith("--effect="):
+            continue
+        if a == "--effect":
+            skip = True
+            continue
+        out.append(a)
+    return "garant " + shlex.join(out + ["--effect", ",".join(names)])
+
+
+def _print_diagnosis(d, params, args):
     print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
     print(f"  {params}-parameter model: worst {d['max_residual_before']:.1f} -> "
           + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
@@ -274,6 +298,13 @@ def _print_diagnosis(d, params):
                 print(f"  {e}: these orientations cannot tell it from {', '.join(others)} (beside the base model, "
                       "one's columns of (2.2) of 001 lie in the other's span); the data name the family, not the "
                       "member")
+    for names, said in d.get("checked", {}).items():
+        print(f"  --effect {names}: {said}")
+    if d.get("add"):
+        print(f"  add them: {_with_effect(args, d['add'])}")
+    elif d["named"]:
+        print("  no set named calibrates with a proven remainder: the first-order fit above is all the data say; "
+              "state the noise bound you can stand behind (--delta-sigma), or record more orientations")
     elif not d["consistent_before"]:
         print("  named: nothing in the catalogue makes the data consistent (sets of up to three tried; best worst "
               f"{d['max_residual_after']:.1f}): an effect outside the catalogue, or a noise bound too tight")
@@ -294,6 +325,14 @@ def _save(res, args):
             write(path, res["calibration"])
             print(f"wrote {path}")
     options.export_imucal(args, res["calibration"])
+    effects = res.get("effect_names")
+    if effects and (args.export_imu_tk or args.export_imucal):
+        print(f"note: the imu_tk and imucal exports have no parameter for {', '.join(effects)}: they carry M and "
+              "b only and drop the effects; `garant apply` with the --save file takes them out of each sample")
+    not_applied = res["calibration"].get("effects", {}).get("not_applied", {})
+    if args.save and not_applied:
+        for name, why in not_applied.items():
+            print(f"note: {args.save} does not apply {name}: {why}")
 
 
 UNITS = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
@@ -334,6 +373,8 @@ def _print_bounds(res, args=None):
           f"larger (a sensitivity, the remainder as proven). The data fit within a noise bound of "
           f"{res['sigma_min_supported']:.3e} (units of g, {res['sigma_min_supported'] / res['delta_sigma_max']:.2f} "
           "delta_sigma_max): the smaller the set, the more it rests on the noise bound being right")
+    if res.get("effects"):
+        _print_effects(res)
     for line in leaning(res):
         print(f"note: {line}")
     gain = res["directions_gain"]
@@ -348,6 +389,19 @@ def _print_bounds(res, args=None):
         print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by "
               f"{gain['threshold']:g} "
               f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
+
+
+def _print_effects(res):
+    """The effects added (--effect): each parameter with its estimate and guaranteed error over the same set."""
+    from ..io import report
+    ref = res["effect_reference"]
+    print(f"effects added to the reading (over g; time t from {ref['time_s']:g} s of the log, the middle of its still "
+          f"intervals, so the biases above are those at that time; temperature T in C, from {ref['temp_c']:g} C):")
+    rows = [(name, p, f"{v['estimate']:+.4e}", f"{v['guaranteed_error']:.3e}", f"{v['guaranteed_error_a_priori']:.3e}",
+             v["unit"]) for name, e in res["effects"].items() for p, v in e["parameters"].items()]
+    report.table(("effect", "parameter", "estimate", "guaranteed error", "a priori", "unit"), rows)
+    for name, e in res["effects"].items():
+        print(f"  {name}: {e['physics']}")
 
 
 #: A set this many times below the a-priori bounds (median over the parameters) is said: it rests on the noise bound.

@@ -43,7 +43,8 @@ MAX_CONDITION = 1e3
 
 
 def from_norm(res, axes):
-    """The calibration dictionary of a consistent `calibrate-norm` result."""
+    """The calibration dictionary of a consistent `calibrate-norm` result (catalogue effects, --effect, add their
+    entry: workflows/norm_effects.py `file_entry`)."""
     e = res["guaranteed_error_q"]                 # bounds of the correction (I + A) of the calibrated block
     B = np.array([[e["lambda1"], 0.0, 0.0], [e["alpha"], e["lambda2"], 0.0], [e["beta"], e["gamma"], e["lambda3"]]])
     eps = res["g"] * np.array([e[f"eps{i}/g"] for i in (1, 2, 3)])
@@ -58,13 +59,14 @@ def from_norm(res, axes):
     # (u, the bound of |Delta_g/g|): E + A becomes (1 + d)(E + A), so |A| <= B + u (E + B), |eps| scales alike
     u = res.get("g_uncertainty", 0.0)
     B, eps = (B + u * (np.eye(3) + B)) * (1 + 1e-12), eps * (1 + u) * (1 + 1e-12)
-    return {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": res["raw_unit"],
-            "M": res["matrix"], "b": res["bias"], "bound_matrix": B.tolist(),
-            "bound_bias": eps.tolist(), "bound_delta": delta,
-            "delta": list(res.get("nonlinearity_delta_g") or [0.0, 0.0, 0.0]),
-            "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
-            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",
-            "premises": res["premises"]}
+    out = {"format": FORMAT, "kind": "norm", "model": "a = M (raw - b)", "raw_unit": res["raw_unit"],
+           "M": res["matrix"], "b": res["bias"], "bound_matrix": B.tolist(),
+           "bound_bias": eps.tolist(), "bound_delta": delta,
+           "delta": list(res.get("nonlinearity_delta_g") or [0.0, 0.0, 0.0]),
+           "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
+           "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",
+           "premises": res["premises"]}
+    return out
 
 
 def through_M(G, B, bias_bound, g_uncertainty=0.0):
@@ -179,6 +181,8 @@ def checked(data, path="calibration"):
                         f"{MAX_CONDITION:g}); a calibration's M is close to a scaled rotation")
     if out["bound_matrix"].sum(axis=1).max() >= 1:
         raise DataError(f"{path}: each row of bound_matrix must sum below 1 (the bound (I - B)^-1 needs it)")
+    if "effects" in data and (data.get("thermal") or np.any(out["delta"]) or data["kind"] != "norm"):
+        raise DataError(f"{path}: effects belong to a 9-parameter norm calibration (no delta, no thermal)")
     if "thermal" in data:
         th = data["thermal"]
         lo, hi = th["range_c"]
@@ -276,7 +280,8 @@ def apply(cal, raw, frame="garant"):
     axis by axis ((3, N), each axis contiguous): |n_i n_j| = |a_i a_j| / |a|^2. The nonlinearity the file
     states (`delta`, of the 12-parameter model) is taken out as calibrate-norm fitted it, g delta_l n_axis(l)
     n_l with n the direction of M (raw - b); its bound `bound_delta` stays in the bound, and so does what the
-    error of n moves the estimated term by: |n_i n_j - m_i m_j| <= 2 |n - m| <= 4 |a - a_true| / |a|."""
+    error of n moves the estimated term by: |n_i n_j - m_i m_j| <= 2 |n - m| <= 4 |a - a_true| / |a|. A file with
+    catalogue effects (calibrate-norm --effect) is applied by workflows/norm_effects.py `apply`."""
     a = cal["M"] @ (np.asarray(raw, float) - cal["b"]).T
     inv2 = 1.0 / np.maximum((a * a).sum(axis=0), 1e-300)
     axes = cal["pendulosity_axes"].astype(int) - 1

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import DataError, opt
 from ..io.recordings import BATCHES, median, raw_unit
 from ..solve import highs, lp, taylor
+from . import norm_information
 from .guarantee import SIGMA_WIDER
 
 MAX_ITER = 60
@@ -76,21 +77,64 @@ def fold(M, b, delta, q, g):
             delta + q[9:12] if len(q) == 12 else delta)
 
 
-def fit(mod, raw, g, params=9):
-    """Iterate the norm relation to convergence: M, b, delta (12 params), residuals, iterations."""
-    M, b, note = initial_map(raw, g)
+def fit(mod, raw, g, params=9, ext=None, start=None, weights=None):
+    """Iterate the norm relation to convergence: M, b, delta (12 params), residuals, iterations. With catalogue
+    effects (`ext`, norm_effects.Extension) their parameters ext.theta are fitted beside, the term evaluated at
+    the direction p of M (raw - b) and taken out of the reading; then p is in the result. `start`: (M, b, note)
+    to start from (default `initial_map`); `weights`: each interval's noise bound, the fit then minimax in their
+    units (many parameters on few intervals: the plain fit would follow the noisiest)."""
+    M, b, note = initial_map(raw, g) if start is None else start
     delta = np.zeros(3)
     for it in range(1, MAX_ITER + 1):
-        s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
-        q, _ = chebyshev_fit(mod.H(n)[:params], s)
-        if not np.all(np.isfinite(q)) or np.abs(q).max() > MAX_STEP:
+        s, n, p = _state(mod, raw, M, b, delta, g, ext)
+        A = mod.H(n)[:params] if ext is None else np.vstack([mod.H(n)[:params], ext.columns(n)])
+        q, _ = chebyshev_fit(A, s) if weights is None else weighted_fit(A, s, weights)
+        if not np.all(np.isfinite(q)) or np.abs(q[:params]).max() > MAX_STEP:
             k = int(np.nanargmax(np.where(np.isfinite(q), np.abs(q), np.inf)))
-            raise Diverged(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to {PARAM_LABELS[k]})")
-        M, b, delta = fold(M, b, delta, q, g)
-        if np.abs(q).max() < 1e-12:
+            raise Diverged(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to "
+                           f"{(PARAM_LABELS[:params] + tuple(ext.labels if ext else ()))[k]})")
+        if ext is not None and weights is not None:     # halved while the worst residual grows
+            q = _damped(mod, raw, M, b, delta, g, ext, weights, q, float(np.max(np.abs(s) / weights)))
+        M, b, delta = fold(M, b, delta, q[:params], g)
+        if ext is not None:
+            ext.theta = ext.theta + q[params:]
+        if np.abs(q[:params]).max() < 1e-12 and np.all(np.abs(q[params:]) * np.abs(A[params:]).max(axis=1) < 1e-12):
             break
-    s, n = sigma_and_n(calibrated(mod, raw, M, b, delta, g))
-    return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note)
+    s, n, p = _state(mod, raw, M, b, delta, g, ext)
+    return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note, p=p)
+
+
+#: Halvings of a step of the fit with effects at most (the last one is taken: 2^-40 of a step is no step).
+HALVINGS = 40
+
+
+def _damped(mod, raw, M, b, delta, g, ext, weights, q, worst):
+    """The step q of the fit with effects, halved until the worst residual in units of `weights` does not grow
+    (a Chebyshev step on nearly dependent columns may overshoot far beyond where the linearisation holds)."""
+    theta = ext.theta
+    for _ in range(HALVINGS):
+        M2, b2, d2 = fold(M, b, delta, q[:9], g)
+        ext.theta = theta + q[9:]
+        s2 = _state(mod, raw, M2, b2, d2, g, ext)[0]
+        ext.theta = theta
+        if np.max(np.abs(s2) / weights) <= worst * (1 + 1e-12):
+            return q
+        q = q / 2
+    return q
+
+
+def _state(mod, raw, M, b, delta, g, ext):
+    """sigma and n of (2.2) for the calibration M, b, delta and the effects' term, and the direction p the term is
+    evaluated at (fixed in `ext` with n): the fixed point p = n of the reading with the term taken out, so that
+    the truth's direction m, near n, is near p too (norm_effects.FIXED_POINT)."""
+    F = calibrated(mod, raw, M, b, delta, g)
+    p = F.T / np.linalg.norm(F, axis=1)
+    if ext is not None:
+        F, p = ext.fixed_point(F)
+    s, n = sigma_and_n(F)
+    if ext is not None:
+        ext.at(p, n)
+    return s, n, p
 
 
 class Diverged(DataError):
@@ -226,14 +270,16 @@ PARAM_LABELS = ("lambda1", "lambda2", "lambda3", "alpha", "beta", "gamma", "eps1
 COUNT_LABELS = ("S11", "S22", "S33", "S21", "S31", "S32", "b1", "b2", "b3")
 
 
-def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
+def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
     """The whole calibration of a log's still intervals: the dictionary the CLI prints and writes.
 
     The noise bound delta_sigma_max is --delta-sigma when given, else the noise rule from the data
     (never the fit's own residual). The verdict first: the data are consistent when the minimax
     residual of the exact norm relation is within delta_sigma_max plus the proven remainder (2.3)
-    of the linearisation around the fit; if not, no bound is given."""
-    need = params + 3
+    of the linearisation around the fit; if not, no bound is given. With catalogue effects (`ext`,
+    norm_effects.Extension) the relation carries their columns and each interval's remainder their rest
+    (norm_effects), and every bound is over the information set of that extended relation."""
+    need = params + 3 + (len(ext.labels) if ext else 0)
     if len(stills) < need:
         raise DataError(f"{path}: found only {len(stills)} still interval(s); a {params}-parameter "
                         f"calibration needs at least {need} (record more orientations, each held still for at least "
@@ -242,11 +288,22 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     M0, b0, _ = initial_map(raw, g)
     before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
     _identifiable(mod, stills, n0, params, path)
+    if ext is not None:
+        ext.at(n0, n0)
+        missing = ext.identifiable(mod.H(n0)[:params])
+        if missing:
+            raise DataError(f"{path}: beside scale, misalignment and bias these orientations cannot identify "
+                            f"{', '.join(missing)} of --effect {','.join(ext.names)} (--diagnose lists the effects "
+                            "they cannot tell apart): add fewer effects, or orientations")
     try:
         res = fit(mod, raw, g, params)
     except Diverged as e:                      # say what the orientations, as they lie, cannot hold apart
         off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
         _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), str(e))
+    if ext is not None:     # from the base model's fit, in units of each interval's noise bound
+        rule = noise_rule(stills, res["M"], res["n"], g, quantum)
+        res = fit(mod, raw, g, params, ext, (res["M"], res["b"], res["note"]),
+                  rule if delta_sigma is None else np.full(len(stills), delta_sigma))
     fit_residual = float(np.abs(res["sigma"]).max())
     rule = noise_rule(stills, res["M"], res["n"], g, quantum)
     dsig = float(rule.max()) if delta_sigma is None else delta_sigma
@@ -262,16 +319,36 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
     if missing:
         raise DataError(f"{path}: the {len(stills)} orientations cannot identify "
                         f"{', '.join(mod.Q_NAMES[k] for k in missing)}; add orientations")
-    rb = linearisation_remainder(mod, err, params)
-    rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb)[0], params)
-    consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
-    info = premise = None
-    if consistent and params == 9 and (delta_sigma is None or si):
-        nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(stills, quantum).T, axis=0) / g if delta_sigma is None
-              else np.full(len(stills), np.linalg.norm(res["M"], 2) * dsig))
-        found = exact_information(mod, res, noise, nu)
+    nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(stills, quantum).T, axis=0) / g if delta_sigma is None
+          else np.full(len(stills), np.linalg.norm(res["M"], 2) * dsig))
+    info = premise = exact = None
+    if ext is not None:
+        if params != 9 or not (delta_sigma is None or si):
+            raise DataError(f"{path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
+                            "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)")
+        consistent, A, bnd, err = ext.verdict(res, noise, nu)
+        base = noise * np.sqrt(1.0 - 2.0 * res["sigma"])             # noise / |F|, the units of sigma
+        rb = float((bnd - base).max())
+        if consistent:
+            found = norm_information.exact_information(mod, res, noise, nu, ext, bnd)
+            if found is None:
+                raise DataError(f"{path}: consistent with --effect {','.join(ext.names)}, but the remainder of the "
+                                "extended relation cannot be proven from any box around the fit: no bound")
+            info, rb_k, premise, shift = found
+            rb, bnd = float(rb_k.max()), base + rb_k
+            exact = (A, bnd, shift, ext)
+            # each contraction's set holds the truth when the premise box does; their common part is empty when
+            # no correction within it meets every interval's bound: the data refute the extended relation there
+            consistent = weighted_fit(A, res["sigma"], bnd)[1] <= 1.0
+    else:
+        rb = linearisation_remainder(mod, err, params)
+        rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb)[0], params)
+        consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
+        bnd = noise + rb
+    if ext is None and consistent and params == 9 and (delta_sigma is None or si):
+        found = norm_information.exact_information(mod, res, noise, nu)
         if found is not None:
-            info, rb_k, premise = found
+            info, rb_k, premise, _ = found
             rb = float(rb_k.max())
     if consistent and info is None:
         info = information(mod, res, params, noise + rb)
@@ -285,7 +362,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
                      + ("takes g as exact" if premise is not None else "of (2.3) takes g and delta_f as exact")
-                     + "); the orientations are still" + _premise_box(premise)),
+                     + "); the orientations are still" + norm_information.premise_box(premise)),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "noise_bound": float(nb),
@@ -295,10 +372,13 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0):
                          for s, nr, nb, sb, sa, d in zip(stills, rule, np.broadcast_to(noise, rule.shape), before,
                                                          res["sigma"], res["n"].T)],
     }
+    if ext is not None:
+        out["effect_names"] = list(ext.names)
+        out["effect_reference"] = {"time_s": ext.t_ref, "temp_c": 20.0}
     if not consistent:
-        out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > noise + rb)]
+        out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > bnd)]
         return out
-    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err, info))
+    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact))
     return out
 
 
@@ -316,132 +396,6 @@ def _noise_premise(dsig, source, stated, si, g):
                 f"of g) of the truth along its direction ({source})")
     return (f"each axis of each still interval's raw mean is within its noise rule of the truth, carried through M "
             f"to the interval's direction (at most delta_sigma_max = {dsig:.3e}, units of g; {source})")
-
-
-def _premise_box(X):
-    """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used)."""
-    if X is None:
-        return ""
-    return ("; the truth's correction to this fit is within " + ", ".join(
-        f"{x.max():.2g} ({name})" for name, x in (("scale", X[:3]), ("misalignment, rad", X[3:6]), ("bias over g",
-                                                                                                    X[6:9])))
-        + f" (the box each interval's remainder is proven from, at most {PREMISE_FACTORS[0]:g}x the information set's "
-        "own box)")
-
-
-STEPS = 12                                            # boxes at most, each way
-PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0)    # the premise box tried, in multiples of the set's own box
-
-
-def remainder_per_interval(F, A_box, e_box, nu):
-    """What is left of the remainder of (2.2) per interval once q absorbs its part in the span of H', in the
-    units of sigma, and the bound of that absorbed shift per q. With B = (E + A)^-1, d = eps/g + u (u the noise of
-    the calibrated mean, |u| <= nu) and y = F - d, the truth has |B y| = 1, and B = E - A + A^2 B gives exactly
-        c - c(0) + F^T (A F + d) = |d + A F|^2 / 2 + (F - d - A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2 = R,
-        sigma_k = H'(n_k)^T q + n_k^T u / |F_k| - R_k / |F_k|^2,
-    H' being H of (2.2) with the bias columns over |F_k|. R's second-order part without u,
-    |e|^2/2 + |A F|^2/2 + e^T A F + F^T A e + F^T A^2 F, is over |F|^2 a quadratic form in n plus a linear one over
-    |F| (n^T n = 1 carries the constant): H'^T s for a shift s of q that the set absorbs, |s| bounded from the box
-    (`shift`); left are the terms in u, |u|^2/2 + e^T u + u^T A F + F^T A u, the third order,
-        F^T A^2 (B y - F) - (d + A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2,   B y - F = -B (A F + d),
-    and |e|^2/2 (1/|F|^2 - 1), bounded with a = |A|_F (>= the spectral norm), |A F| <= | |A| |F| |,
-    |B| <= 1/(1 - a). F (K, 3): the readings calibrated by the fit, units of g; A_box (3, 3) and e_box (3)
-    bound |A| and |eps/g| entrywise. Returns (left per interval (K,), shift bound per q (9,))."""
-    a = float(np.linalg.norm(A_box))
-    if a >= 0.5:
-        return np.full(len(F), np.inf), np.full(9, np.inf)
-    b = 1.0 / (1.0 - a)
-    f = np.linalg.norm(F, axis=1)
-    aF = np.linalg.norm(np.abs(F) @ A_box.T, axis=1)
-    aFt = np.linalg.norm(np.abs(F) @ A_box, axis=1)
-    e = float(np.linalg.norm(e_box))
-    d = e + nu
-    in_u = 0.5 * nu ** 2 + e * nu + nu * (aF + aFt)
-    tail = a * d + a * a * b * (f + d)
-    third = a * a * b * f * (aF + d) + (d + aF) * tail + 0.5 * tail ** 2
-    left = (in_u + third) / f ** 2 + 0.5 * e * e * np.abs(1.0 / f ** 2 - 1.0)
-    P = 0.5 * A_box.T @ A_box + A_box @ A_box                 # |n^T (A^T A / 2 + A^2) n|: coefficients bounded by P
-    shift = np.r_[np.diag(P) + 0.5 * e * e, P[0, 1] + P[1, 0], P[0, 2] + P[2, 0], P[1, 2] + P[2, 1],
-                  A_box.T @ e_box + A_box @ e_box]
-    return left * (1 + 1e-12) + 1e-16, shift * (1 + 1e-12) + 1e-16
-
-
-def exact_information(mod, res, noise, nu):
-    """The information set of the 9 corrections q of (2.2) around the fit with each interval's own remainder
-    (`remainder_per_interval`) instead of the sphere-wide (2.3): q = w + s, every w with |sigma_k - H'_k^T w| <=
-    noise_k / |F_k| + left_k(box), |s| <= shift(box). The remainder needs a box to start from, so it is a premise,
-    stated: the truth's correction to this fit is within X, the widest of PREMISE_FACTORS times the set's own box
-    (the smallest box the remainder is consistent with) from which the set contracts (its hull lies in X). From
-    X each box is the set's hull (LPs, each end proven by duality) within the last, and the remainder is
-    bounded on it again, while it shrinks: each holds the truth when X does. Returns ((lo, hi) of q, what is
-    left of the remainder per interval, X), or None when no premise box contracts."""
-    s, n = res["sigma"], res["n"]
-    f = 1.0 / np.sqrt(1.0 - 2.0 * s)                        # |F_k|: sigma = (|F|^2 - 1) / (2 |F|^2)
-    F = (n * f).T
-    A = mod.H(n)[:9].copy()
-    A[6:9] /= f
-    base = noise / f
-
-    def step(reach, X=None, proofs=None):
-        """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
-        or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP."""
-        A_box = np.array([[reach[0], 0, 0], [reach[3], reach[1], 0], [reach[4], reach[5], reach[2]]])
-        left, shift = remainder_per_interval(F, A_box, reach[6:9], nu)
-        if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
-            return None
-        lo, hi, lams = _hull(A, s, base + left, None if X is None else X + shift, proofs)
-        return lo - shift, hi + shift, left, lams
-
-    lo, hi, lams = _hull(A, s, base)
-    own, proofs = np.maximum(np.abs(lo), np.abs(hi)), [lams]
-    for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
-        for by in (proofs, None):                            # by the multipliers solved, then by LPs
-            got = step(own, None, by)
-            if got is None:
-                return None
-            grown = np.maximum(np.abs(got[0]), np.abs(got[1]))
-            if np.all(grown <= own * 1.1):                    # it only sets the premise's scale
-                break
-        else:
-            own = grown
-            proofs.append(got[3])
-            continue
-        break
-    for factor in PREMISE_FACTORS:                           # each box tried by those multipliers, then by LPs
-        X = factor * own
-        got = next((got for by in (proofs, None) for got in [step(X, X, by)]
-                    if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X)), None)
-        if got is not None:
-            break
-    else:
-        return None
-    lo, hi, left = np.maximum(got[0], -X), np.minimum(got[1], X), got[2]
-    proofs += [got[3]] if got[3] is not None else []
-    # from the premise down: each box proven, inside the last; first by the multipliers of the two sets solved
-    # (no LP: the sets between differ in their bounds only), then by LPs until no bound moves by much
-    for by in (proofs, None):
-        for _ in range(STEPS):
-            got = step(np.maximum(np.abs(lo), np.abs(hi)), X, by)
-            lo2, hi2 = np.maximum(lo, got[0]), np.minimum(hi, got[1])
-            shrunk = np.all(hi2 - lo2 >= 0.95 * (hi - lo))
-            lo, hi, left = lo2, hi2, np.minimum(left, got[2])
-            if shrunk:                                       # a smaller box would move no bound by much
-                break
-    return (lo, hi), left, X
-
-
-def _hull(A, s, bound, X=None, proofs=None):
-    """(lo, hi) of each q over |s_k - a_k^T q| <= bound_k and |q| <= X (default 1: no correction of a fit is as
-    large), proven (solve/hull.py), and the multipliers that prove it; from `proofs` alone when given."""
-    from ..solve import hull
-    box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
-    args = (A.T, s - bound, s + bound, -box, box, np.eye(A.shape[0]))
-    if proofs is not None:
-        return (*hull.proven(*args, proofs), None)
-    try:
-        return hull.ranges(*args, multipliers=True)
-    except hull.Empty:
-        return -box, box, [(np.zeros(len(s)), np.zeros(len(s)))] * A.shape[0]
 
 
 def information(mod, res, params, bound):
@@ -471,44 +425,63 @@ def plan_bounds(mod, params):
     return best
 
 
-def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
+def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None):
     """For data consistent with the noise bound: the estimate (the midpoint of the information set `info`,
     (lo, hi) of q, folded into the fit `res`), its parameters with guaranteed errors over the same set (each a
     linear function of q: an LP pair, proven), the a-priori ones of the LP estimator (noise + remainder rb per
-    interval; `err` the linear part), those of the optimal plan, and the orientations worth adding."""
+    interval; `err` the linear part), those of the optimal plan, and the orientations worth adding. With catalogue
+    effects, `exact` = (A, bound, shift, ext): the set is q = w + s, |s| <= shift, every w with |sigma - A^T w| <=
+    bound (norm_information.exact_information), and the effects' parameters are bounded over it too."""
     from ..solve import hull
     best = plan_bounds(mod, params)
-    Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
+    s = res["sigma"]
+    if exact is None:
+        A, bnd, shift, ext = mod.H(res["n"])[:params], noise + rb, 0.0, None
+        Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
+        scale, rest = 1.0, rb
+    else:
+        A, bnd, shift, ext = exact
+        Phi, bound = lp.primal(A / bnd)
+        Phi = Phi / bnd[:, None]
+        scale = np.sqrt(1.0 - 2.0 * s)                     # noise / |F|: the units of sigma
+        rest = bnd - noise * scale
     lo, hi = info
     dq, half = taylor.midrad(lo, hi)
-    M, b, delta = fold(res["M"], res["b"], res["delta"], dq, g)
+    M, b, delta = fold(res["M"], res["b"], res["delta"], dq[:params], g)
     si = raw_unit(raw, g) == "m/s^2"
     # relative to the raw axes; a log in counts in counts per g (its sensitivities P g) and counts (biases): the
     # same parameters of M / g and b g, whose map from q is as exactly linear (fold)
     unit = 1.0 if si else 1.0 / g
     p = parameters(M * unit, b / unit, g).tolist() + delta.tolist()[: params - 9]
-    J = parameter_map(res["M"] * unit, params)        # each printed parameter is affine in q: its range over the set
-    A = mod.H(res["n"])[:params]
-    s = res["sigma"]
-    p_lo, p_hi = hull.ranges(A.T, s - noise - rb, s + noise + rb, lo, hi, J)
+    extra = A.shape[0] - params                          # the effects' parameters: no printed parameter moves with them
+    J = np.hstack([parameter_map(res["M"] * unit, params), np.zeros((params, extra))])
+    p_lo, p_hi = hull.ranges(A.T, s - bnd, s + bnd, lo - shift, hi + shift, J)
+    reach = np.abs(J) @ np.broadcast_to(shift, lo.shape)          # the absorbed shift s of q, |s| <= shift
+    p_lo, p_hi = p_lo - reach, p_hi + reach
     p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + taylor.SUM_ERROR),
-                        parameter_bounds(res["M"] * unit, half))
+                        parameter_bounds(res["M"] * unit, half[:params]))
     # had each interval's noise bound been SIGMA_WIDER times larger (the remainder as proven): the ranges
     # over that wider set, within the LP estimator's box for it
-    wider = SIGMA_WIDER * noise + rb
+    wider = SIGMA_WIDER * noise * scale + rest
     centre, e_w = Phi.T @ s, (np.abs(Phi).T @ np.broadcast_to(wider, s.shape)) * (1 + 1e-9) + 1e-15
-    C = J if si else np.eye(params)
+    C = J if si else np.hstack([np.eye(params), np.zeros((params, extra))])
     try:
         w_lo, w_hi = hull.ranges(A.T, s - wider, s + wider, centre - e_w, centre + e_w, C)
     except hull.Empty:                           # it holds the set the verdict found a fit in
         w_lo, w_hi = C @ (centre - e_w), C @ (centre + e_w)
+    w_lo, w_hi = w_lo - np.abs(C) @ np.broadcast_to(shift, lo.shape), w_hi + np.abs(C) @ np.broadcast_to(shift,
+                                                                                                          lo.shape)
     mid = C @ dq
     p_wider = np.minimum(np.maximum(w_hi - mid, mid - w_lo) * (1 + taylor.SUM_ERROR),
-                         parameter_bounds(res["M"] * unit, e_w) if si else e_w)
+                         parameter_bounds(res["M"] * unit, e_w[:params]) if si else e_w[:params])
     q = p if si else None
     counts = None if si else {"sensitivity": dict(zip(COUNT_LABELS, (np.array(p[:9]) + [1, 1, 1, 0, 0, 0, 0, 0, 0])
                                                         .tolist())),
                               "error": dict(zip(COUNT_LABELS, p_half[:9].tolist()))}
+    effects = {}
+    if ext is not None:
+        effects["effects"] = ext.effects_out(lo[params:], hi[params:], bound[params:])
+        half, bound, err = half[:params], bound[:params], err[:params]
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
@@ -529,6 +502,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info):
         "directions_to_add": [{"n": d, "nearest_present_deg": a} for d, a in found],
         "directions_gain": {"factor": factor, "parameter": which, "threshold": GAIN},
         "raw_axes_counts": counts,
+        **effects,
     }
 
 

@@ -2,7 +2,8 @@
 
 Is the calibrated norm model consistent with each interval's own noise (the noise rule), and which effects of
 the catalogue (derive/effects.py) make it so? Each effect enters (2.2) through its first-order columns
-(derive/norm.py `effect_columns`: n . d(term)/d(parameter) at w = n), evaluated at each still interval's
+(n . phi_j(n), phi_j the effect's basis of the generated norm module, derived in derive/norm.py), evaluated at
+each still interval's
 direction, mid-time and mean temperature (where the log has a temperature column). What the norm relation
 cannot tell apart on these orientations is decided exactly, as identifiability is: two effects are
 equivalent here when one's columns lie in the span of the base model's and the other's (on the sphere
@@ -29,24 +30,17 @@ def _rank(rows):
 
 
 def columns(mod, n, t_mid, temps):
-    """({effect: its columns (k, intervals)}, {effect: why skipped}) on these intervals."""
-    import sympy as sp
-    from garant.derive.effects import CATALOGUE
-    from garant.derive.norm import NormModel, effect_columns, n_sym
-    cols, skipped = {}, {}
+    """({effect: its columns (k, intervals)}, {effect: why skipped}) on these intervals: n . phi_j(n) of the
+    generated module's `effect_basis` (first order of (2.2))."""
+    cols, skipped = {}, {name: "needs stand angles" for name in mod.STAND_EFFECTS}
     values = {"time_s": t_mid, "temp_c": temps}
-    for name in CATALOGUE:
-        out = effect_columns(NormModel(mod.AXES), name)
-        if out is None:
-            skipped[name] = "needs stand angles"
+    for name in mod.EFFECTS:
+        need = mod.EFFECT_VARIABLES[name]
+        if any(values.get(v) is None for v in need):
+            skipped[name] = "the log has no temperature column" if "temp_c" in need else f"needs {', '.join(need)}"
             continue
-        _, exprs = out
-        extra = sorted({sym.name for e in exprs for sym in e.free_symbols} - {s.name for s in n_sym})
-        if any(values.get(v) is None for v in extra):
-            skipped[name] = "the log has no temperature column" if "temp_c" in extra else f"needs {', '.join(extra)}"
-            continue
-        f = sp.lambdify([*n_sym, *[sp.Symbol(v, real=True) for v in extra]], exprs, "numpy")
-        cols[name] = np.array([np.broadcast_to(v, t_mid.shape) for v in f(*n, *[values[v] for v in extra])], float)
+        phi = mod.effect_basis(name, n, t_mid, 20.0 if temps is None else temps)
+        cols[name] = np.einsum("jik,ik->jk", phi, n)
     return cols, skipped
 
 
@@ -61,6 +55,18 @@ def equivalence(base, cols):
     same = {e: [f for f in seen if f != e and _rank(np.vstack([base, cols[e], cols[f]])) == max(own[e], own[f])]
             for e in seen}
     return same, unseen
+
+
+def _alike(named, e, same, tried):
+    """The effects the data cannot tell from e here: those whose columns span the same space beside the base
+    model, or one nested in the other's, that also make the data consistent in e's place (a nested effect the data
+    refute is told apart by them)."""
+    out = []
+    for f in same:
+        key = next((k for k in tried if set(k) == {f if x == e else x for x in named}), None)
+        if key is not None and tried[key] <= 1:
+            out.append(f)
+    return out
 
 
 def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
@@ -90,6 +96,36 @@ def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
             break
     return {"noise_bound": "the " + noise_rule_name(stills, quantum) + (" plus half a count" if quantum else ""),
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0,
-            "named": named, "equivalent": {e: same[e] for e in named}, "unseen": unseen,
+            "named": named, "equivalent": {e: _alike(named, e, same[e], history[-1] if history else {}) for e in named},
+            "unseen": unseen,
             "consistent_after": bool(after <= 1), "max_residual_after": after,
             "scores": [{", ".join(k): float(v) for k, v in h.items()} for h in history], "skipped": skipped}
+
+
+def to_add(d, mod, calibrate):
+    """The effects to add, checked by the whole calibration: the named set and each set with a named effect swapped
+    for one it cannot be told from here, fewest parameters first (on the sphere a quadratic scale factor is a case
+    of cross-coupling to first order; the second order may tell them apart), each calibrated by `calibrate(names)`
+    (calibrate_norm.run with the extension). Returns (the first set that calibrates, or None; {set: what its
+    calibration said})."""
+    from ..errors import DataError
+    if not d["named"]:
+        return None, {}
+    sets = [tuple(d["named"])]
+    for k, e in enumerate(d["named"]):
+        sets += [tuple(d["named"][:k]) + (f,) + tuple(d["named"][k + 1:]) for f in d["equivalent"][e]]
+    sets = sorted(dict.fromkeys(tuple(sorted(x, key=list(mod.EFFECTS).index)) for x in sets),
+                  key=lambda x: sum(len(mod.EFFECTS[e]) for e in x))
+    checked = {}
+    for names in sets:
+        key = ",".join(names)
+        try:
+            out = calibrate(names)
+        except DataError as e:
+            checked[key] = str(e).split(": ", 1)[-1]
+            continue
+        checked[key] = "calibrates (consistent, every bound over the information set)" if out["consistent"] else \
+            f"refuted: {len(out['disagreements'])} interval(s) beyond their bound with the effects and the remainder"
+        if out["consistent"]:
+            return list(names), checked
+    return None, checked

@@ -129,7 +129,7 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
 
 
 def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=9, fmt=None, sensor=None, imu=None,
-                   rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False):
+                   rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None):
     """Calibrate a static log through the norm relation (2.2) of 001: `garant calibrate-norm --json`.
 
     Parameters
@@ -153,6 +153,9 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
         `min_still` s.
     diagnose : bool
         Also test the effect catalogue.
+    effects : str or sequence of str, optional
+        Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
+        scale_asymmetry, cross_coupling, bias_temperature, scale_temperature).
 
     Returns
     -------
@@ -169,7 +172,14 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
     if len(stills) < params + 3:
         raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
-    res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data))
+    temps = None if data.temp is None else [float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)]))
+                                            for st in stills]
+    from . import norm_effects
+    ext = None
+    if effects is not None:
+        ext = norm_effects.Extension(mod, norm_effects.parse(effects if isinstance(effects, str) else
+                                                             ",".join(effects), mod), stills, temps, data.path)
+    res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext)
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
     res["premises"] += (f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} "
                         "m/s^2 (lambda* of (2.2) of 001), the calibration's bounds include it")
@@ -182,13 +192,17 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
     res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, stills, res["matrix"], res["bias"])
     if res["consistent"]:
         res["calibration"] = calibration.from_norm(res, mod.AXES)
+        if ext is not None:
+            res["calibration"].update(norm_effects.file_entry(res, ext.names, None if temps is None else
+                                                              [min(temps), max(temps)]))
     if diagnose:
         raw = np.array([st.mean for st in stills])
         from . import diagnose_norm
-        temps = None if data.temp is None else [float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)]))
-                                                for st in stills]
-        res["diagnosis"] = diagnose_norm.diagnose(mod, stills, cn.fit(mod, raw, g, params), g, params,
-                                                  recordings.quantum(data), temps)
+        res["diagnosis"] = d = diagnose_norm.diagnose(mod, stills, cn.fit(mod, raw, g, params), g, params,
+                                                      recordings.quantum(data), temps)
+        d["add"], d["checked"] = diagnose_norm.to_add(
+            d, mod, lambda names: cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data),
+                                         norm_effects.Extension(mod, names, stills, temps, data.path)))
     return results.NormCalibration(res)
 
 
@@ -409,6 +423,10 @@ def apply(calibration, log, *, fmt=None, sensor=None, imu=None, rate=None, trust
     def piece(i, j):
         if "thermal" in cal:
             a, bound = cal_io.apply_thermal(cal, data.raw[i:j], data.temp[i:j], data.path)
+        elif cal.get("effects") and cal["effects"]["names"]:
+            from . import norm_effects
+            a, bound = norm_effects.apply(cal, data.raw[i:j], frame, None if data.temp is None else data.temp[i:j],
+                                          data.path)
         else:
             a, bound = cal_io.apply(cal, data.raw[i:j], frame)
         return results.Correction(t=data.t[i:j], a=a, bound=bound, kind=cal["kind"])

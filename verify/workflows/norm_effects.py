@@ -1,0 +1,271 @@
+"""Catalogue effects in the norm relation (2.2) of 001: `garant calibrate-norm LOG --effect NAME[,NAME...]`.
+
+The fit takes the effect's term (derive/effects.py, derived into the generated norm module: `effect_basis`) out of
+each reading, g sum_j theta_j phi_j(p, t, T), at the direction p of the reading with the term taken out (a fixed
+point, `fixed_point`), the interval's time t (s, from the middle of the log's still intervals) and temperature T
+(C). The truth is the reading of the fit, f = M_fit (raw - b_fit) / g = (E + A) m + eps/g + sum_j theta_j phi_j(m,
+t, T) + u with |m| = 1, m the true direction: the effect at the truth's direction. Its first order in the
+correction theta' = theta - theta_fit is a column of (2.2) beside H; the rest, v = Phi(p) theta' + (Phi(m) -
+Phi(p)) theta, enters each interval's remainder (norm_information.remainder_per_interval) with
+|(Phi(m) - Phi(p)) theta| <= ||sum_j |theta_j| b_j||_2 |m - p|, b_j the bound of the effect's Jacobian derived in
+derive/norm.py (`effect_jacobian_bound`). The parameters, the base ones and the effects', are bounded over the
+information set of that extended relation. A calibration file takes the term out at p = M (raw - b) / |M (raw - b)|
+(io/calibration.py `_with_effects` bounds what that direction's error moves it by).
+"""
+import numpy as np
+
+from ..errors import DataError
+
+#: Iterations of the direction the term is evaluated at, p <- direction of (f - Phi(p) theta): a contraction by
+#: about L |theta| (1e-2 for effects of 1e-3); what is left, |n - p|, enters the remainder as computed.
+FIXED_POINT = 30
+
+#: |x/|x| - m| <= K_DIR |x - m| for a unit m and |x - m| <= 0.1: the angle's sine is at most |x - m| and the
+#: chord 2 sin(a/2) = sin a / cos(a/2), cos(a/2) >= sqrt((1 + sqrt(1 - 0.01)) / 2).
+K_DIR = 1.0 / np.sqrt((1 + np.sqrt(1 - 0.01)) / 2) * (1 + 1e-12)
+
+
+def lipschitz(jac, size):
+    """||sum_j size_j b_j||_2 per interval, jac = b (P, 3, 3, K): the effect's Lipschitz bound in w for parameters
+    within `size` (rounded up)."""
+    B = np.einsum("j,jilk->kil", size, jac)
+    return np.linalg.norm(B, 2, axis=(1, 2)) * (1 + 1e-12)
+
+
+#: Effects a file's `apply` does not carry to another log: a drift in time belongs to its calibration session.
+SESSION_ONLY = ("bias_drift",)
+
+
+def parse(text, mod):
+    """The effect names of --effect NAME[,NAME...]: each one the norm relation can carry, none twice."""
+    names = [x.strip() for x in str(text).split(",") if x.strip()]
+    if not names:
+        raise DataError("--effect: give one or more effect names, e.g. --effect bias_drift,cross_coupling")
+    for x in names:
+        if x in mod.STAND_EFFECTS:
+            raise DataError(f"--effect {x}: it needs a stand's angles; calibrate-norm can add "
+                            f"{', '.join(mod.EFFECTS)}")
+        if x not in mod.EFFECTS:
+            raise DataError(f"--effect {x[:40]!r}: not an effect of the catalogue; calibrate-norm can add "
+                            f"{', '.join(mod.EFFECTS)}")
+    if len(set(names)) < len(names):
+        raise DataError("--effect: an effect is named twice")
+    return tuple(sorted(names, key=list(mod.EFFECTS).index))
+
+
+def fixed_point(ext, f):
+    """(F, p) for readings f (K, 3) over g: F = f - Phi(p) theta with p the direction of F, iterated FIXED_POINT
+    times or until p stops moving."""
+    p = f.T / np.linalg.norm(f, axis=1)
+    for _ in range(FIXED_POINT):
+        F = f - ext.term(p).T
+        q = F.T / np.linalg.norm(F, axis=1)
+        done = np.abs(q - p).max() < 1e-16
+        p = q
+        if done:
+            break
+    return f - ext.term(p).T, p
+
+
+class Extension:
+    """The effects added to the norm relation on a log's still intervals: their parameters theta (over g, the
+    units of EFFECT_UNITS), their basis at the fit's directions and what the remainder needs of them."""
+
+    def __init__(self, mod, names, stills, temps, path):
+        self.mod, self.names = mod, tuple(names)
+        t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
+        self.t_ref = float((t_mid.min() + t_mid.max()) / 2)
+        self.t = t_mid - self.t_ref
+        need = {v for x in names for v in mod.EFFECT_VARIABLES[x]}
+        if "temp_c" in need and temps is None:
+            raise DataError(f"{path}: --effect {', '.join(x for x in names if 'temp_c' in mod.EFFECT_VARIABLES[x])} "
+                            "needs each sample's temperature: the log has no temperature column (temp_c, C)")
+        self.temp = np.full(len(stills), 20.0) if temps is None else np.asarray(temps, float)
+        self.labels = [p for x in names for p in mod.EFFECTS[x]]
+        self.units = [u for x in names for u in mod.EFFECT_UNITS[x]]
+        self.theta = np.zeros(len(self.labels))
+        self.phi = self.jac = self.p = self.n = None
+
+    def basis(self, p):
+        """phi_j at directions p (3, K), shape (P, 3, K)."""
+        return np.concatenate([self.mod.effect_basis(x, p, self.t, self.temp) for x in self.names])
+
+    def term(self, p):
+        """The effect's term at theta, directions p (3, K): shape (3, K), over g."""
+        return np.einsum("j,jik->ik", self.theta, self.basis(p))
+
+    def at(self, p, n):
+        """Fix the directions: p of M (raw - b), where the term is evaluated, and n of the reading with the term
+        taken out (the direction of (2.2))."""
+        self.p, self.n = p, n
+        self.phi = self.basis(p)
+        self.jac = np.concatenate([self.mod.effect_jacobian_bound(x, self.t, self.temp) for x in self.names])
+
+    def columns(self, n):
+        """The first-order columns n . phi_j(p) of (2.2), shape (P, K)."""
+        return np.einsum("jik,ik->jk", self.phi, n)
+
+    def extra(self, th_box, A_box, e_box, nu):
+        """(v, rho) per interval for a box of the correction theta' (|theta'| <= th_box) and of the base's (A_box,
+        e_box): |v| <= |Phi(p)| th_box + rho, rho >= |(Phi(m) - Phi(p)) theta| <= L |m - p| with L = ||sum_j
+        (|theta_j| + th_box_j) b_j||_2 (`lipschitz`). With F - m = A m + d, |d| <= |eps/g| + nu + |v|, the angle
+        between F and m has sine at most delta = |F - m|, so |n - m| <= K_DIR delta (delta <= 0.1); |m - p| <=
+        |m - n| + |n - p|; so rho <= L (K_DIR (a + e + nu + v_lin + rho) + |n - p|), solved for rho."""
+        a, e = float(np.linalg.norm(A_box)), float(np.linalg.norm(e_box))
+        v_lin = np.linalg.norm(np.einsum("jik,j->ik", np.abs(self.phi), th_box), axis=0)
+        L = lipschitz(self.jac, np.abs(self.theta) + th_box)
+        dp = np.linalg.norm(self.n - self.p, axis=0)
+        room = 1.0 - K_DIR * L
+        rho = np.where(room > 0, L * (K_DIR * (a + e + nu + v_lin) + dp) / np.where(room > 0, room, 1.0), np.inf)
+        rho = np.where(a + e + nu + v_lin + rho <= 0.1, rho, np.inf)
+        return (v_lin + rho) * (1 + 1e-12), rho * (1 + 1e-12)
+
+    def fixed_point(self, f):
+        """`fixed_point` with this extension's theta."""
+        return fixed_point(self, f)
+
+    def verdict(self, res, noise, nu):
+        """`verdict` of this extension on a fit."""
+        return verdict(self.mod, res, noise, nu, self)
+
+    def effects_out(self, lo, hi, a_priori):
+        """`effects_out` of this extension: the effects' parameters with their bounds."""
+        return effects_out(self, lo, hi, a_priori)[0]
+
+    def identifiable(self, base):
+        """The effect parameters these intervals cannot identify beside the base model's columns `base` (an exact
+        rank test, as diagnose_norm decides equivalence): their labels."""
+        from . import diagnose_norm
+        cols = self.columns(self.n)
+        r = diagnose_norm._rank(np.vstack([base, cols]))
+        if r == base.shape[0] + cols.shape[0]:
+            return []
+        return [lab for j, lab in enumerate(self.labels)
+                if diagnose_norm._rank(np.vstack([base, np.delete(cols, j, axis=0)])) == r]
+
+
+def verdict(mod, res, noise, nu, ext):
+    """Whether the data are consistent with the extended relation, and its design: (consistent, A (9 + P, K) of
+    the information set (bias and effect columns over |F|), each interval's bound base + left, the a-priori errors
+    of the LP estimator (noise only)). The remainder is bounded on the box of the LP estimator's errors (as the base
+    model's verdict bounds (2.3) on it); consistent when some correction meets every interval's bound (a weighted
+    minimax fit within 1)."""
+    from ..solve import lp
+    from .calibrate_norm import weighted_fit
+    from .norm_information import remainder_per_interval
+    s, n = res["sigma"], res["n"]
+    f = 1.0 / np.sqrt(1.0 - 2.0 * s)
+    A = mod.H(n)[:9].copy()
+    A[6:9] /= f
+    A = np.vstack([A, ext.columns(n) / f])
+    base = noise / f
+    _, err = lp.primal(A / base)
+    box = np.array([[err[0], 0, 0], [err[3], err[1], 0], [err[4], err[5], err[2]]])
+    left, _ = remainder_per_interval((n * f).T, box, err[6:9], nu, ext.extra(err[9:], box, err[6:9], nu))
+    if not np.all(np.isfinite(left)):
+        raise DataError(f"{res.get('path', 'the log')}: with --effect {','.join(ext.names)} the fit's effects are too "
+                        f"large ({', '.join(f'{x}={v:+.2g}' for x, v in zip(ext.labels, ext.theta))}) for the "
+                        "remainder of (2.2) to be bounded on the box the orientations guarantee: no verdict; "
+                        "--diagnose names what the data need")
+    t = weighted_fit(A, s, base + left)[1]
+    return bool(t <= 1), A, base + left, err
+
+
+def effects_out(ext, lo, hi, a_priori):
+    """The effects' parameters: estimate (the fit's theta plus the midpoint of the set's correction) and guaranteed
+    error over the information set, per effect, with units and the reference of time and temperature."""
+    from ..solve import taylor
+    mid, half = taylor.midrad(lo, hi)
+    theta = ext.theta + mid
+    out, j = {}, 0
+    for x in ext.names:
+        names = ext.mod.EFFECTS[x]
+        out[x] = {"physics": ext.mod.EFFECT_PHYSICS[x], "parameters": {
+            p: {"estimate": float(theta[j + i]), "guaranteed_error": float(half[j + i]),
+                "guaranteed_error_a_priori": float(a_priori[j + i]), "unit": ext.mod.EFFECT_UNITS[x][i]}
+            for i, p in enumerate(names)}}
+        j += len(names)
+    return out, theta, half
+
+
+def file_entry(res, ext_names, temps_range):
+    """The calibration file's `effects` (and its model and note): what `apply` takes out of each sample and how its
+    bound grows; `temps_range` (C), the still intervals' mean temperatures, lowest and highest, or None."""
+    eff = res["effects"]
+    applied = [x for x in ext_names if x not in SESSION_ONLY]
+    frame = np.abs(np.asarray(res["matrix"]) @ np.linalg.inv(np.asarray(res["matrix_fit"])) - np.eye(3))
+    return {"model": MODEL, "note": res["calibration"]["note"] + NOTE, "effects": {
+            "frame": frame.tolist(), "names": applied, "time_ref_s": res["effect_reference"]["time_s"],
+            "temp_range_c": temps_range,
+            "theta": [eff[x]["parameters"][p]["estimate"] for x in applied for p in eff[x]["parameters"]],
+            "bound": [eff[x]["parameters"][p]["guaranteed_error"] for x in applied for p in eff[x]["parameters"]],
+            "not_applied": {x: "a drift in time belongs to its calibration session: the bias b is the one at "
+                               f"t = {res['effect_reference']['time_s']:g} s of {res['log']}"
+                            for x in ext_names if x in SESSION_ONLY}}}
+
+
+MODEL = "a = M (raw - b) - g sum_j theta_j phi_j(p, T), p = M (raw - b) / |M (raw - b)|"
+NOTE = ("; with effects, inside the brackets also g |Phi(p)| bound + |frame| g (|Phi(p) theta| + |Phi(p)| bound) + g L "
+        "(|theta| + bound) |m - p| (L the effects' Lipschitz bound, |m - p| bounded from the sample's own bound)")
+
+
+def apply_term(cal, a0, temp, g, path):
+    """The effects of a calibration file at corrected samples a0 = M (raw - b) (3, N), m/s^2: the term g Phi(p)
+    theta (3, N) to take out (p = a0 / |a0|), g |Phi(p)| h (3, N) (h the bound of theta) and c = g L (|theta| + h)
+    (N), the bound's growth per unit |m - p| (io/calibration.py `_with_effects` composes them)."""
+    from .. import models
+    mod = models.load("norm")
+    eff = cal["effects"]
+    names = eff["names"]
+    count = sum(len(mod.EFFECTS[x]) for x in names)
+    if len(eff["theta"]) != count or len(eff["bound"]) != count:
+        raise DataError(f"{path}: effects: theta and bound must hold one number per parameter of "
+                        f"{', '.join(names) or 'no effect'} ({count}), not {len(eff['theta'])} and {len(eff['bound'])}")
+    N = a0.shape[1]
+    T = np.full(N, 20.0)
+    if any("temp_c" in mod.EFFECT_VARIABLES[x] for x in names):
+        if temp is None:
+            raise DataError(f"{path}: the calibration holds {', '.join(names)}: the log needs each sample's "
+                            "temperature (a temp_c column, C)")
+        T = np.asarray(temp, float)
+        lo, hi = eff["temp_range_c"]
+        out = np.flatnonzero((T < lo) | (T > hi) | ~np.isfinite(T))
+        if out.size:
+            raise DataError(f"{path}: {out.size} sample(s) at temperatures outside the calibrated range [{lo:g}, "
+                            f"{hi:g}] C (the first, sample {out[0] + 1}, at {T[out[0]]:g} C): the effects' bound "
+                            "holds there only")
+    p = a0 / np.maximum(np.linalg.norm(a0, axis=0), 1e-300)
+    phi = np.concatenate([mod.effect_basis(x, p, 0.0, T) for x in names])
+    jac = np.concatenate([mod.effect_jacobian_bound(x, 0.0, T) for x in names])
+    theta, h = np.asarray(eff["theta"], float), np.asarray(eff["bound"], float)
+    return (g * np.einsum("j,jik->ik", theta, phi), g * np.einsum("j,jik->ik", h, np.abs(phi)),
+            g * lipschitz(jac, np.abs(theta) + h))
+
+
+def apply(cal, raw, frame="garant", temp=None, path="the log"):
+    """io/calibration.py `apply` for a calibration with catalogue effects (9 parameters: no nonlinearity), each
+    sample at its temperature `temp` (C) where an effect needs it. With a = a0 - g Phi(p) theta
+    (p = a0 / |a0|) the truth a_t = g m meets a / g = (E + A') m + eps' / g + x, where A', eps' are bounded by
+    bound_matrix and bound_bias as without effects and x = Phi(p) (theta_t - theta) + (Phi(m) - Phi(p)) theta_t +
+    (K - E) Phi(m) theta_t (K - E the frame of the set's midpoint, bounded by `frame`): componentwise
+        |x| <= |Phi(p)| h + |frame| (|Phi(p) theta| + |Phi(p)| h) + (1 + |frame| 1) L (|theta| + h) |m - p|,
+    and |m - p| <= 2 |a0 / g - m| <= 2 (|a - a_t| + |g Phi(p) theta|) / g closes the bound on itself."""
+    from ..io.calibration import imu_tk_form
+    g = cal["g"]
+    a0 = cal["M"] @ (np.asarray(raw, float) - cal["b"]).T
+    term, lin, c = apply_term(cal, a0, temp, g, path)
+    a = a0 - term
+    F = np.abs(np.asarray(cal["effects"]["frame"], float))
+    inverse = np.linalg.inv(np.eye(3) - cal["bound_matrix"])
+    v = cal["bound_matrix"] @ np.abs(a) + cal["bound_bias"][:, None] + lin + F @ (np.abs(term) + lin)
+    bound0 = inverse @ v
+    grow = inverse @ (1.0 + F.sum(axis=1))                     # the bound's growth per unit of c |m - p|
+    room = g - 2.0 * c * float(np.linalg.norm(grow))
+    if np.any(room <= 0):
+        raise DataError(f"{path}: the calibration's effects are too large for their bound to close (|theta| L >= 1/2)")
+    moved = 2.0 * (np.linalg.norm(bound0, axis=0) + np.linalg.norm(term, axis=0)) / room
+    bound = bound0 + grow[:, None] * (c * moved)
+    if frame == "imu_tk":
+        R = imu_tk_form(cal)[2]
+        a, bound = R @ a, (np.abs(R) @ bound) * (1 + 1e-12)
+    return a.T, (bound * (1 + 1e-12)).T

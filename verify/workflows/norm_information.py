@@ -1,0 +1,147 @@
+"""The information set of the norm relation (2.2) of 001 around a fit, with each still interval's own remainder.
+
+The sphere-wide bound (2.3) of 001 holds for any direction; a log's intervals each have their own reading |F_k|,
+noise and (with catalogue effects, workflows/norm_effects.py) effect terms, and the remainder of each is bounded
+from a box of the truth's correction to the fit (`remainder_per_interval`). The box is a premise, stated; the set
+contracts from it (`exact_information`).
+"""
+import numpy as np
+
+def premise_box(X):
+    """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used)."""
+    if X is None:
+        return ""
+    return ("; the truth's correction to this fit is within " + ", ".join(
+        f"{x.max():.2g} ({name})" for name, x in (("scale", X[:3]), ("misalignment, rad", X[3:6]), ("bias over g",
+                                                                                                    X[6:9])))
+        + f" (the box each interval's remainder is proven from, at most {PREMISE_FACTORS[0]:g}x the information set's "
+        "own box)")
+
+
+STEPS = 12                                            # boxes at most, each way
+PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0)    # the premise box tried, in multiples of the set's own box
+
+
+def remainder_per_interval(F, A_box, e_box, nu, extra=None):
+    """What is left of the remainder of (2.2) per interval once q absorbs its part in the span of H', in the
+    units of sigma, and the bound of that absorbed shift per q. With B = (E + A)^-1, d = eps/g + u (u the noise of
+    the calibrated mean, |u| <= nu) and y = F - d, the truth has |B y| = 1, and B = E - A + A^2 B gives exactly
+        c - c(0) + F^T (A F + d) = |d + A F|^2 / 2 + (F - d - A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2 = R,
+        sigma_k = H'(n_k)^T q + n_k^T u / |F_k| - R_k / |F_k|^2,
+    H' being H of (2.2) with the bias columns over |F_k|. R's second-order part without u,
+    |e|^2/2 + |A F|^2/2 + e^T A F + F^T A e + F^T A^2 F, is over |F|^2 a quadratic form in n plus a linear one over
+    |F| (n^T n = 1 carries the constant): H'^T s for a shift s of q that the set absorbs, |s| bounded from the box
+    (`shift`); left are the terms in u, |u|^2/2 + e^T u + u^T A F + F^T A u, the third order,
+        F^T A^2 (B y - F) - (d + A F)^T (A d + A^2 B y) + |A d + A^2 B y|^2 / 2,   B y - F = -B (A F + d),
+    and |e|^2/2 (1/|F|^2 - 1), bounded with a = |A|_F (>= the spectral norm), |A F| <= | |A| |F| |,
+    |B| <= 1/(1 - a). F (K, 3): the readings calibrated by the fit, units of g; A_box (3, 3) and e_box (3)
+    bound |A| and |eps/g| entrywise. With catalogue effects, `extra` = (v, rho) per interval: d holds the effect's
+    part v beside u (|v| <= v_k; its first order n^T v / |F| is the effect's column but for rho, |rho| <= rho_k,
+    which stays here), so u's terms are bounded with nu + v. Returns (left per interval (K,), shift bound per
+    q (9,))."""
+    a = float(np.linalg.norm(A_box))
+    if a >= 0.5:
+        return np.full(len(F), np.inf), np.full(9, np.inf)
+    b = 1.0 / (1.0 - a)
+    f = np.linalg.norm(F, axis=1)
+    aF = np.linalg.norm(np.abs(F) @ A_box.T, axis=1)
+    aFt = np.linalg.norm(np.abs(F) @ A_box, axis=1)
+    e = float(np.linalg.norm(e_box))
+    rho = 0.0
+    if extra is not None:
+        v, rho = extra
+        nu = nu + v
+    d = e + nu
+    in_u = 0.5 * nu ** 2 + e * nu + nu * (aF + aFt)
+    tail = a * d + a * a * b * (f + d)
+    third = a * a * b * f * (aF + d) + (d + aF) * tail + 0.5 * tail ** 2
+    left = (in_u + third) / f ** 2 + 0.5 * e * e * np.abs(1.0 / f ** 2 - 1.0) + rho / f
+    P = 0.5 * A_box.T @ A_box + A_box @ A_box                 # |n^T (A^T A / 2 + A^2) n|: coefficients bounded by P
+    shift = np.r_[np.diag(P) + 0.5 * e * e, P[0, 1] + P[1, 0], P[0, 2] + P[2, 0], P[1, 2] + P[2, 1],
+                  A_box.T @ e_box + A_box @ e_box]
+    return left * (1 + 1e-12) + 1e-16, shift * (1 + 1e-12) + 1e-16
+
+
+def exact_information(mod, res, noise, nu, ext=None, start=None):
+    """The information set of the 9 corrections q of (2.2) around the fit with each interval's own remainder
+    (`remainder_per_interval`) instead of the sphere-wide (2.3): q = w + s, every w with |sigma_k - H'_k^T w| <=
+    noise_k / |F_k| + left_k(box), |s| <= shift(box). The remainder needs a box to start from, so it is a premise,
+    stated: the truth's correction to this fit is within X, the widest of PREMISE_FACTORS times the set's own box
+    (the smallest box the remainder is consistent with) from which the set contracts (its hull lies in X). From
+    X each box is the set's hull (LPs, each end proven by duality) within the last, and the remainder is
+    bounded on it again, while it shrinks: each holds the truth when X does. With catalogue effects (`ext`,
+    norm_effects.Extension) q holds their parameters' corrections after the 9, their columns beside H'. Returns
+    ((lo, hi) of q, what is left of the remainder per interval, X, the shift bound), or None when no premise box
+    contracts. `start`: each interval's bound of the first set, whose hull sets the scale of the box to start from
+    (default noise / |F|: the linear set; a set that is empty without a remainder needs one)."""
+    s, n = res["sigma"], res["n"]
+    f = 1.0 / np.sqrt(1.0 - 2.0 * s)                        # |F_k|: sigma = (|F|^2 - 1) / (2 |F|^2)
+    F = (n * f).T
+    A = mod.H(n)[:9].copy()
+    A[6:9] /= f
+    if ext is not None:
+        A = np.vstack([A, ext.columns(n) / f])
+    base = noise / f
+
+    def step(reach, X=None, proofs=None):
+        """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
+        or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP."""
+        A_box = np.array([[reach[0], 0, 0], [reach[3], reach[1], 0], [reach[4], reach[5], reach[2]]])
+        extra = None if ext is None else ext.extra(reach[9:], A_box, reach[6:9], nu)
+        left, shift = remainder_per_interval(F, A_box, reach[6:9], nu, extra)
+        shift = np.r_[shift, np.zeros(len(reach) - 9)]
+        if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
+            return None
+        lo, hi, lams = _hull(A, s, base + left, None if X is None else X + shift, proofs)
+        return lo - shift, hi + shift, left, lams, shift
+
+    lo, hi, lams = _hull(A, s, base if start is None else start)       # the scale of the box to start from
+    own, proofs = np.maximum(np.abs(lo), np.abs(hi)), [lams]
+    for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
+        for by in (proofs, None):                            # by the multipliers solved, then by LPs
+            got = step(own, None, by)
+            if got is None:
+                return None
+            grown = np.maximum(np.abs(got[0]), np.abs(got[1]))
+            if np.all(grown <= own * 1.1):                    # it only sets the premise's scale
+                break
+        else:
+            own = grown
+            proofs.append(got[3])
+            continue
+        break
+    for factor in PREMISE_FACTORS:                           # each box tried by those multipliers, then by LPs
+        X = factor * own
+        got = next((got for by in (proofs, None) for got in [step(X, X, by)]
+                    if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X)), None)
+        if got is not None:
+            break
+    else:
+        return None
+    lo, hi, left = np.maximum(got[0], -X), np.minimum(got[1], X), got[2]
+    proofs += [got[3]] if got[3] is not None else []
+    # from the premise down: each box proven, inside the last; first by the multipliers of the two sets solved
+    # (no LP: the sets between differ in their bounds only), then by LPs until no bound moves by much
+    for by in (proofs, None):
+        for _ in range(STEPS):
+            got = step(np.maximum(np.abs(lo), np.abs(hi)), X, by)
+            lo2, hi2 = np.maximum(lo, got[0]), np.minimum(hi, got[1])
+            shrunk = np.all(hi2 - lo2 >= 0.95 * (hi - lo))
+            lo, hi, left = lo2, hi2, np.minimum(left, got[2])
+            if shrunk:                                       # a smaller box would move no bound by much
+                break
+    return (lo, hi), left, X, got[4]
+
+
+def _hull(A, s, bound, X=None, proofs=None):
+    """(lo, hi) of each q over |s_k - a_k^T q| <= bound_k and |q| <= X (default 1: no correction of a fit is as
+    large), proven (solve/hull.py), and the multipliers that prove it; from `proofs` alone when given."""
+    from ..solve import hull
+    box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
+    args = (A.T, s - bound, s + bound, -box, box, np.eye(A.shape[0]))
+    if proofs is not None:
+        return (*hull.proven(*args, proofs), None)
+    try:
+        return hull.ranges(*args, multipliers=True)
+    except hull.Empty:
+        return -box, box, [(np.zeros(len(s)), np.zeros(len(s)))] * A.shape[0]
