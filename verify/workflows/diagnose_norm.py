@@ -103,8 +103,9 @@ def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
 
 
 def to_add(d, mod, calibrate):
-    """The effects to add, checked by the whole calibration: the named set and each set with a named effect swapped
-    for one it cannot be told from here, fewest parameters first (on the sphere a quadratic scale factor is a case
+    """The effects to add, checked by the whole calibration: the named set, each set with a named effect swapped
+    for one it cannot be told from here, and every other set of that size that makes the data consistent to first
+    order, fewest parameters first (on the sphere a quadratic scale factor is a case
     of cross-coupling to first order; the second order may tell them apart), each calibrated by `calibrate(names)`
     (calibrate_norm.run with the extension). Returns (the first set that calibrates, or None; {set: what its
     calibration said})."""
@@ -114,6 +115,7 @@ def to_add(d, mod, calibrate):
     sets = [tuple(d["named"])]
     for k, e in enumerate(d["named"]):
         sets += [tuple(d["named"][:k]) + (f,) + tuple(d["named"][k + 1:]) for f in d["equivalent"][e]]
+    sets += [tuple(k.split(", ")) for k, v in d["scores"][-1].items() if v <= 1]     # the others of that size too
     sets = sorted(dict.fromkeys(tuple(sorted(x, key=list(mod.EFFECTS).index)) for x in sets),
                   key=lambda x: sum(len(mod.EFFECTS[e]) for e in x))
     checked = {}
