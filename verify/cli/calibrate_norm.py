@@ -462,6 +462,13 @@ def _report(res, args):
               _side(k, pars[k]) if k in pars else "", _side(k, v).lstrip("+"),
               f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
              for k, v in res["guaranteed_error"].items()])))
+    if res.get("effects"):
+        ref = res["effect_reference"]
+        sections.append((f"Effects added to the reading (over g; time from {ref['time_s']:g} s of the log, temperature "
+                         f"from {ref['temp_c']:g} C), guaranteed errors over the same information set", report.Table(
+            ("effect", "parameter", "estimate", "guaranteed error", "a priori", "unit"),
+            [(name, p, f"{v['estimate']:+.4e}", f"{v['guaranteed_error']:.3e}", f"{v['guaranteed_error_a_priori']:.3e}",
+              v["unit"]) for name, e in res["effects"].items() for p, v in e["parameters"].items()])))
     sections += [("The log, its still intervals, and the residual of each", report.Image("residuals.png")),
                  ("Residual against the direction of gravity", report.Image("directions.png"))]
     command = report.command_line(args, f"garant calibrate-norm {args.log} --params {args.params}")
