@@ -268,20 +268,6 @@ def effect_basis(name):
     return [p.name for p in e.params], [[sp.expand(v) for v in term.diff(p.symbol)] for p in e.params]
 
 
-def effect_columns(model, name):
-    """First-order columns of sigma(n) for a catalogue effect: n . phi_j(n) (`effect_basis`) at w = n.
-
-    A reading error dF (units of g) changes sigma by n . dF to first order ((2.2)); sensor effects are
-    functions of the true specific force, here w/g = n. Returns (parameter names, expressions in n1, n2, n3,
-    time_s, temp_c) or None (no meaning without a stand)."""
-    out = effect_basis(name)
-    if out is None:
-        return None
-    names, basis = out
-    n = sp.Matrix(n_sym)
-    return names, [sp.expand((n.T * sp.Matrix(phi))[0]) for phi in basis]
-
-
 def _unit_ball_bound(expr):
     """A bound of |expr| over the unit ball |w| <= 1, expr a polynomial in n1, n2, n3 and sign(n_i) (the
     derivative of |n_i|) with coefficients in time_s and temp_c: the sum of the coefficients' absolute values

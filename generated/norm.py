@@ -319,21 +319,9 @@ def _basis_scale_quadratic(n1, n2, n3, time_s, temp_c):
 
 def _jacobian_scale_quadratic(time_s, temp_c):
     return np.array([
-        _stack([
-            [2, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 2, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 2],
-        ], time_s, temp_c),
+        _stack([[2, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 2, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2]], time_s, temp_c),
     ])
 
 
@@ -347,21 +335,9 @@ def _basis_scale_asymmetry(n1, n2, n3, time_s, temp_c):
 
 def _jacobian_scale_asymmetry(time_s, temp_c):
     return np.array([
-        _stack([
-            [1, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 1, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 1],
-        ], time_s, temp_c),
+        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], time_s, temp_c),
     ])
 
 
@@ -378,36 +354,12 @@ def _basis_cross_coupling(n1, n2, n3, time_s, temp_c):
 
 def _jacobian_cross_coupling(time_s, temp_c):
     return np.array([
-        _stack([
-            [1, 1, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [1, 0, 1],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [1, 1, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 1, 1],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [1, 0, 1],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 1, 1],
-        ], time_s, temp_c),
+        _stack([[1, 1, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[1, 0, 1], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [1, 1, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 1, 1], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [1, 0, 1]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 1, 1]], time_s, temp_c),
     ])
 
 
@@ -421,21 +373,9 @@ def _basis_bias_drift(n1, n2, n3, time_s, temp_c):
 
 def _jacobian_bias_drift(time_s, temp_c):
     return np.array([
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
     ])
 
 
@@ -449,21 +389,9 @@ def _basis_bias_temperature(n1, n2, n3, time_s, temp_c):
 
 def _jacobian_bias_temperature(time_s, temp_c):
     return np.array([
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
     ])
 
 
@@ -477,21 +405,9 @@ def _basis_scale_temperature(n1, n2, n3, time_s, temp_c):
 
 def _jacobian_scale_temperature(time_s, temp_c):
     return np.array([
-        _stack([
-            [abs(temp_c - 20), 0, 0],
-            [0, 0, 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, abs(temp_c - 20), 0],
-            [0, 0, 0],
-        ], time_s, temp_c),
-        _stack([
-            [0, 0, 0],
-            [0, 0, 0],
-            [0, 0, abs(temp_c - 20)],
-        ], time_s, temp_c),
+        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], time_s, temp_c),
     ])
 
 

@@ -119,6 +119,9 @@ def test_effect_errors_are_one_line(tmp_path, capsys):
         assert main(["calibrate-norm", str(log), "--effect", effect]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and said in err[0], err
+    from garant.verify.errors import DataError
+    with pytest.raises(DataError, match="give names as text or a list of text"):     # the API validates as the CLI
+        jobs.calibrate_norm(str(log), effects=1)
     assert main(["calibrate-norm", str(log), str(log), "--out", str(tmp_path / "o"), "--effect", "bias_drift"]) == 2
     assert "--effect concerns one log" in capsys.readouterr().err
 

@@ -442,7 +442,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None):
     else:
         A, bnd, shift, ext = exact
         Phi, bound = lp.primal(A / bnd)
-        Phi = Phi / bnd[:, None]
+        Phi, bound = Phi / bnd[:, None], bound + shift       # the estimator's error of w, and q = w + s
         scale = np.sqrt(1.0 - 2.0 * s)                     # noise / |F|: the units of sigma
         rest = bnd - noise * scale
     lo, hi = info

@@ -21,7 +21,7 @@ LARGEST_SET = 3          # effects named together at most
 RANK_TOL = 1e-9          # relative to the largest singular value of the unit-norm columns
 
 
-def _rank(rows):
+def rank(rows):
     """The rank of the columns (rows of `rows`, each a column over the intervals) scaled to unit norm."""
     X = np.asarray(rows, float)
     X = X / np.maximum(np.linalg.norm(X, axis=1, keepdims=True), 1e-300)
@@ -48,11 +48,11 @@ def equivalence(base, cols):
     """({effect: [the effects these orientations cannot tell from it: beside the base model, one's columns lie in
     the span of the other's (the same space, or one a case of the other)]}, [effects unseen: in the base model's
     span])."""
-    r0 = _rank(base)
-    own = {e: _rank(np.vstack([base, c])) for e, c in cols.items()}
+    r0 = rank(base)
+    own = {e: rank(np.vstack([base, c])) for e, c in cols.items()}
     unseen = [e for e in cols if own[e] == r0]
     seen = [e for e in cols if e not in unseen]
-    same = {e: [f for f in seen if f != e and _rank(np.vstack([base, cols[e], cols[f]])) == max(own[e], own[f])]
+    same = {e: [f for f in seen if f != e and rank(np.vstack([base, cols[e], cols[f]])) == max(own[e], own[f])]
             for e in seen}
     return same, unseen
 

@@ -177,8 +177,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
     from . import norm_effects
     ext = None
     if effects is not None:
-        ext = norm_effects.Extension(mod, norm_effects.parse(effects if isinstance(effects, str) else
-                                                             ",".join(effects), mod), stills, temps, data.path)
+        ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path)
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext)
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
     res["premises"] += (f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} "

@@ -37,8 +37,14 @@ SESSION_ONLY = ("bias_drift",)
 
 
 def parse(text, mod):
-    """The effect names of --effect NAME[,NAME...]: each one the norm relation can carry, none twice."""
-    names = [x.strip() for x in str(text).split(",") if x.strip()]
+    """The effect names of --effect NAME[,NAME...] (or a list of names): each one the norm relation can carry,
+    none twice."""
+    if isinstance(text, (list, tuple)) and all(isinstance(x, str) for x in text):
+        text = ",".join(text)
+    if not isinstance(text, str):
+        raise DataError(f"effects: give names as text or a list of text, e.g. 'bias_drift,cross_coupling', not "
+                        f"{type(text).__name__}")
+    names = [x.strip() for x in text.split(",") if x.strip()]
     if not names:
         raise DataError("--effect: give one or more effect names, e.g. --effect bias_drift,cross_coupling")
     for x in names:
@@ -137,11 +143,11 @@ class Extension:
         rank test, as diagnose_norm decides equivalence): their labels."""
         from . import diagnose_norm
         cols = self.columns(self.n)
-        r = diagnose_norm._rank(np.vstack([base, cols]))
+        r = diagnose_norm.rank(np.vstack([base, cols]))
         if r == base.shape[0] + cols.shape[0]:
             return []
         return [lab for j, lab in enumerate(self.labels)
-                if diagnose_norm._rank(np.vstack([base, np.delete(cols, j, axis=0)])) == r]
+                if diagnose_norm.rank(np.vstack([base, np.delete(cols, j, axis=0)])) == r]
 
 
 def verdict(mod, res, noise, nu, ext):
@@ -152,12 +158,9 @@ def verdict(mod, res, noise, nu, ext):
     minimax fit within 1)."""
     from ..solve import lp
     from .calibrate_norm import weighted_fit
-    from .norm_information import remainder_per_interval
+    from .norm_information import design, remainder_per_interval
     s, n = res["sigma"], res["n"]
-    f = 1.0 / np.sqrt(1.0 - 2.0 * s)
-    A = mod.H(n)[:9].copy()
-    A[6:9] /= f
-    A = np.vstack([A, ext.columns(n) / f])
+    A, f = design(mod, res, ext)
     base = noise / f
     _, err = lp.primal(A / base)
     box = np.array([[err[0], 0, 0], [err[3], err[1], 0], [err[4], err[5], err[2]]])

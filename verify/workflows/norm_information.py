@@ -62,6 +62,19 @@ def remainder_per_interval(F, A_box, e_box, nu, extra=None):
     return left * (1 + 1e-12) + 1e-16, shift * (1 + 1e-12) + 1e-16
 
 
+def design(mod, res, ext=None):
+    """(A, |F|): the columns of the information set of (2.2) around the fit `res` (H' of `remainder_per_interval`,
+    the bias columns over |F_k|, and with catalogue effects theirs, n . phi_j(p) / |F_k|) and each interval's |F_k|
+    (sigma = (|F|^2 - 1) / (2 |F|^2))."""
+    s, n = res["sigma"], res["n"]
+    f = 1.0 / np.sqrt(1.0 - 2.0 * s)
+    A = mod.H(n)[:9].copy()
+    A[6:9] /= f
+    if ext is not None:
+        A = np.vstack([A, ext.columns(n) / f])
+    return A, f
+
+
 def exact_information(mod, res, noise, nu, ext=None, start=None):
     """The information set of the 9 corrections q of (2.2) around the fit with each interval's own remainder
     (`remainder_per_interval`) instead of the sphere-wide (2.3): q = w + s, every w with |sigma_k - H'_k^T w| <=
@@ -75,12 +88,8 @@ def exact_information(mod, res, noise, nu, ext=None, start=None):
     contracts. `start`: each interval's bound of the first set, whose hull sets the scale of the box to start from
     (default noise / |F|: the linear set; a set that is empty without a remainder needs one)."""
     s, n = res["sigma"], res["n"]
-    f = 1.0 / np.sqrt(1.0 - 2.0 * s)                        # |F_k|: sigma = (|F|^2 - 1) / (2 |F|^2)
+    A, f = design(mod, res, ext)
     F = (n * f).T
-    A = mod.H(n)[:9].copy()
-    A[6:9] /= f
-    if ext is not None:
-        A = np.vstack([A, ext.columns(n) / f])
     base = noise / f
 
     def step(reach, X=None, proofs=None):
