@@ -352,8 +352,8 @@ def _catalogue():
 
 def _effects_context():
     """The catalogue effects the norm relation can carry (derive/norm.py `effect_basis`, `effect_lipschitz`):
-    (name, function name, parameter names, basis code (P x 3), Jacobian bound code (P x 3 x 3), the variables it
-    reads, the parameters' units, its physics in one line)."""
+    (name, function name, parameter names, basis code (P x 3), Jacobian bound code over the ball and over a box of
+    radius r about w (each P x 3 x 3), the variables it reads, the parameters' units, its physics in one line)."""
     from . import norm
     from .effects import CATALOGUE
     out = []
@@ -364,7 +364,8 @@ def _effects_context():
         names, phi = basis
         variables = sorted({x.name for row in phi for v in row for x in v.free_symbols} - {x.name for x in norm.n_sym})
         out.append((name, name.replace("-", "_"), names, [[pycode(v) for v in row] for row in phi],
-                    [[[pycode(v) for v in row] for row in b] for b in norm.effect_jacobian_bound(name)[1]], variables,
+                    [[[pycode(v) for v in row] for row in b] for b in norm.effect_jacobian_bound(name)[1]],
+                    [[[pycode(v) for v in row] for row in b] for b in norm.effect_slope_bound(name)[1]], variables,
                     [p.unit for p in CATALOGUE[name].params], CATALOGUE[name].physics))
     return out
 

@@ -289,3 +289,32 @@ def effect_jacobian_bound(name):
     w = sp.Matrix(n_sym)
     return names, [[[_unit_ball_bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()]
                    for phi in basis]
+
+
+#: The radius of the box around w that `effect_slope_bound` bounds the Jacobian over.
+r_sym = sp.Symbol("r", nonnegative=True)
+
+
+def _local_bound(expr):
+    """A bound of |expr(z)| over the box |z_i - w_i| <= r, expr a polynomial in w = (n1, n2, n3) (or with a
+    sign(n_i), the derivative of |n_i|: then `_unit_ball_bound`, over the whole ball): expanded about w,
+    expr(w + y) = sum_alpha c_alpha(w) y^alpha, at most sum_alpha |c_alpha(w)| r^|alpha|, exactly."""
+    if expr.has(sp.sign):
+        return _unit_ball_bound(expr)
+    y = sp.symbols("y1:4", real=True)
+    poly = sp.Poly(sp.expand(expr.xreplace(dict(zip(n_sym, [v + d for v, d in zip(n_sym, y)])))), *y)
+    return sum((sp.Abs(c) * r_sym ** sum(m) for m, c in poly.terms()), sp.Integer(0))
+
+
+def effect_slope_bound(name):
+    """Per parameter j, the 3 x 3 matrix s_j(w, r, time_s, temp_c) >= 0 that bounds |d phi_j / d w| entrywise over
+    the box |z - w| <= r (`_local_bound`): for a segment from w to m with |m - w| <= r, the mean-value theorem
+    gives |c^T sum_j theta_j (phi_j(m) - phi_j(w))| <= sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k],
+    the part of the effect's change along one direction c (the reading's, in (2.2) of 001)."""
+    out = effect_basis(name)
+    if out is None:
+        return None
+    names, basis = out
+    w = sp.Matrix(n_sym)
+    return names, [[[_local_bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()]
+                   for phi in basis]

@@ -309,6 +309,15 @@ def effect_jacobian_bound(name, time_s=0.0, temp_c=20.0):
     return _JACOBIAN[name](np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float))
 
 
+def effect_slope_bound(name, w, r, time_s=0.0, temp_c=20.0):
+    """s_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= s_j entrywise over the box of radius r (each coordinate)
+    about w, shape (3, ...) (derive/norm.py `effect_slope_bound`), so the effect's change along a unit c from w to
+    any m within r is at most sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k]."""
+    n1, n2, n3 = np.asarray(w, dtype=float)
+    return _SLOPE[name](n1, n2, n3, np.asarray(r, dtype=float), np.asarray(time_s, dtype=float),
+                        np.asarray(temp_c, dtype=float))
+
+
 def _basis_scale_quadratic(n1, n2, n3, time_s, temp_c):
     return _stack([
         [n1**2, 0, 0],
@@ -325,6 +334,14 @@ def _jacobian_scale_quadratic(time_s, temp_c):
     ])
 
 
+def _slope_scale_quadratic(n1, n2, n3, r, time_s, temp_c):
+    return np.array([
+        _stack([[2*r + 2*abs(n1), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 2*r + 2*abs(n2), 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2*r + 2*abs(n3)]], n1, r, time_s, temp_c),
+    ])
+
+
 def _basis_scale_asymmetry(n1, n2, n3, time_s, temp_c):
     return _stack([
         [abs(n1), 0, 0],
@@ -338,6 +355,14 @@ def _jacobian_scale_asymmetry(time_s, temp_c):
         _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
         _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], time_s, temp_c),
         _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], time_s, temp_c),
+    ])
+
+
+def _slope_scale_asymmetry(n1, n2, n3, r, time_s, temp_c):
+    return np.array([
+        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], n1, r, time_s, temp_c),
     ])
 
 
@@ -363,6 +388,17 @@ def _jacobian_cross_coupling(time_s, temp_c):
     ])
 
 
+def _slope_cross_coupling(n1, n2, n3, r, time_s, temp_c):
+    return np.array([
+        _stack([[r + abs(n2), r + abs(n1), 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[r + abs(n3), 0, r + abs(n1)], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [r + abs(n2), r + abs(n1), 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, r + abs(n3), r + abs(n2)], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [r + abs(n3), 0, r + abs(n1)]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, r + abs(n3), r + abs(n2)]], n1, r, time_s, temp_c),
+    ])
+
+
 def _basis_bias_drift(n1, n2, n3, time_s, temp_c):
     return _stack([
         [time_s, 0, 0],
@@ -376,6 +412,14 @@ def _jacobian_bias_drift(time_s, temp_c):
         _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
         _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
         _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+    ])
+
+
+def _slope_bias_drift(n1, n2, n3, r, time_s, temp_c):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
     ])
 
 
@@ -395,6 +439,14 @@ def _jacobian_bias_temperature(time_s, temp_c):
     ])
 
 
+def _slope_bias_temperature(n1, n2, n3, r, time_s, temp_c):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+    ])
+
+
 def _basis_scale_temperature(n1, n2, n3, time_s, temp_c):
     return _stack([
         [n1*temp_c - 20*n1, 0, 0],
@@ -408,6 +460,14 @@ def _jacobian_scale_temperature(time_s, temp_c):
         _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
         _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], time_s, temp_c),
         _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], time_s, temp_c),
+    ])
+
+
+def _slope_scale_temperature(n1, n2, n3, r, time_s, temp_c):
+    return np.array([
+        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], n1, r, time_s, temp_c),
     ])
 
 
@@ -426,4 +486,12 @@ _JACOBIAN = {
     "bias_drift": _jacobian_bias_drift,
     "bias_temperature": _jacobian_bias_temperature,
     "scale_temperature": _jacobian_scale_temperature,
+}
+_SLOPE = {
+    "scale_quadratic": _slope_scale_quadratic,
+    "scale_asymmetry": _slope_scale_asymmetry,
+    "cross_coupling": _slope_cross_coupling,
+    "bias_drift": _slope_bias_drift,
+    "bias_temperature": _slope_bias_temperature,
+    "scale_temperature": _slope_scale_temperature,
 }

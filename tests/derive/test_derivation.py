@@ -149,3 +149,31 @@ def test_trig_basis_is_the_groebner_remainder_modulo_sin2_plus_cos2(terms):
     want = rem.xreplace({ca: sp.cos(a), sa: sp.sin(a), cb: sp.cos(b), sb: sp.sin(b)})
     assert sp.expand(got - want) == 0
     assert all(c.is_Rational for c in trig_basis(expr, (a, b), (t,)).values())
+
+
+def test_the_effects_slope_bound_holds_over_its_box_and_is_reached_at_a_vertex():
+    # generated/norm.py effect_slope_bound (derive/norm.py, expanded about w) against SymPy's own Jacobian of each
+    # effect's basis, evaluated at the 8 vertices of the box |z - w| <= r and 50 points inside: never below it;
+    # for the polynomial effects (a Jacobian linear in w) equal to the largest at a vertex, for |w_i| at most 1.
+    # Red when a term of the expansion is dropped (the cross-coupling bound without r is exceeded at a vertex).
+    import itertools
+
+    from garant.derive import norm as dn
+    from garant.generated import norm as N
+    rng = np.random.default_rng(5)
+    for name in N.EFFECTS:
+        names, basis = dn.effect_basis(name)
+        jac = [sp.lambdify((*dn.n_sym, sp.Symbol("time_s"), sp.Symbol("temp_c")), sp.Matrix(phi).jacobian(
+            sp.Matrix(dn.n_sym)), "numpy") for phi in basis]
+        for _ in range(20):
+            w = rng.normal(size=3)
+            w /= np.linalg.norm(w)
+            r, t, T = rng.uniform(0, 0.05), rng.uniform(-50, 50), rng.uniform(-10, 60)
+            bound = N.effect_slope_bound(name, w[:, None], np.array([r]), np.array([t]), np.array([T]))[..., 0]
+            vertices = [w + r * np.array(s) for s in itertools.product((-1, 1), repeat=3)]
+            inside = [w + r * rng.uniform(-1, 1, 3) for _ in range(50)]
+            for j, J in enumerate(jac):
+                at = np.array([np.abs(np.array(J(*z, t, T), float)) for z in vertices + inside])
+                assert np.all(at <= bound[j] * (1 + 1e-12) + 1e-15), (name, j)
+                if name != "scale_asymmetry":
+                    np.testing.assert_allclose(at[:8].max(axis=0), bound[j], rtol=1e-12, atol=1e-15)

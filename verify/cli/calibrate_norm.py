@@ -242,12 +242,22 @@ def _print(res, args):
              f"INCONSISTENT: {len(res['disagreements'])} still interval(s) lie beyond their own noise bound plus the "
              "remainder at the best fit, so the data refute the noise bound there; no bound is given. A uniform "
              f"--delta-sigma would need at least {res['sigma_min_supported']:.3e} (units of g). Try --diagnose."))
+    if "model_discrepancy" in res:
+        print(discrepancy(res))
     if not res["consistent"]:
         print(refutations(res))
     if res["consistent"]:
         _print_bounds(res, args)
     if "diagnosis" in res:
         _print_diagnosis(res["diagnosis"], args.params, args)
+
+
+def discrepancy(res):
+    """The worst residual without and with the effects added (--effect), in units of each interval's noise rule."""
+    d = res["model_discrepancy"]
+    return (f"worst residual in units of {d['units']}: {d['max_residual_before']:.2f} without the effects "
+            f"({'consistent' if d['max_residual_before'] <= 1 else 'INCONSISTENT'}) -> {d['max_residual_after']:.2f} "
+            f"with {', '.join(res['effect_names'])}")
 
 
 def refutations(res, count=12):
@@ -449,6 +459,8 @@ def _report(res, args):
                                                            "bound is given")
                + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} "
                f"({res['delta_sigma_source']}), proven remainder {res['remainder_bound']:.1e} (units of g)")
+    if "model_discrepancy" in res:
+        verdict += ". The " + discrepancy(res)
     sections = [("Verdict", verdict), ("Premises", res["premises"]),
                 ("Calibration a = M (raw - b)", report.Table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
                  [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]

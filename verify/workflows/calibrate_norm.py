@@ -302,6 +302,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
         _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), str(e))
     if ext is not None:     # from the base model's fit, in units of each interval's noise bound
         rule = noise_rule(stills, res["M"], res["n"], g, quantum)
+        worst = [weighted_fit(mod.H(res["n"])[:params], res["sigma"], rule)[1]]
         res = fit(mod, raw, g, params, ext, (res["M"], res["b"], res["note"]),
                   rule if delta_sigma is None else np.full(len(stills), delta_sigma))
     fit_residual = float(np.abs(res["sigma"]).max())
@@ -373,6 +374,9 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
                                                          res["sigma"], res["n"].T)],
     }
     if ext is not None:
+        worst.append(weighted_fit(np.vstack([mod.H(res["n"])[:params], ext.columns(res["n"])]), res["sigma"], rule)[1])
+        out["model_discrepancy"] = {"max_residual_before": float(worst[0]), "max_residual_after": float(worst[1]),
+                                    "units": "each interval's noise rule (first order of (2.2) of 001, no remainder)"}
         out["effect_names"] = list(ext.names)
         out["effect_reference"] = {"time_s": ext.t_ref, "temp_c": 20.0}
     if not consistent:

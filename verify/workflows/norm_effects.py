@@ -78,7 +78,7 @@ class Extension:
     units of EFFECT_UNITS), their basis at the fit's directions and what the remainder needs of them."""
 
     def __init__(self, mod, names, stills, temps, path):
-        self.mod, self.names = mod, tuple(names)
+        self.mod, self.names, self.path = mod, tuple(names), path
         t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
         self.t_ref = float((t_mid.min() + t_mid.max()) / 2)
         self.t = t_mid - self.t_ref
@@ -113,18 +113,44 @@ class Extension:
 
     def extra(self, th_box, A_box, e_box, nu):
         """(v, rho) per interval for a box of the correction theta' (|theta'| <= th_box) and of the base's (A_box,
-        e_box): |v| <= |Phi(p)| th_box + rho, rho >= |(Phi(m) - Phi(p)) theta| <= L |m - p| with L = ||sum_j
+        e_box): |v| <= |Phi(p)| th_box + r, r >= |(Phi(m) - Phi(p)) theta| <= L |m - p| with L = ||sum_j
         (|theta_j| + th_box_j) b_j||_2 (`lipschitz`). With F - m = A m + d, |d| <= |eps/g| + nu + |v|, the angle
         between F and m has sine at most delta = |F - m|, so |n - m| <= K_DIR delta (delta <= 0.1); |m - p| <=
-        |m - n| + |n - p|; so rho <= L (K_DIR (a + e + nu + v_lin + rho) + |n - p|), solved for rho."""
+        |m - n| + |n - p| =: D; so r <= L (K_DIR (a + e + nu + v_lin + r) + |n - p|), solved for r. rho bounds
+        the part along n, |n^T (Phi(m) - Phi(p)) theta|, which enters (2.2) at first order: the smaller of r and
+        D sum_k sum_j (|theta_j| + th_box_j) sum_i |n_i| s_j[i, k], s_j the Jacobian's bound within D of p
+        (generated `effect_slope_bound`: at p itself, not the ball's worst)."""
         a, e = float(np.linalg.norm(A_box)), float(np.linalg.norm(e_box))
         v_lin = np.linalg.norm(np.einsum("jik,j->ik", np.abs(self.phi), th_box), axis=0)
-        L = lipschitz(self.jac, np.abs(self.theta) + th_box)
+        size = np.abs(self.theta) + th_box
+        L = lipschitz(self.jac, size)
         dp = np.linalg.norm(self.n - self.p, axis=0)
         room = 1.0 - K_DIR * L
-        rho = np.where(room > 0, L * (K_DIR * (a + e + nu + v_lin) + dp) / np.where(room > 0, room, 1.0), np.inf)
-        rho = np.where(a + e + nu + v_lin + rho <= 0.1, rho, np.inf)
-        return (v_lin + rho) * (1 + 1e-12), rho * (1 + 1e-12)
+        r = np.where(room > 0, L * (K_DIR * (a + e + nu + v_lin) + dp) / np.where(room > 0, room, 1.0), np.inf)
+        r = np.where(a + e + nu + v_lin + r <= 0.1, r, np.inf)
+        if not np.all(np.isfinite(r)):
+            return np.full(r.shape, np.inf), np.full(r.shape, np.inf)
+        D = (K_DIR * (a + e + nu + v_lin + r) + dp) * (1 + 1e-12)
+        Dc = np.minimum(D, self._components(A_box, e_box, nu + v_lin + r, D) + dp)
+        slope = np.concatenate([self.mod.effect_slope_bound(x, self.p, D, self.t, self.temp) for x in self.names])
+        along = np.einsum("j,jick,ik,ck->k", size, slope, np.abs(self.n), Dc) * (1 + 1e-12)
+        return (v_lin + r) * (1 + 1e-12), np.minimum(r, along) * (1 + 1e-12)
+
+    def _components(self, A_box, e_box, w, D):
+        """A bound of |n - m| per coordinate (3, K), with Delta = F - m = A m + e + x, |x| <= w (noise and the
+        effect's part), |Delta| <= delta: n - m = (P_m Delta - m ((1 - |F|) m^T Delta + |Delta|^2) / (|F| + 1)) / |F|
+        exactly (|F|^2 = 1 + 2 m^T Delta + |Delta|^2), so |(n - m)_c| <= (|(P_n Delta)_c| + 2 |n - m| delta +
+        |m_c| 2 delta^2 / (2 - delta)) / (1 - delta), and |(P_n Delta)_c| <= (|P_n| (|A| (|n| + D) + |e|))_c + w
+        (a row of a projection has norm at most 1); D >= |n - m|, |m| <= |n| + D."""
+        n = self.n
+        delta = np.linalg.norm(A_box) * (1 + D) + np.linalg.norm(e_box) + w
+        Pn = np.abs(np.eye(3)[:, :, None] - n[:, None, :] * n[None, :, :])        # (3, 3, K)
+        inner = np.abs(A_box) @ (np.abs(n) + D) + np.abs(e_box)[:, None]           # (3, K)
+        Pd = np.einsum("cdk,dk->ck", Pn, inner) + w
+        if np.any(delta >= 0.5):
+            return np.full(n.shape, np.inf)
+        out = (Pd + 2 * D * delta + (np.abs(n) + D) * 2 * delta ** 2 / (2 - delta)) / (1 - delta)
+        return out * (1 + 1e-12)
 
     def fixed_point(self, f):
         """`fixed_point` with this extension's theta."""
@@ -166,7 +192,7 @@ def verdict(mod, res, noise, nu, ext):
     box = np.array([[err[0], 0, 0], [err[3], err[1], 0], [err[4], err[5], err[2]]])
     left, _ = remainder_per_interval((n * f).T, box, err[6:9], nu, ext.extra(err[9:], box, err[6:9], nu))
     if not np.all(np.isfinite(left)):
-        raise DataError(f"{res.get('path', 'the log')}: with --effect {','.join(ext.names)} the fit's effects are too "
+        raise DataError(f"{ext.path}: with --effect {','.join(ext.names)} the fit's effects are too "
                         f"large ({', '.join(f'{x}={v:+.2g}' for x, v in zip(ext.labels, ext.theta))}) for the "
                         "remainder of (2.2) to be bounded on the box the orientations guarantee: no verdict; "
                         "--diagnose names what the data need")

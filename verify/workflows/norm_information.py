@@ -19,7 +19,8 @@ def premise_box(X):
 
 
 STEPS = 12                                            # boxes at most, each way
-PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0)    # the premise box tried, in multiples of the set's own box
+#: The premise box tried, in multiples of the set's own box (the widest that contracts is taken).
+PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0, 1.5, 1.25)
 
 
 def remainder_per_interval(F, A_box, e_box, nu, extra=None):
