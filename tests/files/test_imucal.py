@@ -79,6 +79,43 @@ def test_imucals_session_through_the_norm_says_what_six_faces_cannot_identify(ca
     assert err.count("\n") == 1 and "the norm fit diverges at step 1" in err
     assert "13 still intervals in 6 distinct orientation(s), each along an axis" in err
     assert "cannot identify alpha, beta, gamma" in err and "would identify lambda1, lambda2, lambda3" in err
+    assert "state bounds on alpha, beta, gamma, e.g. --bound alpha=1e-3" in err
+
+
+def test_imucals_session_calibrates_scale_and_bias_with_the_misalignment_premise(tmp_path, capsys):
+    # Six faces identify the scale factors and biases; the misalignments enter (2.2) of 001 only at second order
+    # there, so they are a stated premise (--bound, rad), printed with the bounds and bounding them. imucal's own
+    # Ferraris calibration of the session (it also turns the unit, so it sees the misalignments): its
+    # non-orthogonality in garant's lower-triangular frame is within 1e-2 rad (|alpha| 6.2e-3, |beta| 6.1e-3,
+    # |gamma| 3.9e-3), so that premise holds for this unit, and its scale factors and biases lie within garant's
+    # bounds. With 2e-3 rad the faces refute the premise (exit 3). Red when the held misalignments are held at 0
+    # instead of within the premise (the faces then refute the model: exit 3).
+    from imucal import FerrarisCalibration, ferraris_regions_from_section_list
+    base = ["calibrate-norm", str(SESSION), "--format", "imucal", "--rate", "102.4"]
+    premise = [x for name in ("alpha", "beta", "gamma") for x in ("--bound", f"{name}=1e-2")]
+    out, cal = tmp_path / "r.json", tmp_path / "c.json"
+    assert main(base + premise + ["--json", str(out), "--save", str(cal)]) == 0
+    said = capsys.readouterr().out
+    assert "the misalignments are within |alpha| <= 0.01 rad, |beta| <= 0.01 rad, |gamma| <= 0.01 rad (--bound" in said
+    res = json.loads(out.read_text())
+    assert res["misalignment_premise"] == {"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2}
+    assert all(res["guaranteed_error"][k] <= 1e-2 * 1.001 for k in ("alpha", "beta", "gamma"))
+    assert "|alpha| <= 0.01 rad" in json.loads(cal.read_text())["premises"]
+    df = pd.read_csv(SESSION, header=0, index_col=0)
+    info = FerrarisCalibration().compute(ferraris_regions_from_section_list(df, pd.read_json(SECTIONS).T), 102.4,
+                                         "m/s^2", "deg/s")
+    G = np.asarray(info.K_a) @ np.asarray(info.R_a) - np.eye(3)
+    lower = [G[1, 0] + G[0, 1], G[2, 0] + G[0, 2], G[2, 1] + G[1, 2]]        # the skew part turned away
+    assert np.all(np.abs(lower) <= 1e-2) and np.max(np.abs(lower)) > 5e-3
+    p, e = res["parameters"], res["guaranteed_error"]
+    for i, k in enumerate(("lambda1", "lambda2", "lambda3")):
+        assert abs(G[i, i] - p[k]) <= e[k], (k, G[i, i], p[k], e[k])
+    for i, k in enumerate(("eps1/g", "eps2/g", "eps3/g")):
+        assert abs(info.b_a[i] / res["g"] - p[k]) <= e[k], (k, info.b_a[i], p[k], e[k])
+    tight = [x for name in ("alpha", "beta", "gamma") for x in ("--bound", f"{name}=2e-3")]
+    assert main(base + tight) == 3
+    assert main(base + ["--bound", "kappa=1e-3"]) == 2
+    assert "takes bounds of the misalignments alpha, beta, gamma" in capsys.readouterr().err
 
 
 def test_a_dataframe_in_gives_a_calibrated_copy_out(calibrated):

@@ -32,6 +32,10 @@ def add(sub):
                    help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
                         "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature; "
                         "--diagnose names the ones the data need)")
+    p.add_argument("--bound", action="append", type=options.named_bound, metavar="NAME=RAD", default=[],
+                   help="a misalignment's a-priori bound (alpha, beta, gamma; rad), repeatable: where every "
+                        "orientation lies along an axis (six faces) the scale factors and biases are calibrated with "
+                        "the misalignments held within it, a premise printed with the bounds")
     options.units(p)
     options.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
@@ -176,7 +180,7 @@ def _run(args, into=None):
     res = jobs.calibrate_norm(args.log, g=args.g, g_uncertainty=args.g_uncertainty, delta_sigma=args.delta_sigma,
                               params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                               window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose,
-                              effects=args.effect)
+                              effects=args.effect, bound=dict(args.bound))
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)

@@ -77,18 +77,23 @@ def fold(M, b, delta, q, g):
             delta + q[9:12] if len(q) == 12 else delta)
 
 
-def fit(mod, raw, g, params=9, ext=None, start=None, weights=None):
+def fit(mod, raw, g, params=9, ext=None, start=None, weights=None, free=None):
     """Iterate the norm relation to convergence: M, b, delta (12 params), residuals, iterations. With catalogue
     effects (`ext`, norm_effects.Extension) their parameters ext.theta are fitted beside, the term evaluated at
     the direction p of M (raw - b) and taken out of the reading; then p is in the result. `start`: (M, b, note)
     to start from (default `initial_map`); `weights`: each interval's noise bound, the fit then minimax in their
-    units (many parameters on few intervals: the plain fit would follow the noisiest)."""
+    units (many parameters on few intervals: the plain fit would follow the noisiest); `free`: the corrections
+    fitted (default all; the rest stay 0: misalignments the orientations cannot identify, bounded by a premise)."""
     M, b, note = initial_map(raw, g) if start is None else start
     delta = np.zeros(3)
     for it in range(1, MAX_ITER + 1):
         s, n, p = _state(mod, raw, M, b, delta, g, ext)
         A = mod.H(n)[:params] if ext is None else np.vstack([mod.H(n)[:params], ext.columns(n)])
-        q, _ = chebyshev_fit(A, s) if weights is None else weighted_fit(A, s, weights)
+        if free is not None:
+            q = np.zeros(A.shape[0])
+            q[free] = chebyshev_fit(A[free], s)[0]
+        else:
+            q, _ = chebyshev_fit(A, s) if weights is None else weighted_fit(A, s, weights)
         if not np.all(np.isfinite(q)) or np.abs(q[:params]).max() > MAX_STEP:
             k = int(np.nanargmax(np.where(np.isfinite(q), np.abs(q), np.inf)))
             raise Diverged(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to "
@@ -151,16 +156,26 @@ def orientations(n, within_deg=SAME_ORIENTATION_DEG):
     return np.array(reps)
 
 
-def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""):
+def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause="", premise=None):
     """Before the fit: the parameters the orientations present identify, structurally: each direction
     within `within_deg` of a sensor axis taken as that axis (six faces, each axis up and down, are axes
     to within a degree), an exact rank test of (2.2) of 001 on them. The parameters they cannot identify
     are named with the orientations to add, and nothing is fitted (a fit on them runs away). After a fit
-    that ran away (`cause`), the same statement with the orientations' own distance from the axes."""
+    that ran away (`cause`), the same statement with the orientations' own distance from the axes. With a
+    `premise` ({misalignment: its bound, rad}) that bounds each misalignment they cannot identify (six faces
+    along the axes: the misalignments enter (2.2) of 001 only at second order there), the scale factors and
+    biases are calibrated: returns the indices the premise bounds; a premise these orientations do not need is
+    refused."""
     axes = np.vstack([np.eye(3), -np.eye(3)])
     snapped = np.array([axes[np.argmax(axes @ d)] if np.degrees(np.arccos(np.clip((axes @ d).max(), -1, 1)))
                         <= within_deg else d for d in n.T]).T
     unseen = lp.unidentifiable(mod.H(snapped)[:params])
+    if premise and not cause:
+        if not unseen:
+            raise DataError(f"{path}: --bound {', '.join(premise)}: these orientations identify the misalignments; "
+                            "a bound on them is taken only where they cannot (each orientation along an axis)")
+        if set(unseen) <= {3, 4, 5} and all(PARAM_LABELS[k] in premise for k in unseen):
+            return list(unseen)
     if not unseen:
         if cause:
             raise DataError(f"{path}: {cause}; record orientations between the axes (garant plan norm)")
@@ -177,34 +192,42 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
                     + (" (a misalignment enters the norm only at second order when every orientation lies along an "
                        "axis)" if on_axes and any(3 <= k < 6 for k in unseen) else "")
                     + (f"; they would identify {', '.join(seen)}" if seen else "")
+                    + (f" (state bounds on {', '.join(PARAM_LABELS[k] for k in unseen)}, e.g. --bound "
+                       f"{PARAM_LABELS[unseen[0]]}=1e-3 in rad, to calibrate them with those as a premise)"
+                       if set(unseen) <= {3, 4, 5} else "")
                     + "; add orientations such as "
                     + ", ".join("(" + ", ".join(f"{v:+.3f}" for v in p) + ")" for p in add)
                     + " (garant plan norm lists them all)")
 
 
-def guaranteed(mod, n, params, noise):
+def guaranteed(mod, n, params, noise, cap=None):
     """Guaranteed error of each parameter on the present directions, and the unidentifiable ones:
     the LP min sum_k noise_k |Phi_k| subject to A Phi = e_nu (noise: each direction's bound, units of g),
     solved as the plain LP (7)-(8) on the columns a_k / noise_k."""
-    return estimator(mod, n, params, noise)[1:]
+    return estimator(mod, n, params, noise, cap)[1:]
 
 
-def estimator(mod, n, params, noise):
+def estimator(mod, n, params, noise, cap=None):
     """The optimal guaranteed estimator on the present directions: weights Phi (K x params) on the norm
-    residuals, the guaranteed errors, and the unidentifiable parameters (then Phi and errors are None)."""
+    residuals, the guaranteed errors, and the unidentifiable parameters (then Phi and errors are None). With
+    `cap` (params, inf where none), the a-priori bounds of q: each a measurement of that q, 0 (the fit holds it
+    there) within cap, beside the directions (its weight in Phi is left out: it multiplies a residual of 0)."""
     A = mod.H(n)[:params]
+    w = np.broadcast_to(noise, A.shape[1])
+    if cap is not None:
+        held = np.flatnonzero(np.isfinite(cap))
+        A, w = np.hstack([A, np.eye(params)[:, held]]), np.r_[w, cap[held]]
     missing = lp.unidentifiable(A)
     if missing:
         return None, None, missing
-    w = np.broadcast_to(noise, A.shape[1])
     Phi, err = lp.primal(A / w)
-    return Phi / w[:, None], err, []
+    return (Phi / w[:, None])[:len(n.T)], err, []
 
 
 GAIN = 1.25   # orientations are suggested only when they shrink some bound by at least this factor
 
 
-def directions_to_add(mod, n, params, noise, err, within_deg=10.0):
+def directions_to_add(mod, n, params, noise, err, within_deg=10.0, cap=None):
     """Optimal-plan directions farther than within_deg from every direction present, when adding them
     (each held as well as the log's typical interval: the median noise bound) shrinks some bound by GAIN
     or more: (directions with the angle to the nearest present one, the largest factor and the q it is
@@ -215,7 +238,7 @@ def directions_to_add(mod, n, params, noise, err, within_deg=10.0):
     if not far:
         return [], 1.0, None
     n_all = np.column_stack([n, np.array([p for p, _ in far]).T])
-    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), median(noise))])[0]
+    err_all = guaranteed(mod, n_all, params, np.r_[noise, np.full(len(far), median(noise))], cap)[0]
     factor = err / err_all
     k = int(np.argmax(factor))
     found = [(p.tolist(), a) for p, a in far] if factor[k] >= GAIN else []
@@ -270,7 +293,7 @@ PARAM_LABELS = ("lambda1", "lambda2", "lambda3", "alpha", "beta", "gamma", "eps1
 COUNT_LABELS = ("S11", "S22", "S33", "S21", "S31", "S32", "b1", "b2", "b3")
 
 
-def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
+def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, premise=None):
     """The whole calibration of a log's still intervals: the dictionary the CLI prints and writes.
 
     The noise bound delta_sigma_max is --delta-sigma when given, else the noise rule from the data
@@ -278,7 +301,9 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
     residual of the exact norm relation is within delta_sigma_max plus the proven remainder (2.3)
     of the linearisation around the fit; if not, no bound is given. With catalogue effects (`ext`,
     norm_effects.Extension) the relation carries their columns and each interval's remainder their rest
-    (norm_effects), and every bound is over the information set of that extended relation."""
+    (norm_effects), and every bound is over the information set of that extended relation. `premise`
+    ({misalignment: bound, rad}, --bound): where the orientations cannot identify the misalignments (each along
+    an axis), the scale factors and biases are fitted and the misalignments held within it (`_identifiable`)."""
     need = params + 3 + (len(ext.labels) if ext else 0)
     if len(stills) < need:
         raise DataError(f"{path}: found only {len(stills)} still interval(s); a {params}-parameter "
@@ -287,7 +312,15 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
     raw = np.array([s.mean for s in stills])
     M0, b0, _ = initial_map(raw, g)
     before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
-    _identifiable(mod, stills, n0, params, path)
+    free = held = None
+    if premise:
+        if ext is not None:
+            raise DataError(f"{path}: --bound (the misalignments of six faces) and --effect are not taken together")
+        off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
+        held = _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), premise=premise)
+        free = [k for k in range(params) if k not in held]
+    else:
+        _identifiable(mod, stills, n0, params, path)
     if ext is not None:
         ext.at(n0, n0)
         missing = ext.identifiable(mod.H(n0)[:params])
@@ -296,7 +329,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
                             f"{', '.join(missing)} of --effect {','.join(ext.names)} (--diagnose lists the effects "
                             "they cannot tell apart): add fewer effects, or orientations")
     try:
-        res = fit(mod, raw, g, params)
+        res = fit(mod, raw, g, params, free=free)
     except Diverged as e:                      # say what the orientations, as they lie, cannot hold apart
         off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
         _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), str(e))
@@ -316,13 +349,14 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
         noise = dsig * np.linalg.norm(res["M"].T @ res["n"], axis=0) * (1 + 1e-12)
     else:
         noise = np.full(len(stills), dsig)
-    err, missing = guaranteed(mod, res["n"], params, noise)
+    cap = None if held is None else misalignment_cap(res["M"], params, premise, held, si)
+    err, missing = guaranteed(mod, res["n"], params, noise, cap)
     if missing:
         raise DataError(f"{path}: the {len(stills)} orientations cannot identify "
                         f"{', '.join(mod.Q_NAMES[k] for k in missing)}; add orientations")
     nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(stills, quantum).T, axis=0) / g if delta_sigma is None
           else np.full(len(stills), np.linalg.norm(res["M"], 2) * dsig))
-    info = premise = exact = None
+    info = box = exact = None
     if ext is not None:
         if params != 9 or not (delta_sigma is None or si):
             raise DataError(f"{path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
@@ -335,7 +369,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
             if found is None:
                 raise DataError(f"{path}: consistent with --effect {','.join(ext.names)}, but the remainder of the "
                                 "extended relation cannot be proven from any box around the fit: no bound")
-            info, rb_k, premise, shift = found
+            info, rb_k, box, shift = found
             rb, bnd = float(rb_k.max()), base + rb_k
             exact = (A, bnd, shift, ext)
             # each contraction's set holds the truth when the premise box does; their common part is empty when
@@ -343,16 +377,17 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
             consistent = weighted_fit(A, res["sigma"], bnd)[1] <= 1.0
     else:
         rb = linearisation_remainder(mod, err, params)
-        rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb)[0], params)
-        consistent = bool(np.all(np.abs(res["sigma"]) <= noise + rb))
+        rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb, cap)[0], params)
         bnd = noise + rb
+        consistent = bool(np.all(np.abs(res["sigma"]) <= bnd)) if cap is None else held_fit(
+            mod.H(res["n"])[:params], res["sigma"], bnd, cap) <= 1.0
     if ext is None and consistent and params == 9 and (delta_sigma is None or si):
-        found = norm_information.exact_information(mod, res, noise, nu)
+        found = norm_information.exact_information(mod, res, noise, nu, cap=cap)
         if found is not None:
-            info, rb_k, premise, _ = found
+            info, rb_k, box, _ = found
             rb = float(rb_k.max())
     if consistent and info is None:
-        info = information(mod, res, params, noise + rb)
+        info = information(mod, res, params, noise + rb, cap)
     out = {
         "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
         "start": res["note"], "raw_unit": raw_unit(raw, g), "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
@@ -363,7 +398,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
                      + ("takes g as exact" if premise is not None else "of (2.3) takes g and delta_f as exact")
-                     + "); the orientations are still" + norm_information.premise_box(premise)),
+                     + "); the orientations are still" + norm_information.premise_box(box)
+                     + _misalignment_premise(premise, held)),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "noise_bound": float(nb),
@@ -373,6 +409,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
                          for s, nr, nb, sb, sa, d in zip(stills, rule, np.broadcast_to(noise, rule.shape), before,
                                                          res["sigma"], res["n"].T)],
     }
+    if held is not None:
+        out["misalignment_premise"] = {PARAM_LABELS[k]: float(premise[PARAM_LABELS[k]]) for k in held}
     if ext is not None:
         worst.append(weighted_fit(np.vstack([mod.H(res["n"])[:params], ext.columns(res["n"])]), res["sigma"], rule)[1])
         out["model_discrepancy"] = {"max_residual_before": float(worst[0]), "max_residual_after": float(worst[1]),
@@ -382,8 +420,40 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None):
     if not consistent:
         out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > bnd)]
         return out
-    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact))
+    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact, cap))
     return out
+
+
+def misalignment_cap(M_fit, params, premise, held, si):
+    """The bound of each held correction q_k (the fit keeps it 0) from the premise on the printed misalignment:
+    on a log in m/s^2 the printed misalignment moves by J_kk q_k alone when the fit's M is diagonal
+    (`parameter_map`: P = inv(M) moves by P_fit dA, exactly), so |q_k| <= bound / |J_kk|; on a log in counts
+    the printed parameters are q."""
+    cap = np.full(params, np.inf)
+    J = parameter_map(M_fit, params) if si else np.eye(params)
+    for k in held:
+        if np.count_nonzero(J[k]) != 1:
+            raise DataError("the fit's M is not diagonal: a misalignment premise cannot be carried to q")
+        cap[k] = premise[PARAM_LABELS[k]] / abs(J[k, k]) * (1 + 1e-12)
+    return cap
+
+
+def held_fit(H, s, bound, cap):
+    """The weighted minimax residual (`weighted_fit`) with each held q_k also a measurement of 0 within cap_k:
+    within 1 when some correction within the premise meets every interval's bound."""
+    held = np.flatnonzero(np.isfinite(cap))
+    return weighted_fit(np.hstack([H, np.eye(H.shape[0])[:, held]]), np.r_[s, np.zeros(len(held))],
+                        np.r_[bound, cap[held]])[1]
+
+
+def _misalignment_premise(premise, held):
+    """The misalignment premise in words, or empty."""
+    if held is None:
+        return ""
+    return ("; the misalignments are within " + ", ".join(f"|{PARAM_LABELS[k]}| <= {premise[PARAM_LABELS[k]]:g} rad"
+                                                        for k in held)
+            + " (--bound, stated: each orientation lies along an axis, where they enter (2.2) of 001 only at second "
+              "order, so the data cannot bound them)")
 
 
 def _noise_premise(dsig, source, stated, si, g):
@@ -402,7 +472,7 @@ def _noise_premise(dsig, source, stated, si, g):
             f"to the interval's direction (at most delta_sigma_max = {dsig:.3e}, units of g; {source})")
 
 
-def information(mod, res, params, bound):
+def information(mod, res, params, bound, cap=None):
     """(lo, hi) of the corrections q of (2.2) around the fit over the information set: every q with
     |sigma_k - H(n_k)^T q| <= bound_k (each interval's noise plus the remainder the verdict proves) for every
     interval; LPs, each end proven by duality (solve/hull.py), within the LP estimator's interval (which
@@ -410,9 +480,11 @@ def information(mod, res, params, bound):
     from ..solve import hull
     A = mod.H(res["n"])[:params]
     s = res["sigma"]
-    Phi, e, _ = estimator(mod, res["n"], params, bound)
+    Phi, e, _ = estimator(mod, res["n"], params, bound, cap)
     centre = Phi.T @ s
     box = (centre - e * (1 + 1e-9) - 1e-15, centre + e * (1 + 1e-9) + 1e-15)
+    if cap is not None:                          # the premise itself: |q| <= cap
+        box = (np.maximum(box[0], -cap), np.minimum(box[1], cap))
     try:
         lo, hi = hull.ranges(A.T, s - bound, s + bound, *box, np.eye(params))
     except hull.Empty:                           # the verdict found a fit: empty only to HiGHS's tolerance
@@ -429,7 +501,7 @@ def plan_bounds(mod, params):
     return best
 
 
-def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None):
+def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None, cap=None):
     """For data consistent with the noise bound: the estimate (the midpoint of the information set `info`,
     (lo, hi) of q, folded into the fit `res`), its parameters with guaranteed errors over the same set (each a
     linear function of q: an LP pair, proven), the a-priori ones of the LP estimator (noise + remainder rb per
@@ -441,7 +513,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None):
     s = res["sigma"]
     if exact is None:
         A, bnd, shift, ext = mod.H(res["n"])[:params], noise + rb, 0.0, None
-        Phi, bound, _ = estimator(mod, res["n"], params, noise + rb)
+        Phi, bound, _ = estimator(mod, res["n"], params, noise + rb, cap)
         scale, rest = 1.0, rb
     else:
         A, bnd, shift, ext = exact
@@ -468,6 +540,9 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None):
     # over that wider set, within the LP estimator's box for it
     wider = SIGMA_WIDER * noise * scale + rest
     centre, e_w = Phi.T @ s, (np.abs(Phi).T @ np.broadcast_to(wider, s.shape)) * (1 + 1e-9) + 1e-15
+    if cap is not None:                          # the held q's measurements of 0 within cap count too
+        Phi_w, e_w, _ = estimator(mod, res["n"], params, wider, cap)
+        centre, e_w = Phi_w.T @ s, e_w * (1 + 1e-9) + 1e-15
     C = J if si else np.hstack([np.eye(params), np.zeros((params, extra))])
     try:
         w_lo, w_hi = hull.ranges(A.T, s - wider, s + wider, centre - e_w, centre + e_w, C)
@@ -486,7 +561,7 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None):
     if ext is not None:
         effects["effects"] = ext.effects_out(lo[params:], hi[params:], bound[params:])
         half, bound, err = half[:params], bound[:params], err[:params]
-    found, factor, which = directions_to_add(mod, res["n"], params, noise, err)
+    found, factor, which = directions_to_add(mod, res["n"], params, noise, err, cap=cap)
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
         "matrix_fit": res["M"].tolist(),

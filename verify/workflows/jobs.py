@@ -128,8 +128,27 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
     return Positions(str(data), angles_for(mod, run.nominal, data), np.array([st.mean for st in run.stills]))
 
 
-def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=9, fmt=None, sensor=None, imu=None,
-                   rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None):
+def _misalignment_bounds(bound):
+    """{misalignment: bound} of `bound` (--bound NAME=VALUE), each name alpha, beta or gamma, each bound a positive
+    number of rad; None when none is given."""
+    if not bound:
+        return None
+    if not isinstance(bound, dict):
+        raise DataError(f"bound: give the misalignments' bounds as a dict, e.g. {{'alpha': 1e-3}}, not "
+                        f"{type(bound).__name__}")
+    out = {}
+    for name, value in bound.items():
+        if name not in ("alpha", "beta", "gamma"):
+            raise DataError(f"--bound {str(name)[:40]}: calibrate-norm takes bounds of the misalignments alpha, beta, "
+                            "gamma (rad)")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 0.5:
+            raise DataError(f"--bound {name}={str(value)[:40]}: give a bound in rad, above 0 and below 0.5")
+        out[name] = float(value)
+    return out
+
+
+def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=None, params=9, fmt=None, sensor=None,
+                   imu=None, rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None):
     """Calibrate a static log through the norm relation (2.2) of 001: `garant calibrate-norm --json`.
 
     Parameters
@@ -141,6 +160,11 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
         Local gravity, m/s^2 (None: 9.81 assumed, |Delta_g/g| <= 5e-3 in the calibration's bounds).
     g_uncertainty : float, optional
         The bound on |Delta_g/g| (default 1e-5 with g, 5e-3 without).
+    bound : dict, optional
+        A-priori bounds of the misalignments, rad (`--bound alpha=1e-3`: {"alpha": 1e-3, ...}), taken where
+        the orientations cannot identify them (each along an axis, as six faces): the scale factors and biases
+        are then calibrated with the misalignments held within them, a premise printed with the bounds.
+
     delta_sigma : float, optional
         A guaranteed bound on |delta_sigma| of (2.2), units of g (None: the noise rule).
     params : {9, 12}
@@ -156,7 +180,6 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
     effects : str or sequence of str, optional
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
         scale_asymmetry, cross_coupling, bias_temperature, scale_temperature).
-
     Returns
     -------
     NormCalibration
@@ -178,7 +201,8 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, delta_sigma=None, params=
     ext = None
     if effects is not None:
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path)
-    res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext)
+    res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
+                 _misalignment_bounds(bound))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
     res["premises"] += (f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} "
                         "m/s^2 (lambda* of (2.2) of 001), the calibration's bounds include it")

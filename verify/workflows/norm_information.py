@@ -76,7 +76,7 @@ def design(mod, res, ext=None):
     return A, f
 
 
-def exact_information(mod, res, noise, nu, ext=None, start=None):
+def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
     """The information set of the 9 corrections q of (2.2) around the fit with each interval's own remainder
     (`remainder_per_interval`) instead of the sphere-wide (2.3): q = w + s, every w with |sigma_k - H'_k^T w| <=
     noise_k / |F_k| + left_k(box), |s| <= shift(box). The remainder needs a box to start from, so it is a premise,
@@ -87,11 +87,13 @@ def exact_information(mod, res, noise, nu, ext=None, start=None):
     norm_effects.Extension) q holds their parameters' corrections after the 9, their columns beside H'. Returns
     ((lo, hi) of q, what is left of the remainder per interval, X, the shift bound), or None when no premise box
     contracts. `start`: each interval's bound of the first set, whose hull sets the scale of the box to start from
-    (default noise / |F|: the linear set; a set that is empty without a remainder needs one)."""
+    (default noise / |F|: the linear set; a set that is empty without a remainder needs one). `cap`: a stated
+    a-priori bound of q (inf where none; calibrate_norm.misalignment_cap), held in every set."""
     s, n = res["sigma"], res["n"]
     A, f = design(mod, res, ext)
     F = (n * f).T
     base = noise / f
+    cap = np.full(A.shape[0], np.inf) if cap is None else np.r_[cap, np.full(A.shape[0] - len(cap), np.inf)]
 
     def step(reach, X=None, proofs=None):
         """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
@@ -102,10 +104,11 @@ def exact_information(mod, res, noise, nu, ext=None, start=None):
         shift = np.r_[shift, np.zeros(len(reach) - 9)]
         if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
             return None
-        lo, hi, lams = _hull(A, s, base + left, None if X is None else X + shift, proofs)
+        box = None if X is None and not np.isfinite(cap).any() else np.minimum(1.0 if X is None else X, cap) + shift
+        lo, hi, lams = _hull(A, s, base + left, box, proofs)
         return lo - shift, hi + shift, left, lams, shift
 
-    lo, hi, lams = _hull(A, s, base if start is None else start)       # the scale of the box to start from
+    lo, hi, lams = _hull(A, s, base if start is None else start, np.minimum(1.0, cap))    # the box's scale
     own, proofs = np.maximum(np.abs(lo), np.abs(hi)), [lams]
     for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
         for by in (proofs, None):                            # by the multipliers solved, then by LPs
@@ -128,7 +131,7 @@ def exact_information(mod, res, noise, nu, ext=None, start=None):
             break
     else:
         return None
-    lo, hi, left = np.maximum(got[0], -X), np.minimum(got[1], X), got[2]
+    lo, hi, left = np.maximum(got[0], -np.minimum(X, cap)), np.minimum(got[1], np.minimum(X, cap)), got[2]
     proofs += [got[3]] if got[3] is not None else []
     # from the premise down: each box proven, inside the last; first by the multipliers of the two sets solved
     # (no LP: the sets between differ in their bounds only), then by LPs until no bound moves by much
