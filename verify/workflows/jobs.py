@@ -164,7 +164,6 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         A-priori bounds of the misalignments, rad (`--bound alpha=1e-3`: {"alpha": 1e-3, ...}), taken where
         the orientations cannot identify them (each along an axis, as six faces): the scale factors and biases
         are then calibrated with the misalignments held within them, a premise printed with the bounds.
-
     delta_sigma : float, optional
         A guaranteed bound on |delta_sigma| of (2.2), units of g (None: the noise rule).
     params : {9, 12}
@@ -180,6 +179,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     effects : str or sequence of str, optional
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
         scale_asymmetry, cross_coupling, bias_temperature, scale_temperature).
+
     Returns
     -------
     NormCalibration
