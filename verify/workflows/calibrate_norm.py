@@ -397,7 +397,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
         "premises": ("the bounds hold if " + _noise_premise(dsig, source, delta_sigma is not None, si, g)
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
-                     + ("takes g as exact" if premise is not None else "of (2.3) takes g and delta_f as exact")
+                     + ("takes g as exact" if box is not None else "of (2.3) takes g and delta_f as exact")
                      + "); the orientations are still" + norm_information.premise_box(box)
                      + _misalignment_premise(premise, held)),
         "sigma_min_supported": max(fit_residual - rb, 0.0),
