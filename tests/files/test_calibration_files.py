@@ -144,6 +144,18 @@ def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
     assert set(KALIBR_KEYS) <= set(fields) and fields["rostopic"] == "/xsens/imu"
     assert all(float(fields[k]) > 0 for k in KALIBR_KEYS if k != "rostopic")     # the reader's own checks
     assert "every field Kalibr's reader needs" in capsys.readouterr().out
+    # Kalibr's reader (kalibr_common/ConfigReader.py, ParametersBase.readYaml) loads the file with PyYAML's
+    # safe_load, a YAML 1.1 parser that reads 2.0e-05 as a number and 2e-05 as text, and then compares each
+    # figure with 0.0 (ImuParameters.checkGyroStatistics): every figure must load as a float. Red with %.6g (2e-5
+    # was written 2e-05: text, a TypeError in that comparison).
+    import yaml
+    assert main(["calibrate-norm", str(REAL / "imu_tk_xsens_acc.txt"), "--g", str(G), "--export-kalibr", str(out),
+                 "--kalibr-gyro", "2e-4,2e-5"]) == 0
+    data = yaml.safe_load(out.read_text())
+    assert all(isinstance(data[k], float) and data[k] > 0 for k in KALIBR_KEYS if k != "rostopic"), data
+    from garant.verify.io.calibration import yaml_float
+    for x in (2e-5, 1e-12, 100, 0.5, 123456789.0, 3.3e7):
+        assert yaml.safe_load(f"x: {yaml_float(x)}")["x"] == float(f"{x:.6g}")
 
 
 @needs_real

@@ -353,6 +353,14 @@ def read_imu_tk(path):
     return T @ K, B
 
 
+def yaml_float(x):
+    """x as a YAML 1.1 float (PyYAML's safe_load, Kalibr's reader, takes 2e-05 for text): six significant digits,
+    a dot in the mantissa and a signed exponent (2.0e-05, 100.0)."""
+    s = f"{float(x):.6g}"
+    mant, e, exp = s.partition("e")
+    return (mant if "." in mant else mant + ".0") + (e + exp if e else "")
+
+
 def kalibr_text(noise_density, rate_hz, random_walk=None, gyro=None, topic="/imu0", why_no_walk=""):
     """The IMU file Kalibr's reader takes (its ImuParameters: flat keys rostopic,
     update_rate, accelerometer_noise_density (m/s^2/sqrt(Hz)), accelerometer_random_walk (m/s^3/sqrt(Hz)),
@@ -364,14 +372,14 @@ def kalibr_text(noise_density, rate_hz, random_walk=None, gyro=None, topic="/imu
              "# statistics Kalibr's reader takes. Scale, misalignment and bias are no fields of it: see the garant",
              "# JSON (--save) or the imu_tk file (--export-imu-tk).",
              f"rostopic: {topic}",
-             f"update_rate: {rate_hz:.6g}   # [ Hz ]",
-             f"accelerometer_noise_density: {noise_density:.6g}   # [ m / s^2 / sqrt(Hz) ], from the still intervals"]
-    lines.append(f"accelerometer_random_walk: {random_walk:.6g}   # [ m / s^3 / sqrt(Hz) ], from the longest still "
+             f"update_rate: {yaml_float(rate_hz)}   # [ Hz ]",
+             f"accelerometer_noise_density: {yaml_float(noise_density)}   # [ m / s^2 / sqrt(Hz) ], from the still intervals"]
+    lines.append(f"accelerometer_random_walk: {yaml_float(random_walk)}   # [ m / s^3 / sqrt(Hz) ], from the longest still "
                  "interval (Allan deviation; statistical, not a bound)" if random_walk is not None else
                  f"# accelerometer_random_walk: not measured ({why_no_walk}); Kalibr needs it")
     if gyro is not None:
-        lines += [f"gyroscope_noise_density: {gyro[0]:.6g}   # [ rad / s / sqrt(Hz) ], as given (--kalibr-gyro)",
-                  f"gyroscope_random_walk: {gyro[1]:.6g}   # [ rad / s^2 / sqrt(Hz) ], as given (--kalibr-gyro)"]
+        lines += [f"gyroscope_noise_density: {yaml_float(gyro[0])}   # [ rad / s / sqrt(Hz) ], as given (--kalibr-gyro)",
+                  f"gyroscope_random_walk: {yaml_float(gyro[1])}   # [ rad / s^2 / sqrt(Hz) ], as given (--kalibr-gyro)"]
     else:
         lines += ["# gyroscope_noise_density: not measured by an accelerometer log (give --kalibr-gyro ND,RW); "
                   "Kalibr needs it",
