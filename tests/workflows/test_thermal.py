@@ -64,11 +64,10 @@ def mems(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def biases_drift(tmp_path_factory):
-    """A unit whose biases alone drift with T (quadratic), estimated once with both autopilot exports."""
+    """A unit whose biases alone drift with T (quadratic), estimated once with ArduPilot's export."""
     folder = tmp_path_factory.mktemp("biases")
     truth = {k: v for k, v in MEMS.items() if not k.startswith("Gamma") or "_T" not in k}
-    return (folder, truth) + _estimated(folder, truth, "--export-ardupilot", "tcal.parm", "--export-px4",
-                                        "tc.params")
+    return (folder, truth) + _estimated(folder, truth, "--export-ardupilot", "tcal.parm")
 
 
 @pytest.mark.parametrize("signs, noise", [(1, "uniform"), (-1, "tilting"), (1, "bending"), (-1, "bending")])
@@ -114,35 +113,55 @@ def test_too_few_temperatures_for_the_degree_are_refused_naming_what_is_missing(
 
 
 def _ardupilot(parm, imu=1):
-    """ArduPilot's correction as its Tools/scripts/tempcal_IMU.py states it: P = poly1d of the ACC coefficients
-    (highest first, no constant term, each stored x 1e6), T held within [TMIN, TMAX], about TEMP_REF = 35 C;
-    corrected = raw - (P(T - 35) - P(T_cal - 35))."""
+    """ArduPilot's correction as its C++ applies it (libraries/AP_InertialSensor/AP_InertialSensor_tempcal.cpp,
+    TCal::correct_sensor and polynomial_eval; AP_InertialSensor_Backend.cpp, _rotate_and_correct_accel): T and
+    T_cal = INS_ACCn_CALTEMP held within [TMIN, TMAX], P(x) = (c1 + (c2 + c3 x) x) x 1e-6 with x = T - 35 C (no
+    constant), v = raw - P(T - 35) + P(T_cal - 35), then a = (v - INS_ACCOFFS) * INS_ACCSCAL, per axis."""
     values = dict(line.split() for line in parm.splitlines() if line and not line.startswith("#"))
+    n = "" if imu == 1 else str(imu)
     tmin, tmax = float(values[f"INS_TCAL{imu}_TMIN"]), float(values[f"INS_TCAL{imu}_TMAX"])
-    polys = [np.poly1d([float(values[f"INS_TCAL{imu}_ACC{p}_{a}"]) / 1e6 for p in (3, 2, 1)] + [0.0]) for a in "XYZ"]
+    c = np.array([[float(values[f"INS_TCAL{imu}_ACC{p}_{a}"]) for a in "XYZ"] for p in (1, 2, 3)])
+    t_cal = float(values[f"INS_ACC{imu}_CALTEMP"])
+    offs = np.array([float(values[f"INS_ACC{n}OFFS_{a}"]) for a in "XYZ"])
+    scal = np.array([float(values[f"INS_ACC{n}SCAL_{a}"]) for a in "XYZ"])
 
-    def correct(raw, T, t_cal):
-        T, t_cal = np.clip(T, tmin, tmax), np.clip(t_cal, tmin, tmax)
-        return raw - np.column_stack([P(T - 35.0) - P(t_cal - 35.0) for P in polys])
-    return correct
+    def P(x):
+        return (c[0] + (c[1] + c[2] * x[:, None]) * x[:, None]) * x[:, None] * 1e-6
+
+    def correct(raw, T):
+        T, tc = np.clip(T, tmin, tmax), np.clip(np.full(len(T), t_cal), tmin, tmax)
+        return (raw - P(T - 35.0) + P(tc - 35.0) - offs) * scal
+    return correct, values
 
 
 def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them(biases_drift):
-    """A unit whose biases alone drift with T (quadratic): ArduPilot's own formula with the exported parameters
-    takes each reading to what it was at 20 C, within twice the bias bound over the range plus twice the noise.
-    Red on a sign, the 1e6 scaling or the re-expansion about 35 C missing (the quadratic term moves the linear
-    coefficient by 2 x 1e-5 x 15 C = 0.3 mg/C between 20 and 35 C: 12 mg over the range, checked by mutation)."""
-    folder, _, _, data, res = biases_drift
+    """A unit whose biases alone drift with T (quadratic): ArduPilot's own correction with the file as loaded (its
+    INS_ACC1_CALTEMP, offsets and scales included) takes each reading to what its calibration at T0 = 20 C gives
+    there, within twice the bias bound over the range plus twice the noise, leaving well under 10 % of the drift;
+    the offsets and scales are the bias and 1 / (1 + scale) at T0 within their bounds. Red on a sign, the 1e6
+    scaling, the re-expansion about 35 C missing (the quadratic term moves the linear coefficient by 2 x 1e-5 x
+    15 C = 0.3 mg/C between 20 and 35 C: 12 mg over the range), or CALTEMP left out (ArduPilot then takes -300 C,
+    held at TMIN: the correction is off by P(TMIN) - P(T0))."""
+    folder, truth, mod, data, res = biases_drift
     text = (folder / "tcal.parm").read_text()
     assert "INS_TCAL1_ENABLE 1\nINS_TCAL1_TMIN -20.0\nINS_TCAL1_TMAX 60.0\n" in text
+    correct, values = _ardupilot(text)
+    assert float(values["INS_ACC1_CALTEMP"]) == 20.0
     bound = G * max(res["thermal"]["bound"][q] for q in ("q7", "q11", "q15"))
     rows = np.loadtxt(data, delimiter=",", skiprows=1)
     raw, T = rows[:, 2:5], rows[:, 5]
-    corrected = _ardupilot(text)(raw, T, 20.0)
-    at20 = np.tile(raw[T == 20.0], (len(TEMPS), 1))
+    corrected = correct(raw, T)
+    at20 = np.tile(corrected[T == 20.0], (len(TEMPS), 1))
     miss = np.abs(corrected - at20).max()
-    assert miss <= 2 * bound + 2 * G * SIGMA, (miss, bound)
-    assert np.abs(raw - at20).max() > 0.5                                # the drift itself is 60 mg and more
+    drift = np.abs(raw - np.tile(raw[T == 20.0], (len(TEMPS), 1))).max()
+    assert miss <= 2 * bound + 2 * G * SIGMA and miss < 0.1 * drift, (miss, bound, drift)
+    assert drift > 0.5                                                   # the drift itself is 60 mg and more
+    q_true = models.q_of(mod, [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES])
+    for i, (qb, qs) in enumerate((("q7", "q5"), ("q11", "q10"), ("q15", "q14"))):
+        assert abs(float(values[f"INS_ACCOFFS_{'XYZ'[i]}"]) - G * q_true[mod.Q_NAMES.index(qb)]) <= \
+            G * res["thermal"]["bound"][qb]
+        assert abs(float(values[f"INS_ACCSCAL_{'XYZ'[i]}"]) - 1 / (1 + q_true[mod.Q_NAMES.index(qs)])) <= \
+            1.1 * res["thermal"]["bound"][qs]
 
 
 def test_thermal_outputs_need_temperature_and_a_calibration_file_is_refused_with_it(tmp_path, capsys):
@@ -207,38 +226,68 @@ def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coe
         assert "cannot identify" in capsys.readouterr().err
 
 
-def _px4(params, instance=0):
-    """PX4's correction as its sensor-thermal-calibration guide states it: d = T - TREF (T held within [TMIN,
-    TMAX]), offset = X0 + X1 d + X2 d^2 + X3 d^3, corrected = (raw - offset) * SCL, per axis."""
+def _px4(params, device_id):
+    """PX4's correction as its C++ applies it (src/modules/temperature_compensation/TemperatureCompensation.cpp:
+    set_sensor_id maps the sensor to the slot j whose TC_Aj_ID is its device id, none when no slot has it;
+    calc_thermal_offsets_3D holds T within [TMIN, TMAX], d = T - TREF, offset = X0 + X1 d + X2 d^2 + X3 d^3;
+    src/lib/sensor_calibration/Accelerometer.hpp, Correct: (data - thermal_offset - offset) * scale, the offset and
+    scale CAL_ACCn_xOFF, xSCALE of the calibration slot whose CAL_ACCn_ID is the device id), per axis."""
     values = {line.split("\t")[2]: float(line.split("\t")[3]) for line in params.splitlines()
               if line and not line.startswith("#")}
-    a = f"TC_A{instance}"
+    slot = next((j for j in range(4) if values.get(f"TC_A{j}_ID") == device_id), None)
+    cal = next((j for j in range(4) if values.get(f"CAL_ACC{j}_ID") == device_id), None)
+    offset = np.array([values[f"CAL_ACC{cal}_{a}OFF"] for a in "XYZ"]) if cal is not None else np.zeros(3)
+    scale = np.array([values[f"CAL_ACC{cal}_{a}SCALE"] for a in "XYZ"]) if cal is not None else np.ones(3)
 
     def correct(raw, T):
+        if slot is None:                                  # set_sensor_id found no slot: no thermal offset
+            return (raw - offset) * scale
+        a = f"TC_A{slot}"
         d = np.clip(T, values[f"{a}_TMIN"], values[f"{a}_TMAX"]) - values[f"{a}_TREF"]
-        offset = np.column_stack([sum(values[f"{a}_X{n}_{i}"] * d ** n for n in range(4)) for i in range(3)])
-        return (raw - offset) * np.array([values[f"{a}_SCL_{i}"] for i in range(3)])
+        thermal = np.column_stack([values[f"{a}_X0_{i}"] + values[f"{a}_X1_{i}"] * d + values[f"{a}_X2_{i}"] * d ** 2
+                                   + values[f"{a}_X3_{i}"] * d ** 3 for i in range(3)])
+        return (raw - thermal - offset) * scale
     return correct, values
 
 
-def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drift):
-    """A unit whose biases alone drift with T: PX4's own formula with the exported TC_A0_* takes each reading to
-    its value at TREF within twice the bias bound plus twice the noise (scaled by SCL), and SCL is 1 / (1 + the
-    scale q) within that q's bound. Red on a sign, X0 left out, the polynomial about the wrong TREF or SCL
-    inverted."""
+def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drift, tmp_path, capsys):
+    """A unit whose biases alone drift with T: PX4's own correction with the file as loaded (slot 3, device id
+    1310988) takes each reading to its value at TREF within twice the bias bound plus twice the noise, leaving
+    well under 10 % of the drift; the file carries TC_A3_ID and no SCL, X0 = 0 (relative to TREF, as PX4's own
+    script writes it), and CAL_ACC3_xOFF, xSCALE are the bias and 1 / (1 + scale) at TREF within their bounds.
+    Another sensor's id finds no slot (PX4 leaves its drift). Without --px4-device-id: refused in one line before
+    any work, nothing written. Red on a missing TC_A3_ID (no slot: the whole drift stays), X0 holding the bias
+    (an xOFF then subtracts it twice), a sign, or the polynomial about the wrong TREF."""
     folder, truth, mod, data, res = biases_drift
-    correct, values = _px4((folder / "tc.params").read_text())
-    assert values["TC_A_ENABLE"] == 1 and values["TC_A0_TREF"] == 20 and values["TC_A0_TMAX"] == 60
+    out = tmp_path / "tc.params"
+    argv = ["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G), "--temperature", "2",
+            "--export-px4", str(out), "--px4-instance", "3"]
+    assert main(argv) == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--export-px4 needs --px4-device-id N" in err
+    assert main(argv + ["--px4-device-id", "1310988"]) == 0
+    text = out.read_text()
+    assert "SCL" not in text
+    correct, values = _px4(text, 1310988)
+    assert values["TC_A_ENABLE"] == 1 and values["TC_A3_ID"] == 1310988 and values["CAL_ACC3_ID"] == 1310988
+    assert values["TC_A3_TREF"] == 20 and values["TC_A3_TMAX"] == 60
+    assert all(values[f"TC_A3_X0_{i}"] == 0 for i in range(3))
     rows = np.loadtxt(data, delimiter=",", skiprows=1)
     raw, T = rows[:, 2:5], rows[:, 5]
     got = correct(raw, T)
     at_ref = np.tile(got[T == 20.0], (len(TEMPS), 1))
     bound = G * max(res["thermal"]["bound"][q] for q in ("q7", "q11", "q15"))
-    assert np.abs(got - at_ref).max() <= 1.02 * (2 * bound + 2 * G * SIGMA)
+    drift = np.abs(raw - np.tile(raw[T == 20.0], (len(TEMPS), 1))).max()
+    miss = np.abs(got - at_ref).max()
+    assert miss <= 1.02 * (2 * bound + 2 * G * SIGMA) and miss < 0.1 * drift, (miss, bound, drift)
     q_true = models.q_of(mod, [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES])
-    for i, q in enumerate(("q5", "q10", "q14")):                        # Gamma_ii - Delta_g
-        k = mod.Q_NAMES.index(q)
-        assert abs(values[f"TC_A0_SCL_{i}"] - 1 / (1 + q_true[k])) <= 1.1 * res["guaranteed_error"][q]
+    for i, (qb, qs) in enumerate((("q7", "q5"), ("q11", "q10"), ("q15", "q14"))):     # Gamma_ii - Delta_g
+        assert abs(values[f"CAL_ACC3_{'XYZ'[i]}OFF"] - G * q_true[mod.Q_NAMES.index(qb)]) <= \
+            G * res["thermal"]["bound"][qb]
+        assert abs(values[f"CAL_ACC3_{'XYZ'[i]}SCALE"] - 1 / (1 + q_true[mod.Q_NAMES.index(qs)])) <= \
+            1.1 * res["thermal"]["bound"][qs]
+    other = _px4(text, 1310996)[0](raw, T)
+    assert np.abs(other - np.tile(other[T == 20.0], (len(TEMPS), 1))).max() > 0.5 * drift
 
 
 @pytest.mark.parametrize("degree", [1, 2])

@@ -373,13 +373,16 @@ def kalibr_text(noise_density, rate_hz, random_walk=None, gyro=None, topic="/imu
              "# JSON (--save) or the imu_tk file (--export-imu-tk).",
              f"rostopic: {topic}",
              f"update_rate: {yaml_float(rate_hz)}   # [ Hz ]",
-             f"accelerometer_noise_density: {yaml_float(noise_density)}   # [ m / s^2 / sqrt(Hz) ], from the still intervals"]
-    lines.append(f"accelerometer_random_walk: {yaml_float(random_walk)}   # [ m / s^3 / sqrt(Hz) ], from the longest still "
-                 "interval (Allan deviation; statistical, not a bound)" if random_walk is not None else
+             f"accelerometer_noise_density: {yaml_float(noise_density)}   # [ m / s^2 / sqrt(Hz) ], from the still "
+             "intervals"]
+    lines.append(f"accelerometer_random_walk: {yaml_float(random_walk)}   # [ m / s^3 / sqrt(Hz) ], from the longest "
+                 "still interval (Allan deviation; statistical, not a bound)" if random_walk is not None else
                  f"# accelerometer_random_walk: not measured ({why_no_walk}); Kalibr needs it")
     if gyro is not None:
-        lines += [f"gyroscope_noise_density: {yaml_float(gyro[0])}   # [ rad / s / sqrt(Hz) ], as given (--kalibr-gyro)",
-                  f"gyroscope_random_walk: {yaml_float(gyro[1])}   # [ rad / s^2 / sqrt(Hz) ], as given (--kalibr-gyro)"]
+        lines += [f"gyroscope_noise_density: {yaml_float(gyro[0])}   # [ rad / s / sqrt(Hz) ], as given "
+                  "(--kalibr-gyro)",
+                  f"gyroscope_random_walk: {yaml_float(gyro[1])}   # [ rad / s^2 / sqrt(Hz) ], as given "
+                  "(--kalibr-gyro)"]
     else:
         lines += ["# gyroscope_noise_density: not measured by an accelerometer log (give --kalibr-gyro ND,RW); "
                   "Kalibr needs it",

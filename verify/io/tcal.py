@@ -1,19 +1,26 @@
-"""Thermal compensation parameters of the flight stacks from a thermal estimate: ArduPilot's INS_TCALn_*
-and PX4's TC_An_*.
+"""Thermal compensation parameters of the flight stacks from a thermal estimate: ArduPilot's INS_TCALn_* and
+PX4's TC_An_*, each with the accelerometer calibration it is applied with, so that a file is right as loaded.
 
-ArduPilot corrects each accelerometer axis (m/s^2, sensor frame) by
+ArduPilot (libraries/AP_InertialSensor/AP_InertialSensor_tempcal.cpp, TCal::correct_sensor, and
+AP_InertialSensor_Backend.cpp, _rotate_and_correct_accel) corrects each axis, in the IMU's axes after its
+driver's fixed rotation and before the board's orientation, by
 
-    a = raw - (P(T) - P(T_cal)),   P(x) = sum_{p=1..3} ACCp x^p with x = T - 35 C,
+    v = raw - (P(T) - P(T_cal)),  a = (v - INS_ACCOFFS) * INS_ACCSCAL,  P(x) = sum_{p=1..3} ACCp x^p, x = T - 35 C,
 
-T held within [TMIN, TMAX] and T_cal the temperature of its offset calibration (INS_ACCn_CALTEMP); the
-parameters are stored times 1e6 (its Tools/scripts/tempcal_IMU.py, TEMP_REF = 35, SCALE_FACTOR = 1e6).
-P is garant's bias polynomial of each axis, g b_i(T), re-expanded about 35 C; its constant term is what the
-offset calibration holds and is not written. A scale factor's drift with T has no ArduPilot parameter.
+T and T_cal = INS_ACCn_CALTEMP held within [TMIN, TMAX], the parameters stored times 1e6 (SCALE_FACTOR). P is
+garant's bias polynomial of each axis, g b_i(T), re-expanded about 35 C without its constant; the file sets
+T_cal = T0 of the estimate, INS_ACCOFFS = g b_i(T0) and INS_ACCSCAL = 1 / (1 + the scale q at T0). A scale
+factor's drift with T has no ArduPilot parameter.
 
-PX4 corrects each axis by (raw - offset) * SCL, offset = X0 + X1 d + X2 d^2 + X3 d^3, d = T - TREF, T held
-within [TMIN, TMAX] (its sensor-thermal-calibration guide): X0..X3 are g times the bias polynomial about
-TREF = T0, and SCL = 1 / (1 + the scale q at T0), the scale factor relative to the model's g; PX4 holds the
-scale constant in T and has no misalignment.
+PX4 (src/modules/temperature_compensation/TemperatureCompensation.cpp, calc_thermal_offsets_3D and
+set_sensor_id; src/lib/sensor_calibration/Accelerometer.hpp, Correct) corrects the accelerometer whose device id
+is TC_An_ID by
+
+    a = (raw - thermal_offset(T) - CAL_ACCn_xOFF) * CAL_ACCn_xSCALE,  thermal_offset = X0 + X1 d + X2 d^2 + X3 d^3,
+
+d = T - TREF with T held within [TMIN, TMAX]. As PX4's Tools/process_sensor_caldata.py writes them, the thermal
+offset is relative (X0 = 0: none at TREF = T0) and the constant is CAL_ACCn_xOFF = g b_i(T0); CAL_ACCn_xSCALE =
+1 / (1 + the scale q at T0). PX4 holds the scale constant in T and has no misalignment.
 """
 from math import comb
 
@@ -51,6 +58,14 @@ def offset_polynomials(res, about, option="--export-ardupilot"):
     return out, bounds
 
 
+def _at_t0(res, option):
+    """(g b_i(T0) in m/s^2, 1 / (1 + scale q_i at T0)) per axis: the accelerometer calibration at the estimate's
+    T0 that the thermal polynomial is applied with."""
+    poly, _ = offset_polynomials(res, res["thermal"]["t0_c"], option)
+    return [poly[i][0] for i in range(3)], [1.0 / (1.0 + res["thermal"]["q"][_scale_q(res, i, option)][0])
+                                            for i in range(3)]
+
+
 def text(res, imu=1):
     """The .parm file: comments stating what it holds and rests on, then NAME VALUE lines."""
     th = res["thermal"]
@@ -58,11 +73,17 @@ def text(res, imu=1):
         raise DataError(f"--export-ardupilot: ArduPilot holds a polynomial of degree {ORDER}")
     poly, bounds = offset_polynomials(res, TEMP_REF)
     poly = {i: (d[1:] + [0.0] * ORDER)[:ORDER] for i, d in poly.items()}
+    offs, scal = _at_t0(res, "--export-ardupilot")
     lo, hi = th["range_c"]
-    lines = [f"# garant estimate --temperature {th['degree']}: accelerometer offset polynomials for ArduPilot, "
-             f"IMU {imu}",
-             f"# valid over [{lo:g}, {hi:g}] C (TMIN, TMAX); T0 of the estimate {th['t0_c']} C; ArduPilot's "
-             "reference 35 C",
+    n = "" if imu == 1 else str(imu)
+    lines = [f"# garant estimate --temperature {th['degree']}: accelerometer thermal compensation for ArduPilot, "
+             f"IMU {imu}, with the accelerometer calibration it is applied with",
+             f"# valid over [{lo:g}, {hi:g}] C (TMIN, TMAX) of the IMU's own temperature; ArduPilot's reference 35 C",
+             f"# INS_ACC{imu}_CALTEMP, INS_ACC{n}OFFS_* and INS_ACC{n}SCAL_* are garant's calibration at T0 = "
+             f"{th['t0_c']:g} C: loading them replaces an earlier accelerometer calibration (a later one sets them "
+             "again, at its own temperature)",
+             "# axes: the IMU's, after its driver's fixed rotation and before the board's orientation "
+             "(AHRS_ORIENTATION), as AP_InertialSensor_Backend corrects them",
              "# guaranteed bound of each axis's bias over the range (m/s^2): "
              + ", ".join(f"{'XYZ'[i]} {bounds[i]:.3e}" for i in range(3)),
              f"# premise: {th['premise']}",
@@ -73,28 +94,42 @@ def text(res, imu=1):
     for p in range(ORDER):
         for i in range(3):
             lines.append(f"INS_TCAL{imu}_ACC{p + 1}_{'XYZ'[i]} {poly[i][p] * SCALE_FACTOR:.9f}")
+    lines.append(f"INS_ACC{imu}_CALTEMP {th['t0_c']:.2f}")
+    lines += [f"INS_ACC{n}OFFS_{'XYZ'[i]} {offs[i]:.9f}" for i in range(3)]
+    lines += [f"INS_ACC{n}SCAL_{'XYZ'[i]} {scal[i]:.9f}" for i in range(3)]
     return "\n".join(lines) + "\n"
 
 
-def px4_text(res, instance=0):
+#: PX4's accelerometer slots (TemperatureCompensation.h ACCEL_COUNT_MAX, Accelerometer.hpp MAX_SENSOR_COUNT).
+PX4_INSTANCES = 4
+
+
+def px4_text(res, instance=0, device_id=None):
     """PX4's parameter file (QGroundControl's tab-separated .params: vehicle, component, name, value, type 9 for
-    a float, 6 for an integer): TC_A_ENABLE, TC_An_TREF/TMIN/TMAX, X0..X3 per axis and SCL per axis."""
+    a float, 6 for an integer): TC_A_ENABLE, TC_An_ID (the device id PX4 matches, set_sensor_id), TREF/TMIN/TMAX,
+    X0..X3 per axis (X0 = 0), and CAL_ACCn_ID, CAL_ACCn_xOFF, CAL_ACCn_xSCALE."""
     th = res["thermal"]
     if th["degree"] > ORDER:
         raise DataError(f"--export-px4: PX4 holds a polynomial of degree {ORDER}")
+    if device_id is None:
+        raise DataError(PX4_NEEDS_ID)
     poly, bounds = offset_polynomials(res, th["t0_c"], "--export-px4")
+    offs, scal = _at_t0(res, "--export-px4")
     lo, hi = th["range_c"]
-    a = f"TC_A{instance}"
-    params = [("TC_A_ENABLE", 1, 6), (f"{a}_TREF", float(th["t0_c"]), 9), (f"{a}_TMIN", float(lo), 9),
-              (f"{a}_TMAX", float(hi), 9)]
+    a, c = f"TC_A{instance}", f"CAL_ACC{instance}"
+    params = [("TC_A_ENABLE", 1, 6), (f"{a}_ID", int(device_id), 6), (f"{a}_TREF", float(th["t0_c"]), 9),
+              (f"{a}_TMIN", float(lo), 9), (f"{a}_TMAX", float(hi), 9)]
     for n in range(ORDER + 1):
         for i in range(3):
-            params.append((f"{a}_X{n}_{i}", poly[i][n] if n < len(poly[i]) else 0.0, 9))
-    for i in range(3):
-        scale = th["q"][_scale_q(res, i)][0]
-        params.append((f"{a}_SCL_{i}", 1.0 / (1.0 + scale), 9))
+            params.append((f"{a}_X{n}_{i}", poly[i][n] if 0 < n < len(poly[i]) else 0.0, 9))
+    params.append((f"{c}_ID", int(device_id), 6))
+    params += [(f"{c}_{'XYZ'[i]}OFF", offs[i], 9) for i in range(3)]
+    params += [(f"{c}_{'XYZ'[i]}SCALE", scal[i], 9) for i in range(3)]
     head = [f"# garant estimate --temperature {th['degree']}: accelerometer thermal compensation for PX4, instance "
-            f"{instance}; valid over [{lo:g}, {hi:g}] C",
+            f"{instance}, device id {device_id}; valid over [{lo:g}, {hi:g}] C of the IMU's own temperature",
+            f"# the thermal offset is relative to TREF = {th['t0_c']:g} C (X0 = 0, as PX4's process_sensor_caldata.py "
+            f"writes it); CAL_ACC{instance}_*OFF and *SCALE are garant's calibration at TREF: loading them replaces "
+            "an earlier accelerometer calibration",
             "# guaranteed bound of each axis's bias over the range (m/s^2): "
             + ", ".join(f"{'XYZ'[i]} {bounds[i]:.3e}" for i in range(3)),
             f"# premise: {th['premise']}; the scale factors are those at TREF (PX4 holds them constant in T)",
@@ -103,14 +138,18 @@ def px4_text(res, instance=0):
                               for n, v, t in params]) + "\n"
 
 
-def _scale_q(res, i):
+PX4_NEEDS_ID = ("--export-px4 needs --px4-device-id N: PX4 applies TC_An_* only to the accelerometer whose device "
+                "id is TC_An_ID (its CAL_ACCn_ID, or device_id in the sensor_accel log)")
+
+
+def _scale_q(res, i, option="--export-px4"):
     """The q of accelerometer i's scale factor: Gamma_ii alone, or Gamma_ii less Delta_g (relative to the
     model's g)."""
     th = res["thermal"]
     for q, d in res["definitions"].items():
         if q in th["q"] and d.replace(" ", "") in (f"Gamma{i + 1}{i + 1}", f"Gamma{i + 1}{i + 1}-Delta_g"):
             return q
-    raise DataError(f"--export-px4: this stand's q do not hold the scale of accelerometer {i + 1} alone")
+    raise DataError(f"{option}: this stand's q do not hold the scale of accelerometer {i + 1} alone")
 
 
 def write(path, res, imu=1):
@@ -118,6 +157,6 @@ def write(path, res, imu=1):
     files.write(path, [text(res, imu)], "w")
 
 
-def write_px4(path, res, instance=0):
+def write_px4(path, res, instance=0, device_id=None):
     """Write PX4's .params file."""
-    files.write(path, [px4_text(res, instance)], "w")
+    files.write(path, [px4_text(res, instance, device_id)], "w")
