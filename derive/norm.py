@@ -282,13 +282,18 @@ def effect_jacobian_bound(name):
     unit ball (`_unit_ball_bound`). For w1, w2 in the ball (the segment between them stays in it) the mean-value
     theorem gives |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= B |w1 - w2| entrywise, B = sum_j |theta_j| b_j, so in
     norm at most ||B||_2 |w1 - w2|: the effect at the truth's direction m and at the reading's differ by that."""
+    return _jacobian_entries(name, _unit_ball_bound)
+
+
+def _jacobian_entries(name, bound):
+    """(parameter names, per parameter the 3 x 3 matrix of `bound` of each entry of d phi_j / d w), or None for
+    an effect that needs a stand."""
     out = effect_basis(name)
     if out is None:
         return None
     names, basis = out
     w = sp.Matrix(n_sym)
-    return names, [[[_unit_ball_bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()]
-                   for phi in basis]
+    return names, [[[bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()] for phi in basis]
 
 
 #: The radius of the box around w that `effect_slope_bound` bounds the Jacobian over.
@@ -311,10 +316,4 @@ def effect_slope_bound(name):
     the box |z - w| <= r (`_local_bound`): for a segment from w to m with |m - w| <= r, the mean-value theorem
     gives |c^T sum_j theta_j (phi_j(m) - phi_j(w))| <= sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k],
     the part of the effect's change along one direction c (the reading's, in (2.2) of 001)."""
-    out = effect_basis(name)
-    if out is None:
-        return None
-    names, basis = out
-    w = sp.Matrix(n_sym)
-    return names, [[[_local_bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()]
-                   for phi in basis]
+    return _jacobian_entries(name, _local_bound)
