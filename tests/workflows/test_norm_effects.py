@@ -210,3 +210,50 @@ def test_each_intervals_remainder_with_effects_holds_at_the_vertices(names):
         assert np.all(left <= bound), (left / bound).max()
         worst = max(worst, (left / bound).max())
     assert worst > 0.1, worst
+
+
+def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remove_the_drift(tmp_path, capsys):
+    # A unit turned through 36 still orientations while it warms from 20 C (to 43 C), its biases drifting 2e-5 g/C
+    # (bias_temperature of the generator): `calibrate-norm --temperature 1` is consistent; each axis's raw bias
+    # and scale factor (Gamma_ii) over the logged range lie within their one bound of the truth at 60 temperatures
+    # of it. The files it writes, applied as ArduPilot's and PX4's C++ does (test_thermal.py re-implements both,
+    # as cited there) to the truth's readings of one direction across the range, leave at most 10 % of the
+    # drift. Red on the slope's sign, or the constant not re-expanded about t0 (the bias at 20 C written for the
+    # one at t0).
+    from test_thermal import _ardupilot, _px4
+    log = static_log(tmp_path / "warm.csv", "bias_temperature", still_s=10.0)
+    out = tmp_path / "r.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1", "--json", str(out),
+                 "--export-ardupilot", str(tmp_path / "t.parm"), "--export-px4", str(tmp_path / "t.params"),
+                 "--px4-device-id", "42"]) == 0
+    said = capsys.readouterr().out
+    assert "over temperature (the IMU's, the log's temp_c)" in said
+    res = json.loads(out.read_text())
+    assert res["consistent"]
+    th = res["thermal"]
+    lo, hi = th["range_c"]
+    assert lo < 21 and hi > 42
+    truth = _truth()
+    T = np.linspace(lo, hi, 60)
+    for i in range(3):
+        c, true = th["q"][f"bias{i + 1}"], truth[6 + i] + TRUE["bias_temperature"][i] * (T - 20)
+        assert np.abs(c[0] + c[1] * (T - th["t0_c"]) - true).max() <= th["bound"][f"bias{i + 1}"]
+        c = th["q"][f"scale{i + 1}"]
+        assert np.abs(c[0] + c[1] * (T - th["t0_c"]) - truth[i]).max() <= th["bound"][f"scale{i + 1}"]
+    m = np.array([0.6, -0.48, 0.64])
+    m /= np.linalg.norm(m)
+    raw = np.array([G * N.readings(m, np.concatenate([truth, np.zeros(7)])) + G * np.array(TRUE["bias_temperature"])
+                    * (t - 20) for t in T])
+    drift = np.abs(raw - raw[0]).max()
+    for got in (_ardupilot((tmp_path / "t.parm").read_text())[0](raw, T),
+                _px4((tmp_path / "t.params").read_text(), 42)[0](raw, T)):
+        left = np.abs(got - got[len(T) // 2]).max()
+        assert left <= 0.1 * drift, (left, drift)
+    for argv, said in ((["--temperature", "2"], "calibrate-norm fits a polynomial of degree 1"),
+                       (["--export-px4", str(tmp_path / "x.params")], "--export-px4 needs --temperature D")):
+        assert main(["calibrate-norm", str(log), *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and said in err, err
+    no_temp = static_log(tmp_path / "cold.csv", "none", temperature=False)
+    assert main(["calibrate-norm", str(no_temp), "--temperature", "1"]) == 2
+    assert "--temperature needs each sample's temperature" in capsys.readouterr().err

@@ -32,6 +32,11 @@ def add(sub):
                    help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
                         "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature; "
                         "--diagnose names the ones the data need)")
+    p.add_argument("--temperature", type=int, metavar="D",
+                   help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
+                        "polynomials of degree D (1) in T, each still interval cut where T moves, one guaranteed "
+                        "bound over the logged range; with --export-ardupilot / --export-px4")
+    options.flight_stacks(p)
     p.add_argument("--bound", action="append", type=options.named_bound, metavar="NAME=RAD", default=[],
                    help="a misalignment's a-priori bound (alpha, beta, gamma; rad), repeatable: where every "
                         "orientation lies along an axis (six faces) the scale factors and biases are calibrated with "
@@ -76,6 +81,13 @@ def _gyro(text):
 
 def run(args):
     """`garant calibrate-norm`: parse, call the job, print; the exit status."""
+    stacks = [o for o, v in (("--export-ardupilot", args.export_ardupilot), ("--export-px4", args.export_px4)) if v]
+    if stacks and args.temperature is None:
+        raise DataError(f"{stacks[0]} needs --temperature D (the flight stacks' files hold the drift in T)")
+    if args.temperature is not None:
+        from ..workflows.norm_thermal import check_degree
+        check_degree(args.temperature)
+    options.check_flight_stacks(args)
     if len(args.logs) > 1 or args.out:
         return _batch(args)
     if args.jobs or args.spec:
@@ -112,7 +124,7 @@ def _batch(args):
     from ..workflows import batch
     single = [o for o in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report", "json")
               if getattr(args, o)]
-    single += ["effect"] if args.effect else []
+    single += [o for o in ("effect", "temperature", "export_ardupilot", "export_px4") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:
         raise DataError(f"--{(single or ['imu all' if args.imu == 'all' else 'diagnose'])[0].replace('_', '-')} "
                         "concerns one log: a batch writes each unit's files to --out DIR")
@@ -180,7 +192,7 @@ def _run(args, into=None):
     res = jobs.calibrate_norm(args.log, g=args.g, g_uncertainty=args.g_uncertainty, delta_sigma=args.delta_sigma,
                               params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                               window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose,
-                              effects=args.effect, bound=dict(args.bound))
+                              effects=args.effect, bound=dict(args.bound), temperature=args.temperature)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)
@@ -190,6 +202,8 @@ def _run(args, into=None):
         print(f"wrote {args.plot}", file=sys.stderr)
     if args.save or args.export_imu_tk or args.export_imucal:
         _save(res, args)
+    if res.get("thermal"):
+        options.write_flight_stacks(args, res)
     if args.export_kalibr:
         from ..io import calibration
         walk, why = res["random_walk"], res["random_walk_note"]
@@ -389,6 +403,8 @@ def _print_bounds(res, args=None):
           "delta_sigma_max): the smaller the set, the more it rests on the noise bound being right")
     if res.get("effects"):
         _print_effects(res)
+    if res.get("thermal"):
+        _print_thermal(res)
     for line in leaning(res):
         print(f"note: {line}")
     gain = res["directions_gain"]
@@ -403,6 +419,21 @@ def _print_bounds(res, args=None):
         print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by "
               f"{gain['threshold']:g} "
               f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
+
+
+def _print_thermal(res):
+    """--temperature: each axis's raw bias and scale factor as a polynomial in T, one bound over the range."""
+    from ..io import report
+    th = res["thermal"]
+    lo, hi = th["range_c"]
+    print(f"\nover temperature (the IMU's, the log's temp_c): p(T) = c0 + c1 (T - {th['t0_c']:g} C), one guaranteed "
+          f"bound over [{lo:.1f}, {hi:.1f}] C, the logged range; in the raw axes, as the flight stacks correct them")
+    report.table(("p", "c0", "c1", "bound over range", "unit"),
+                 [(k, f"{c[0]:+.4e}", f"{c[1]:+.4e}", f"{th['bound'][k]:.3e}", " , ".join(th["units"][k]))
+                  for k, c in th["q"].items()])
+    print("bias_i: the raw bias over g (b_i / g at T); scale_i: Gamma_ii (P_ii - 1 at T, P = M^-1); bound over range: "
+          "the largest |p(T) - p_hat(T)| over the information set for every T of the range (an LP pair at each end, "
+          "proven by duality, and the bilinear part from the set's box)")
 
 
 def _print_effects(res):

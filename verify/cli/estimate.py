@@ -41,18 +41,7 @@ def add(sub):
                    "bound over the whole temperature range")
     p.add_argument("--thermal-plot", metavar="FILE.png", help="with --temperature: each q(T) with its guaranteed "
                    "band over the range, and the estimate and bound at each chamber temperature")
-    p.add_argument("--export-ardupilot", metavar="FILE.parm", help="with --temperature: ArduPilot's INS_TCALn_* "
-                   "parameters (TMIN, TMAX, the accelerometer offset polynomial ACC1-3 about 35 C, x 1e6)")
-    p.add_argument("--ardupilot-imu", type=int, choices=(1, 2, 3), default=1, metavar="N",
-                   help="the IMU the ArduPilot parameters are for (INS_TCALN_*; default 1)")
-    p.add_argument("--export-px4", metavar="FILE.params", help="with --temperature and --px4-device-id: PX4's "
-                   "TC_A* parameters (QGroundControl's .params: ID, TREF, TMIN, TMAX, the offset polynomial X0-X3 "
-                   "relative to TREF) and CAL_ACCn_ID, xOFF, xSCALE at TREF")
-    p.add_argument("--px4-instance", type=int, choices=(0, 1, 2, 3), default=0, metavar="N",
-                   help="the accelerometer slot the PX4 parameters are for (TC_AN_*, CAL_ACCN_*; default 0)")
-    p.add_argument("--px4-device-id", type=options.positive_int, metavar="ID",
-                   help="the accelerometer's device id (CAL_ACCn_ID on the vehicle): PX4 applies TC_AN_* only to "
-                        "the sensor whose id is TC_AN_ID")
+    options.flight_stacks(p)
     return p
 
 
@@ -65,9 +54,7 @@ def run(args):
                                    ("--export-px4", args.export_px4)) if v]
     if thermal_only and args.temperature is None:
         raise DataError(f"{thermal_only[0]} needs --temperature D")
-    if args.export_px4 and args.px4_device_id is None:
-        from ..io.tcal import PX4_NEEDS_ID
-        raise DataError(PX4_NEEDS_ID)
+    options.check_flight_stacks(args)
     wanted = args.save or args.export_imu_tk or args.export_imucal
     if (args.export_imu_tk or args.export_imucal) and args.temperature is not None:
         raise DataError("--export-imu-tk/--export-imucal: those files hold no temperature polynomial; with "
@@ -243,13 +230,7 @@ def print_thermal(res, args):
         from ..io import plots
         plots.thermal(res, args.thermal_plot, f"{args.data}: q(T) with its guaranteed band")
         print(f"wrote {args.thermal_plot}")
-    from ..io import tcal
-    if args.export_ardupilot:
-        tcal.write(args.export_ardupilot, res, args.ardupilot_imu)
-        print(f"wrote {args.export_ardupilot}")
-    if args.export_px4:
-        tcal.write_px4(args.export_px4, res, args.px4_instance, args.px4_device_id)
-        print(f"wrote {args.export_px4}")
+    options.write_flight_stacks(args, res)
 
 
 def print_refuted(refuted, command):

@@ -387,6 +387,12 @@ def still_intervals(log, window=1.0, init=5.0, k=10.0, min_still=2.0):
     return out, note
 
 
+def still_of(log, a, b):
+    """The still interval of the log's samples a to b (b excluded): its span, mean and standard errors."""
+    mean, std_error, batch = _segment(log.raw[a:b])
+    return Still(float(log.t[a]), float(log.t[b - 1]), mean, std_error, int(b - a), batch)
+
+
 #: The shortest still interval a random walk is read from (s): an Allan deviation at a quarter of it.
 RANDOM_WALK_SECONDS = 40.0
 

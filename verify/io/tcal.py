@@ -76,7 +76,8 @@ def text(res, imu=1):
     offs, scal = _at_t0(res, "--export-ardupilot")
     lo, hi = th["range_c"]
     n = "" if imu == 1 else str(imu)
-    lines = [f"# garant estimate --temperature {th['degree']}: accelerometer thermal compensation for ArduPilot, "
+    lines = [f"# garant {th.get('command', 'estimate')} --temperature {th['degree']}: accelerometer thermal "
+             "compensation for ArduPilot, "
              f"IMU {imu}, with the accelerometer calibration it is applied with",
              f"# valid over [{lo:g}, {hi:g}] C (TMIN, TMAX) of the IMU's own temperature; ArduPilot's reference 35 C",
              f"# INS_ACC{imu}_CALTEMP, INS_ACC{n}OFFS_* and INS_ACC{n}SCAL_* are garant's calibration at T0 = "
@@ -89,8 +90,8 @@ def text(res, imu=1):
              f"# premise: {th['premise']}",
              "# scale-factor drift with T has no ArduPilot parameter: see garant's JSON (thermal)",
              f"INS_TCAL{imu}_ENABLE 1",
-             f"INS_TCAL{imu}_TMIN {lo:.1f}",
-             f"INS_TCAL{imu}_TMAX {hi:.1f}"]
+             f"INS_TCAL{imu}_TMIN {_celsius(lo)}",
+             f"INS_TCAL{imu}_TMAX {_celsius(hi)}"]
     for p in range(ORDER):
         for i in range(3):
             lines.append(f"INS_TCAL{imu}_ACC{p + 1}_{'XYZ'[i]} {poly[i][p] * SCALE_FACTOR:.9f}")
@@ -102,6 +103,13 @@ def text(res, imu=1):
 
 #: PX4's accelerometer slots (TemperatureCompensation.h ACCEL_COUNT_MAX, Accelerometer.hpp MAX_SENSOR_COUNT).
 PX4_INSTANCES = 4
+
+
+def _celsius(x):
+    """A temperature as written: up to 4 decimals, at least one (20.0, 20.1501): the range is not rounded inwards
+    or outwards."""
+    text = f"{x:.4f}".rstrip("0")
+    return text + "0" if text.endswith(".") else text
 
 
 def px4_text(res, instance=0, device_id=None):
@@ -125,7 +133,8 @@ def px4_text(res, instance=0, device_id=None):
     params.append((f"{c}_ID", int(device_id), 6))
     params += [(f"{c}_{'XYZ'[i]}OFF", offs[i], 9) for i in range(3)]
     params += [(f"{c}_{'XYZ'[i]}SCALE", scal[i], 9) for i in range(3)]
-    head = [f"# garant estimate --temperature {th['degree']}: accelerometer thermal compensation for PX4, instance "
+    head = [f"# garant {th.get('command', 'estimate')} --temperature {th['degree']}: accelerometer thermal "
+            "compensation for PX4, instance "
             f"{instance}, device id {device_id}; valid over [{lo:g}, {hi:g}] C of the IMU's own temperature",
             f"# the thermal offset is relative to TREF = {th['t0_c']:g} C (X0 = 0, as PX4's process_sensor_caldata.py "
             f"writes it); CAL_ACC{instance}_*OFF and *SCALE are garant's calibration at TREF: loading them replaces "

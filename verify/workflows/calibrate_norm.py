@@ -560,6 +560,11 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None, cap
     effects = {}
     if ext is not None:
         effects["effects"] = ext.effects_out(lo[params:], hi[params:], bound[params:])
+        if getattr(ext, "thermal_range", None) is not None:
+            from . import norm_thermal
+            effects["thermal"] = norm_thermal.block(ext, A, s, bnd, lo, hi, np.broadcast_to(shift, lo.shape),
+                                                    res["M"], res["b"], g, dq, parameter_map(res["M"], 9))
+            effects["definitions"] = dict(norm_thermal.DEFINITIONS)
         half, bound, err = half[:params], bound[:params], err[:params]
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err, cap=cap)
     return {

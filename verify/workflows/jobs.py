@@ -148,7 +148,8 @@ def _misalignment_bounds(bound):
 
 
 def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=None, params=9, fmt=None, sensor=None,
-                   imu=None, rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None):
+                   imu=None, rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None,
+                   temperature=None):
     """Calibrate a static log through the norm relation (2.2) of 001: `garant calibrate-norm --json`.
 
     Parameters
@@ -179,6 +180,10 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     effects : str or sequence of str, optional
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
         scale_asymmetry, cross_coupling, bias_temperature, scale_temperature).
+    temperature : int, optional
+        D (`--temperature D`, 1): on a log with a temperature column, each still interval (cut where the
+        temperature moves) at its own mean temperature, the biases and scale factors polynomials of degree D in
+        T with one guaranteed bound over the logged range (`thermal`), for --export-ardupilot / --export-px4.
 
     Returns
     -------
@@ -195,12 +200,27 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
     if len(stills) < params + 3:
         raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
+    from . import norm_effects, norm_thermal
+    if temperature is not None:
+        norm_thermal.check_degree(temperature)
+        if data.temp is None:
+            raise DataError(f"{data.path}: --temperature needs each sample's temperature, the IMU's own: a column "
+                            f"{' or '.join(recordings.TEMP_COLUMNS)} (C)")
+        if effects is not None:
+            raise DataError("--temperature and --effect are not taken together (--temperature adds "
+                            f"{', '.join(norm_thermal.NAMES)} itself)")
+        if recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
+            raise DataError(f"{data.path}: --temperature takes a log in m/s^2 (the flight stacks' unit); this one "
+                            "is in counts")
+        stills = norm_thermal.split(data, stills, min_still)
     temps = None if data.temp is None else [float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)]))
                                             for st in stills]
-    from . import norm_effects
     ext = None
     if effects is not None:
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path)
+    if temperature is not None:
+        ext = norm_effects.Extension(mod, norm_thermal.NAMES, stills, temps, data.path)
+        ext.thermal_range = (min(temps), max(temps))
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                  _misalignment_bounds(bound))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
@@ -213,6 +233,8 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
                                        / np.sqrt(3) * np.sqrt(dt))})
     res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, stills, res["matrix"], res["bias"])
+    if "thermal" in res:
+        res["thermal"].update(command="calibrate-norm", premise=res["premises"])
     if res["consistent"]:
         res["calibration"] = calibration.from_norm(res, mod.AXES)
         if ext is not None:

@@ -91,6 +91,7 @@ class Extension:
         self.units = [u for x in names for u in mod.EFFECT_UNITS[x]]
         self.theta = np.zeros(len(self.labels))
         self.phi = self.jac = self.p = self.n = None
+        self.thermal_range = None     # (lowest, highest) C of the still intervals, with --temperature
 
     def basis(self, p):
         """phi_j at directions p (3, K), shape (P, 3, K)."""

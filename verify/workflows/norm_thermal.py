@@ -1,0 +1,122 @@
+"""`garant calibrate-norm LOG --temperature 1`: a warm-up log's biases and scale factors, each a polynomial in the
+IMU's temperature T (its temp_c column), with one guaranteed bound over the logged range, and the files the
+flight stacks load (io/tcal.py) from it.
+
+The norm relation (2.2) of 001 carries the catalogue effects bias_temperature and scale_temperature
+(workflows/norm_effects.py: f_i += g T_i (T - 20 C) and S_i (T - 20 C) w_i in the calibrated reading), so every
+parameter is bounded over the information set of that extended relation. In the raw readings that is
+
+    raw = b + g P (a / g + (T - 20) (T_vec + diag(S) a / g)),   P = M^-1,
+
+so the raw bias over g at T is beta(T) = b / g + (T - 20) P T_vec and the raw scale matrix Gamma(T) = P (E + (T -
+20) diag(S)) - E: per axis the polynomials the flight stacks hold (bias_i, Gamma_ii), about t0, the middle of the
+logged range. Each bound over the range is the largest over T of the set's hull of beta_i(T) (or Gamma_ii(T)): for a
+fixed T its linear part in the corrections q is a row of LPs (solve/hull.py), a convex function of T whose largest
+value is at an end of the range; the part bilinear in q (P's correction times the effect's) is bounded from the
+set's box.
+"""
+import numpy as np
+
+from ..errors import DataError
+
+#: calibrate-norm fits polynomials of this degree in T at most.
+DEGREES = (1,)
+#: The effects that carry the polynomials (workflows/norm_effects.py, derived in derive/norm.py).
+NAMES = ("bias_temperature", "scale_temperature")
+#: A still interval is cut where the temperature has moved by more than this (C) since the piece began.
+SPLIT_C = 1.0
+
+
+def check_degree(degree):
+    """The degree of --temperature D, or a one-line refusal."""
+    if isinstance(degree, bool) or degree not in DEGREES:
+        raise DataError(f"--temperature {str(degree)[:20]}: calibrate-norm fits a polynomial of degree "
+                        f"{', '.join(map(str, DEGREES))} in T (a drift linear in the temperature); the chamber path, "
+                        "estimate --temperature D, takes up to 3")
+    return degree
+
+
+def split(data, stills, min_still):
+    """Each still interval cut into pieces over which the temperature moves by at most SPLIT_C (each at least
+    min_still s, the last piece joined to the one before when shorter): a warm-up's long still interval becomes
+    one interval per temperature step, each at its own mean temperature."""
+    from ..io import recordings
+    out = []
+    for st in stills:
+        idx = np.flatnonzero((data.t >= st.start) & (data.t <= st.stop))
+        T = data.temp[idx]
+        cuts, a = [0], 0
+        for k in range(1, len(idx)):
+            if abs(T[k] - T[a]) > SPLIT_C and data.t[idx[k]] - data.t[idx[a]] >= min_still:
+                cuts.append(k)
+                a = k
+        if len(cuts) > 1 and data.t[idx[-1]] - data.t[idx[cuts[-1]]] < min_still:
+            cuts.pop()
+        cuts.append(len(idx))
+        out += [recordings.still_of(data, idx[i], idx[j - 1] + 1) for i, j in zip(cuts[:-1], cuts[1:])]
+    return out
+
+
+def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
+    """The thermal result (the shape of estimate --temperature's, which io/tcal.py writes the flight stacks'
+    files from): per axis the raw bias over g and the scale Gamma_ii as polynomials about t0 with one bound over
+    the logged range, over the information set (A, s, bnd: |s - A^T w| <= bnd, q = w + s', |s'| <= shift, q
+    within lo, hi; dq the set's midpoint, where the estimate is). M_fit, b_fit: the fit (m/s^2 per raw unit); J:
+    how the printed lambda_i (P_ii - 1) and eps_i/g (b_i/g) move with q (calibrate_norm.parameter_map)."""
+    from ..solve import hull
+    t_lo, t_hi = ext.thermal_range
+    t0 = round(0.5 * (t_lo + t_hi), 1)
+    P = np.linalg.inv(M_fit)
+    Q = A.shape[0]
+    k_T = [9 + ext.labels.index(f"T_{i + 1}") for i in range(3)]
+    k_S = [9 + ext.labels.index(f"S_{i + 1}") for i in range(3)]
+    th_T, th_S = ext.theta[[k - 9 for k in k_T]], ext.theta[[k - 9 for k in k_S]]
+    dA = np.zeros((6, 3, 3))                      # d A / d q_k, A = [[q0, 0, 0], [q3, q1, 0], [q4, q5, q2]]
+    for k, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1))):
+        dA[k, i, j] = 1.0
+
+    def exact(q, tau20):
+        """beta_i and Gamma_ii at T - 20 = tau20 for the correction q: P (E + A(q)), b + g P q_b, theta + q."""
+        Pq = P @ (np.eye(3) + _lower(q))
+        beta = b_fit / g + P @ q[6:9] + tau20 * Pq @ (th_T + q[k_T])
+        return beta, np.diag(Pq) * (1 + tau20 * (th_S + q[k_S])) - 1
+
+    box = np.maximum(np.abs(lo), np.abs(hi))
+    a_box = np.abs(_lower(box))
+    bound_b, bound_s = np.zeros(3), np.zeros(3)
+    for T in (t_lo, t_hi):                        # each half-width is convex in T: largest at an end
+        tau20 = T - 20.0
+        C = np.zeros((6, Q))                      # the parts of beta_i and Gamma_ii linear in q
+        C[:3, :9], C[3:, :9] = J[6:9], J[0:3] * (1 + tau20 * th_S)[:, None]
+        for i in range(3):
+            C[i, :6] += tau20 * np.einsum("j,kjl,l->k", P[i], dA, th_T)
+            C[i, k_T] += tau20 * P[i]
+            C[3 + i, k_S[i]] += tau20 * P[i, i]
+        p_lo, p_hi = hull.ranges(A.T, s - bnd, s + bnd, lo - shift, hi + shift, C)
+        reach = np.abs(C) @ shift
+        mid = C @ dq
+        half = np.maximum(p_hi + reach - mid, mid - p_lo + reach)
+        # the bilinear parts, tau20 P A(q) q_T and tau20 (P A(q))_ii q_S,i, at q and at the estimate's dq
+        second = abs(tau20) * np.r_[np.abs(P) @ a_box @ box[k_T], np.diag(np.abs(P) @ a_box) * box[k_S]]
+        bound_b = np.maximum(bound_b, half[:3] + 2 * second[:3])
+        bound_s = np.maximum(bound_s, half[3:] + 2 * second[3:])
+    b0, s0 = exact(dq, t0 - 20.0)
+    Pm = P @ (np.eye(3) + _lower(dq))
+    b1, s1 = Pm @ (th_T + dq[k_T]), np.diag(Pm) * (th_S + dq[k_S])
+    up = 1 + 1e-9
+    return {"degree": 1, "t0_c": t0, "range_c": [float(t_lo), float(t_hi)],
+            "q": {**{f"bias{i + 1}": [float(b0[i]), float(b1[i])] for i in range(3)},
+                  **{f"scale{i + 1}": [float(s0[i]), float(s1[i])] for i in range(3)}},
+            "bound": {**{f"bias{i + 1}": float(bound_b[i]) * up for i in range(3)},
+                      **{f"scale{i + 1}": float(bound_s[i]) * up for i in range(3)}},
+            "units": {**{f"bias{i + 1}": ["1 (over g)", "1/degC (over g)"] for i in range(3)},
+                      **{f"scale{i + 1}": ["1", "1/degC"] for i in range(3)}}}
+
+
+def _lower(q):
+    """The lower-triangular correction A of q (scale, misalignment)."""
+    return np.array([[q[0], 0, 0], [q[3], q[1], 0], [q[4], q[5], q[2]]])
+
+
+#: What each thermal q is, in the names io/tcal.py looks for (estimate's definitions).
+DEFINITIONS = {**{f"bias{i}": f"bias{i}" for i in (1, 2, 3)}, **{f"scale{i}": f"Gamma{i}{i}" for i in (1, 2, 3)}}
