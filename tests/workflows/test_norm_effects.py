@@ -257,3 +257,34 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
     no_temp = static_log(tmp_path / "cold.csv", "none", temperature=False)
     assert main(["calibrate-norm", str(no_temp), "--temperature", "1"]) == 2
     assert "--temperature needs each sample's temperature" in capsys.readouterr().err
+
+
+def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_separate(tmp_path, capsys):
+    # ArduPilot's procedure: the board still, level, while it heats 20 -> 48 C over 20 min, each axis's reading
+    # drifting by g x (2e-5, -2e-5, 1.5e-5) per C, noise within 2e-4 m/s^2. `calibrate-norm --temperature 1` cuts
+    # the one still interval where the temperature moves and bounds each axis's slope over the information set:
+    # the truth within each bound; it says that one orientation cannot separate a bias drift from a scale drift
+    # times the axis's share of g, and refuses to write a calibration from it. Red when the still interval is not
+    # cut where the temperature moves (one piece at one mean temperature: no slope, refused).
+    rng = np.random.default_rng(1)
+    t = np.arange(0, 1200, 0.01)
+    T = 20 + 30 * (1 - np.exp(-t / 400))
+    m = np.array([0.02, -0.03, 1.0]) / np.linalg.norm([0.02, -0.03, 1.0])
+    slope = G * np.array([2e-5, -2e-5, 1.5e-5])
+    raw = (G * m * (1 + np.array([2e-3, -1e-3, 3e-3])) + np.array([0.05, -0.02, 0.03]) + slope * (T[:, None] - 20)
+           + rng.uniform(-2e-4, 2e-4, (len(t), 3)))
+    log = tmp_path / "still.csv"
+    np.savetxt(log, np.column_stack([t, raw, T]), delimiter=",", header="time_s,ax,ay,az,temp_c", comments="",
+               fmt="%.9g")
+    out = tmp_path / "s.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1", "--json", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "one orientation" in said and "cannot separate a bias drift from a scale-factor drift" in said
+    res = json.loads(out.read_text())
+    assert res["intervals"] > 20 and res["range_c"][1] - res["range_c"][0] > 25
+    for i, axis in enumerate("xyz"):
+        d = res["drift"][axis]
+        assert abs(d["slope"] - slope[i]) <= d["slope_bound"] < 0.1 * abs(slope[i]), (axis, d)
+    assert main(["calibrate-norm", str(log), "--temperature", "1", "--save", str(tmp_path / "c.json")]) == 2
+    assert "a still-only warm-up gives each axis's drift" in capsys.readouterr().err
+    assert not (tmp_path / "c.json").exists()

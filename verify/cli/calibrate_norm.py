@@ -193,6 +193,8 @@ def _run(args, into=None):
                               params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                               window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose,
                               effects=args.effect, bound=dict(args.bound), temperature=args.temperature)
+    if res.get("still_only"):
+        return _still_only(res, args)
     _print(res, args)
     if args.json:
         report.write_json(args.json, res)
@@ -419,6 +421,34 @@ def _print_bounds(res, args=None):
         print(f"\nno orientation to add: the optimal plan's missing ones would shrink no bound by "
               f"{gain['threshold']:g} "
               f"times or more (at most {gain['factor']:.2f}, for {gain['parameter']})")
+
+
+def _still_only(res, args):
+    """A still-only warm-up: each axis's drift in T with its bound, and what one orientation cannot separate."""
+    from ..io import report
+    asked = [o for o in ("save", "export_imu_tk", "export_imucal", "export_kalibr", "export_ardupilot", "export_px4",
+                         "plot", "report") if getattr(args, o)]
+    if asked:
+        raise DataError(f"--{asked[0].replace('_', '-')}: a still-only warm-up gives each axis's drift in this "
+                        "orientation, no calibration: turn the unit through orientations while it warms")
+    lo, hi = res["range_c"]
+    u = res["raw_unit"]
+    print(f"{args.log}: {res['samples']} samples over {res['duration_s']:.1f} s, one orientation: "
+          f"{res['intervals']} still pieces from {lo:.1f} to {hi:.1f} C (cut where the temperature moves)")
+    print(f"premises: {res['premises']}")
+    if not res["consistent"]:
+        print("INCONSISTENT: no drift linear in T meets every piece within its noise rule")
+        if args.json:
+            report.write_json(args.json, res)
+        return options.EXIT_INCONSISTENT
+    print(f"each axis's raw reading r(T) = r(t0) + slope (T - {res['t0_c']:g} C), bounds over the information set:")
+    report.table(("axis", f"r(t0) ({u})", "bound", f"slope ({u}/C)", "bound", f"over the range ({u})", "bound"),
+                 [(a, f"{d['at_t0']:+.6e}", f"{d['at_t0_bound']:.2e}", f"{d['slope']:+.4e}", f"{d['slope_bound']:.2e}",
+                   f"{d['over_range']:+.4e}", f"{d['over_range_bound']:.2e}") for a, d in res["drift"].items()])
+    print(f"not separated: {res['not_separated']}")
+    if args.json:
+        report.write_json(args.json, res)
+    return 0
 
 
 def _print_thermal(res):

@@ -198,8 +198,6 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
-    if len(stills) < params + 3:
-        raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
     from . import norm_effects, norm_thermal
     if temperature is not None:
         norm_thermal.check_degree(temperature)
@@ -209,10 +207,16 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         if effects is not None:
             raise DataError("--temperature and --effect are not taken together (--temperature adds "
                             f"{', '.join(norm_thermal.NAMES)} itself)")
-        if recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
+        stills = norm_thermal.split(data, stills, min_still)
+        if stills and norm_thermal.one_orientation(stills):
+            quantum = recordings.quantum(data)
+            return results.NormCalibration(norm_thermal.still_only(
+                data, stills, note, g, cn.noise_axes(stills, quantum), cn.noise_rule_name(stills, quantum)))
+        if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
             raise DataError(f"{data.path}: --temperature takes a log in m/s^2 (the flight stacks' unit); this one "
                             "is in counts")
-        stills = norm_thermal.split(data, stills, min_still)
+    if len(stills) < params + 3:
+        raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
     temps = None if data.temp is None else [float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)]))
                                             for st in stills]
     ext = None

@@ -120,3 +120,64 @@ def _lower(q):
 
 #: What each thermal q is, in the names io/tcal.py looks for (estimate's definitions).
 DEFINITIONS = {**{f"bias{i}": f"bias{i}" for i in (1, 2, 3)}, **{f"scale{i}": f"Gamma{i}{i}" for i in (1, 2, 3)}}
+
+
+#: Still intervals whose mean readings all lie within this angle (degrees) of the first are one orientation.
+ONE_ORIENTATION_DEG = 5.0
+
+
+def one_orientation(stills):
+    """Whether every still interval holds the unit in the same orientation (a still-only warm-up)."""
+    m = np.array([st.mean for st in stills])
+    m = m / np.linalg.norm(m, axis=1, keepdims=True)
+    return bool(np.all(m @ m[0] >= np.cos(np.radians(ONE_ORIENTATION_DEG))))
+
+
+def still_only(data, stills, note, g, e, rule):
+    """A still-only warm-up (ArduPilot's procedure: the board still while it heats): per axis the raw reading's
+    drift r_i(T) = c0_i + c1_i (T - t0), every (c0, c1) that meets each piece's mean within its noise rule (the
+    information set, LPs proven by duality, solve/hull.py), t0 the middle of the range. One orientation cannot
+    separate a bias drift from a scale drift times the axis's share of g, nor calibrate the scale factors and
+    biases themselves: the drift is their sum, right for this orientation, said by name. e (K, 3): each piece's
+    noise rule per axis (raw units, calibrate_norm.noise_axes), `rule` its name."""
+    from ..io import recordings
+    from ..solve import hull
+    temps = np.array([float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)])) for st in stills])
+    if len(stills) < 2 or temps.max() - temps.min() < 2 * SPLIT_C:
+        raise DataError(f"{data.path}: one orientation over {temps.min():.1f}-{temps.max():.1f} C: a drift in T needs "
+                        f"the temperature to move by {2 * SPLIT_C:g} C or more while the unit is still")
+    t_lo, t_hi = float(temps.min()), float(temps.max())
+    t0 = round(0.5 * (t_lo + t_hi), 1)
+    tau = temps - t0
+    r = np.array([st.mean for st in stills])
+    B = np.column_stack([np.ones(len(tau)), tau])
+    far = int(np.argmax(tau)), int(np.argmin(tau))
+    drift, consistent = {}, True
+    for i in range(3):
+        slope_max = (abs(r[far[0], i] - r[far[1], i]) + e[far[0], i] + e[far[1], i]) / (tau[far[0]] - tau[far[1]])
+        c0_box = np.max(np.abs(r[:, i]) + e[:, i] + slope_max * np.abs(tau))
+        box = np.array([c0_box, slope_max]) * (1 + 1e-9)
+        try:
+            lo, hi = hull.ranges(B, r[:, i] - e[:, i], r[:, i] + e[:, i], -box, box, np.eye(2))
+        except hull.Empty:
+            consistent = False
+            break
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        drift["xyz"[i]] = {"at_t0": float(mid[0]), "at_t0_bound": float(half[0]) * (1 + 1e-9),
+                           "slope": float(mid[1]), "slope_bound": float(half[1]) * (1 + 1e-9),
+                           "over_range": float(mid[1] * (t_hi - t_lo)),
+                           "over_range_bound": float(half[1] * (t_hi - t_lo)) * (1 + 1e-9)}
+    unit = recordings.raw_unit(r, g)
+    share = r.mean(axis=0) / np.linalg.norm(r.mean(axis=0))
+    return {"log": data.path, "still_only": True, "consistent": consistent, "intervals": len(stills),
+            "still_note": note, "samples": len(data.t), "duration_s": float(data.t[-1]), "raw_unit": unit,
+            "t0_c": t0, "range_c": [t_lo, t_hi], "drift": drift if consistent else None,
+            "direction": share.tolist(),
+            "not_separated": (f"one orientation (gravity along {', '.join(f'{v:+.3f}' for v in share)} in the raw "
+                              "axes) cannot separate a bias drift from a scale-factor drift times that axis's share "
+                              "of g, nor give the scale factors and biases themselves: each drift is their sum, right "
+                              "in this orientation only; turn the unit through orientations while it warms "
+                              "(calibrate-norm --temperature 1 on that log) to separate them"),
+            "premises": (f"the bounds hold if each axis of each still piece's raw mean is within its noise rule of the "
+                         f"truth ({rule}) and each "
+                         "axis's reading is linear in the temperature over the range")}
