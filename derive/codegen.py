@@ -355,9 +355,9 @@ def _effects_context():
     (name, function name, parameter names, basis code (P x 3), Jacobian bound code over the ball and over a box of
     radius r about w (each P x 3 x 3), the variables it reads, the parameters' units, its physics in one line)."""
     from . import norm
-    from .effects import CATALOGUE
+    from .effects import CATALOGUE, LOG_EFFECTS
     out = []
-    for name in CATALOGUE:
+    for name, e in {**CATALOGUE, **LOG_EFFECTS}.items():
         basis = norm.effect_basis(name)
         if basis is None:
             continue
@@ -366,7 +366,7 @@ def _effects_context():
         out.append((name, name.replace("-", "_"), names, [[pycode(v) for v in row] for row in phi],
                     [[[pycode(v) for v in row] for row in b] for b in norm.effect_jacobian_bound(name)[1]],
                     [[[pycode(v) for v in row] for row in b] for b in norm.effect_slope_bound(name)[1]], variables,
-                    [p.unit for p in CATALOGUE[name].params], CATALOGUE[name].physics))
+                    [p.unit for p in e.params], e.physics))
     return out
 
 

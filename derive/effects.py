@@ -66,6 +66,18 @@ CATALOGUE = {e.name: e for e in (
 )}
 
 
+#: The rate of the logged temperature (C/s): a log's samples give it, no stand's positions file does.
+TEMP_RATE = sp.Symbol("temp_rate_c_s", real=True)
+
+#: Effects of a log's samples only (calibrate-norm --effect, --diagnose): they read the temperature's rate.
+LOG_EFFECTS = {e.name: e for e in (
+    Effect("temperature_lag", "f_i += g L_i dT/dt (the bias lags the logged temperature: L_i = -tau d(bias_i/g)/dT, "
+                              "tau the lag, s; dT/dt of column temp_c, C/s)",
+           _per_axis("L_", "L", "s/degC", "bias lag behind the logged temperature, over g"),
+           term=lambda w, s: sp.Matrix([s[f"L_{i + 1}"] * TEMP_RATE for i in range(3)])),
+)}
+
+
 BLOCK_PARAMETERS = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
 THERMAL_PREFIX = "thermal_d"
 

@@ -257,10 +257,10 @@ def estimators(model):
 def effect_basis(name):
     """A catalogue effect's addition to the reading over g, term(w) = sum_j theta_j phi_j(w, time_s, temp_c), as
     the basis (phi_1, ..., phi_P), each a 3-vector in the true specific force over g, w = (n1, n2, n3), and the
-    symbols time_s, temp_c; or None when the effect has no meaning without a stand (encoder harmonics need stand
-    angles). Returns (parameter names, [phi_j as 3 expressions])."""
-    from .effects import CATALOGUE
-    e = CATALOGUE[name]
+    symbols time_s, temp_c, temp_rate_c_s; or None when the effect has no meaning without a stand (encoder
+    harmonics need stand angles). Returns (parameter names, [phi_j as 3 expressions])."""
+    from .effects import CATALOGUE, LOG_EFFECTS
+    e = {**CATALOGUE, **LOG_EFFECTS}[name]
     if e.term is None:
         return None
     syms = {p.name: p.symbol for p in e.params}

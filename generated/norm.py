@@ -258,6 +258,7 @@ EFFECTS = {
     "bias_drift": ("D_1", "D_2", "D_3"),
     "bias_temperature": ("T_1", "T_2", "T_3"),
     "scale_temperature": ("S_1", "S_2", "S_3"),
+    "temperature_lag": ("L_1", "L_2", "L_3"),
 }
 #: The units of each effect's parameters (over g: a term of 1e-3 adds 1e-3 g to the reading).
 EFFECT_UNITS = {
@@ -267,6 +268,7 @@ EFFECT_UNITS = {
     "bias_drift": ("1/s", "1/s", "1/s"),
     "bias_temperature": ("1/degC", "1/degC", "1/degC"),
     "scale_temperature": ("1/degC", "1/degC", "1/degC"),
+    "temperature_lag": ("s/degC", "s/degC", "s/degC"),
 }
 #: Each effect's physics in one line (derive/effects.py).
 EFFECT_PHYSICS = {
@@ -276,10 +278,12 @@ EFFECT_PHYSICS = {
     "bias_drift": "f_i += g D_i t (bias drifting linearly in time; t = column time_s, s)",
     "bias_temperature": "f_i += g T_i (T - 20 C) (bias temperature coefficient; T = column temp_c)",
     "scale_temperature": "f_i += S_i (T - 20 C) w_i (scale-factor temperature coefficient; T = column temp_c)",
+    "temperature_lag": "f_i += g L_i dT/dt (the bias lags the logged temperature: L_i = -tau d(bias_i/g)/dT, tau the lag, s; dT/dt of column temp_c, C/s)",
 }
 #: Catalogue effects with no meaning without a stand (they need its angles).
 STAND_EFFECTS = ("alpha_encoder_harmonic", "beta_encoder_harmonic")
-#: What each effect reads beside w: time_s (s, the row's time) and temp_c (C, its temperature).
+#: What each effect reads beside w: time_s (s, the row's time), temp_c (C, its temperature) and temp_rate_c_s (C/s,
+#: the temperature's rate).
 EFFECT_VARIABLES = {
     "scale_quadratic": (),
     "scale_asymmetry": (),
@@ -287,6 +291,7 @@ EFFECT_VARIABLES = {
     "bias_drift": ("time_s",),
     "bias_temperature": ("temp_c",),
     "scale_temperature": ("temp_c",),
+    "temperature_lag": ("temp_rate_c_s",),
 }
 
 
@@ -296,77 +301,81 @@ def _stack(rows, *like):
     return np.array([[np.broadcast_to(np.asarray(v, dtype=float), shape) for v in row] for row in rows])
 
 
-def effect_basis(name, w, time_s=0.0, temp_c=20.0):
+def _variables(time_s, temp_c, temp_rate_c_s):
+    """The variables an effect reads, as arrays: time (s), temperature (C), the temperature's rate (C/s)."""
+    return (np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float), np.asarray(temp_rate_c_s, dtype=float))
+
+
+def effect_basis(name, w, time_s=0.0, temp_c=20.0, temp_rate_c_s=0.0):
     """phi_j of the effect `name` (EFFECTS), shape (P, 3, ...), at w, shape (3, ...), and time_s, temp_c
     (numbers or arrays broadcast with w's trailing shape)."""
     n1, n2, n3 = np.asarray(w, dtype=float)
-    return _BASIS[name](n1, n2, n3, np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float))
+    return _BASIS[name](n1, n2, n3, *_variables(time_s, temp_c, temp_rate_c_s))
 
 
-def effect_jacobian_bound(name, time_s=0.0, temp_c=20.0):
+def effect_jacobian_bound(name, time_s=0.0, temp_c=20.0, temp_rate_c_s=0.0):
     """b_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= b_j entrywise over the unit ball (derive/norm.py
     `effect_jacobian_bound`), so |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= ||sum_j |theta_j| b_j||_2 |w1 - w2|."""
-    return _JACOBIAN[name](np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float))
+    return _JACOBIAN[name](*_variables(time_s, temp_c, temp_rate_c_s))
 
 
-def effect_slope_bound(name, w, r, time_s=0.0, temp_c=20.0):
+def effect_slope_bound(name, w, r, time_s=0.0, temp_c=20.0, temp_rate_c_s=0.0):
     """s_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= s_j entrywise over the box of radius r (each coordinate)
     about w, shape (3, ...) (derive/norm.py `effect_slope_bound`), so the effect's change along a unit c from w to
     any m within r is at most sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k]."""
     n1, n2, n3 = np.asarray(w, dtype=float)
-    return _SLOPE[name](n1, n2, n3, np.asarray(r, dtype=float), np.asarray(time_s, dtype=float),
-                        np.asarray(temp_c, dtype=float))
+    return _SLOPE[name](n1, n2, n3, np.asarray(r, dtype=float), *_variables(time_s, temp_c, temp_rate_c_s))
 
 
-def _basis_scale_quadratic(n1, n2, n3, time_s, temp_c):
+def _basis_scale_quadratic(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
     return _stack([
         [n1**2, 0, 0],
         [0, n2**2, 0],
         [0, 0, n3**2],
-    ], n1, time_s, temp_c)
+    ], n1, time_s, temp_c, temp_rate_c_s)
 
 
-def _jacobian_scale_quadratic(time_s, temp_c):
+def _jacobian_scale_quadratic(time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[2, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 2, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2]], time_s, temp_c),
+        _stack([[2, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 2, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2]], time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _slope_scale_quadratic(n1, n2, n3, r, time_s, temp_c):
+def _slope_scale_quadratic(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[2*r + 2*abs(n1), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 2*r + 2*abs(n2), 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2*r + 2*abs(n3)]], n1, r, time_s, temp_c),
+        _stack([[2*r + 2*abs(n1), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 2*r + 2*abs(n2), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2*r + 2*abs(n3)]], n1, r, time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _basis_scale_asymmetry(n1, n2, n3, time_s, temp_c):
+def _basis_scale_asymmetry(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
     return _stack([
         [abs(n1), 0, 0],
         [0, abs(n2), 0],
         [0, 0, abs(n3)],
-    ], n1, time_s, temp_c)
+    ], n1, time_s, temp_c, temp_rate_c_s)
 
 
-def _jacobian_scale_asymmetry(time_s, temp_c):
+def _jacobian_scale_asymmetry(time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], time_s, temp_c),
+        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _slope_scale_asymmetry(n1, n2, n3, r, time_s, temp_c):
+def _slope_scale_asymmetry(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], n1, r, time_s, temp_c),
+        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], n1, r, time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _basis_cross_coupling(n1, n2, n3, time_s, temp_c):
+def _basis_cross_coupling(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
     return _stack([
         [n1*n2, 0, 0],
         [n1*n3, 0, 0],
@@ -374,100 +383,124 @@ def _basis_cross_coupling(n1, n2, n3, time_s, temp_c):
         [0, n2*n3, 0],
         [0, 0, n1*n3],
         [0, 0, n2*n3],
-    ], n1, time_s, temp_c)
+    ], n1, time_s, temp_c, temp_rate_c_s)
 
 
-def _jacobian_cross_coupling(time_s, temp_c):
+def _jacobian_cross_coupling(time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[1, 1, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[1, 0, 1], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [1, 1, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 1, 1], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [1, 0, 1]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 1, 1]], time_s, temp_c),
+        _stack([[1, 1, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[1, 0, 1], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [1, 1, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 1, 1], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [1, 0, 1]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 1, 1]], time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _slope_cross_coupling(n1, n2, n3, r, time_s, temp_c):
+def _slope_cross_coupling(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[r + abs(n2), r + abs(n1), 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[r + abs(n3), 0, r + abs(n1)], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [r + abs(n2), r + abs(n1), 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, r + abs(n3), r + abs(n2)], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [r + abs(n3), 0, r + abs(n1)]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, r + abs(n3), r + abs(n2)]], n1, r, time_s, temp_c),
+        _stack([[r + abs(n2), r + abs(n1), 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[r + abs(n3), 0, r + abs(n1)], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [r + abs(n2), r + abs(n1), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, r + abs(n3), r + abs(n2)], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [r + abs(n3), 0, r + abs(n1)]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, r + abs(n3), r + abs(n2)]], n1, r, time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _basis_bias_drift(n1, n2, n3, time_s, temp_c):
+def _basis_bias_drift(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
     return _stack([
         [time_s, 0, 0],
         [0, time_s, 0],
         [0, 0, time_s],
-    ], n1, time_s, temp_c)
+    ], n1, time_s, temp_c, temp_rate_c_s)
 
 
-def _jacobian_bias_drift(time_s, temp_c):
+def _jacobian_bias_drift(time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _slope_bias_drift(n1, n2, n3, r, time_s, temp_c):
+def _slope_bias_drift(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _basis_bias_temperature(n1, n2, n3, time_s, temp_c):
+def _basis_bias_temperature(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
     return _stack([
         [temp_c - 20, 0, 0],
         [0, temp_c - 20, 0],
         [0, 0, temp_c - 20],
-    ], n1, time_s, temp_c)
+    ], n1, time_s, temp_c, temp_rate_c_s)
 
 
-def _jacobian_bias_temperature(time_s, temp_c):
+def _jacobian_bias_temperature(time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _slope_bias_temperature(n1, n2, n3, r, time_s, temp_c):
+def _slope_bias_temperature(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _basis_scale_temperature(n1, n2, n3, time_s, temp_c):
+def _basis_scale_temperature(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
     return _stack([
         [n1*temp_c - 20*n1, 0, 0],
         [0, n2*temp_c - 20*n2, 0],
         [0, 0, n3*temp_c - 20*n3],
-    ], n1, time_s, temp_c)
+    ], n1, time_s, temp_c, temp_rate_c_s)
 
 
-def _jacobian_scale_temperature(time_s, temp_c):
+def _jacobian_scale_temperature(time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], time_s, temp_c),
+        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], time_s, temp_c, temp_rate_c_s),
     ])
 
 
-def _slope_scale_temperature(n1, n2, n3, r, time_s, temp_c):
+def _slope_scale_temperature(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     return np.array([
-        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], n1, r, time_s, temp_c),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], n1, r, time_s, temp_c),
+        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _basis_temperature_lag(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [temp_rate_c_s, 0, 0],
+        [0, temp_rate_c_s, 0],
+        [0, 0, temp_rate_c_s],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_temperature_lag(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_temperature_lag(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
     ])
 
 
@@ -478,6 +511,7 @@ _BASIS = {
     "bias_drift": _basis_bias_drift,
     "bias_temperature": _basis_bias_temperature,
     "scale_temperature": _basis_scale_temperature,
+    "temperature_lag": _basis_temperature_lag,
 }
 _JACOBIAN = {
     "scale_quadratic": _jacobian_scale_quadratic,
@@ -486,6 +520,7 @@ _JACOBIAN = {
     "bias_drift": _jacobian_bias_drift,
     "bias_temperature": _jacobian_bias_temperature,
     "scale_temperature": _jacobian_scale_temperature,
+    "temperature_lag": _jacobian_temperature_lag,
 }
 _SLOPE = {
     "scale_quadratic": _slope_scale_quadratic,
@@ -494,4 +529,5 @@ _SLOPE = {
     "bias_drift": _slope_bias_drift,
     "bias_temperature": _slope_bias_temperature,
     "scale_temperature": _slope_scale_temperature,
+    "temperature_lag": _slope_temperature_lag,
 }

@@ -288,3 +288,54 @@ def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_sep
     assert main(["calibrate-norm", str(log), "--temperature", "1", "--save", str(tmp_path / "c.json")]) == 2
     assert "a still-only warm-up gives each axis's drift" in capsys.readouterr().err
     assert not (tmp_path / "c.json").exists()
+
+
+def _lagging_warm_up(path, tau=8.0, seed=0, noise=1e-4, rate=100, still_s=5.0, move_s=2.0, directions=144):
+    """A log whose sensor's temperature lags the logged one (first order, time constant tau s) through a heat-cool
+    cycle (20 -> 50 -> 20 C over the log), its biases 5e-5 g/C of the sensor's temperature: (path, the 9
+    parameters, the coefficients)."""
+    rng = np.random.default_rng(seed)
+    truth, coef = rng.uniform(-2e-3, 2e-3, 9), np.array([5e-5, -5e-5, 4e-5])
+    dirs = rng.normal(size=(directions, 3))
+    period = directions * (still_s + move_s)
+    t = np.arange(int(period * rate)) / rate
+    T = 35 - 15 * np.cos(2 * np.pi * t / period)
+    Ts = np.empty(len(t))
+    Ts[0] = T[0]
+    for k in range(1, len(t)):                     # dTs/dt = (T - Ts) / tau
+        Ts[k] = Ts[k - 1] + (T[k - 1] - Ts[k - 1]) / (tau * rate)
+    rows, k = [], 0
+    for m in dirs / np.linalg.norm(dirs, axis=1, keepdims=True):
+        for _ in range(int(still_s * rate)):
+            f = (G * N.readings(m, np.r_[truth, np.zeros(7)]) + G * coef * (Ts[k] - 20)
+                 + G * rng.uniform(-noise, noise, 3))
+            rows.append([t[k], *f, T[k]])
+            k += 1
+        for _ in range(int(move_s * rate)):
+            rows.append([t[k], *(G * rng.normal(size=3)), T[k]])
+            k += 1
+    np.savetxt(path, np.array(rows), delimiter=",", comments="", fmt="%.10g", header="time_s,ax,ay,az,temp_c")
+    return path, truth, coef
+
+
+def test_a_sensor_lagging_the_logged_temperature_is_named_and_calibrated(tmp_path):
+    # Through a heat-cool cycle the sensor's temperature lags the logged one by tau = 8 s, so the same logged
+    # temperature gives another bias heating than cooling: a temperature coefficient alone leaves 2.4 noise bounds
+    # (the 9-parameter model 60); --diagnose names bias_temperature with temperature_lag (worst 0.29), whose
+    # calibration is consistent with the truth in every bound: T_i, and L_i = -tau T_i to first order in the lag.
+    # On a warm-up whose rate follows its temperature (an exponential approach: test_diagnose_norm.py's logs) the
+    # two span one space, and bias_temperature is named with temperature_lag listed as equivalent. Red when the
+    # temperature's rate is not read per interval (the lag's columns are then 0: nothing fits).
+    log, truth, coef = _lagging_warm_up(tmp_path / "cycle.csv")
+    d = jobs.calibrate_norm(str(log), g=G, diagnose=True).to_dict()["diagnosis"]
+    assert d["scores"][0]["bias_temperature"] > 1 and d["named"] == ["bias_temperature", "temperature_lag"], d
+    assert d["add"] == ["bias_temperature", "temperature_lag"]
+    out = jobs.calibrate_norm(str(log), g=G, effects="bias_temperature,temperature_lag").to_dict()
+    assert out["consistent"]
+    pars = {**out["effects"]["bias_temperature"]["parameters"], **out["effects"]["temperature_lag"]["parameters"]}
+    for i in range(3):
+        for name, true in ((f"T_{i + 1}", coef[i]), (f"L_{i + 1}", -8.0 * coef[i])):
+            assert abs(pars[name]["estimate"] - true) <= pars[name]["guaranteed_error"], (name, pars[name], true)
+    d = jobs.calibrate_norm(str(static_log(tmp_path / "warm.csv", "bias_temperature")), g=G,
+                            diagnose=True).to_dict()["diagnosis"]
+    assert d["named"] == ["bias_temperature"] and d["equivalent"] == {"bias_temperature": ["temperature_lag"]}

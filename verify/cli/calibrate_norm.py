@@ -30,8 +30,8 @@ def add(sub):
                    help="test the model against each interval's noise and try the effect catalogue")
     p.add_argument("--effect", metavar="NAME[,NAME...]",
                    help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
-                        "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature; "
-                        "--diagnose names the ones the data need)")
+                        "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, "
+                        "temperature_lag; --diagnose names the ones the data need)")
     p.add_argument("--temperature", type=int, metavar="D",
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1) in T, each still interval cut where T moves, one guaranteed "

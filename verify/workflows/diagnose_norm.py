@@ -18,7 +18,10 @@ import numpy as np
 from .calibrate_norm import noise_rule, noise_rule_name, weighted_fit
 
 LARGEST_SET = 3          # effects named together at most
-RANK_TOL = 1e-9          # relative to the largest singular value of the unit-norm columns
+#: Relative to the largest singular value of the unit-norm columns. Columns that differ by rounding and by the
+#: curvature within an interval (a warm-up's temperature rate against its temperature: 1e-9) are one space;
+#: distinct effects on a log's orientations stand at 1e-2 and above.
+RANK_TOL = 1e-6
 
 
 def rank(rows):
@@ -29,17 +32,18 @@ def rank(rows):
     return int(np.count_nonzero(sv > RANK_TOL * sv[0])) if sv.size else 0
 
 
-def columns(mod, n, t_mid, temps):
+def columns(mod, n, t_mid, temps, rates=None):
     """({effect: its columns (k, intervals)}, {effect: why skipped}) on these intervals: n . phi_j(n) of the
     generated module's `effect_basis` (first order of (2.2))."""
     cols, skipped = {}, {name: "needs stand angles" for name in mod.STAND_EFFECTS}
-    values = {"time_s": t_mid, "temp_c": temps}
+    values = {"time_s": t_mid, "temp_c": temps, "temp_rate_c_s": rates}
     for name in mod.EFFECTS:
         need = mod.EFFECT_VARIABLES[name]
         if any(values.get(v) is None for v in need):
-            skipped[name] = "the log has no temperature column" if "temp_c" in need else f"needs {', '.join(need)}"
+            skipped[name] = ("the log has no temperature column" if {"temp_c", "temp_rate_c_s"} & set(need)
+                             else f"needs {', '.join(need)}")
             continue
-        phi = mod.effect_basis(name, n, t_mid, 20.0 if temps is None else temps)
+        phi = mod.effect_basis(name, n, t_mid, 20.0 if temps is None else temps, 0.0 if rates is None else rates)
         cols[name] = np.einsum("jik,ik->jk", phi, n)
     return cols, skipped
 
@@ -69,19 +73,33 @@ def _alike(named, e, same, tried):
     return out
 
 
-def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
+def _first_of_kind(best, same, tried, order):
+    """The set named: `best` with each effect replaced by the first in catalogue order that spans the same space
+    here and fits as well in its place (one name for one explanation, whatever rounding prefers)."""
+    named = list(best)
+    for k, e in enumerate(best):
+        for f in sorted(same[e], key=order.index):
+            swap = tuple(sorted(named[:k] + [f] + named[k + 1:], key=order.index))
+            if order.index(f) < order.index(e) and tried.get(swap, np.inf) <= 1:
+                named[k] = f
+                break
+    return sorted(named, key=order.index)
+
+
+def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None, rates=None):
     """The diagnosis of a log's norm calibration (res: calibrate_norm.fit of its still intervals): the worst
     residual in units of each interval's noise bound before and after; `named`, the fewest effects that make the
     data consistent (the smallest worst residual among the sets of that size); `equivalent`, per named effect
     the effects these orientations cannot tell from it; `unseen`, the effects the base model absorbs here;
     `scores`, each set tried with its worst residual, size by size. temps: each interval's mean temperature (C),
-    or None."""
+    or None; rates: its temperature's rate (C/s), or None."""
     s, n = res["sigma"], res["n"]
     bounds = noise_rule(stills, res["M"], n, g, quantum)
     t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
     base = mod.H(n)[:params]
     _, t0 = weighted_fit(base, s, bounds)
-    cols, skipped = columns(mod, n, t_mid, None if temps is None else np.asarray(temps, float))
+    cols, skipped = columns(mod, n, t_mid, None if temps is None else np.asarray(temps, float),
+                            None if rates is None else np.asarray(rates, float))
     same, unseen = equivalence(base, cols)
     usable = [e for e in cols if e not in unseen]
     named, after, history = [], t0, []
@@ -92,7 +110,7 @@ def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None):
         best = min(tried, key=tried.get)
         after = min(after, tried[best])
         if tried[best] <= 1:
-            named = list(best)
+            named = _first_of_kind(best, same, tried, list(mod.EFFECTS))
             break
     return {"noise_bound": "the " + noise_rule_name(stills, quantum) + (" plus half a count" if quantum else ""),
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0,

@@ -179,7 +179,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         Also test the effect catalogue.
     effects : str or sequence of str, optional
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
-        scale_asymmetry, cross_coupling, bias_temperature, scale_temperature).
+        scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, temperature_lag).
     temperature : int, optional
         D (`--temperature D`, 1): on a log with a temperature column, each still interval (cut where the
         temperature moves) at its own mean temperature, the biases and scale factors polynomials of degree D in
@@ -217,13 +217,12 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
                             "is in counts")
     if len(stills) < params + 3:
         raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
-    temps = None if data.temp is None else [float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)]))
-                                            for st in stills]
+    temps, rates = (None, None) if data.temp is None else norm_thermal.of_intervals(data, stills)
     ext = None
     if effects is not None:
-        ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path)
+        ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path, rates)
     if temperature is not None:
-        ext = norm_effects.Extension(mod, norm_thermal.NAMES, stills, temps, data.path)
+        ext = norm_effects.Extension(mod, norm_thermal.NAMES, stills, temps, data.path, rates)
         ext.thermal_range = (min(temps), max(temps))
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                  _misalignment_bounds(bound))
@@ -248,10 +247,10 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         raw = np.array([st.mean for st in stills])
         from . import diagnose_norm
         res["diagnosis"] = d = diagnose_norm.diagnose(mod, stills, cn.fit(mod, raw, g, params), g, params,
-                                                      recordings.quantum(data), temps)
+                                                      recordings.quantum(data), temps, rates)
         d["add"], d["checked"] = diagnose_norm.to_add(
             d, mod, lambda names: cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data),
-                                         norm_effects.Extension(mod, names, stills, temps, data.path)))
+                                         norm_effects.Extension(mod, names, stills, temps, data.path, rates)))
     return results.NormCalibration(res)
 
 

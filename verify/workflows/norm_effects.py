@@ -32,8 +32,13 @@ def lipschitz(jac, size):
     return np.linalg.norm(B, 2, axis=(1, 2)) * (1 + 1e-12)
 
 
-#: Effects a file's `apply` does not carry to another log: a drift in time belongs to its calibration session.
-SESSION_ONLY = ("bias_drift",)
+#: Effects a file's `apply` does not carry to another log, and why.
+SESSION_ONLY = {
+    "bias_drift": "a drift in time belongs to its calibration session: the bias b is the one at t = {t_ref:g} s of "
+                  "{log}",
+    "temperature_lag": "applying it needs each sample's temperature rate, which a log's neighbouring samples give only "
+                       "noisily: the file's biases and temperature coefficients are those of the sensor's own "
+                       "temperature, the lag taken out"}
 
 
 def parse(text, mod):
@@ -77,16 +82,18 @@ class Extension:
     """The effects added to the norm relation on a log's still intervals: their parameters theta (over g, the
     units of EFFECT_UNITS), their basis at the fit's directions and what the remainder needs of them."""
 
-    def __init__(self, mod, names, stills, temps, path):
+    def __init__(self, mod, names, stills, temps, path, rates=None):
         self.mod, self.names, self.path = mod, tuple(names), path
         t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
         self.t_ref = float((t_mid.min() + t_mid.max()) / 2)
         self.t = t_mid - self.t_ref
         need = {v for x in names for v in mod.EFFECT_VARIABLES[x]}
-        if "temp_c" in need and temps is None:
-            raise DataError(f"{path}: --effect {', '.join(x for x in names if 'temp_c' in mod.EFFECT_VARIABLES[x])} "
-                            "needs each sample's temperature: the log has no temperature column (temp_c, C)")
+        if need & {"temp_c", "temp_rate_c_s"} and temps is None:
+            raise DataError(f"{path}: --effect "
+                            + ", ".join(x for x in names if {"temp_c", "temp_rate_c_s"} & set(mod.EFFECT_VARIABLES[x]))
+                            + " needs each sample's temperature: the log has no temperature column (temp_c, C)")
         self.temp = np.full(len(stills), 20.0) if temps is None else np.asarray(temps, float)
+        self.rate = np.zeros(len(stills)) if rates is None else np.asarray(rates, float)     # C/s
         self.labels = [p for x in names for p in mod.EFFECTS[x]]
         self.units = [u for x in names for u in mod.EFFECT_UNITS[x]]
         self.theta = np.zeros(len(self.labels))
@@ -95,7 +102,7 @@ class Extension:
 
     def basis(self, p):
         """phi_j at directions p (3, K), shape (P, 3, K)."""
-        return np.concatenate([self.mod.effect_basis(x, p, self.t, self.temp) for x in self.names])
+        return np.concatenate([self.mod.effect_basis(x, p, self.t, self.temp, self.rate) for x in self.names])
 
     def term(self, p):
         """The effect's term at theta, directions p (3, K): shape (3, K), over g."""
@@ -106,7 +113,7 @@ class Extension:
         taken out (the direction of (2.2))."""
         self.p, self.n = p, n
         self.phi = self.basis(p)
-        self.jac = np.concatenate([self.mod.effect_jacobian_bound(x, self.t, self.temp) for x in self.names])
+        self.jac = np.concatenate([self.mod.effect_jacobian_bound(x, self.t, self.temp, self.rate) for x in self.names])
 
     def columns(self, n):
         """The first-order columns n . phi_j(p) of (2.2), shape (P, K)."""
@@ -133,7 +140,8 @@ class Extension:
             return np.full(r.shape, np.inf), np.full(r.shape, np.inf)
         D = (K_DIR * (a + e + nu + v_lin + r) + dp) * (1 + 1e-12)
         Dc = np.minimum(D, self._components(A_box, e_box, nu + v_lin + r, D) + dp)
-        slope = np.concatenate([self.mod.effect_slope_bound(x, self.p, D, self.t, self.temp) for x in self.names])
+        slope = np.concatenate([self.mod.effect_slope_bound(x, self.p, D, self.t, self.temp, self.rate)
+                                for x in self.names])
         along = np.einsum("j,jick,ik,ck->k", size, slope, np.abs(self.n), Dc) * (1 + 1e-12)
         return (v_lin + r) * (1 + 1e-12), np.minimum(r, along) * (1 + 1e-12)
 
@@ -229,8 +237,7 @@ def file_entry(res, ext_names, temps_range):
             "temp_range_c": temps_range,
             "theta": [eff[x]["parameters"][p]["estimate"] for x in applied for p in eff[x]["parameters"]],
             "bound": [eff[x]["parameters"][p]["guaranteed_error"] for x in applied for p in eff[x]["parameters"]],
-            "not_applied": {x: "a drift in time belongs to its calibration session: the bias b is the one at "
-                               f"t = {res['effect_reference']['time_s']:g} s of {res['log']}"
+            "not_applied": {x: SESSION_ONLY[x].format(t_ref=res["effect_reference"]["time_s"], log=res["log"])
                             for x in ext_names if x in SESSION_ONLY}}}
 
 

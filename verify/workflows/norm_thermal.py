@@ -27,6 +27,18 @@ NAMES = ("bias_temperature", "scale_temperature")
 SPLIT_C = 1.0
 
 
+def of_intervals(data, stills):
+    """Each still interval's mean temperature (C) and the temperature's rate over it (C/s, a least-squares line
+    through its samples): the variables of the temperature effects."""
+    temps, rates = [], []
+    for st in stills:
+        keep = (data.t >= st.start) & (data.t <= st.stop)
+        t, T = data.t[keep], data.temp[keep]
+        temps.append(float(np.mean(T)))
+        rates.append(float(np.polyfit(t - t.mean(), T, 1)[0]) if len(t) > 1 and np.ptp(t) > 0 else 0.0)
+    return temps, rates
+
+
 def check_degree(degree):
     """The degree of --temperature D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
