@@ -223,7 +223,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path, rates)
     if temperature is not None:
         ext = norm_effects.Extension(mod, norm_thermal.NAMES, stills, temps, data.path, rates)
-        ext.thermal_range = (min(temps), max(temps))
+        ext.thermal_range = norm_thermal.sample_range(data, stills)
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                  _misalignment_bounds(bound))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
@@ -242,7 +242,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         res["calibration"] = calibration.from_norm(res, mod.AXES)
         if ext is not None:
             res["calibration"].update(norm_effects.file_entry(res, ext.names, None if temps is None else
-                                                              [min(temps), max(temps)]))
+                                                              list(norm_thermal.sample_range(data, stills))))
     if diagnose:
         raw = np.array([st.mean for st in stills])
         from . import diagnose_norm

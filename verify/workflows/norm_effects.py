@@ -228,7 +228,8 @@ def effects_out(ext, lo, hi, a_priori):
 
 def file_entry(res, ext_names, temps_range):
     """The calibration file's `effects` (and its model and note): what `apply` takes out of each sample and how its
-    bound grows; `temps_range` (C), the still intervals' mean temperatures, lowest and highest, or None."""
+    bound grows; `temps_range` (C), the lowest and highest temperature of the samples in the still intervals, or
+    None."""
     eff = res["effects"]
     applied = [x for x in ext_names if x not in SESSION_ONLY]
     frame = np.abs(np.asarray(res["matrix"]) @ np.linalg.inv(np.asarray(res["matrix_fit"])) - np.eye(3))

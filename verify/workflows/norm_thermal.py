@@ -39,6 +39,15 @@ def of_intervals(data, stills):
     return temps, rates
 
 
+def sample_range(data, stills):
+    """(lowest, highest) temperature of the samples in the still intervals (C): the range a calibration over
+    temperature is proven and applied over."""
+    keep = np.zeros(len(data.t), bool)
+    for st in stills:
+        keep |= (data.t >= st.start) & (data.t <= st.stop)
+    return float(data.temp[keep].min()), float(data.temp[keep].max())
+
+
 def check_degree(degree):
     """The degree of --temperature D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
