@@ -69,12 +69,23 @@ CATALOGUE = {e.name: e for e in (
 #: The rate of the logged temperature (C/s): a log's samples give it, no stand's positions file does.
 TEMP_RATE = sp.Symbol("temp_rate_c_s", real=True)
 
-#: Effects of a log's samples only (calibrate-norm --effect, --diagnose): they read the temperature's rate.
+#: Effects of a log's samples only (calibrate-norm --effect, --diagnose, --temperature D): the temperature's rate,
+#: and the terms of degree 2 and 3 in T of a warm-up's polynomials (a stand's chamber has the `thermal` effect).
 LOG_EFFECTS = {e.name: e for e in (
     Effect("temperature_lag", "f_i += g L_i dT/dt (the bias lags the logged temperature: L_i = -tau d(bias_i/g)/dT, "
                               "tau the lag, s; dT/dt of column temp_c, C/s)",
            _per_axis("L_", "L", "s/degC", "bias lag behind the logged temperature, over g"),
            term=lambda w, s: sp.Matrix([s[f"L_{i + 1}"] * TEMP_RATE for i in range(3)])),
+    *(Effect(f"bias_temperature_{k}", f"f_i += g T{k}_i (T - 20 C)^{k} (the bias's term of degree {k} in T; "
+                                      "T = column temp_c)",
+             _per_axis(f"T{k}_", f"T^{{({k})}}", f"1/degC^{k}", f"bias temperature coefficient of degree {k} over g"),
+             term=lambda w, s, k=k: sp.Matrix([s[f"T{k}_{i + 1}"] * (TEMP - 20) ** k for i in range(3)]))
+      for k in (2, 3)),
+    *(Effect(f"scale_temperature_{k}", f"f_i += S{k}_i (T - 20 C)^{k} w_i (the scale factor's term of degree {k} "
+                                       "in T; T = column temp_c)",
+             _per_axis(f"S{k}_", f"S^{{({k})}}", f"1/degC^{k}", f"scale-factor temperature coefficient of degree {k}"),
+             term=lambda w, s, k=k: sp.Matrix([s[f"S{k}_{i + 1}"] * (TEMP - 20) ** k * w[i] for i in range(3)]))
+      for k in (2, 3)),
 )}
 
 

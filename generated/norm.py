@@ -259,6 +259,10 @@ EFFECTS = {
     "bias_temperature": ("T_1", "T_2", "T_3"),
     "scale_temperature": ("S_1", "S_2", "S_3"),
     "temperature_lag": ("L_1", "L_2", "L_3"),
+    "bias_temperature_2": ("T2_1", "T2_2", "T2_3"),
+    "bias_temperature_3": ("T3_1", "T3_2", "T3_3"),
+    "scale_temperature_2": ("S2_1", "S2_2", "S2_3"),
+    "scale_temperature_3": ("S3_1", "S3_2", "S3_3"),
 }
 #: The units of each effect's parameters (over g: a term of 1e-3 adds 1e-3 g to the reading).
 EFFECT_UNITS = {
@@ -269,6 +273,10 @@ EFFECT_UNITS = {
     "bias_temperature": ("1/degC", "1/degC", "1/degC"),
     "scale_temperature": ("1/degC", "1/degC", "1/degC"),
     "temperature_lag": ("s/degC", "s/degC", "s/degC"),
+    "bias_temperature_2": ("1/degC^2", "1/degC^2", "1/degC^2"),
+    "bias_temperature_3": ("1/degC^3", "1/degC^3", "1/degC^3"),
+    "scale_temperature_2": ("1/degC^2", "1/degC^2", "1/degC^2"),
+    "scale_temperature_3": ("1/degC^3", "1/degC^3", "1/degC^3"),
 }
 #: Each effect's physics in one line (derive/effects.py).
 EFFECT_PHYSICS = {
@@ -279,6 +287,10 @@ EFFECT_PHYSICS = {
     "bias_temperature": "f_i += g T_i (T - 20 C) (bias temperature coefficient; T = column temp_c)",
     "scale_temperature": "f_i += S_i (T - 20 C) w_i (scale-factor temperature coefficient; T = column temp_c)",
     "temperature_lag": "f_i += g L_i dT/dt (the bias lags the logged temperature: L_i = -tau d(bias_i/g)/dT, tau the lag, s; dT/dt of column temp_c, C/s)",
+    "bias_temperature_2": "f_i += g T2_i (T - 20 C)^2 (the bias's term of degree 2 in T; T = column temp_c)",
+    "bias_temperature_3": "f_i += g T3_i (T - 20 C)^3 (the bias's term of degree 3 in T; T = column temp_c)",
+    "scale_temperature_2": "f_i += S2_i (T - 20 C)^2 w_i (the scale factor's term of degree 2 in T; T = column temp_c)",
+    "scale_temperature_3": "f_i += S3_i (T - 20 C)^3 w_i (the scale factor's term of degree 3 in T; T = column temp_c)",
 }
 #: Catalogue effects with no meaning without a stand (they need its angles).
 STAND_EFFECTS = ("alpha_encoder_harmonic", "beta_encoder_harmonic")
@@ -292,6 +304,10 @@ EFFECT_VARIABLES = {
     "bias_temperature": ("temp_c",),
     "scale_temperature": ("temp_c",),
     "temperature_lag": ("temp_rate_c_s",),
+    "bias_temperature_2": ("temp_c",),
+    "bias_temperature_3": ("temp_c",),
+    "scale_temperature_2": ("temp_c",),
+    "scale_temperature_3": ("temp_c",),
 }
 
 
@@ -504,6 +520,102 @@ def _slope_temperature_lag(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     ])
 
 
+def _basis_bias_temperature_2(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [temp_c**2 - 40*temp_c + 400, 0, 0],
+        [0, temp_c**2 - 40*temp_c + 400, 0],
+        [0, 0, temp_c**2 - 40*temp_c + 400],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_bias_temperature_2(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_bias_temperature_2(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _basis_bias_temperature_3(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000, 0, 0],
+        [0, temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000, 0],
+        [0, 0, temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_bias_temperature_3(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_bias_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _basis_scale_temperature_2(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [n1*temp_c**2 - 40*n1*temp_c + 400*n1, 0, 0],
+        [0, n2*temp_c**2 - 40*n2*temp_c + 400*n2, 0],
+        [0, 0, n3*temp_c**2 - 40*n3*temp_c + 400*n3],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_scale_temperature_2(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**2 - 40*temp_c + 400)]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_scale_temperature_2(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**2 - 40*temp_c + 400)]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _basis_scale_temperature_3(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [n1*temp_c**3 - 60*n1*temp_c**2 + 1200*n1*temp_c - 8000*n1, 0, 0],
+        [0, n2*temp_c**3 - 60*n2*temp_c**2 + 1200*n2*temp_c - 8000*n2, 0],
+        [0, 0, n3*temp_c**3 - 60*n3*temp_c**2 + 1200*n3*temp_c - 8000*n3],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_scale_temperature_3(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000)]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_scale_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000)]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
 _BASIS = {
     "scale_quadratic": _basis_scale_quadratic,
     "scale_asymmetry": _basis_scale_asymmetry,
@@ -512,6 +624,10 @@ _BASIS = {
     "bias_temperature": _basis_bias_temperature,
     "scale_temperature": _basis_scale_temperature,
     "temperature_lag": _basis_temperature_lag,
+    "bias_temperature_2": _basis_bias_temperature_2,
+    "bias_temperature_3": _basis_bias_temperature_3,
+    "scale_temperature_2": _basis_scale_temperature_2,
+    "scale_temperature_3": _basis_scale_temperature_3,
 }
 _JACOBIAN = {
     "scale_quadratic": _jacobian_scale_quadratic,
@@ -521,6 +637,10 @@ _JACOBIAN = {
     "bias_temperature": _jacobian_bias_temperature,
     "scale_temperature": _jacobian_scale_temperature,
     "temperature_lag": _jacobian_temperature_lag,
+    "bias_temperature_2": _jacobian_bias_temperature_2,
+    "bias_temperature_3": _jacobian_bias_temperature_3,
+    "scale_temperature_2": _jacobian_scale_temperature_2,
+    "scale_temperature_3": _jacobian_scale_temperature_3,
 }
 _SLOPE = {
     "scale_quadratic": _slope_scale_quadratic,
@@ -530,4 +650,8 @@ _SLOPE = {
     "bias_temperature": _slope_bias_temperature,
     "scale_temperature": _slope_scale_temperature,
     "temperature_lag": _slope_temperature_lag,
+    "bias_temperature_2": _slope_bias_temperature_2,
+    "bias_temperature_3": _slope_bias_temperature_3,
+    "scale_temperature_2": _slope_scale_temperature_2,
+    "scale_temperature_3": _slope_scale_temperature_3,
 }

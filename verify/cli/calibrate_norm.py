@@ -34,7 +34,7 @@ def add(sub):
                         "temperature_lag; --diagnose names the ones the data need)")
     p.add_argument("--temperature", type=int, metavar="D",
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
-                        "polynomials of degree D (1) in T, each still interval cut where T moves, one guaranteed "
+                        "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
                         "bound over the logged range; with --export-ardupilot / --export-px4")
     options.flight_stacks(p)
     p.add_argument("--bound", action="append", type=options.named_bound, metavar="NAME=RAD", default=[],
@@ -456,10 +456,13 @@ def _print_thermal(res):
     from ..io import report
     th = res["thermal"]
     lo, hi = th["range_c"]
-    print(f"\nover temperature (the IMU's, the log's temp_c): p(T) = c0 + c1 (T - {th['t0_c']:g} C), one guaranteed "
-          f"bound over [{lo:.1f}, {hi:.1f}] C, the logged range; in the raw axes, as the flight stacks correct them")
-    report.table(("p", "c0", "c1", "bound over range", "unit"),
-                 [(k, f"{c[0]:+.4e}", f"{c[1]:+.4e}", f"{th['bound'][k]:.3e}", " , ".join(th["units"][k]))
+    d, t0 = th["degree"], th["t0_c"]
+    print("\nover temperature (the IMU's, the log's temp_c): p(T) = c0 + "
+          + " + ".join(f"c{k} (T - {t0:g} C)" + (f"^{k}" if k > 1 else "") for k in range(1, d + 1))
+          + f", one guaranteed bound over [{lo:.1f}, {hi:.1f}] C, the logged range; in the raw axes, as the flight "
+          "stacks correct them; c_k in the unit per C^k")
+    report.table(("p", *(f"c{k}" for k in range(d + 1)), "bound over range", "unit of c0"),
+                 [(k, *(f"{x:+.4e}" for x in c), f"{th['bound'][k]:.3e}", th["units"][k][0])
                   for k, c in th["q"].items()])
     print("bias_i: the raw bias over g (b_i / g at T); scale_i: Gamma_ii (P_ii - 1 at T, P = M^-1); bound over range: "
           "the largest |p(T) - p_hat(T)| over the information set for every T of the range (an LP pair at each end, "

@@ -326,7 +326,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
         missing = ext.identifiable(mod.H(n0)[:params])
         if missing:
             raise DataError(f"{path}: beside scale, misalignment and bias these orientations cannot identify "
-                            f"{', '.join(missing)} of --effect {','.join(ext.names)} (--diagnose lists the effects "
+                            f"{', '.join(missing)} of {ext.option} (--diagnose lists the effects "
                             "they cannot tell apart): add fewer effects, or orientations")
     try:
         res = fit(mod, raw, g, params, free=free)
@@ -367,7 +367,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
         if consistent:
             found = norm_information.exact_information(mod, res, noise, nu, ext, bnd)
             if found is None:
-                raise DataError(f"{path}: consistent with --effect {','.join(ext.names)}, but the remainder of the "
+                raise DataError(f"{path}: consistent with {ext.option}, but the remainder of the "
                                 "extended relation cannot be proven from any box around the fit: no bound")
             info, rb_k, box, shift = found
             rb, bnd = float(rb_k.max()), base + rb_k
@@ -416,7 +416,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
         out["model_discrepancy"] = {"max_residual_before": float(worst[0]), "max_residual_after": float(worst[1]),
                                     "units": "each interval's noise rule (first order of (2.2) of 001, no remainder)"}
         out["effect_names"] = list(ext.names)
-        out["effect_reference"] = {"time_s": ext.t_ref, "temp_c": 20.0}
+        out["effect_reference"] = {"time_s": ext.t_ref, "temp_c": ext.temp_ref}
     if not consistent:
         out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > bnd)]
         return out

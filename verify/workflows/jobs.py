@@ -181,7 +181,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
         scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, temperature_lag).
     temperature : int, optional
-        D (`--temperature D`, 1): on a log with a temperature column, each still interval (cut where the
+        D (`--temperature D`, 1-3): on a log with a temperature column, each still interval (cut where the
         temperature moves) at its own mean temperature, the biases and scale factors polynomials of degree D in
         T with one guaranteed bound over the logged range (`thermal`), for --export-ardupilot / --export-px4.
 
@@ -206,7 +206,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
                             f"{' or '.join(recordings.TEMP_COLUMNS)} (C)")
         if effects is not None:
             raise DataError("--temperature and --effect are not taken together (--temperature adds "
-                            f"{', '.join(norm_thermal.NAMES)} itself)")
+                            f"{', '.join(norm_thermal.names(temperature))} itself)")
         stills = norm_thermal.split(data, stills, min_still)
         if stills and norm_thermal.one_orientation(stills):
             quantum = recordings.quantum(data)
@@ -222,8 +222,11 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     if effects is not None:
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path, rates)
     if temperature is not None:
-        ext = norm_effects.Extension(mod, norm_thermal.NAMES, stills, temps, data.path, rates)
-        ext.thermal_range = norm_thermal.sample_range(data, stills)
+        t_range = norm_thermal.sample_range(data, stills)
+        ext = norm_effects.Extension(mod, norm_thermal.names(temperature), stills, temps, data.path, rates,
+                                     round(0.5 * sum(t_range), 1))
+        ext.thermal_range = t_range
+        ext.option = f"--temperature {temperature} ({', '.join(ext.names)})"
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                  _misalignment_bounds(bound))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})

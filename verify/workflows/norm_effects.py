@@ -82,7 +82,7 @@ class Extension:
     """The effects added to the norm relation on a log's still intervals: their parameters theta (over g, the
     units of EFFECT_UNITS), their basis at the fit's directions and what the remainder needs of them."""
 
-    def __init__(self, mod, names, stills, temps, path, rates=None):
+    def __init__(self, mod, names, stills, temps, path, rates=None, temp_ref=20.0):
         self.mod, self.names, self.path = mod, tuple(names), path
         t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
         self.t_ref = float((t_mid.min() + t_mid.max()) / 2)
@@ -92,13 +92,16 @@ class Extension:
             raise DataError(f"{path}: --effect "
                             + ", ".join(x for x in names if {"temp_c", "temp_rate_c_s"} & set(mod.EFFECT_VARIABLES[x]))
                             + " needs each sample's temperature: the log has no temperature column (temp_c, C)")
-        self.temp = np.full(len(stills), 20.0) if temps is None else np.asarray(temps, float)
+        # the effects' temperature counted from temp_ref (C): the generated basis reads T - 20, so T is shifted
+        self.temp_ref = float(temp_ref)
+        self.temp = np.full(len(stills), 20.0) if temps is None else np.asarray(temps, float) - self.temp_ref + 20.0
         self.rate = np.zeros(len(stills)) if rates is None else np.asarray(rates, float)     # C/s
         self.labels = [p for x in names for p in mod.EFFECTS[x]]
         self.units = [u for x in names for u in mod.EFFECT_UNITS[x]]
         self.theta = np.zeros(len(self.labels))
         self.phi = self.jac = self.p = self.n = None
         self.thermal_range = None     # (lowest, highest) C of the still intervals, with --temperature
+        self.option = f"--effect {','.join(self.names)}"          # how the user asked for it, in messages
 
     def basis(self, p):
         """phi_j at directions p (3, K), shape (P, 3, K)."""
@@ -201,7 +204,7 @@ def verdict(mod, res, noise, nu, ext):
     box = np.array([[err[0], 0, 0], [err[3], err[1], 0], [err[4], err[5], err[2]]])
     left, _ = remainder_per_interval((n * f).T, box, err[6:9], nu, ext.extra(err[9:], box, err[6:9], nu))
     if not np.all(np.isfinite(left)):
-        raise DataError(f"{ext.path}: with --effect {','.join(ext.names)} the fit's effects are too "
+        raise DataError(f"{ext.path}: with {ext.option} the fit's effects are too "
                         f"large ({', '.join(f'{x}={v:+.2g}' for x, v in zip(ext.labels, ext.theta))}) for the "
                         "remainder of (2.2) to be bounded on the box the orientations guarantee: no verdict; "
                         "--diagnose names what the data need")
@@ -235,6 +238,7 @@ def file_entry(res, ext_names, temps_range):
     frame = np.abs(np.asarray(res["matrix"]) @ np.linalg.inv(np.asarray(res["matrix_fit"])) - np.eye(3))
     return {"model": MODEL, "note": res["calibration"]["note"] + NOTE, "effects": {
             "frame": frame.tolist(), "names": applied, "time_ref_s": res["effect_reference"]["time_s"],
+            "temp_ref_c": res["effect_reference"]["temp_c"],
             "temp_range_c": temps_range,
             "theta": [eff[x]["parameters"][p]["estimate"] for x in applied for p in eff[x]["parameters"]],
             "bound": [eff[x]["parameters"][p]["guaranteed_error"] for x in applied for p in eff[x]["parameters"]],
@@ -267,11 +271,13 @@ def apply_term(cal, a0, temp, g, path):
                             "temperature (a temp_c column, C)")
         T = np.asarray(temp, float)
         lo, hi = eff["temp_range_c"]
+        shift = 20.0 - float(eff.get("temp_ref_c", 20.0))      # the basis reads T - 20: counted from temp_ref_c
         out = np.flatnonzero((T < lo) | (T > hi) | ~np.isfinite(T))
         if out.size:
             raise DataError(f"{path}: {out.size} sample(s) at temperatures outside the calibrated range [{lo:g}, "
                             f"{hi:g}] C (the first, sample {out[0] + 1}, at {T[out[0]]:g} C): the effects' bound "
                             "holds there only")
+        T = T + shift
     p = a0 / np.maximum(np.linalg.norm(a0, axis=0), 1e-300)
     phi = np.concatenate([mod.effect_basis(x, p, 0.0, T) for x in names])
     jac = np.concatenate([mod.effect_jacobian_bound(x, 0.0, T) for x in names])

@@ -19,10 +19,16 @@ import numpy as np
 
 from ..errors import DataError
 
-#: calibrate-norm fits polynomials of this degree in T at most.
-DEGREES = (1,)
-#: The effects that carry the polynomials (workflows/norm_effects.py, derived in derive/norm.py).
-NAMES = ("bias_temperature", "scale_temperature")
+#: The degrees of --temperature D calibrate-norm fits.
+DEGREES = (1, 2, 3)
+
+
+def names(degree):
+    """The effects that carry the polynomials of `degree` (workflows/norm_effects.py, derived in derive/norm.py)."""
+    return tuple(f"{kind}_temperature{'' if k == 1 else f'_{k}'}" for kind in ("bias", "scale")
+                 for k in range(1, degree + 1))
+
+
 #: A still interval is cut where the temperature has moved by more than this (C) since the piece began.
 SPLIT_C = 1.0
 
@@ -51,9 +57,7 @@ def sample_range(data, stills):
 def check_degree(degree):
     """The degree of --temperature D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
-        raise DataError(f"--temperature {str(degree)[:20]}: calibrate-norm fits a polynomial of degree "
-                        f"{', '.join(map(str, DEGREES))} in T (a drift linear in the temperature); the chamber path, "
-                        "estimate --temperature D, takes up to 3")
+        raise DataError(f"--temperature {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3")
     return degree
 
 
@@ -78,60 +82,76 @@ def split(data, stills, min_still):
     return out
 
 
+#: The range cut into this many pieces, each bounded by the Bernstein control points of its polynomial.
+PIECES = 8
+
+
 def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
     """The thermal result (the shape of estimate --temperature's, which io/tcal.py writes the flight stacks'
     files from): per axis the raw bias over g and the scale Gamma_ii as polynomials about t0 with one bound over
     the logged range, over the information set (A, s, bnd: |s - A^T w| <= bnd, q = w + s', |s'| <= shift, q
     within lo, hi; dq the set's midpoint, where the estimate is). M_fit, b_fit: the fit (m/s^2 per raw unit); J:
-    how the printed lambda_i (P_ii - 1) and eps_i/g (b_i/g) move with q (calibrate_norm.parameter_map)."""
+    how the printed lambda_i (P_ii - 1) and eps_i/g (b_i/g) move with q (calibrate_norm.parameter_map).
+
+    With x = T - ref (the effects' reference temperature, ext.temp_ref), beta_i(T) = b_i/g + sum_k x^k (P (E +
+    A(q)) T_k)_i and Gamma_ii(T) = (P (E + A(q)))_ii (1 + sum_k x^k S_k,i) - 1. Their parts linear in q are
+    polynomials in x with rows of q as coefficients; on each of PIECES pieces of the range the largest |L(x) (q -
+    q_hat)| over the set is at most the largest over the Bernstein control points of L (workflows/thermal.py
+    `bernstein`: L(x) is their convex combination), each an LP pair proven by duality. The parts bilinear in q
+    (P's correction times an effect's) are bounded from the set's
+    box, at q and at q_hat."""
     from ..solve import hull
+    from .thermal import bernstein
     t_lo, t_hi = ext.thermal_range
-    t0 = round(0.5 * (t_lo + t_hi), 1)
+    t0, ref = round(0.5 * (t_lo + t_hi), 1), ext.temp_ref       # the effects' temperature counts from ref
+    D = max(int(x.rsplit("_", 1)[1]) if x[-1].isdigit() else 1 for x in ext.names)
     P = np.linalg.inv(M_fit)
     Q = A.shape[0]
-    k_T = [9 + ext.labels.index(f"T_{i + 1}") for i in range(3)]
-    k_S = [9 + ext.labels.index(f"S_{i + 1}") for i in range(3)]
-    th_T, th_S = ext.theta[[k - 9 for k in k_T]], ext.theta[[k - 9 for k in k_S]]
+    k_T = [[9 + ext.labels.index(f"T{'' if k == 1 else k}_{i + 1}") for i in range(3)] for k in range(1, D + 1)]
+    k_S = [[9 + ext.labels.index(f"S{'' if k == 1 else k}_{i + 1}") for i in range(3)] for k in range(1, D + 1)]
+    th = np.r_[np.zeros(9), ext.theta]
     dA = np.zeros((6, 3, 3))                      # d A / d q_k, A = [[q0, 0, 0], [q3, q1, 0], [q4, q5, q2]]
     for k, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1))):
         dA[k, i, j] = 1.0
-
-    def exact(q, tau20):
-        """beta_i and Gamma_ii at T - 20 = tau20 for the correction q: P (E + A(q)), b + g P q_b, theta + q."""
-        Pq = P @ (np.eye(3) + _lower(q))
-        beta = b_fit / g + P @ q[6:9] + tau20 * Pq @ (th_T + q[k_T])
-        return beta, np.diag(Pq) * (1 + tau20 * (th_S + q[k_S])) - 1
-
+    rows = [np.zeros((6, Q)) for _ in range(D + 1)]   # L(x) = sum_k x^k rows[k]: beta_1..3, Gamma_11..33
+    rows[0][:3, :9], rows[0][3:, :9] = J[6:9], J[0:3]
+    for k in range(1, D + 1):
+        t_k, s_k = th[k_T[k - 1]], th[k_S[k - 1]]
+        for i in range(3):
+            rows[k][i, :6] = np.einsum("j,kjl,l->k", P[i], dA, t_k)
+            rows[k][i, k_T[k - 1]] = P[i]
+            rows[k][3 + i, :9] = J[i] * s_k[i]
+            rows[k][3 + i, k_S[k - 1][i]] = P[i, i]
+    cuts = np.linspace(t_lo - ref, t_hi - ref, PIECES + 1)
+    C = np.vstack([np.vstack(bernstein(rows, a, b)) for a, b in zip(cuts[:-1], cuts[1:])])
+    U, back = np.unique(C, axis=0, return_inverse=True)
+    p_lo, p_hi = hull.ranges(A.T, s - bnd, s + bnd, lo - shift, hi + shift, U)
+    reach, mid = np.abs(U) @ shift, U @ dq
+    half = np.maximum(p_hi + reach - mid, mid - p_lo + reach)[np.ravel(back)].reshape(-1, 6).max(axis=0)
     box = np.maximum(np.abs(lo), np.abs(hi))
     a_box = np.abs(_lower(box))
-    bound_b, bound_s = np.zeros(3), np.zeros(3)
-    for T in (t_lo, t_hi):                        # each half-width is convex in T: largest at an end
-        tau20 = T - 20.0
-        C = np.zeros((6, Q))                      # the parts of beta_i and Gamma_ii linear in q
-        C[:3, :9], C[3:, :9] = J[6:9], J[0:3] * (1 + tau20 * th_S)[:, None]
-        for i in range(3):
-            C[i, :6] += tau20 * np.einsum("j,kjl,l->k", P[i], dA, th_T)
-            C[i, k_T] += tau20 * P[i]
-            C[3 + i, k_S[i]] += tau20 * P[i, i]
-        p_lo, p_hi = hull.ranges(A.T, s - bnd, s + bnd, lo - shift, hi + shift, C)
-        reach = np.abs(C) @ shift
-        mid = C @ dq
-        half = np.maximum(p_hi + reach - mid, mid - p_lo + reach)
-        # the bilinear parts, tau20 P A(q) q_T and tau20 (P A(q))_ii q_S,i, at q and at the estimate's dq
-        second = abs(tau20) * np.r_[np.abs(P) @ a_box @ box[k_T], np.diag(np.abs(P) @ a_box) * box[k_S]]
-        bound_b = np.maximum(bound_b, half[:3] + 2 * second[:3])
-        bound_s = np.maximum(bound_s, half[3:] + 2 * second[3:])
-    b0, s0 = exact(dq, t0 - 20.0)
-    Pm = P @ (np.eye(3) + _lower(dq))
-    b1, s1 = Pm @ (th_T + dq[k_T]), np.diag(Pm) * (th_S + dq[k_S])
-    up = 1 + 1e-9
-    return {"degree": 1, "t0_c": t0, "range_c": [float(t_lo), float(t_hi)],
-            "q": {**{f"bias{i + 1}": [float(b0[i]), float(b1[i])] for i in range(3)},
-                  **{f"scale{i + 1}": [float(s0[i]), float(s1[i])] for i in range(3)}},
-            "bound": {**{f"bias{i + 1}": float(bound_b[i]) * up for i in range(3)},
-                      **{f"scale{i + 1}": float(bound_s[i]) * up for i in range(3)}},
-            "units": {**{f"bias{i + 1}": ["1 (over g)", "1/degC (over g)"] for i in range(3)},
-                      **{f"scale{i + 1}": ["1", "1/degC"] for i in range(3)}}}
+    x_max = max(abs(t_lo - ref), abs(t_hi - ref))
+    second = sum(x_max ** k * np.r_[np.abs(P) @ a_box @ box[k_T[k - 1]], np.diag(np.abs(P) @ a_box) * box[k_S[k - 1]]]
+                 for k in range(1, D + 1))
+    bound = (half + 2 * second) * (1 + 1e-9)
+    Pm = P @ (np.eye(3) + _lower(dq))             # the estimate: the exact polynomials at the set's midpoint
+    beta = [b_fit / g + P @ dq[6:9]] + [Pm @ (th[k_T[k - 1]] + dq[k_T[k - 1]]) for k in range(1, D + 1)]
+    gamma = [np.diag(Pm) - 1] + [np.diag(Pm) * (th[k_S[k - 1]] + dq[k_S[k - 1]]) for k in range(1, D + 1)]
+    beta, gamma = _about(beta, t0 - ref), _about(gamma, t0 - ref)
+    unit = ["1/degC" if k == 1 else f"1/degC^{k}" for k in range(1, D + 1)]
+    return {"degree": D, "t0_c": t0, "range_c": [float(t_lo), float(t_hi)],
+            "q": {**{f"bias{i + 1}": [float(c[i]) for c in beta] for i in range(3)},
+                  **{f"scale{i + 1}": [float(c[i]) for c in gamma] for i in range(3)}},
+            "bound": {**{f"bias{i + 1}": float(bound[i]) for i in range(3)},
+                      **{f"scale{i + 1}": float(bound[3 + i]) for i in range(3)}},
+            "units": {**{f"bias{i + 1}": ["1 (over g)"] + [f"{u} (over g)" for u in unit] for i in range(3)},
+                      **{f"scale{i + 1}": ["1"] + unit for i in range(3)}}}
+
+
+def _about(coeffs, d):
+    """The coefficients of p(x) = sum_k coeffs[k] x^k in y = x - d."""
+    from math import comb
+    return [sum(comb(k, m) * d ** (k - m) * coeffs[k] for k in range(m, len(coeffs))) for m in range(len(coeffs))]
 
 
 def _lower(q):
