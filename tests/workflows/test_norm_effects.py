@@ -225,7 +225,7 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
     out = tmp_path / "r.json"
     assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1", "--json", str(out),
                  "--export-ardupilot", str(tmp_path / "t.parm"), "--export-px4", str(tmp_path / "t.params"),
-                 "--px4-device-id", "42"]) == 0
+                 "--px4-device-id", "42", "--save", str(tmp_path / "cal.json")]) == 0
     said = capsys.readouterr().out
     assert "over temperature (the IMU's, the log's temp_c)" in said
     res = json.loads(out.read_text())
@@ -233,6 +233,18 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
     th = res["thermal"]
     lo, hi = th["range_c"]
     assert lo < 21 and hi > 42
+    # the saved file, applied to the unit's noise-free readings at 500 directions and temperatures of the range:
+    # each within its per-sample bound
+    rng = np.random.default_rng(5)
+    m = rng.normal(size=(3, 500))
+    m /= np.linalg.norm(m, axis=0)
+    temp = rng.uniform(lo, hi, 500)
+    f = G * N.readings(m, np.r_[_truth(), np.zeros(7)]) + G * np.outer(TRUE["bias_temperature"], temp - 20)
+    log2 = tmp_path / "apply.csv"
+    np.savetxt(log2, np.column_stack([np.arange(500) / 100, f.T, temp]), delimiter=",", comments="", fmt="%.12g",
+               header="time_s,ax,ay,az,temp_c")
+    c = jobs.apply(str(tmp_path / "cal.json"), str(log2))
+    assert np.all(np.abs(c.a - G * m.T) <= c.bound), float((np.abs(c.a - G * m.T) / c.bound).max())
     truth = _truth()
     T = np.linspace(lo, hi, 60)
     for i in range(3):
