@@ -66,6 +66,16 @@ CATALOGUE = {e.name: e for e in (
 )}
 
 
+def _degree(k):
+    """The suffix of an effect's term of degree k in T: none for 1, _2, _3."""
+    return "" if k == 1 else f"_{k}"
+
+
+def _power(k, mark=""):
+    """The suffix of a parameter's degree k: none for 1, 2 or 3 (with `mark`, ^2)."""
+    return "" if k == 1 else f"{mark}{k}"
+
+
 #: The rate of the logged temperature (C/s): a log's samples give it, no stand's positions file does.
 TEMP_RATE = sp.Symbol("temp_rate_c_s", real=True)
 
@@ -86,6 +96,16 @@ LOG_EFFECTS = {e.name: e for e in (
              _per_axis(f"S{k}_", f"S^{{({k})}}", f"1/degC^{k}", f"scale-factor temperature coefficient of degree {k}"),
              term=lambda w, s, k=k: sp.Matrix([s[f"S{k}_{i + 1}"] * (TEMP - 20) ** k * w[i] for i in range(3)]))
       for k in (2, 3)),
+    *(Effect(f"misalignment_temperature{_degree(k)}",
+             f"f_2 += X{k}_21 (T - 20 C)^{k} w_1, f_3 += (X{k}_31 w_1 + X{k}_32 w_2) (T - 20 C)^{k} (the "
+             f"misalignments' term of degree {k} in T; T = column temp_c)",
+             tuple(_p(f"X{_power(k)}_{i}{j}", f"X^{{({k})}}_{{{i}{j}}}", "1/degC" + _power(k, "^"),
+                      f"misalignment temperature coefficient of degree {k}, axis {i} towards {j}")
+                   for i, j in ((2, 1), (3, 1), (3, 2))),
+             term=lambda w, s, k=k: sp.Matrix([0, s[f"X{_power(k)}_21"] * w[0] * (TEMP - 20) ** k,
+                                               (s[f"X{_power(k)}_31"] * w[0] + s[f"X{_power(k)}_32"] * w[1])
+                                               * (TEMP - 20) ** k]))
+      for k in (1, 2, 3)),
 )}
 
 

@@ -263,6 +263,9 @@ EFFECTS = {
     "bias_temperature_3": ("T3_1", "T3_2", "T3_3"),
     "scale_temperature_2": ("S2_1", "S2_2", "S2_3"),
     "scale_temperature_3": ("S3_1", "S3_2", "S3_3"),
+    "misalignment_temperature": ("X_21", "X_31", "X_32"),
+    "misalignment_temperature_2": ("X2_21", "X2_31", "X2_32"),
+    "misalignment_temperature_3": ("X3_21", "X3_31", "X3_32"),
 }
 #: The units of each effect's parameters (over g: a term of 1e-3 adds 1e-3 g to the reading).
 EFFECT_UNITS = {
@@ -277,6 +280,9 @@ EFFECT_UNITS = {
     "bias_temperature_3": ("1/degC^3", "1/degC^3", "1/degC^3"),
     "scale_temperature_2": ("1/degC^2", "1/degC^2", "1/degC^2"),
     "scale_temperature_3": ("1/degC^3", "1/degC^3", "1/degC^3"),
+    "misalignment_temperature": ("1/degC", "1/degC", "1/degC"),
+    "misalignment_temperature_2": ("1/degC^2", "1/degC^2", "1/degC^2"),
+    "misalignment_temperature_3": ("1/degC^3", "1/degC^3", "1/degC^3"),
 }
 #: Each effect's physics in one line (derive/effects.py).
 EFFECT_PHYSICS = {
@@ -291,6 +297,9 @@ EFFECT_PHYSICS = {
     "bias_temperature_3": "f_i += g T3_i (T - 20 C)^3 (the bias's term of degree 3 in T; T = column temp_c)",
     "scale_temperature_2": "f_i += S2_i (T - 20 C)^2 w_i (the scale factor's term of degree 2 in T; T = column temp_c)",
     "scale_temperature_3": "f_i += S3_i (T - 20 C)^3 w_i (the scale factor's term of degree 3 in T; T = column temp_c)",
+    "misalignment_temperature": "f_2 += X1_21 (T - 20 C)^1 w_1, f_3 += (X1_31 w_1 + X1_32 w_2) (T - 20 C)^1 (the misalignments' term of degree 1 in T; T = column temp_c)",
+    "misalignment_temperature_2": "f_2 += X2_21 (T - 20 C)^2 w_1, f_3 += (X2_31 w_1 + X2_32 w_2) (T - 20 C)^2 (the misalignments' term of degree 2 in T; T = column temp_c)",
+    "misalignment_temperature_3": "f_2 += X3_21 (T - 20 C)^3 w_1, f_3 += (X3_31 w_1 + X3_32 w_2) (T - 20 C)^3 (the misalignments' term of degree 3 in T; T = column temp_c)",
 }
 #: Catalogue effects with no meaning without a stand (they need its angles).
 STAND_EFFECTS = ("alpha_encoder_harmonic", "beta_encoder_harmonic")
@@ -308,6 +317,9 @@ EFFECT_VARIABLES = {
     "bias_temperature_3": ("temp_c",),
     "scale_temperature_2": ("temp_c",),
     "scale_temperature_3": ("temp_c",),
+    "misalignment_temperature": ("temp_c",),
+    "misalignment_temperature_2": ("temp_c",),
+    "misalignment_temperature_3": ("temp_c",),
 }
 
 
@@ -616,6 +628,78 @@ def _slope_scale_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
     ])
 
 
+def _basis_misalignment_temperature(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [0, n1*temp_c - 20*n1, 0],
+        [0, 0, n1*temp_c - 20*n1],
+        [0, 0, n2*temp_c - 20*n2],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_misalignment_temperature(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [abs(temp_c - 20), 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c - 20), 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c - 20), 0]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_misalignment_temperature(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [abs(temp_c - 20), 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c - 20), 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c - 20), 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _basis_misalignment_temperature_2(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [0, n1*temp_c**2 - 40*n1*temp_c + 400*n1, 0],
+        [0, 0, n1*temp_c**2 - 40*n1*temp_c + 400*n1],
+        [0, 0, n2*temp_c**2 - 40*n2*temp_c + 400*n2],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_misalignment_temperature_2(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_misalignment_temperature_2(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _basis_misalignment_temperature_3(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
+    return _stack([
+        [0, n1*temp_c**3 - 60*n1*temp_c**2 + 1200*n1*temp_c - 8000*n1, 0],
+        [0, 0, n1*temp_c**3 - 60*n1*temp_c**2 + 1200*n1*temp_c - 8000*n1],
+        [0, 0, n2*temp_c**3 - 60*n2*temp_c**2 + 1200*n2*temp_c - 8000*n2],
+    ], n1, time_s, temp_c, temp_rate_c_s)
+
+
+def _jacobian_misalignment_temperature_3(time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0]], time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0]], time_s, temp_c, temp_rate_c_s),
+    ])
+
+
+def _slope_misalignment_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
+    return np.array([
+        _stack([[0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0]], n1, r, time_s, temp_c, temp_rate_c_s),
+    ])
+
+
 _BASIS = {
     "scale_quadratic": _basis_scale_quadratic,
     "scale_asymmetry": _basis_scale_asymmetry,
@@ -628,6 +712,9 @@ _BASIS = {
     "bias_temperature_3": _basis_bias_temperature_3,
     "scale_temperature_2": _basis_scale_temperature_2,
     "scale_temperature_3": _basis_scale_temperature_3,
+    "misalignment_temperature": _basis_misalignment_temperature,
+    "misalignment_temperature_2": _basis_misalignment_temperature_2,
+    "misalignment_temperature_3": _basis_misalignment_temperature_3,
 }
 _JACOBIAN = {
     "scale_quadratic": _jacobian_scale_quadratic,
@@ -641,6 +728,9 @@ _JACOBIAN = {
     "bias_temperature_3": _jacobian_bias_temperature_3,
     "scale_temperature_2": _jacobian_scale_temperature_2,
     "scale_temperature_3": _jacobian_scale_temperature_3,
+    "misalignment_temperature": _jacobian_misalignment_temperature,
+    "misalignment_temperature_2": _jacobian_misalignment_temperature_2,
+    "misalignment_temperature_3": _jacobian_misalignment_temperature_3,
 }
 _SLOPE = {
     "scale_quadratic": _slope_scale_quadratic,
@@ -654,4 +744,7 @@ _SLOPE = {
     "bias_temperature_3": _slope_bias_temperature_3,
     "scale_temperature_2": _slope_scale_temperature_2,
     "scale_temperature_3": _slope_scale_temperature_3,
+    "misalignment_temperature": _slope_misalignment_temperature,
+    "misalignment_temperature_2": _slope_misalignment_temperature_2,
+    "misalignment_temperature_3": _slope_misalignment_temperature_3,
 }

@@ -10,7 +10,7 @@ from garant.generated import norm as N
 from garant.verify.cli import main
 from garant.verify.io import schemas
 from garant.verify.workflows import jobs
-from conftest import G_REAL, REAL, needs_real
+from conftest import G_REAL, REAL, ROOT, needs_real
 from test_diagnose_norm import EFFECTS, G, _warm_up, static_log
 
 #: The hidden effects' parameters as the generator of test_diagnose_norm.py adds them (over g, the units of the
@@ -384,3 +384,13 @@ def test_a_warm_up_with_a_curved_drift_calibrates_with_degree_2(tmp_path, monkey
                                                                          + curve * (t - 20) ** 2) for t in T])
     got = _px4((tmp_path / "t.params").read_text(), 7)[0](raw, T)
     assert np.abs(got - got[30]).max() <= 0.1 * np.abs(raw - raw[30]).max()
+
+
+def test_the_calibration_schema_names_every_effect_the_norm_relation_carries():
+    # A calibration with an effect the schema did not list was refused on --save (misalignment_temperature);
+    # the schema's list is the generated module's.
+    schema = json.loads((ROOT / "docs" / "schemas" / "calibration.schema.json").read_text())
+    names = schema["properties"]["effects"]["properties"]["names"]
+    assert names["items"]["enum"] == list(N.EFFECTS) and names["maxItems"] == len(N.EFFECTS)
+    count = sum(len(p) for p in N.EFFECTS.values())
+    assert all(schema["properties"]["effects"]["properties"][k]["maxItems"] == count for k in ("theta", "bound"))

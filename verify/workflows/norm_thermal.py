@@ -25,7 +25,7 @@ DEGREES = (1, 2, 3)
 
 def names(degree):
     """The effects that carry the polynomials of `degree` (workflows/norm_effects.py, derived in derive/norm.py)."""
-    return tuple(f"{kind}_temperature{'' if k == 1 else f'_{k}'}" for kind in ("bias", "scale")
+    return tuple(f"{kind}_temperature{'' if k == 1 else f'_{k}'}" for kind in ("bias", "scale", "misalignment")
                  for k in range(1, degree + 1))
 
 
@@ -108,44 +108,71 @@ def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
     P = np.linalg.inv(M_fit)
     Q = A.shape[0]
     k_T = [[9 + ext.labels.index(f"T{'' if k == 1 else k}_{i + 1}") for i in range(3)] for k in range(1, D + 1)]
-    k_S = [[9 + ext.labels.index(f"S{'' if k == 1 else k}_{i + 1}") for i in range(3)] for k in range(1, D + 1)]
+    # K_k = diag(S_k) + X_k (strictly lower): the scale and misalignment terms of degree k, index in q per entry
+    k_K = [{(i, i): 9 + ext.labels.index(f"S{'' if k == 1 else k}_{i + 1}") for i in range(3)}
+           | {(i, j): 9 + ext.labels.index(f"X{'' if k == 1 else k}_{i + 1}{j + 1}") for i, j in LOWER}
+           for k in range(1, D + 1)]
     th = np.r_[np.zeros(9), ext.theta]
     dA = np.zeros((6, 3, 3))                      # d A / d q_k, A = [[q0, 0, 0], [q3, q1, 0], [q4, q5, q2]]
     for k, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1))):
         dA[k, i, j] = 1.0
-    rows = [np.zeros((6, Q)) for _ in range(D + 1)]   # L(x) = sum_k x^k rows[k]: beta_1..3, Gamma_11..33
-    rows[0][:3, :9], rows[0][3:, :9] = J[6:9], J[0:3]
+    cells = [(i, i) for i in range(3)] + list(LOWER)          # Gamma_11, 22, 33, 21, 31, 32
+    rows = [np.zeros((9, Q)) for _ in range(D + 1)]   # L(x) = sum_k x^k rows[k]: beta_1..3, then the cells
+    rows[0][:3, :9], rows[0][3:6, :9], rows[0][6:, :9] = J[6:9], J[0:3], J[3:6]
     for k in range(1, D + 1):
-        t_k, s_k = th[k_T[k - 1]], th[k_S[k - 1]]
+        t_k = th[k_T[k - 1]]
+        K = np.zeros((3, 3))
+        for (i, j), n in k_K[k - 1].items():
+            K[i, j] = th[n]
         for i in range(3):
             rows[k][i, :6] = np.einsum("j,kjl,l->k", P[i], dA, t_k)
             rows[k][i, k_T[k - 1]] = P[i]
-            rows[k][3 + i, :9] = J[i] * s_k[i]
-            rows[k][3 + i, k_S[k - 1][i]] = P[i, i]
+        for r, (i, j) in enumerate(cells):        # (P (E + A) K)_ij: through A with K, through K with P
+            rows[k][3 + r, :6] = np.einsum("l,klm,m->k", P[i], dA, K[:, j])
+            for (row, col), n in k_K[k - 1].items():
+                if col == j:
+                    rows[k][3 + r, n] = P[i, row]
     cuts = np.linspace(t_lo - ref, t_hi - ref, PIECES + 1)
     C = np.vstack([np.vstack(bernstein(rows, a, b)) for a, b in zip(cuts[:-1], cuts[1:])])
     U, back = np.unique(C, axis=0, return_inverse=True)
     p_lo, p_hi = hull.ranges(A.T, s - bnd, s + bnd, lo - shift, hi + shift, U)
     reach, mid = np.abs(U) @ shift, U @ dq
-    half = np.maximum(p_hi + reach - mid, mid - p_lo + reach)[np.ravel(back)].reshape(-1, 6).max(axis=0)
+    half = np.maximum(p_hi + reach - mid, mid - p_lo + reach)[np.ravel(back)].reshape(-1, 9).max(axis=0)
     box = np.maximum(np.abs(lo), np.abs(hi))
-    a_box = np.abs(_lower(box))
+    PA = np.abs(P) @ np.abs(_lower(box))          # |P A(q)| entrywise, from the set's box
     x_max = max(abs(t_lo - ref), abs(t_hi - ref))
-    second = sum(x_max ** k * np.r_[np.abs(P) @ a_box @ box[k_T[k - 1]], np.diag(np.abs(P) @ a_box) * box[k_S[k - 1]]]
-                 for k in range(1, D + 1))
+    second = np.zeros(9)                          # the bilinear parts, x^k P A(q) T'_k and x^k P A(q) K'_k
+    for k in range(1, D + 1):
+        K_box = np.zeros((3, 3))
+        for (i, j), n in k_K[k - 1].items():
+            K_box[i, j] = box[n]
+        PAK = PA @ K_box
+        second += x_max ** k * np.r_[PA @ box[k_T[k - 1]], [PAK[i, j] for i, j in cells]]
     bound = (half + 2 * second) * (1 + 1e-9)
     Pm = P @ (np.eye(3) + _lower(dq))             # the estimate: the exact polynomials at the set's midpoint
     beta = [b_fit / g + P @ dq[6:9]] + [Pm @ (th[k_T[k - 1]] + dq[k_T[k - 1]]) for k in range(1, D + 1)]
-    gamma = [np.diag(Pm) - 1] + [np.diag(Pm) * (th[k_S[k - 1]] + dq[k_S[k - 1]]) for k in range(1, D + 1)]
-    beta, gamma = _about(beta, t0 - ref), _about(gamma, t0 - ref)
+    gam = [Pm - np.eye(3)]
+    for k in range(1, D + 1):
+        K = np.zeros((3, 3))
+        for (i, j), n in k_K[k - 1].items():
+            K[i, j] = th[n] + dq[n]
+        gam.append(Pm @ K)
+    beta, gam = _about(beta, t0 - ref), _about(gam, t0 - ref)
     unit = ["1/degC" if k == 1 else f"1/degC^{k}" for k in range(1, D + 1)]
+    names = [f"scale{i + 1}" for i in range(3)] + list(MISALIGNMENTS)
     return {"degree": D, "t0_c": t0, "range_c": [float(t_lo), float(t_hi)],
             "q": {**{f"bias{i + 1}": [float(c[i]) for c in beta] for i in range(3)},
-                  **{f"scale{i + 1}": [float(c[i]) for c in gamma] for i in range(3)}},
+                  **{n: [float(c[i, j]) for c in gam] for n, (i, j) in zip(names, cells)}},
             "bound": {**{f"bias{i + 1}": float(bound[i]) for i in range(3)},
-                      **{f"scale{i + 1}": float(bound[3 + i]) for i in range(3)}},
+                      **{n: float(bound[3 + r]) for r, n in enumerate(names)}},
             "units": {**{f"bias{i + 1}": ["1 (over g)"] + [f"{u} (over g)" for u in unit] for i in range(3)},
-                      **{f"scale{i + 1}": ["1"] + unit for i in range(3)}}}
+                      **{f"scale{i + 1}": ["1"] + unit for i in range(3)},
+                      **{n: ["rad"] + [f"rad {u}" for u in unit] for n in MISALIGNMENTS}}}
+
+
+#: The strictly lower cells of Gamma: the misalignments alpha, beta, gamma of (1.3) of 001.
+LOWER = ((1, 0), (2, 0), (2, 1))
+MISALIGNMENTS = {"alpha": "Gamma21", "beta": "Gamma31", "gamma": "Gamma32"}
 
 
 def _about(coeffs, d):
@@ -160,7 +187,8 @@ def _lower(q):
 
 
 #: What each thermal q is, in the names io/tcal.py looks for (estimate's definitions).
-DEFINITIONS = {**{f"bias{i}": f"bias{i}" for i in (1, 2, 3)}, **{f"scale{i}": f"Gamma{i}{i}" for i in (1, 2, 3)}}
+DEFINITIONS = {**{f"bias{i}": f"bias{i}" for i in (1, 2, 3)}, **{f"scale{i}": f"Gamma{i}{i}" for i in (1, 2, 3)},
+               **MISALIGNMENTS}
 
 
 #: Still intervals whose mean readings all lie within this angle (degrees) of the first are one orientation.
