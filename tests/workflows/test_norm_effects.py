@@ -218,8 +218,8 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
     # scale factor (Gamma_ii) and misalignment over the logged range lie within their one bound of the truth at 60
     # temperatures of it. The files it writes, applied as ArduPilot's and PX4's C++ does (test_thermal.py
     # re-implements both, as cited there) to the truth's readings of one direction across the range, leave at most
-    # 10 % of the drift. Red on the slope's sign, or the constant not re-expanded about t0 (the bias at 20 C written for the
-    # one at t0).
+    # 10 % of the drift. Red on the slope's sign, or the constant not re-expanded about t0 (the bias at 20 C written
+    # for the one at t0).
     from test_thermal import _ardupilot, _px4
     log = static_log(tmp_path / "warm.csv", "bias_temperature", still_s=10.0)
     out = tmp_path / "r.json"
