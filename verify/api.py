@@ -43,8 +43,10 @@ def _api(fn):
                 bound.arguments[name] = checks.check(name, value, CHECKS[name])
             elif name == "imu" and value != "all":
                 bound.arguments[name] = checks.check(name, value, checks.positive_int)
+        from threadpoolctl import threadpool_limits
         try:
-            out = fn(*bound.args, **bound.kwargs)
+            with threadpool_limits(limits=1):        # one BLAS thread, as the command: the same bounds on any machine
+                out = fn(*bound.args, **bound.kwargs)
         except DataError as e:
             raise DataError(e.render("api"), param=e.param) from None
         if isinstance(out, results.Result):

@@ -1,8 +1,7 @@
 """Hostile and malformed inputs: no code runs from a user's file, and every bad file ends
 with exit status 2, exactly one line on stderr naming the file or option and the problem, no output
-file, and in bounded time."""
+file, and in work bounded by counts (never the clock)."""
 import json
-import time
 from pathlib import Path
 
 import numpy as np
@@ -17,12 +16,11 @@ BASE = (STANDS_DIR / "single_axis.toml").read_text()
 G = 9.81
 
 
-def run(argv, capsys, limit_s=30):
-    t0 = time.perf_counter()
+def run(argv, capsys):
+    """The command's status and its standard error's lines. Its work is bounded by the code's own budgets (counts:
+    search nodes, rows, characters), never by the clock, so no test here depends on the machine's speed."""
     code = main([str(a) for a in argv])
-    elapsed = time.perf_counter() - t0
     err = capsys.readouterr().err.strip().splitlines()
-    assert elapsed < limit_s, f"took {elapsed:.1f} s"
     return code, err
 
 
@@ -54,7 +52,7 @@ def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     text = BASE.replace(old_unit, 'unit = "rad"\nmeaning = ' + json.dumps(hostile), 1)
     text = text.replace(old_title, f"title = {json.dumps(title)}", 1)
     (tmp_path / "s.toml").write_text(text)
-    code, err = run(["derive", "s.toml", "--out", "out"], capsys, limit_s=60)
+    code, err = run(["derive", "s.toml", "--out", "out"], capsys)
     assert code == 0, err
     assert not (tmp_path / "pwned").exists()
     from garant.verify import models
@@ -123,7 +121,7 @@ def test_oversized_or_undecodable_description_refused_fast(tmp_path, capsys, mak
 
 def test_description_with_bom_is_read(tmp_path, capsys):
     (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbf" + BASE.encode())
-    code, err = run(["derive", tmp_path / "s.toml", "--out", tmp_path / "out"], capsys, limit_s=60)
+    code, err = run(["derive", tmp_path / "s.toml", "--out", tmp_path / "out"], capsys)
     assert code == 0, err
 
 

@@ -320,3 +320,117 @@ def test_the_thermal_outputs_never_replace_an_input(tmp_path, capsys):
                      option, str(data)]) == 2
         assert "would be written over an input of this command" in capsys.readouterr().err
     assert data.read_bytes() == before
+
+
+# ---------------------------------------------------------------- round four (issue 57)
+
+REAL_LOG = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "repeat_session2_acc.txt"
+IMUCAL_DIR = Path(__file__).resolve().parents[1] / "data" / "imucal"
+
+
+def test_an_imucal_session_is_refused_for_another_stands_model(capsys):
+    # `estimate --format imucal --model two-axis` printed a consistent estimate of the two-axis stand's q from a
+    # session held on the faces of a cube: the six-face model's. Refused before any work, through the API too.
+    refused(["estimate", "--format", "imucal", "--model", "two-axis", IMUCAL_DIR / "example_ferraris_session.csv",
+             "--sections", IMUCAL_DIR / "example_ferraris_session_list.json", "--sigma", "1e-2"], capsys,
+            "give --model six-face")
+    with pytest.raises(garant.DataError, match="give --model six-face"):
+        garant.estimate("two-axis", str(IMUCAL_DIR / "example_ferraris_session.csv"), 1e-2, fmt="imucal",
+                        sections=str(IMUCAL_DIR / "example_ferraris_session_list.json"))
+
+
+def test_imucal_gyro_is_checked_before_any_work_and_never_ignored(tmp_path, capsys):
+    # --imucal-gyro with fields of the wrong shape was copied into the export; without --export-imucal it was
+    # accepted and ignored.
+    gyro = tmp_path / "g.json"
+    gyro.write_text(json.dumps({"K_g": [1, 2], "R_g": np.eye(3).tolist(), "K_ga": np.eye(3).tolist(),
+                                "b_g": [0, 0, 0]}))
+    out = tmp_path / "i.json"
+    refused(["calibrate-norm", REAL_LOG, "--imucal-gyro", gyro, "--export-imucal", out], capsys,
+            "K_g must be 3 x 3 finite numbers", outputs=[out])
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps({"K_g": np.eye(3).tolist(), "R_g": np.eye(3).tolist(), "K_ga": np.zeros((3, 3))
+                                .tolist(), "b_g": [0, 0, 0]}))
+    refused(["calibrate-norm", REAL_LOG, "--imucal-gyro", good], capsys, "goes into --export-imucal's file only")
+
+
+@pytest.mark.parametrize("name, magic", [("p.svg", b"<?xml"), ("p.pdf", b"%PDF"), ("p.png", b"\x89PNG")])
+def test_a_plot_is_written_in_the_format_its_name_says(tmp_path, capsys, name, magic):
+    # `plan --plot p.svg` wrote PNG bytes under an .svg name.
+    assert main(["plan", "two-axis", "--plot", str(tmp_path / name)]) == 0
+    assert (tmp_path / name).read_bytes().startswith(magic)
+
+
+def test_a_plot_of_another_format_is_refused_before_any_work(tmp_path, capsys):
+    refused(["plan", "two-axis", "--plot", tmp_path / "p.txt", "--json", tmp_path / "p.json"], capsys,
+            "name the file .png, .svg or .pdf", outputs=[tmp_path / "p.txt", tmp_path / "p.json"])
+
+
+def test_a_folder_in_the_way_of_a_report_file_is_named(tmp_path, capsys):
+    # A report folder whose residuals.png is a folder gave an error naming a temporary .part path.
+    (tmp_path / "rep" / "residuals.png").mkdir(parents=True)
+    err = refused(["calibrate-norm", REAL_LOG, "--report", tmp_path / "rep"], capsys, "residuals.png",
+                  "a folder or another non-file is in the way")
+    assert ".part" not in err
+
+
+@pytest.mark.parametrize("make, said", [
+    (lambda d: os.symlink(d / "nowhere", d / "out"), "a link to nowhere (or a loop of links)"),
+    (lambda d: os.symlink(d / "out", d / "out"), "a link to nowhere (or a loop of links)"),
+])
+def test_a_batch_out_that_cannot_hold_the_files_is_refused_before_any_log(tmp_path, capsys, monkeypatch, make,
+                                                                         said):
+    # A dangling --out answered "lk: File exists", and a link loop likewise, after every log was calibrated.
+    from garant.verify.workflows import batch
+    make(tmp_path)
+    monkeypatch.setattr(batch, "calibrate_many", lambda *a, **k: pytest.fail("calibrated before --out was checked"))
+    refused(["calibrate-norm", REAL_LOG, REAL_LOG, "--out", tmp_path / "out", "--jobs", "1"], capsys, said)
+
+
+def test_a_batch_out_given_as_a_link_is_followed_once(tmp_path, capsys):
+    # A symlinked --out was refused as "changed during the run" (its docstring says a link is followed once).
+    (tmp_path / "real").mkdir()
+    os.symlink(tmp_path / "real", tmp_path / "out")
+    assert main(["calibrate-norm", str(REAL_LOG), str(REAL_LOG), "--out", str(tmp_path / "out"), "--jobs", "1"]) == 0
+    assert (tmp_path / "real" / "summary.csv").exists()
+    assert capsys.readouterr().err.count("calibrate-norm: ") == 2       # off a terminal: a line a step, no \r
+
+
+def test_the_api_takes_what_its_docstrings_offer_and_raises_only_data_errors():
+    # calibrate_many turned DataFrames and arrays into error rows; apply with a list, estimate on the norm model,
+    # a DataFrame with a column twice or of several levels, and diagnose on zero rows gave tracebacks or were
+    # accepted silently. Each is now a DataError naming its argument (param), or the result asked for.
+    pd = pytest.importorskip("pandas")
+    from garant.verify.workflows import jobs
+    data = jobs.read_log(str(REAL_LOG))
+    arr = np.column_stack([data.t, data.raw])
+    df = pd.DataFrame({"t": data.t, "acc_x": data.raw[:, 0], "acc_y": data.raw[:, 1], "acc_z": data.raw[:, 2]})
+    rows = garant.calibrate_many([arr, df], jobs=1)
+    assert [r["log"] for r in rows] == ["log 1 (in memory)", "log 2 (in memory)"]
+    assert [r["status"] for r in rows] == ["consistent", "consistent"]
+    twice = df.copy()
+    twice.columns = ["t", "acc_x", "acc_x", "acc_z"]
+    levels = df.copy()
+    levels.columns = pd.MultiIndex.from_tuples([("a", "t"), ("a", "acc_x"), ("b", "acc_y"), ("b", "acc_z")])
+    for call, param, said in (
+            (lambda: garant.apply([1, 2, 3], str(REAL_LOG)), "calibration", "not list"),
+            (lambda: garant.estimate("norm", str(REAL_LOG), 1e-3, temperature=1), "model", "calibrate_norm"),
+            (lambda: garant.calibrate_norm(twice), "log", "the column acc_x more than once"),
+            (lambda: garant.calibrate_norm(levels), "log", "several levels"),
+            (lambda: garant.diagnose("two-axis", np.zeros((0, 5)), 1e-4), "data", "no positions")):
+        with pytest.raises(garant.DataError, match=said) as e:
+            call()
+        assert e.value.param == param, (param, e.value.param)
+
+
+def test_the_api_answers_the_same_with_any_blas_thread_count():
+    # The command pins one BLAS thread; the API did not, so a set that is nearly a point gave bounds that moved
+    # with the machine's thread count. Each API call now runs on one BLAS thread (threadpoolctl), whatever the
+    # caller set: a job run through the API's wrapper sees one thread under a caller's limit of 4.
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from garant.verify import api
+    seen = api._api(lambda: [x["num_threads"] for x in threadpool_info()])
+    with threadpool_limits(limits=4):
+        inside = seen()
+    assert inside and set(inside) == {1}, inside

@@ -190,6 +190,10 @@ def _check_paths(args):
     files.check_inputs(inputs)
     files.check_outputs([(getattr(args, attr), what, kind) for attr, what, kind in OUTPUTS
                          if getattr(args, attr, None) is not None])
+    from ..io.report import figure_format
+    for attr in ("plot", "thermal_plot"):
+        if getattr(args, attr, None):
+            figure_format(getattr(args, attr), "--" + attr.replace("_", "-"))
 
 
 if __name__ == "__main__":

@@ -89,6 +89,17 @@ def imucal_export(p):
                    "--export-imucal carries (else the gyroscope is written as not calibrated)")
 
 
+def check_imucal(args):
+    """Before any work: --imucal-gyro is carried by --export-imucal only, and read now (a bad file stops here)."""
+    if getattr(args, "imucal_gyro", None):
+        from ..errors import DataError
+        from ..io import imucal
+        if not getattr(args, "export_imucal", None):
+            raise DataError("--imucal-gyro: its gyroscope goes into --export-imucal's file only; give --export-imucal "
+                            "FILE.json, or leave it out")
+        imucal.read_calibration(args.imucal_gyro)
+
+
 def export_imucal(args, cal):
     """Write --export-imucal when asked: garant's accelerometer, the gyroscope of --imucal-gyro or none."""
     if not getattr(args, "export_imucal", None):

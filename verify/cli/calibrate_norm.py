@@ -88,6 +88,7 @@ def run(args):
         from ..workflows.norm_thermal import check_degree
         check_degree(args.temperature)
     options.check_flight_stacks(args)
+    options.check_imucal(args)
     if len(args.logs) > 1 or args.out:
         return _batch(args)
     if args.jobs or args.spec:
@@ -132,13 +133,16 @@ def _batch(args):
         raise DataError("several logs: give --out DIR for each unit's calibration and the summary")
     spec = batch.read_spec(args.spec) if args.spec else None
     imu = int(args.imu) if args.imu is not None else None
+    folder = files.make_folder(args.out)             # before any work: a folder that cannot hold them stops here
 
-    def progress(done, total):
-        print(f"\rcalibrate-norm: {done}/{total} logs", end="" if done < total else "\n", file=sys.stderr, flush=True)
+    live = sys.stderr.isatty()
+
+    def progress(done, total):                  # one line rewritten on a terminal, a line a step into a file
+        print(("\r" if live else "") + f"calibrate-norm: {done}/{total} logs",
+              end="" if live and done < total else "\n", file=sys.stderr, flush=True)
     rows = batch.calibrate_many(args.logs, args.jobs, spec, progress, g=args.g, params=args.params, fmt=args.format,
                                 sensor=args.sensor, imu=imu, window=args.window, k=args.k, min_still=args.min_still,
                                 delta_sigma=args.delta_sigma, g_uncertainty=args.g_uncertainty, rate=args.rate)
-    folder = files.make_folder(args.out)
     names = batch.stems(args.logs)
     for stem, row in zip(names, rows):
         if row["result"] and row["result"].get("calibration"):

@@ -55,6 +55,7 @@ def run(args):
     if thermal_only and args.temperature is None:
         raise DataError(f"{thermal_only[0]} needs --temperature D")
     options.check_flight_stacks(args)
+    options.check_imucal(args)
     wanted = args.save or args.export_imu_tk or args.export_imucal
     if (args.export_imu_tk or args.export_imucal) and args.temperature is not None:
         raise DataError("--export-imu-tk/--export-imucal: those files hold no temperature polynomial; with "

@@ -218,13 +218,22 @@ def make_folder(path):
     """An output folder, made with its parents if missing (and removed again if the command fails); a
     folder given as a symbolic link is followed once, here, and the folder it names is the one written to."""
     path = Path(path)
+    if os.path.islink(path) and not os.path.exists(path):
+        raise DataError(f"{path}: an output folder given as a link to nowhere (or a loop of links); give a folder")
     missing = [p for p in [path, *path.parents] if not os.path.lexists(p)]
-    path.mkdir(parents=True, exist_ok=True)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise DataError(f"{path}: the output folder cannot be made ({e.strerror})") from None
     if _STAGED is not None:
         _MADE.extend(missing)                       # deepest first: removed in this order
     st = os.stat(path)
     if not stat.S_ISDIR(st.st_mode):
         raise DataError(f"{path}: an output folder must be a folder, not {_kind(st.st_mode)}")
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise DataError(f"{path}: the output folder is not writable")
+    if os.path.islink(path):                        # followed once: the folder it names is the one written to
+        path = Path(os.path.realpath(path))
     _FOLDERS[os.path.abspath(path)] = (st.st_dev, st.st_ino)
     return path
 
@@ -234,6 +243,8 @@ def _check_place(path):
     checked when the command began (a folder swapped for a link during the run is refused)."""
     _refuse_link(path)
     refuse_input(path)
+    if os.path.lexists(path) and not os.path.isfile(path):
+        raise DataError(f"{path}: a folder or another non-file is in the way of this output; nothing written")
     folder = os.path.abspath(path.parent if str(path.parent) else ".")
     if folder in _FOLDERS and _identity_nofollow(folder) != _FOLDERS[folder]:
         raise DataError(f"{path.parent}: the output folder changed during the run (replaced or made a link); "

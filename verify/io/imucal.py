@@ -114,4 +114,11 @@ def read_calibration(path):
     need = ("K_g", "R_g", "K_ga", "b_g")
     if not isinstance(data, dict) or any(k not in data for k in need):
         raise DataError(f"{path}: an imucal Ferraris calibration has {', '.join(need)}")
+    for key, shape in (("K_g", (3, 3)), ("R_g", (3, 3)), ("K_ga", (3, 3)), ("b_g", (3,))):
+        try:
+            value = np.array(data[key], dtype=float)
+        except (TypeError, ValueError):
+            value = None
+        if value is None or value.shape != shape or not np.all(np.isfinite(value)):
+            raise DataError(f"{path}: {key} must be {' x '.join(map(str, shape))} finite numbers, as imucal writes it")
     return data

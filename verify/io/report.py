@@ -68,11 +68,24 @@ def write_files(texts):
     return sorted(texts)
 
 
+#: The formats a figure is written in, by the file name's suffix.
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
+
+def figure_format(path, what="--plot"):
+    """The format of a figure file by its name's suffix, or a one-line refusal (before any work)."""
+    suffix = Path(str(path)).suffix.lower().lstrip(".")
+    if suffix not in FIGURE_FORMATS:
+        raise DataError(f"{what} {str(path)[:80]}: name the file .png, .svg or .pdf (the format it is written in)")
+    return suffix
+
+
 def save_figure(fig, path):
-    """A matplotlib figure as PNG, written atomically."""
+    """A matplotlib figure in the format its name says (png, svg, pdf), written atomically."""
     import io
     buf = io.BytesIO()
-    fig.savefig(buf, dpi=110, format="png")
+    fmt = figure_format(path)
+    fig.savefig(buf, dpi=110, format=fmt, metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt))
     write_text(path, buf.getvalue(), "wb")
 
 

@@ -121,6 +121,11 @@ def nominal_parameters(counts, S, offset):
     return pars, errs
 
 
+def _in_memory(log):
+    """Whether a log is data (an array or a DataFrame) rather than a path."""
+    return not isinstance(log, (str, os.PathLike))
+
+
 def _one(job):
     """One log: the calibration's result, or the one-line error (run in a worker process)."""
     path, kwargs = job
@@ -128,7 +133,7 @@ def _one(job):
     try:
         return dict(calibrate_norm(path, **kwargs)), None
     except DataError as e:
-        return None, str(e)
+        return None, str(e).replace("log: ", "", 1) if _in_memory(path) else str(e)
     except MemoryError:
         return None, "out of memory"
 
@@ -146,7 +151,7 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
     the same results whatever `jobs`), in the order given: a list of rows (log, status, message, the
     result or None, verdict and reason against `spec` when given). `progress(done, total)` hears of each."""
     from concurrent.futures import ProcessPoolExecutor
-    work = [(str(p), kwargs) for p in paths]
+    work = [(p if _in_memory(p) else str(p), kwargs) for p in paths]
     jobs = max(1, min(jobs or cores(), len(work)))
     if jobs == 1:
         outcomes = []
@@ -169,9 +174,10 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
                 if progress:
                     progress(k, len(work))
     rows = []
-    for (path, _), (res, error) in zip(work, outcomes):
+    for k, ((path, _), (res, error)) in enumerate(zip(work, outcomes), 1):
         status = "error" if res is None else ("consistent" if res["consistent"] else "refuted")
-        row = {"log": path, "status": status, "message": error or "", "result": res}
+        row = {"log": f"log {k} (in memory)" if _in_memory(path) else path, "status": status,
+               "message": error or "", "result": res}
         if spec is not None:
             row["verdict"], row["reason"], nominal = (("retest", f"not calibrated: {error}", None) if res is None
                                                       else judge(res, spec))

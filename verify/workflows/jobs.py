@@ -4,6 +4,8 @@ The command (cli/) parses its options, calls one of these and prints the result;
 (api.py) calls the same function and returns the result: the two cannot disagree. Results are the
 objects of io/results.py (a dict whose keys are also attributes, with `to_json()`).
 """
+import os
+
 import numpy as np
 
 from .. import models
@@ -56,6 +58,12 @@ def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
         with the block's errors holds "calibration", the dictionary `apply` takes.
     """
     from . import estimate as est
+    if models.kind(model) == "norm":
+        raise DataError("model norm: the norm relation (2.2) of 001 has no stand positions to estimate from; "
+                        "calibrate a static log with calibrate_norm (garant calibrate-norm)", param="model")
+    if fmt == "imucal" and model != "six-face":
+        raise DataError(f"--format imucal: imucal's Ferraris session holds the unit on the faces of a cube, the "
+                        f"six-face model; {str(model)[:60]!r} is another stand's: give --model six-face")
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     thermal = None
@@ -308,11 +316,18 @@ def _frame(df, rate=None):
     log may have (acc_x, acc_y, acc_z, as imucal's, among them), time from a time column (its suffix the
     unit) or, with none, from the index over `rate` (imucal's sample index)."""
     from ..io import recordings
+    if getattr(df.columns, "nlevels", 1) > 1:
+        raise DataError("log: a DataFrame with columns of several levels (a MultiIndex); give one level, e.g. "
+                        "df.droplevel(0, axis=1)", param="log")
+    names = [str(c).lower() for c in df.columns]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise DataError(f"log: the DataFrame has the column {twice[0]} more than once", param="log")
     low = {str(c).lower(): c for c in df.columns}
     acc = next((names for names in recordings.ACCEL_COLUMNS if all(n in low for n in names)), None)
     if acc is None:
         raise DataError(f"log: a DataFrame needs accelerometer columns such as acc_x, acc_y, acc_z; it has "
-                        f"{', '.join(map(str, df.columns))}")
+                        f"{', '.join(map(str, df.columns))}", param="log")
     times = [c for c in low if c in recordings.TIME_COLUMNS]
     if times:
         t = real_array(df[low[times[0]]], f"log: column {times[0]}") * recordings.TIME_COLUMNS[times[0]]
@@ -413,6 +428,8 @@ def diagnose(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
     positions = positions_of(mod, data)
+    if len(positions.f) == 0:
+        raise DataError("data: no positions to diagnose (every row of the data is read, none is left)", param="data")
     res = diagnosis.diagnose(models.stand_model(model), mod, positions, sigma, prem)
     study = res.pop("_study")
     if not res["consistent_before"] and (model in models.STANDS or str(model).endswith(".toml")):
@@ -458,6 +475,9 @@ def apply(calibration, log, *, fmt=None, sensor=None, imu=None, rate=None, trust
         (t, a, bound).
     """
     from ..io import calibration as cal_io, recordings
+    if not isinstance(calibration, (dict, str, os.PathLike)):
+        raise DataError(f"calibration: a calibration file's path or the dictionary a result's calibration holds, "
+                        f"not {type(calibration).__name__}", param="calibration")
     cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
     data = read_log(log, fmt, sensor, imu, rate)
     if not trust_units:
