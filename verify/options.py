@@ -178,11 +178,11 @@ def check(name, value, kind):
         return None
     if isinstance(value, str) and not getattr(kind, "takes_text", False):
         raise DataError(f"{name}: must be {'True or False' if kind is flag else 'a number'}, not the text "
-                        f"{_shown(value)}")
+                        f"{_shown(value)}", param=name)
     try:
         return kind(value)
     except Bad as e:
-        raise DataError(f"{name}: {e}") from None
+        raise DataError(f"{name}: {e}", param=name) from None
 
 
 def argtype(kind):

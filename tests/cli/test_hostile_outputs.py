@@ -417,7 +417,8 @@ def test_the_api_takes_what_its_docstrings_offer_and_raises_only_data_errors():
             (lambda: garant.estimate("norm", str(REAL_LOG), 1e-3, temperature=1), "model", "calibrate_norm"),
             (lambda: garant.calibrate_norm(twice), "log", "the column acc_x more than once"),
             (lambda: garant.calibrate_norm(levels), "log", "several levels"),
-            (lambda: garant.diagnose("two-axis", np.zeros((0, 5)), 1e-4), "data", "no positions")):
+            (lambda: garant.diagnose("two-axis", np.zeros((0, 5)), 1e-4), "data", "no positions"),
+            (lambda: garant.estimate("two-axis", str(REAL_LOG), 1e-4, g=-1), "g", "must be a finite number")):
         with pytest.raises(garant.DataError, match=said) as e:
             call()
         assert e.value.param == param, (param, e.value.param)
