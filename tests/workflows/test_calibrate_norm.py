@@ -187,7 +187,7 @@ def test_noise_rule_holds_on_split_halves_of_every_real_log():
     # than the rules combined. The batch-means rule (K_BATCH standard errors from 8 batch means, plus half
     # a count) is exceeded on at most 1 % of interval-axes; the white-noise rule (3 std / sqrt(n) plus
     # half a count) on more: the wrong rule turns this red.
-    from garant.verify.workflows.calibrate_norm import K_BATCH, K_SE
+    from garant.verify.workflows.norm_noise import K_BATCH, K_SE
     batch = split_half_exceedances(lambda white, batch: K_BATCH * batch)
     bad, total = map(sum, zip(*batch.values()))
     assert total > 1000 and bad <= 0.01 * total, batch
@@ -201,7 +201,7 @@ def test_k_batch_is_the_student_t_point():
     # BATCHES - 1 = 7 degrees of freedom, by quadrature of its density.
     import mpmath as mp
     from garant.verify.io.recordings import BATCHES
-    from garant.verify.workflows.calibrate_norm import K_BATCH
+    from garant.verify.workflows.norm_noise import K_BATCH
     nu = BATCHES - 1
     def pdf(t):
         return mp.gamma((nu + 1) / 2) / (mp.sqrt(nu * mp.pi) * mp.gamma(nu / 2)) * (1 + t ** 2 / nu) ** (-(nu + 1) / 2)

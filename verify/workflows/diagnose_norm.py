@@ -15,7 +15,8 @@ from itertools import combinations
 
 import numpy as np
 
-from .calibrate_norm import noise_rule, noise_rule_name, weighted_fit
+from .calibrate_norm import weighted_fit
+from .norm_noise import noise_rule, noise_rule_name
 
 LARGEST_SET = 3          # effects named together at most
 #: Relative to the largest singular value of the unit-norm columns. Columns that differ by rounding and by the

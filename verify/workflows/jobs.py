@@ -217,9 +217,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
                             f"{', '.join(norm_thermal.names(temperature))} itself)")
         stills = norm_thermal.split(data, stills, min_still)
         if stills and norm_thermal.one_orientation(stills):
-            quantum = recordings.quantum(data)
-            return results.NormCalibration(norm_thermal.still_only(
-                data, stills, note, g, cn.noise_axes(stills, quantum), cn.noise_rule_name(stills, quantum)))
+            return results.NormCalibration(norm_thermal.still_only(data, stills, note, g, recordings.quantum(data)))
         if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
             raise DataError(f"{data.path}: --temperature takes a log in m/s^2 (the flight stacks' unit); this one "
                             "is in counts")

@@ -202,15 +202,16 @@ def one_orientation(stills):
     return bool(np.all(m @ m[0] >= np.cos(np.radians(ONE_ORIENTATION_DEG))))
 
 
-def still_only(data, stills, note, g, e, rule):
+def still_only(data, stills, note, g, quantum):
     """A still-only warm-up (ArduPilot's procedure: the board still while it heats): per axis the raw reading's
     drift r_i(T) = c0_i + c1_i (T - t0), every (c0, c1) that meets each piece's mean within its noise rule (the
     information set, LPs proven by duality, solve/hull.py), t0 the middle of the range. One orientation cannot
     separate a bias drift from a scale drift times the axis's share of g, nor calibrate the scale factors and
-    biases themselves: the drift is their sum, right for this orientation, said by name. e (K, 3): each piece's
-    noise rule per axis (raw units, calibrate_norm.noise_axes), `rule` its name."""
+    biases themselves: the drift is their sum, right for this orientation, said by name."""
     from ..io import recordings
     from ..solve import hull
+    from .norm_noise import noise_axes, noise_rule_name
+    e, rule = noise_axes(stills, quantum), noise_rule_name(stills, quantum)
     temps = np.array([float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)])) for st in stills])
     if len(stills) < 2 or temps.max() - temps.min() < 2 * SPLIT_C:
         raise DataError(f"{data.path}: one orientation over {temps.min():.1f}-{temps.max():.1f} C: a drift in T needs "

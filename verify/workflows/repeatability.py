@@ -14,7 +14,7 @@ import itertools
 import numpy as np
 
 from ..errors import DataError, opt
-from . import calibrate_norm as cn
+from . import calibrate_norm as cn, norm_noise
 
 #: Candidate effects between runs: (name, physics, which of the 9 parameters move per run, within-run
 #: time term). The first (fewest added unknowns) that makes every run consistent is named.
@@ -104,7 +104,7 @@ def effect_test(mod, runs, ref, g, params):
                 sig, n = cn.sigma_and_n(cn.calibrated(mod, raw[r] - drift, Ms[r], bs[r], np.zeros(3), g))
                 H.append(mod.H(n)[:params])
                 s.append(sig)
-                bounds.append(cn.noise_rule(runs[r].stills, Ms[r], n, g, runs[r].quantum))
+                bounds.append(norm_noise.noise_rule(runs[r].stills, Ms[r], n, g, runs[r].quantum))
                 run_of.append(np.full(len(sig), r))
             H, s, bounds, run_of = np.hstack(H), np.concatenate(s), np.concatenate(bounds), np.concatenate(run_of)
             cols = [H] + [H[list(free)] * (run_of == r) for r in range(1, R)] + ([H[6:9] * np.concatenate(t)]
