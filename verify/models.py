@@ -5,8 +5,6 @@ import os
 import types
 from pathlib import Path
 
-import numpy as np
-
 from garant.generated import API, MODELS as REGISTRY
 
 from .errors import DataError
@@ -255,6 +253,7 @@ def reachable_grid(ranges, detents, step, limit=1_000_000, what="the grid", rais
     """Positions (degrees, (S, n)) a stand can take on a grid: each angle at its detents when it has
     them, else at the multiples of `step` (one per angle, or one for all) inside its range. A grid of
     more than `limit` positions is refused before it is built (`raise_with`: the option that raises it)."""
+    import numpy as np
     steps = list(step) if np.ndim(step) else [step] * len(ranges)
     cells = [len(det) if len(det) else (min(hi - lo, 360) + 1e-9) / st for (lo, hi), det, st in zip(ranges, detents,
                                                                                                     steps)]
@@ -273,6 +272,7 @@ def reachable_grid(ranges, detents, step, limit=1_000_000, what="the grid", rais
 
 def unreachable(ranges, detents, P):
     """The first (position index, angle index, value) a stand cannot take, or None."""
+    import numpy as np
     P = np.atleast_2d(np.asarray(P, float))
     for i, ((lo, hi), det) in enumerate(zip(ranges, detents)):
         v = P[:, i]
@@ -295,6 +295,7 @@ def layout(mod):
 def H_at(mod, angles_rad, mounts=None, variables=()):
     """H at positions: angles (S, n_angles) in radians, mounts (S,) indices, and the values (S,) of the
     model's VARIABLES (time, temperature) -> (3, m, S)."""
+    import numpy as np
     angles_rad = np.atleast_2d(np.asarray(angles_rad, float))
     cols = [angles_rad[:, i] for i in range(angles_rad.shape[1])] + [np.asarray(v, float) for v in variables]
     return mod.H(*cols, mount=0 if mounts is None else np.asarray(mounts))
@@ -303,6 +304,7 @@ def H_at(mod, angles_rad, mounts=None, variables=()):
 def q_of(mod, physical):
     """The q (4) of 000 an estimate bounds for a unit with these physical errors: those of the unit that
     reads the same with the model's ABSORBED parameters at 0 (`equivalent`; the unit itself when none)."""
+    import numpy as np
     physical = np.asarray(physical, float)
     same = mod.equivalent(physical)
     return np.asarray(mod.PHYSICAL_TO_Q, float) @ same

@@ -1,7 +1,7 @@
 """garant apply: correct a raw log with a calibration, with the worst-case error of every sample."""
 import os
 
-from ..io.recordings import FORMATS, SENSORS
+from ..defaults import FORMATS, SENSORS
 
 
 def add(sub):

@@ -1,7 +1,7 @@
 """Arguments several commands share, stated once with their units."""
 from .. import options as checks
 from ..models import STANDS
-from ..workflows.premises import G_DEFAULT
+from ..defaults import G_DEFAULT
 
 #: Exit status when the data refute the noise bound (docs: README, "Exit status").
 EXIT_INCONSISTENT = 3

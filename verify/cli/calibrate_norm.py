@@ -2,7 +2,7 @@
 import sys
 
 from ..errors import DataError
-from ..io.recordings import FORMATS, SENSORS
+from ..defaults import FORMATS, SENSORS
 from . import args as options
 
 

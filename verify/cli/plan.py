@@ -3,8 +3,7 @@ import sys
 
 from ..errors import DataError
 from ..models import STANDS, kind
-from ..solve.highs import COUNT_NODES, SEARCH_NODES
-from ..workflows.plan import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS
+from ..defaults import COUNT_NODES, COUNT_SECONDS, MAX_CANDIDATES, SEARCH_NODES, SEARCH_SECONDS
 from . import args as options
 
 

@@ -2,13 +2,13 @@
 effect named when they disagree, and the between-run envelope to expect of the next run."""
 import sys
 
-from ..io.recordings import FORMATS, SENSORS
+from ..defaults import FORMATS, SENSORS
 from . import args as options
 
 
 def add(sub):
     """The `garant repeatability` subcommand and its options."""
-    from ..workflows.repeatability import MAX_RUNS
+    from ..defaults import MAX_RUNS
     p = sub.add_parser("repeatability", help="compare runs of one sensor against their guaranteed bounds; "
                        "name the effect when they disagree; the between-run envelope")
     p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "

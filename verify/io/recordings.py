@@ -7,8 +7,8 @@ import numpy as np
 
 from ..errors import DataError, opt
 from . import files, mimu
+from ..defaults import FORMATS, SENSORS
 
-SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}
 
 
 class Log(NamedTuple):
@@ -256,7 +256,7 @@ def _read_imucal(path, sensor, imu, rate):
 READERS = {"imu_tk": _read_imu_tk, "csv": _read_csv, "openaxes": _read_openaxes, "mimu": _read_mimu,
            "npy": _read_npy, "imucal": _read_imucal}
 #: The formats a log may be read as (`--format`).
-FORMATS = tuple(READERS)
+assert tuple(READERS) == FORMATS, "defaults.FORMATS names READERS in order"
 
 
 def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):

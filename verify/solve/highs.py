@@ -12,6 +12,7 @@ import highspy
 import numpy as np
 
 from ..errors import DataError, LPFailed
+from ..defaults import COUNT_NODES, SEARCH_NODES
 
 INF = highspy.kHighsInf
 _quiet = False
@@ -241,11 +242,6 @@ def sparse_dual(A, targets=None, slack=1e-9):
     return Lam, values
 
 
-#: The work the search for the fewest positions may take: branch-and-bound nodes of its first solve (the
-#: built-in stands prove their minimum in a few), then nodes for counting the plans of that size (in all).
-#: Budgeted by work, the result is the same on every machine; the time limits are a safety stop only.
-SEARCH_NODES = 20_000
-COUNT_NODES = 20
 
 
 def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=(), nodes=SEARCH_NODES,

@@ -5,6 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError, opt
+from ..defaults import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS
 
 
 @dataclass
@@ -61,15 +62,6 @@ class Plan:
             "optimal_plans": [[self.position(s) for s in pl] for pl in r.optimal_plans]}
 
 
-#: The most candidate positions (times mountings) a plan search takes unless told otherwise: a 3-degree
-#: grid on the two-axis stand (14,400) takes about 30 s on one core.
-MAX_CANDIDATES = 10_000
-
-#: Safety stops only (s): the search for the fewest positions and the count of its plans are budgeted by
-#: work (--search-nodes, --count-nodes: solve/highs.py), so that they give the same plan on every machine;
-#: a time limit that fires instead is said, for its result may differ elsewhere.
-SEARCH_SECONDS = 300.0
-COUNT_SECONDS = 120.0
 
 
 def refuse_variables(mod, model):

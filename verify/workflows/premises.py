@@ -10,9 +10,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import DataError, opt
+from ..defaults import G_DEFAULT
 
 #: The gravity assumed when none is given, m/s^2 (with the uncertainty G_UNCERTAINTY_DEFAULT).
-G_DEFAULT = 9.81
 #: Defaults where the description states no bound (rad, or dimensionless).
 STAND_BOUND = 1e-3        # a stand error of a description that states none
 MOUNTING_BOUND = 1e-2     # the block on its fixture, rad (about 0.6 degree)

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import DataError, opt
 from . import calibrate_norm as cn, norm_noise
+from ..defaults import MAX_RUNS
 
 #: Candidate effects between runs: (name, physics, which of the 9 parameters move per run, within-run
 #: time term). The first (fewest added unknowns) that makes every run consistent is named.
@@ -130,9 +131,6 @@ def effect_test(mod, runs, ref, g, params):
     return out
 
 
-#: The most runs compared unless told otherwise: the effect test fits every run at once, so its LP
-#: grows with the square of the runs (20 runs of 16 positions take 0.2 s, 200 runs 80 s).
-MAX_RUNS = 50
 
 
 def run(mod, runs, g, params=9, max_runs=MAX_RUNS):

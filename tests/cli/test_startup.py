@@ -1,0 +1,40 @@
+"""Start-up: `garant --help`, `garant CMD --help`, an unknown option and a missing argument answer before the
+numerics load (numpy, SymPy, cvxpy, matplotlib, HiGHS are imported only by the commands that compute). Checked by
+the modules a fresh interpreter holds afterwards, not by timing; docs/bench.md gives the time
+(`python -m verify.bench`, bench_startup)."""
+import json
+import subprocess
+import sys
+
+from garant.verify.cli import COMMANDS
+
+HEAVY = ("numpy", "sympy", "cvxpy", "matplotlib", "highspy", "scipy", "pandas")
+
+PROBE = """
+import json, sys
+from garant.verify.cli import main
+codes = []
+for argv in json.loads(sys.argv[1]):
+    try:
+        codes.append(main(argv))
+    except SystemExit as e:
+        codes.append(e.code)
+print(json.dumps({"codes": codes, "heavy": sorted({m.split('.')[0] for m in sys.modules} & set(%r))}))
+""" % (HEAVY,)
+
+
+def _probe(argvs):
+    out = subprocess.run([sys.executable, "-c", PROBE, json.dumps(argvs)], capture_output=True, text=True,
+                         check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_help_and_argument_errors_load_no_numerics():
+    # `garant --help` took 0.45 s, 0.41 s over a bare interpreter: the argument definitions imported the models,
+    # the noise rule and the plan search, which load numpy and more. Red when a command's parser imports one.
+    argvs = [["--help"], ["--version"]] + [[c, "--help"] for c in COMMANDS]
+    argvs += [["calibrate-norm", "--bogus"], ["estimate"], ["plan", "two-axis", "--search-nodes", "x"]]
+    got = _probe(argvs)
+    assert got["heavy"] == [], got
+    assert got["codes"][:len(COMMANDS) + 2] == [0] * (len(COMMANDS) + 2)
+    assert all(c == 2 for c in got["codes"][len(COMMANDS) + 2:]), got["codes"]
