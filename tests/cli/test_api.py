@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import garant
-from conftest import ROOT, write_csv
+from conftest import G_REAL, REAL, ROOT, needs_real, write_csv
 from garant.verify.cli import main
 
 STANDS = ROOT / "tests" / "data" / "stands"
@@ -73,11 +73,6 @@ def test_api_errors_name_the_api_arguments(tmp_path):
     with pytest.raises(garant.DataError) as err:
         garant.calibrate_norm(str(log), imu=9)
     assert "imu" in str(err.value) and "--imu" not in str(err.value)
-
-
-REAL = ROOT.parent / "shared" / "data" / "real"
-needs_real = pytest.mark.skipif(not REAL.is_dir() and not __import__("os").environ.get("CI"),
-                                reason="../shared/data/real is not present")
 
 
 @needs_real
@@ -186,3 +181,26 @@ def test_docs_api_states_each_function_as_it_is():
         options = [p for p in sig.parameters if p not in given]
         premises = [p for p in ("g", "g_uncertainty", "prior", "bound") if p in options]
         assert options[:len(premises)] == premises, name                # the premises first, in one order
+
+
+@needs_real
+def test_apply_returns_what_docs_api_says_for_each_kind_of_log(tmp_path):
+    # garant.apply(cal, DataFrame) returned a DataFrame while docs/api.md's table said a Correction that unpacks:
+    # the table now says what each input gives, and each is called as documented.
+    pd = pytest.importorskip("pandas")
+    text = (ROOT / "docs" / "api.md").read_text()
+    row = next(line for line in text.splitlines() if line.startswith("| `garant.apply("))
+    assert "a path or an array: `Correction`" in row and "a pandas DataFrame: a corrected copy" in row
+    log = REAL / "repeat_session2_acc.txt"
+    cal = garant.calibrate_norm(str(log), g=G_REAL).calibration
+    t, a, bound = garant.apply(cal, str(log))                      # a path: a Correction that unpacks
+    from garant.verify.workflows import jobs
+    raw = jobs.read_log(str(log))
+    c = garant.apply(cal, np.column_stack([raw.t, raw.raw]))      # an array: the same
+    assert np.allclose(c.a, a) and len(t) == len(c.t)
+    df = pd.DataFrame({"time_s": raw.t, "acc_x": raw.raw[:, 0], "acc_y": raw.raw[:, 1], "acc_z": raw.raw[:, 2]})
+    out = garant.apply(cal, df)                                    # a DataFrame: a corrected copy with bounds
+    assert isinstance(out, pd.DataFrame) and {"bound_x", "bound_y", "bound_z"} <= set(out.columns)
+    assert np.allclose(out[["acc_x", "acc_y", "acc_z"]].to_numpy(), a)
+    pieces = list(garant.apply(cal, str(log), chunk=5000))         # with chunk: Corrections, piece by piece
+    assert sum(len(p.t) for p in pieces) == len(t)

@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import simulate, write_csv
+from conftest import REAL, needs_real, simulate, write_csv
 from garant.verify import models
 from garant.verify.cli import main
 
@@ -150,3 +150,21 @@ def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
         out.write(line[:50])
         out.write(line[50:] + "\nshort\n")
     assert max(map(len, tty.getvalue().splitlines())) <= 100 and plain.getvalue() == line + "\nshort\n"
+
+
+@needs_real
+def test_apply_without_output_says_how_and_writes_standard_output_on_dash(tmp_path, capsys):
+    # `apply CAL LOG` without -o was an error that did not say where the corrected log could go; -o - now writes
+    # the CSV to standard output (the line saying what was written to standard error). A norm calibration of a
+    # log whose format has no sensor (imu_tk's) says none, not adxl355.
+    log = REAL / "imu_tk_xsens_acc.txt"
+    cal = tmp_path / "c.json"
+    assert main(["calibrate-norm", str(log), "--save", str(cal), "--json", str(tmp_path / "r.json")]) == 0
+    assert json.loads((tmp_path / "r.json").read_text())["sensor"] is None
+    capsys.readouterr()
+    assert main(["apply", str(cal), str(log)]) == 2
+    assert "-o - writes it to standard output" in capsys.readouterr().err
+    assert main(["apply", str(cal), str(log), "-o", "-"]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("time_s,ax,ay,az,bound_x,bound_y,bound_z\n") and out.count("\n") > 1000
+    assert err.startswith("wrote standard output:")

@@ -1,5 +1,6 @@
 """garant apply: correct a raw log with a calibration, with the worst-case error of every sample."""
 import os
+import sys
 
 from ..defaults import FORMATS, SENSORS
 
@@ -22,7 +23,8 @@ def add(sub):
                         "(--export-imu-tk; for a norm calibration turned into imu_tk's upper-triangular T)")
     p.add_argument("-o", "--output", metavar="OUT.csv",
                    help="CSV: time_s (12 digits), ax, ay, az (m/s^2, 8 significant digits), bound_x, bound_y, "
-                        "bound_z (m/s^2, worst case, 4 digits rounded up)")
+                        "bound_z (m/s^2, worst case, 4 digits rounded up); - for standard output (the line that says "
+                        "what was written then goes to standard error)")
     p.add_argument("--out", metavar="DIR", help="several logs: DIR/<log name>.csv each (as --output), a bad log "
                    "said on its line while the others go on; the exit status counts the logs that failed")
     return p
@@ -57,11 +59,12 @@ def run(args):
             raise DataError(f"several logs: give {opt('out')} DIR for the corrected CSVs")
         return _batch(args)
     if not args.output:
-        raise DataError(f"give {opt('output')} OUT.csv for the corrected log")
+        raise DataError(f"give {opt('output')} OUT.csv for the corrected log (-o - writes it to standard output)")
     if os.path.isdir(args.calibration):
         raise DataError(f"{args.calibration} is a folder: a batch's calibrations apply to several logs with "
                         f"{opt('out')} DIR; for one log give its calibration file")
-    print(_apply(args, args.calibration, args.logs[0], args.output))
+    said = _apply(args, args.calibration, args.logs[0], args.output)
+    print(said, file=sys.stderr if args.output == "-" else sys.stdout)
     return 0
 
 
@@ -106,10 +109,18 @@ def _apply(args, calibration, log, output):
             np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
             total, n, kind = total + c.bound.sum(), n + len(c.t), c.kind
             yield csv_bytes([c.t, *c.a.T, *c.bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
-    write_chunks(output, rows())
-    return (f"wrote {output}: {n} samples corrected by {calibration} ({kind} calibration); worst-case error per "
-            f"component up to {worst.max():.3e} m/s^2 (mean {total / max(3 * n, 1):.3e}); frame: "
-            f"{_frame_said(args, calibration)}{_effects_said(calibration)}")
+    if output == "-":                            # a reader that stops (| head) ends the writing, not the command
+        try:
+            for chunk in rows():
+                sys.stdout.buffer.write(chunk)
+            sys.stdout.buffer.flush()
+        except BrokenPipeError:
+            sys.stdout.stopped = True
+    else:
+        write_chunks(output, rows())
+    return (f"wrote {'standard output' if output == '-' else output}: {n} samples corrected by {calibration} "
+            f"({kind} calibration); worst-case error per component up to {worst.max():.3e} m/s^2 (mean "
+            f"{total / max(3 * n, 1):.3e}); frame: {_frame_said(args, calibration)}{_effects_said(calibration)}")
 
 
 def _effects_said(path):

@@ -241,7 +241,8 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     dt = float(recordings.median(np.diff(data.t)))
     per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
     res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
-                "format": data.fmt, "sensor": sensor or "adxl355", "rate_hz": 1 / dt,
+                "format": data.fmt, "sensor": (sensor or "adxl355") if data.fmt == "openaxes" else None,
+                "rate_hz": 1 / dt,
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
                                        / np.sqrt(3) * np.sqrt(dt))})
     res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, stills, res["matrix"], res["bias"])
