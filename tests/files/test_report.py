@@ -51,7 +51,18 @@ def test_each_report_is_one_self_contained_page(reports):
         assert "<table>" in html and "Premises" in html and "Reproduce with" in html
         assert hashlib.sha256(source.read_bytes()).hexdigest() in html and "garant 0." in html
         assert "@page{size:A4" in html
-    assert "The log, its still intervals, and the residual of each" in (tmp_path / "c" / "index.html").read_text()
+    norm = (tmp_path / "c" / "index.html").read_text()
+    assert "The log, its still intervals, and the residual of each" in norm
+    # for a reader who is not a specialist (issue 60): the verdict says what it means for the unit, the premises
+    # are a list (one a line, not a 120-word paragraph), M has a column per entry, every column head of the
+    # parameters says its unit or what it is, the human-unit column keeps one unit per kind
+    assert "holds for this unit with the guaranteed errors shown" in norm
+    premises = re.search(r"<h2>Premises[^<]*</h2>\s*<ul>(.*?)</ul>", norm, re.S).group(1)
+    assert premises.count("<li>") >= 4 and "the orientations are still" in premises
+    assert "<th>M_i1 (m/s^2 per raw unit)</th><th>M_i2 (m/s^2 per raw unit)</th>" in norm
+    assert "<th>unit</th>" in norm and "on the optimal plan (the 18 orientations" in norm
+    human = re.findall(r"<tr><td>lambda\d</td>(?:<td>[^<]*</td>){3}<td>([^<]*)</td>", norm)
+    assert len(human) == 3 and all(x.endswith(" ppm") for x in human), human
     assert "a&lt;b&gt;.csv" in (tmp_path / "e" / "index.html").read_text() and "a<b>" not in (
         tmp_path / "e" / "index.html").read_text()
 

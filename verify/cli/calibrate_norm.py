@@ -377,10 +377,10 @@ def _unit(k):
 
 
 def _side(k, x):
-    """A parameter's value in ppm, mrad or mg (the nonlinearity as it is)."""
+    """A parameter's value in ppm, mrad or mg, one unit per kind (the nonlinearity as it is)."""
     from ..io import report
-    return report.human(x, "1" if k.startswith(("lambda", "eps")) else _unit(k), bias=k.startswith("eps")) \
-        if not k.startswith("delta") else f"{x:+.4g} {_unit(k)}"
+    return report.human(x, "1" if k.startswith(("lambda", "eps")) else _unit(k), bias=k.startswith("eps"),
+                        fixed=True) if not k.startswith("delta") else f"{x:+.4g} {_unit(k)}"
 
 
 def _print_bounds(res, args=None):
@@ -527,25 +527,39 @@ def _report(res, args):
     plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows],
                                  [res["g"] * r["noise_rule"] for r in rows],
                                  folder / "directions.png", f"{args.log}: residual against the direction of gravity")
-    verdict = (("**consistent**" if res["consistent"] else "**INCONSISTENT**: the data refute the noise bound; no "
-                                                           "bound is given")
-               + f": minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} "
+    verdict = (("**consistent**: every still interval's reading fits the model of (2.2) of 001 within its own noise "
+                "bound, so the calibration below holds for this unit with the guaranteed errors shown, as long as "
+                "the premises (next) hold" if res["consistent"] else
+                "**INCONSISTENT**: some still intervals lie beyond their noise bound at the best fit, so the data "
+                "refute the noise bound or the model; no bound is given and no calibration should be used")
+               + f". Minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} "
                f"({res['delta_sigma_source']}), proven remainder {res['remainder_bound']:.1e} (units of g)")
     if "model_discrepancy" in res:
         verdict += ". The " + discrepancy(res)
-    sections = [("Verdict", verdict), ("Premises", res["premises"]),
-                ("Calibration a = M (raw - b)", report.Table(("row", "M (m/s^2 per raw unit)", "b (raw units)"),
-                 [(i + 1, "  ".join(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
+    axes = ("x", "y", "z")
+    sections = [("Verdict", verdict), ("Premises: what must hold for the bounds to hold",
+                                       report.Bullets(report.clauses(res["premises"]))),
+                ("Calibration a = M (raw - b)", report.Table(
+                    ("row", "M_i1 (m/s^2 per raw unit)", "M_i2 (m/s^2 per raw unit)", "M_i3 (m/s^2 per raw unit)",
+                     "b_i (raw units)"),
+                    [(axes[i], *(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
     if res["consistent"]:
         pars = res.get("parameters") or {}
-        sections.append(("Parameters of (1.3) and their guaranteed errors (over the information set; a priori: the "
-                         "LP estimator's)", report.Table(
-            ("parameter", "estimate", "guaranteed error", "estimate", "guaranteed error", "a priori", "on the optimal "
-                "plan"),
-            [(k, f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}",
+        sections.append(("Parameters of (1.3) of 001 and their guaranteed errors", report.Table(
+            ("parameter", "unit", "estimate", "guaranteed error (over the information set)",
+             "estimate (ppm, mrad or mg)", "guaranteed error (ppm, mrad or mg)",
+             "a priori (these orientations, any data within the noise bound)",
+             "on the optimal plan (the 18 orientations of 001's plan, the same noise)"),
+            [(k, _unit(k), f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}",
               _side(k, pars[k]) if k in pars else "", _side(k, v).lstrip("+"),
               f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
              for k, v in res["guaranteed_error"].items()])))
+        sections.append(("How to read the parameters",
+                         "A guaranteed error is the largest distance, over every set of parameters that fits every "
+                         "interval within its noise bound, from the estimate: the truth lies within it when the "
+                         "premises hold. The a-priori column is what these orientations guarantee for any data; the "
+                         "optimal plan's is what the best set of orientations would give with the same noise, so a "
+                         "large ratio between the two says more orientations would pay."))
     if res.get("effects"):
         ref = res["effect_reference"]
         sections.append((f"Effects added to the reading (over g; time from {ref['time_s']:g} s of the log, temperature "

@@ -1,5 +1,6 @@
 """Plain-text tables and JSON files for the command line; every file is written whole or not at all."""
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -19,9 +20,17 @@ def table(headers, rows, out=None):
         print("  ".join(c.ljust(w) for c, w in zip(r, widths)), file=out)
 
 
-def human(value, unit, bias=False):
+def human(value, unit, bias=False, fixed=False):
     """A value in the unit an engineer reads at a glance, beside SI: a dimensionless scale factor or
-    misalignment in % (from 0.1 %) or ppm, an angle in mrad or urad, a bias (over g, or in m/s^2) in mg or ug."""
+    misalignment in % (from 0.1 %) or ppm, an angle in mrad or urad, a bias (over g, or in m/s^2) in mg or ug.
+    `fixed`: one unit per kind whatever the size (ppm, mrad, mg; four significant digits, no exponent), for a
+    table column that should not mix units."""
+    if fixed:
+        scaled, name = ((value * 1e3 if unit == "1" else value / 9.80665 * 1e3, "mg") if bias else
+                        (value * 1e3, "mrad") if unit == "rad" else (value * 1e6, "ppm") if unit == "1" else
+                        (value, unit))
+        digits = 0 if scaled == 0 else max(0, 3 - int(math.floor(math.log10(abs(scaled)))))
+        return f"{scaled:+.{digits}f} {name}"
     if bias:
         mg = value * 1e3 if unit == "1" else value / 9.80665 * 1e3
         return f"{mg:+.4g} mg" if abs(mg) >= 1 else f"{mg * 1e3:+.4g} ug"
@@ -114,6 +123,21 @@ class Image(str):
     """A section's plot: the name of a PNG file in the report's folder."""
 
 
+class Bullets(tuple):
+    """A section's list: one item a line (a premise a line), rendered as a Markdown or HTML list."""
+
+
+def clauses(text):
+    """`text` cut at each "; " outside parentheses: the premises of a printed guarantee, one a line."""
+    out, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if depth == 0 and text.startswith("; ", i):
+            out.append(text[start:i])
+            start = i + 2
+    return [x.strip() for x in out + [text[start:]] if x.strip()]
+
+
 def write_page(folder, title, command, sections, inputs=()):
     """DIR/report.md and DIR/index.html: the title, the command that reproduces it, then (heading, body)
     sections, a body being text (with **bold**), a Table or an Image; the HTML is one self-contained file
@@ -146,6 +170,8 @@ def _markdown(body):
         return markdown_table(*body)
     if isinstance(body, Image):
         return f"![{Path(body).stem}]({body})"
+    if isinstance(body, Bullets):
+        return "\n".join(f"- {x}" for x in body)
     return body
 
 
@@ -178,6 +204,8 @@ def _html(folder, title, command, sections, inputs):
         elif isinstance(body, Image):
             data = base64.b64encode(files.written(folder / body)).decode()
             out.append(f'<img alt="{escape(Path(body).stem)}" src="data:image/png;base64,{data}">')
+        elif isinstance(body, Bullets):
+            out.append("<ul>" + "".join(f"<li>{bold(x)}</li>" for x in body) + "</ul>")
         else:
             out.append(f"<p>{bold(body)}</p>")
     digests = [(p, hashlib.sha256(Path(p).read_bytes()).hexdigest()) for p in inputs if Path(p).is_file()]
