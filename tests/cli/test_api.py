@@ -204,3 +204,21 @@ def test_apply_returns_what_docs_api_says_for_each_kind_of_log(tmp_path):
     assert np.allclose(out[["acc_x", "acc_y", "acc_z"]].to_numpy(), a)
     pieces = list(garant.apply(cal, str(log), chunk=5000))         # with chunk: Corrections, piece by piece
     assert sum(len(p.t) for p in pieces) == len(t)
+
+
+@needs_real
+def test_calibrate_norm_returns_what_docs_api_says_for_a_path_an_array_and_a_dataframe():
+    # docs/api.md: calibrate_norm gives a NormCalibration whatever the log's kind; each kind called as documented
+    # gives the same calibration.
+    pd = pytest.importorskip("pandas")
+    from garant.verify.io.results import NormCalibration
+    from garant.verify.workflows import jobs
+    row = next(line for line in (ROOT / "docs" / "api.md").read_text().splitlines()
+               if line.startswith("| `garant.calibrate_norm("))
+    assert "`NormCalibration`" in row
+    log = REAL / "repeat_session2_acc.txt"
+    raw = jobs.read_log(str(log))
+    df = pd.DataFrame({"time_s": raw.t, "acc_x": raw.raw[:, 0], "acc_y": raw.raw[:, 1], "acc_z": raw.raw[:, 2]})
+    got = [garant.calibrate_norm(x, g=G_REAL) for x in (str(log), np.column_stack([raw.t, raw.raw]), df)]
+    assert all(isinstance(r, NormCalibration) for r in got)
+    assert all(np.allclose(r.matrix, got[0].matrix) for r in got)
