@@ -326,6 +326,7 @@ def norm_context(model):
     from . import norm
     bound_args = {norm.kmax: sp.Symbol("k_max"), norm.vmax: sp.Symbol("v_max")}
     est = norm.estimators(model)
+    effects = _effects_context()           # derived once: the catalogue effects the norm relation carries
     return dict(
         axes=list(model.axes), q_names=list(norm.Q_NAMES),
         q_units=["1"] * 3 + ["rad"] * 3 + ["1"] * 6,
@@ -340,8 +341,8 @@ def norm_context(model):
         plan_exact=[", ".join(str(v) for v in d) for d in norm.plan(model)],
         duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
         estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
-        effects=_effects_context(),
-        stand_effects=[n for n in _catalogue() if n not in {e[0] for e in _effects_context()}],
+        effects=effects,
+        stand_effects=[n for n in _catalogue() if n not in {e[0] for e in effects}],
     )
 
 
