@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import DataError
 from ..io.calibration import BLOCK_NAMES
 from ..solve import hull, taylor
+from .guarantee import Unbounded
 
 BLOCK = BLOCK_NAMES                     # Gamma11..Gamma33, bias1..bias3
 
@@ -35,7 +36,7 @@ def calibration(mod, info, premises):
         lo, hi, points = info.physical(M, np.where(bounded, -b, -np.inf), np.where(bounded, b, np.inf), targets)
     except hull.Empty:
         raise DataError(_CONTRADICT) from None
-    except ValueError as err:
+    except Unbounded as err:
         raise DataError(f"this stand does not separate the block's {BLOCK[err.args[0]]} (its range over the "
                         "premises is unbounded): no calibration of the block from it") from None
     if np.any(lo > hi):

@@ -296,6 +296,11 @@ class Remainder:
                 + np.abs(Wc) @ err.reshape(-1)) * (1 + taylor.SUM_ERROR)
 
 
+class Unbounded(Exception):
+    """A target of InformationSet.physical whose range over the premises is unbounded: its index among the
+    targets is `args[0]` (the stand does not separate it)."""
+
+
 class InformationSet:
     """What the readings prove: every q whose linearised readings fit each reading within its bound,
         Q = {q = q0 + w - u : |y_k - a_k^T w| <= s_k for every k, |u| <= shift},
@@ -418,7 +423,7 @@ class InformationSet:
                 break
         free = ~(np.isfinite(lo) & np.isfinite(hi))
         if free[list(targets)].any():
-            raise ValueError(int(np.flatnonzero(free[list(targets)])[0]))
+            raise Unbounded(int(np.flatnonzero(free[list(targets)])[0]))
         # a column no row encloses is never a target (refused above); it gets the box |p| <= 1, a premise that
         # binds nothing on the built-in stands (every parameter is bounded or enclosed there)
         lo, hi = np.where(free, -1.0, lo), np.where(free, 1.0, hi)
