@@ -150,7 +150,7 @@ def _batch(args):
             report.write_json(folder / row["file"], row["result"]["calibration"])
     head, table = batch.summary_rows(rows)
     report.write_text(folder / "summary.csv", _csv_text([head, *table]))
-    counts = {s: sum(r["status"] == s for r in rows) for s in ("consistent", "refuted", "error")}
+    counts = {s: sum(r["status"] == s for r in rows) for s in batch.STATUSES}
     verdicts = {v: sum(r.get("verdict") == v for r in rows) for v in batch.VERDICTS} if spec else {}
     said = (f"{len(rows)} logs: {counts['consistent']} calibrated, {counts['refuted']} refuted their noise bound, "
             f"{counts['error']} could not be calibrated" + (
@@ -176,9 +176,10 @@ def batch_status(rows, judged):
     """0 every unit has a verdict (pass, fail or undecided; without --spec: every log calibrated), 4 some unit
     failed its specification, 5 some log could not be judged (not calibrated, or refuted its noise bound:
     retest), which outranks 4."""
-    if any(r["status"] != "consistent" for r in rows):
+    from ..workflows import batch
+    if any(r["status"] != batch.CONSISTENT for r in rows):
         return BATCH_UNJUDGED
-    return BATCH_FAILED if judged and any(r.get("verdict") == "fail" for r in rows) else BATCH_JUDGED
+    return BATCH_FAILED if judged and any(r.get("verdict") == batch.FAIL for r in rows) else BATCH_JUDGED
 
 
 def _csv_text(rows):

@@ -21,8 +21,11 @@ SPEC_KEYS = {"scale": (("lambda1", "lambda2", "lambda3"), "1"),
              "bias": (("eps1/g", "eps2/g", "eps3/g"), "1 (over g)")}
 
 
-#: The verdicts, in the order the summary counts them: retest is a recording's, not the unit's.
-VERDICTS = ("pass", "fail", "undecided", "retest")
+#: The verdicts, in the order the summary counts them: guaranteed within every limit, one wholly outside, neither,
+#: or retest, a recording's (not calibrated, or refuting its noise bound), not the unit's.
+PASS, FAIL, UNDECIDED, RETEST = VERDICTS = ("pass", "fail", "undecided", "retest")
+#: A log's status in a batch: calibrated and consistent, refuting its noise bound, or not calibrated at all.
+CONSISTENT, REFUTED, ERROR = STATUSES = ("consistent", "refuted", "error")
 
 
 def read_spec(path):
@@ -78,14 +81,14 @@ def judge(res, spec):
     nominal = None
     if not res.get("consistent"):
         where = res.get("disagreements") or []
-        return "retest", ("the log refutes its noise bound" + (
+        return RETEST, ("the log refutes its noise bound" + (
             f" at still interval(s) {', '.join(map(str, where[:8]))}" + (" ..." if len(where) > 8 else "")
             if where else "") + ": no interval is guaranteed, so nothing is proven of the unit; record it again"), None
     pars, errs = res.get("parameters"), res.get("guaranteed_error")
     if not pars:
         counts = res.get("raw_axes_counts")
         if "sensitivity" not in spec or not counts:
-            return "undecided", ("a log in raw counts: its parameters are relative to the raw axes; give the nominal "
+            return UNDECIDED, ("a log in raw counts: its parameters are relative to the raw axes; give the nominal "
                                  "sensitivity (counts per g) as [nominal] sensitivity in the spec"), None
         nominal = pars, errs = nominal_parameters(counts, spec["sensitivity"], spec.get("offset", [0.0] * 3))
     fails, open_ = [], []
@@ -101,10 +104,10 @@ def judge(res, spec):
             if errs[name] > limit:
                 open_.append(f"{name}'s guaranteed error {errs[name]:.2g} above {limit:g}")
     if fails:
-        return "fail", "; ".join(fails), nominal
+        return FAIL, "; ".join(fails), nominal
     if open_:
-        return "undecided", "; ".join(open_), nominal
-    return "pass", "every guaranteed interval within its limit", nominal
+        return UNDECIDED, "; ".join(open_), nominal
+    return PASS, "every guaranteed interval within its limit", nominal
 
 
 def nominal_parameters(counts, S, offset):
@@ -175,11 +178,11 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
                     progress(k, len(work))
     rows = []
     for k, ((path, _), (res, error)) in enumerate(zip(work, outcomes), 1):
-        status = "error" if res is None else ("consistent" if res["consistent"] else "refuted")
+        status = ERROR if res is None else (CONSISTENT if res["consistent"] else REFUTED)
         row = {"log": f"log {k} (in memory)" if _in_memory(path) else path, "status": status,
                "message": error or "", "result": res}
         if spec is not None:
-            row["verdict"], row["reason"], nominal = (("retest", f"not calibrated: {error}", None) if res is None
+            row["verdict"], row["reason"], nominal = ((RETEST, f"not calibrated: {error}", None) if res is None
                                                       else judge(res, spec))
             if nominal is not None:
                 row["nominal"] = nominal
