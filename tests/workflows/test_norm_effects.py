@@ -395,3 +395,28 @@ def test_the_calibration_schema_names_every_effect_the_norm_relation_carries():
     assert names["items"]["enum"] == list(N.EFFECTS) and names["maxItems"] == len(N.EFFECTS)
     count = sum(len(p) for p in N.EFFECTS.values())
     assert all(schema["properties"]["effects"]["properties"][k]["maxItems"] == count for k in ("theta", "bound"))
+
+
+@needs_real
+def test_every_key_of_calibrate_norms_json_is_in_its_schema(tmp_path):
+    # 24 keys of calibrate-norm's JSON (directions_gain, duration_s, format, ...) were in no schema: every key of
+    # real runs (plain, --diagnose, --effect, --temperature 1, a still-only warm-up, six faces with --bound) is now
+    # a property of docs/schemas/calibrate-norm.schema.json, with its meaning.
+    schema = json.loads((ROOT / "docs" / "schemas" / "calibrate-norm.schema.json").read_text())
+    log = str(REAL / "repeat_session2_acc.txt")
+    warm = str(static_log(tmp_path / "warm.csv", "bias_temperature"))
+    rng = np.random.default_rng(1)
+    t = np.arange(0, 600, 0.01)
+    T = 20 + 30 * (1 - np.exp(-t / 300))
+    still = tmp_path / "still.csv"
+    np.savetxt(still, np.column_stack([t, np.array([0.1, 0.2, G])[None, :] + 2e-4 * (T[:, None] - 20)
+                                       + rng.uniform(-2e-4, 2e-4, (len(t), 3)), T]), delimiter=",",
+               header="time_s,ax,ay,az,temp_c", comments="", fmt="%.9g")
+    faces = str(ROOT / "tests" / "data" / "imucal" / "example_ferraris_session.csv")
+    runs = [jobs.calibrate_norm(log), jobs.calibrate_norm(log, diagnose=True),
+            jobs.calibrate_norm(warm, g=G, effects="bias_temperature"), jobs.calibrate_norm(warm, g=G, temperature=1),
+            jobs.calibrate_norm(str(still), g=G, temperature=1),
+            jobs.calibrate_norm(faces, fmt="imucal", rate=102.4, bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2})]
+    keys = set().union(*(r.to_dict() for r in runs))
+    assert keys - set(schema["properties"]) == set()
+    assert all(schema["properties"][k].get("description") or k in schema["required"] for k in keys)
