@@ -168,3 +168,14 @@ def test_apply_without_output_says_how_and_writes_standard_output_on_dash(tmp_pa
     out, err = capsys.readouterr()
     assert out.startswith("time_s,ax,ay,az,bound_x,bound_y,bound_z\n") and out.count("\n") > 1000
     assert err.startswith("wrote standard output:")
+
+
+def test_verify_prints_a_summary_and_every_row_with_verbose(capsys):
+    # `garant verify` printed every one of its rows, ~240 lines: now each group's count and the failing rows, every
+    # row with --verbose (the JSON always holds every row).
+    assert main(["verify"]) == 0
+    out = capsys.readouterr().out
+    assert "group of checks" in out and "certificates.certificates" in out and "passed, 0 failed" in out
+    assert out.count("\n") < 40 and "(--verbose prints every check" in out
+    assert main(["verify", "--verbose"]) == 0
+    assert capsys.readouterr().out.count("PASS") > 200
