@@ -359,6 +359,9 @@ def test_a_plot_is_written_in_the_format_its_name_says(tmp_path, capsys, name, m
     # `plan --plot p.svg` wrote PNG bytes under an .svg name.
     assert main(["plan", "two-axis", "--plot", str(tmp_path / name)]) == 0
     assert (tmp_path / name).read_bytes().startswith(magic)
+    # the same input gives the same file: no date, the same svg ids (red without svg.hashsalt: ids are random)
+    assert main(["plan", "two-axis", "--plot", str(tmp_path / ("again_" + name))]) == 0
+    assert (tmp_path / ("again_" + name)).read_bytes() == (tmp_path / name).read_bytes()
 
 
 def test_a_plot_of_another_format_is_refused_before_any_work(tmp_path, capsys):

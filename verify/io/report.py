@@ -93,8 +93,10 @@ def save_figure(fig, path):
     """A matplotlib figure in the format its name says (png, svg, pdf), written atomically."""
     import io
     buf = io.BytesIO()
+    import matplotlib
     fmt = figure_format(path)
-    fig.savefig(buf, dpi=110, format=fmt, metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt))
+    with matplotlib.rc_context({"svg.hashsalt": "garant"}):        # the same ids in every run: same input, same file
+        fig.savefig(buf, dpi=110, format=fmt, metadata={"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt))
     write_text(path, buf.getvalue(), "wb")
 
 

@@ -73,7 +73,7 @@ def sigma_and_n(f):
 def fold(M, b, delta, q, g):
     """The calibration corrected by q of (2.2) (lower-triangular scale and misalignment, bias over g,
     and nonlinearity when q has 12 entries)."""
-    A = np.array([[q[0], 0, 0], [q[3], q[1], 0], [q[4], q[5], q[2]]])
+    A = norm_information.lower(q)
     return (np.linalg.solve(np.eye(3) + A, M), b + np.linalg.solve(M, g * q[6:9]),
             delta + q[9:12] if len(q) == 12 else delta)
 
@@ -548,7 +548,7 @@ def parameter_map(M_fit, params):
     for j in range(params):
         e = np.zeros(params)
         e[j] = 1.0
-        A = np.array([[e[0], 0, 0], [e[3], e[1], 0], [e[4], e[5], e[2]]])
+        A = norm_information.lower(e)
         PA = P @ A
         J[:, j] = [PA[0, 0], PA[1, 1], PA[2, 2], PA[1, 0], PA[2, 0], PA[2, 1], *(P @ e[6:9]), *e[9:params]]
     return J
@@ -560,7 +560,7 @@ def parameter_bounds(M_fit, e):
     P_fit dq_b, exactly linear: |P_fit| |dA| and |P_fit| |dq_b| bound them (componentwise)."""
     e = np.asarray(e, float)
     Pabs = np.abs(np.linalg.inv(M_fit))
-    E = np.array([[e[0], 0, 0], [e[3], e[1], 0], [e[4], e[5], e[2]]])
+    E = norm_information.lower(e)
     EP = Pabs @ E
     out = np.array([EP[0, 0], EP[1, 1], EP[2, 2], EP[1, 0], EP[2, 0], EP[2, 1], *(Pabs @ e[6:9]), *e[9:]])
     return np.nextafter(out, np.inf)

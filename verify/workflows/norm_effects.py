@@ -196,12 +196,12 @@ def verdict(mod, res, noise, nu, ext):
     minimax fit within 1)."""
     from ..solve import lp
     from .calibrate_norm import weighted_fit
-    from .norm_information import design, remainder_per_interval
+    from .norm_information import design, lower, remainder_per_interval
     s, n = res["sigma"], res["n"]
     A, f = design(mod, res, ext)
     base = noise / f
     _, err = lp.primal(A / base)
-    box = np.array([[err[0], 0, 0], [err[3], err[1], 0], [err[4], err[5], err[2]]])
+    box = lower(err)
     left, _ = remainder_per_interval((n * f).T, box, err[6:9], nu, ext.extra(err[9:], box, err[6:9], nu))
     if not np.all(np.isfinite(left)):
         raise DataError(f"{ext.path}: with {ext.option} the fit's effects are too "

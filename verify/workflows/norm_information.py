@@ -18,6 +18,12 @@ def premise_box(X):
         "own box)")
 
 
+def lower(q):
+    """The lower-triangular 3 x 3 of the scale and misalignment entries of q (or of their bounds) in (2.2) of 001:
+    [[q0, 0, 0], [q3, q1, 0], [q4, q5, q2]]."""
+    return np.array([[q[0], 0, 0], [q[3], q[1], 0], [q[4], q[5], q[2]]])
+
+
 STEPS = 12                                            # boxes at most, each way
 #: The premise box tried, in multiples of the set's own box (the widest that contracts is taken).
 PREMISE_FACTORS = (64.0, 32.0, 16.0, 8.0, 4.0, 2.0, 1.5, 1.25)
@@ -98,7 +104,7 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
     def step(reach, X=None, proofs=None):
         """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
         or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP."""
-        A_box = np.array([[reach[0], 0, 0], [reach[3], reach[1], 0], [reach[4], reach[5], reach[2]]])
+        A_box = lower(reach)
         extra = None if ext is None else ext.extra(reach[9:], A_box, reach[6:9], nu)
         left, shift = remainder_per_interval(F, A_box, reach[6:9], nu, extra)
         shift = np.r_[shift, np.zeros(len(reach) - 9)]

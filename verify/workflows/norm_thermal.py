@@ -1,19 +1,16 @@
-"""`garant calibrate-norm LOG --temperature 1`: a warm-up log's biases and scale factors, each a polynomial in the
-IMU's temperature T (its temp_c column), with one guaranteed bound over the logged range, and the files the
-flight stacks load (io/tcal.py) from it.
+"""`garant calibrate-norm LOG --temperature D`, D = 1 to 3: a warm-up log's biases, scale factors and
+misalignments, each a polynomial in the IMU's temperature T (its temp_c column), with one guaranteed bound over
+the logged range, and the files the flight stacks load (io/tcal.py) from it; a still-only warm-up's drift per axis.
 
-The norm relation (2.2) of 001 carries the catalogue effects bias_temperature and scale_temperature
-(workflows/norm_effects.py: f_i += g T_i (T - 20 C) and S_i (T - 20 C) w_i in the calibrated reading), so every
-parameter is bounded over the information set of that extended relation. In the raw readings that is
+The norm relation (2.2) of 001 carries the effects bias_temperature, scale_temperature and
+misalignment_temperature (and their terms of degree 2 and 3: derive/effects.py, workflows/norm_effects.py), T
+counted from the middle of the range, so every parameter is bounded over the information set of that extended
+relation. In the raw readings, with x = T - t_ref and P = M^-1,
 
-    raw = b + g P (a / g + (T - 20) (T_vec + diag(S) a / g)),   P = M^-1,
+    raw = b + g P (a / g + sum_k x^k (T_k + K_k a / g)),   K_k = diag(S_k) + the strictly lower X_k,
 
-so the raw bias over g at T is beta(T) = b / g + (T - 20) P T_vec and the raw scale matrix Gamma(T) = P (E + (T -
-20) diag(S)) - E: per axis the polynomials the flight stacks hold (bias_i, Gamma_ii), about t0, the middle of the
-logged range. Each bound over the range is the largest over T of the set's hull of beta_i(T) (or Gamma_ii(T)): for a
-fixed T its linear part in the corrections q is a row of LPs (solve/hull.py), a convex function of T whose largest
-value is at an end of the range; the part bilinear in q (P's correction times the effect's) is bounded from the
-set's box.
+so the raw bias over g is beta(T) = b / g + sum_k x^k P T_k and the raw scale and misalignment matrix Gamma(T) =
+P (E + sum_k x^k K_k) - E: per axis the polynomials the flight stacks hold (bias_i, Gamma_ii), about t0 (`block`).
 """
 import numpy as np
 
@@ -101,6 +98,7 @@ def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
     (P's correction times an effect's) are bounded from the set's
     box, at q and at q_hat."""
     from ..solve import hull
+    from .norm_information import lower
     from .thermal import bernstein
     t_lo, t_hi = ext.thermal_range
     t0, ref = round(0.5 * (t_lo + t_hi), 1), ext.temp_ref       # the effects' temperature counts from ref
@@ -139,7 +137,7 @@ def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
     reach, mid = np.abs(U) @ shift, U @ dq
     half = np.maximum(p_hi + reach - mid, mid - p_lo + reach)[np.ravel(back)].reshape(-1, 9).max(axis=0)
     box = np.maximum(np.abs(lo), np.abs(hi))
-    PA = np.abs(P) @ np.abs(_lower(box))          # |P A(q)| entrywise, from the set's box
+    PA = np.abs(P) @ np.abs(lower(box))          # |P A(q)| entrywise, from the set's box
     x_max = max(abs(t_lo - ref), abs(t_hi - ref))
     second = np.zeros(9)                          # the bilinear parts, x^k P A(q) T'_k and x^k P A(q) K'_k
     for k in range(1, D + 1):
@@ -149,7 +147,7 @@ def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
         PAK = PA @ K_box
         second += x_max ** k * np.r_[PA @ box[k_T[k - 1]], [PAK[i, j] for i, j in cells]]
     bound = (half + 2 * second) * (1 + 1e-9)
-    Pm = P @ (np.eye(3) + _lower(dq))             # the estimate: the exact polynomials at the set's midpoint
+    Pm = P @ (np.eye(3) + lower(dq))             # the estimate: the exact polynomials at the set's midpoint
     beta = [b_fit / g + P @ dq[6:9]] + [Pm @ (th[k_T[k - 1]] + dq[k_T[k - 1]]) for k in range(1, D + 1)]
     gam = [Pm - np.eye(3)]
     for k in range(1, D + 1):
@@ -179,11 +177,6 @@ def _about(coeffs, d):
     """The coefficients of p(x) = sum_k coeffs[k] x^k in y = x - d."""
     from math import comb
     return [sum(comb(k, m) * d ** (k - m) * coeffs[k] for k in range(m, len(coeffs))) for m in range(len(coeffs))]
-
-
-def _lower(q):
-    """The lower-triangular correction A of q (scale, misalignment)."""
-    return np.array([[q[0], 0, 0], [q[3], q[1], 0], [q[4], q[5], q[2]]])
 
 
 #: What each thermal q is, in the names io/tcal.py looks for (estimate's definitions).
