@@ -295,11 +295,12 @@ def test_a_file_name_of_nested_mathtext_draws_as_written(tmp_path, capsys):
 
 def test_every_option_that_names_a_file_to_write_is_checked_as_an_output():
     """Every option of every command whose metavar names a file or folder to write (FILE.png, FILE.parm, DIR,
-    CAL.json of --save, ...) is in cli.OUTPUTS, so it is never taken for an input and never written over one.
+    CAL.json of --save, ...) is in cli.OUTPUTS or the export registry, so it is never taken for an input and never
+    written over one.
     Red when a new output option is added without its entry (--thermal-plot was taken for an input: a second
     run refused to replace the first run's plot)."""
     from garant.verify import cli
-    outputs = {attr for attr, _, _ in cli.OUTPUTS}
+    outputs = {attr for attr, _, _ in cli.OUTPUTS + cli.exports.outputs()}
     writes = ("plot", "json", "output", "report", "certificates", "out", "save", "csv", "markdown")
     missing = []
     for name, sub in cli.parser()._subparsers._group_actions[0].choices.items():

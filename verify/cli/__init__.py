@@ -19,23 +19,18 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 from ..errors import DataError, LPFailed
+from . import exports
 
 #: The subcommands, in the order of `garant --help`: command name -> its module.
 COMMANDS = {"verify": "verify", "plan": "plan", "next": "next", "estimate": "estimate",
             "calibrate-norm": "calibrate_norm",
             "repeatability": "repeatability", "apply": "apply", "identify": "identify", "derive": "derive",
             "simulate": "simulate", "diagnose": "diagnose", "check-certificate": "check_certificate"}
-#: Output options of the commands: (attribute, what it is, a file or a folder).
+#: Output options of the commands: (attribute, what it is, a file or a folder); the exports' are in exports.py.
 OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("output", "the data file", "file"),
            ("report", "the report folder", "folder"), ("certificates", "the certificate folder", "folder"),
-           ("out", "the output folder", "folder"), ("save", "the calibration file", "file"),
-           ("export_imu_tk", "the imu_tk calibration file", "file"),
-           ("csv", "the plan file", "file"), ("export_kalibr", "the Kalibr YAML", "file"),
-           ("export_imucal", "the imucal calibration file", "file"),
-           ("markdown", "the Markdown file", "file"), ("thermal_plot", "the thermal plot", "file"),
-           ("export_ardupilot", "the ArduPilot parameter file", "file"),
-           ("export_px4", "the PX4 parameter file", "file"))
-
+           ("out", "the output folder", "folder"), ("csv", "the plan file", "file"),
+           ("markdown", "the Markdown file", "file"), ("thermal_plot", "the thermal plot", "file"))
 
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: `garant: error: ...` and exit status 2."""
@@ -179,7 +174,8 @@ def _check_paths(args):
     """Every input and output path before any work (io/files.py): inputs are regular files, outputs
     never replace an input or each other, so a command that fails writes nothing."""
     from ..io import files
-    out_attrs = {attr for attr, _, _ in OUTPUTS}
+    outputs = OUTPUTS + exports.outputs()
+    out_attrs = {attr for attr, _, _ in outputs}
     inputs = []
     for attr, value in vars(args).items():
         if attr in out_attrs:
@@ -188,7 +184,7 @@ def _check_paths(args):
             if isinstance(v, str) and v != "-":
                 inputs.append(v)
     files.check_inputs(inputs)
-    files.check_outputs([(getattr(args, attr), what, kind) for attr, what, kind in OUTPUTS
+    files.check_outputs([(getattr(args, attr), what, kind) for attr, what, kind in outputs
                          if getattr(args, attr, None) is not None])
     from ..io.report import figure_format
     for attr in ("plot", "thermal_plot"):

@@ -81,36 +81,6 @@ def named_bound(text):
     return name.strip(), small(value)
 
 
-def imucal_export(p):
-    """--export-imucal FILE.json and --imucal-gyro CAL.json: the calibration as imucal's file."""
-    p.add_argument("--export-imucal", metavar="FILE.json", help="also write the calibration as imucal's "
-                   "FerrarisCalibrationInfo (load_calibration_info reads it); the bounds in its comment")
-    p.add_argument("--imucal-gyro", metavar="CAL.json", help="the imucal calibration whose gyroscope part "
-                   "--export-imucal carries (else the gyroscope is written as not calibrated)")
-
-
-def check_imucal(args):
-    """Before any work: --imucal-gyro is carried by --export-imucal only, and read now (a bad file stops here)."""
-    if getattr(args, "imucal_gyro", None):
-        from ..errors import DataError
-        from ..io import imucal
-        if not getattr(args, "export_imucal", None):
-            raise DataError("--imucal-gyro: its gyroscope goes into --export-imucal's file only; give --export-imucal "
-                            "FILE.json, or leave it out")
-        imucal.read_calibration(args.imucal_gyro)
-
-
-def export_imucal(args, cal):
-    """Write --export-imucal when asked: garant's accelerometer, the gyroscope of --imucal-gyro or none."""
-    if not getattr(args, "export_imucal", None):
-        return
-    from ..io import imucal, report
-    gyro = imucal.read_calibration(args.imucal_gyro) if args.imucal_gyro else None
-    report.write_json(args.export_imucal, imucal.calibration_json(cal, gyro))
-    print(f"wrote {args.export_imucal}" + ("" if gyro else " (gyroscope not calibrated: --imucal-gyro CAL.json "
-                                                           "carries an imucal calibration's)"))
-
-
 def say_gravity(g_given, premises):
     """The gravity line (workflows/premises.gravity_line) on a line of its own, when --g was not given."""
     from ..workflows.premises import gravity_line
@@ -125,39 +95,3 @@ def premises_of(args, mod):
     from ..workflows.premises import premises as make
     return make(mod, args.sigma, args.g if args.g is not None else G_DEFAULT, g_given=args.g is not None,
                 g_uncertainty=args.g_uncertainty, prior=args.prior, bound=dict(args.bound))
-
-
-def flight_stacks(p):
-    """--export-ardupilot and --export-px4 (with --temperature): the thermal files the flight stacks load."""
-    p.add_argument("--export-ardupilot", metavar="FILE.parm", help="with --temperature: ArduPilot's INS_TCALn_* "
-                   "parameters (TMIN, TMAX, the offset polynomial ACC1-3 about 35 C, x 1e6) and INS_ACCn_CALTEMP, "
-                   "INS_ACCOFFS, INS_ACCSCAL at T0")
-    p.add_argument("--ardupilot-imu", type=int, choices=(1, 2, 3), default=1, metavar="N",
-                   help="the IMU the ArduPilot parameters are for (INS_TCALN_*; default 1)")
-    p.add_argument("--export-px4", metavar="FILE.params", help="with --temperature and --px4-device-id: PX4's "
-                   "TC_A* parameters (QGroundControl's .params: ID, TREF, TMIN, TMAX, the offset polynomial X0-X3 "
-                   "relative to TREF) and CAL_ACCn_ID, xOFF, xSCALE at TREF")
-    p.add_argument("--px4-instance", type=int, choices=(0, 1, 2, 3), default=0, metavar="N",
-                   help="the accelerometer slot the PX4 parameters are for (TC_AN_*, CAL_ACCN_*; default 0)")
-    p.add_argument("--px4-device-id", type=positive_int, metavar="ID",
-                   help="the accelerometer's device id (CAL_ACCn_ID on the vehicle): PX4 applies TC_AN_* only to "
-                        "the sensor whose id is TC_AN_ID")
-
-
-def check_flight_stacks(args):
-    """Before any work: --export-px4 needs the device id PX4 matches."""
-    if getattr(args, "export_px4", None) and args.px4_device_id is None:
-        from ..errors import DataError
-        from ..io.tcal import PX4_NEEDS_ID
-        raise DataError(PX4_NEEDS_ID)
-
-
-def write_flight_stacks(args, res):
-    """Write --export-ardupilot and --export-px4 from a result with a thermal block."""
-    from ..io import tcal
-    if args.export_ardupilot:
-        tcal.write(args.export_ardupilot, res, args.ardupilot_imu)
-        print(f"wrote {args.export_ardupilot}")
-    if args.export_px4:
-        tcal.write_px4(args.export_px4, res, args.px4_instance, args.px4_device_id)
-        print(f"wrote {args.export_px4}")

@@ -4,6 +4,7 @@ import sys
 from ..errors import DataError
 from ..defaults import FORMATS, SENSORS
 from . import args as options
+from . import exports
 
 
 def add(sub):
@@ -36,7 +37,6 @@ def add(sub):
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
                         "bound over the logged range; with --export-ardupilot / --export-px4")
-    options.flight_stacks(p)
     p.add_argument("--bound", action="append", type=options.named_bound, metavar="NAME=RAD", default=[],
                    help="a misalignment's a-priori bound (alpha, beta, gamma; rad), repeatable: where every "
                         "orientation lies along an axis (six faces) the scale factors and biases are calibrated with "
@@ -46,17 +46,7 @@ def add(sub):
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
                                                    "tables, plots, the command, inputs SHA-256) and DIR/report.md")
-    p.add_argument("--save", metavar="CAL.json", help="write the calibration (garant-calibration-1, docs/formats.md) "
-                   "for `garant apply`")
-    p.add_argument("--export-imu-tk", metavar="FILE", help="write the calibration in imu_tk's form (T, K, B)")
-    p.add_argument("--export-kalibr", metavar="FILE.yaml",
-                   help="write the IMU file Kalibr's reader takes (imu.yaml: rate, noise density, random walk; the "
-                        "gyroscope's from --kalibr-gyro, else written as missing)")
-    p.add_argument("--kalibr-gyro", metavar="ND,RW", type=_gyro,
-                   help="the gyroscope's noise density (rad/s/sqrt(Hz)) and random walk (rad/s^2/sqrt(Hz)) for "
-                        "--export-kalibr (an accelerometer log does not measure them)")
-    p.add_argument("--kalibr-topic", default="/imu0", metavar="TOPIC", help="the rostopic of --export-kalibr")
-    options.imucal_export(p)
+    exports.add(p, "calibrate-norm")
     p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "
                    "(--format imucal: imucal's session)")
     p.add_argument("--out", metavar="DIR", help="a batch's folder: DIR/<log>.json (each unit's calibration), "
@@ -70,25 +60,12 @@ def add(sub):
     return p
 
 
-def _gyro(text):
-    """--kalibr-gyro ND,RW: two finite numbers > 0."""
-    import argparse
-    parts = text.split(",")
-    if len(parts) != 2:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r}: give ND,RW, e.g. 1.7e-4,1.9e-5")
-    return tuple(options.positive(p) for p in parts)
-
-
 def run(args):
     """`garant calibrate-norm`: parse, call the job, print; the exit status."""
-    stacks = [o for o, v in (("--export-ardupilot", args.export_ardupilot), ("--export-px4", args.export_px4)) if v]
-    if stacks and args.temperature is None:
-        raise DataError(f"{stacks[0]} needs --temperature D (the flight stacks' files hold the drift in T)")
     if args.temperature is not None:
         from ..workflows.norm_thermal import check_degree
         check_degree(args.temperature)
-    options.check_flight_stacks(args)
-    options.check_imucal(args)
+    exports.check(args, "calibrate-norm")
     if len(args.logs) > 1 or args.out:
         return _batch(args)
     if args.jobs or args.spec:
@@ -104,9 +81,10 @@ def run(args):
     import copy
 
     from ..io import mimu, report
-    for opt in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report"):
+    exports.refuse(args, "calibrate-norm", "writes one sensor's calibration: give one IMU with --imu K")
+    for opt in ("plot", "report"):
         if getattr(args, opt):
-            raise DataError(f"--{opt.replace('_', '-')} writes one sensor's calibration: give one IMU with --imu K")
+            raise DataError(f"--{opt} is of one sensor: give one IMU with --imu K", param=opt)
     results, codes = {}, []
     for k in range(1, mimu.IMUS + 1):
         print(f"\n== IMU {k}")
@@ -123,9 +101,8 @@ def _batch(args):
     CSV and a page, a progress line on standard error; the exit status is `batch_status`'s."""
     from ..io import files, report
     from ..workflows import batch
-    single = [o for o in ("save", "export_imu_tk", "export_kalibr", "export_imucal", "plot", "report", "json")
-              if getattr(args, o)]
-    single += [o for o in ("effect", "temperature", "export_ardupilot", "export_px4") if getattr(args, o)]
+    exports.refuse(args, "calibrate-norm", "concerns one log: a batch writes each unit's calibration to --out DIR")
+    single = [o for o in ("plot", "report", "json", "effect", "temperature") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:
         raise DataError(f"--{(single or ['imu all' if args.imu == 'all' else 'diagnose'])[0].replace('_', '-')} "
                         "concerns one log: a batch writes each unit's files to --out DIR")
@@ -207,19 +184,7 @@ def _run(args, into=None):
         from ..io import plots
         plots.norm_residuals(res, _log_of(args), args.plot)
         print(f"wrote {args.plot}", file=sys.stderr)
-    if args.save or args.export_imu_tk or args.export_imucal:
-        _save(res, args)
-    if res.get("thermal"):
-        options.write_flight_stacks(args, res)
-    if args.export_kalibr:
-        from ..io import calibration
-        walk, why = res["random_walk"], res["random_walk_note"]
-        report.write_text(args.export_kalibr, calibration.kalibr_text(res["noise_density"], res["rate_hz"], walk,
-                                                                      args.kalibr_gyro, args.kalibr_topic, why))
-        missing = ([] if walk is not None else [f"accelerometer_random_walk ({why})"]) + (
-            [] if args.kalibr_gyro else ["the gyroscope's two fields (--kalibr-gyro ND,RW)"])
-        print(f"wrote {args.export_kalibr}" + (f"; Kalibr's reader also needs: {'; '.join(missing)}" if missing
-                                              else ": every field Kalibr's reader needs"))
+    exports.write(args, res, "calibrate-norm")
     if args.report:
         _report(res, args)
     if into is not None:
@@ -350,26 +315,6 @@ def _print_diagnosis(d, params, args):
             print(f"  not tried: {e} ({why})")
 
 
-def _save(res, args):
-    from ..io import calibration
-    if not res["consistent"]:
-        print("no calibration file written: the data refute the noise bound, so it has no guaranteed bounds")
-        return
-    for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):
-        if path:
-            write(path, res["calibration"])
-            print(f"wrote {path}")
-    options.export_imucal(args, res["calibration"])
-    effects = res.get("effect_names")
-    if effects and (args.export_imu_tk or args.export_imucal):
-        print(f"note: the imu_tk and imucal exports have no parameter for {', '.join(effects)}: they carry M and "
-              "b only and drop the effects; `garant apply` with the --save file takes them out of each sample")
-    not_applied = res["calibration"].get("effects", {}).get("not_applied", {})
-    if args.save and not_applied:
-        for name, why in not_applied.items():
-            print(f"note: {args.save} does not apply {name}: {why}")
-
-
 UNITS = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
 
 
@@ -431,11 +376,12 @@ def _print_bounds(res, args=None):
 def _still_only(res, args):
     """A still-only warm-up: each axis's drift in T with its bound, and what one orientation cannot separate."""
     from ..io import report
-    asked = [o for o in ("save", "export_imu_tk", "export_imucal", "export_kalibr", "export_ardupilot", "export_px4",
-                         "plot", "report") if getattr(args, o)]
-    if asked:
-        raise DataError(f"--{asked[0].replace('_', '-')}: a still-only warm-up gives each axis's drift in this "
-                        "orientation, no calibration: turn the unit through orientations while it warms")
+    why = "a still-only warm-up gives each axis's drift in this orientation, no calibration: turn the unit through " \
+          "orientations while it warms"
+    exports.refuse(args, "calibrate-norm", f"is refused: {why}")
+    for opt in ("plot", "report"):
+        if getattr(args, opt):
+            raise DataError(f"--{opt} is refused: {why}", param=opt)
     lo, hi = res["range_c"]
     u = res["raw_unit"]
     print(f"{args.log}: {res['samples']} samples over {res['duration_s']:.1f} s, one orientation: "

@@ -3,6 +3,7 @@ import sys
 
 from ..errors import DataError
 from . import args as options
+from . import exports
 
 EXIT_INCONSISTENT = options.EXIT_INCONSISTENT
 
@@ -31,17 +32,12 @@ def add(sub):
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
                                                    "tables, plots, the command, inputs SHA-256) and DIR/report.md")
-    p.add_argument("--save", metavar="CAL.json", help="write the block's calibration (garant-calibration-1) for "
-                   "`garant apply`, from any stand")
-    p.add_argument("--export-imu-tk", metavar="FILE", help="also write the block's calibration in imu_tk's form "
-                   "(T, K, B), the stand's frame")
-    options.imucal_export(p)
     p.add_argument("--temperature", type=int, choices=(1, 2, 3), metavar="D", help="each block parameter a "
                    "polynomial of degree D (1-3) in T, the temp_c column (C): each q's coefficients and one guaranteed "
                    "bound over the whole temperature range")
     p.add_argument("--thermal-plot", metavar="FILE.png", help="with --temperature: each q(T) with its guaranteed "
                    "band over the range, and the estimate and bound at each chamber temperature")
-    options.flight_stacks(p)
+    exports.add(p, "estimate")
     return p
 
 
@@ -50,17 +46,9 @@ def run(args):
     from .. import models
     from ..io import report
     from ..workflows import jobs
-    thermal_only = [o for o, v in (("--thermal-plot", args.thermal_plot), ("--export-ardupilot", args.export_ardupilot),
-                                   ("--export-px4", args.export_px4)) if v]
-    if thermal_only and args.temperature is None:
-        raise DataError(f"{thermal_only[0]} needs --temperature D")
-    options.check_flight_stacks(args)
-    options.check_imucal(args)
-    wanted = args.save or args.export_imu_tk or args.export_imucal
-    if (args.export_imu_tk or args.export_imucal) and args.temperature is not None:
-        raise DataError("--export-imu-tk/--export-imucal: those files hold no temperature polynomial; with "
-                        "--temperature give --save (garant's calibration, which holds it), --export-ardupilot or "
-                        "--export-px4")
+    if args.thermal_plot and args.temperature is None:
+        raise DataError("--thermal-plot needs --temperature D", param="thermal_plot")
+    exports.check(args, "estimate")
     res = jobs.estimate(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty, prior=args.prior,
                         bound=dict(args.bound), mount=args.mount, gamma=args.gamma, imu=args.imu,
                         which_run=args.which_run, fmt=args.format, sections=args.sections,
@@ -68,9 +56,10 @@ def run(args):
                         progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     mod = (models.thermal(args.model, args.temperature, res["thermal"]["t0_c"]) if "thermal" in res
            else models.load(args.model))
+    wanted = exports.asked(args, "estimate", "calibration")
     if wanted and res["consistent"] and "calibration" not in res and not res.get("premises_refuted"):
         why = res.get("block_not_separated", "this model has no block parameters")
-        raise DataError(f"--save/--export-imu-tk: {why}; nothing written")
+        raise DataError(f"{wanted[0].option}: {why}; nothing written", param=wanted[0].dest)
     if args.json:
         report.write_json(args.json, res)
     if (args.plot or args.report) and "residual_minimax" in res:
@@ -192,16 +181,9 @@ def print_estimate(res, mod, args):
         print_block(res, args.units == "human")
     elif "block_not_separated" in res:
         print(f"\nthe block: {res['block_not_separated']}")
-    if args.save or args.export_imu_tk:
-        from ..io import calibration
-        for path, write in ((args.save, calibration.write), (args.export_imu_tk, calibration.write_imu_tk)):
-            if path:
-                write(path, res["calibration"])
-                print(f"wrote {path}")
-    if "calibration" in res:
-        options.export_imucal(args, res["calibration"])
     if "thermal" in res:
         print_thermal(res, args)
+    exports.write(args, res, "estimate")
     return 0
 
 
@@ -231,7 +213,6 @@ def print_thermal(res, args):
         from ..io import plots
         plots.thermal(res, args.thermal_plot, f"{args.data}: q(T) with its guaranteed band")
         print(f"wrote {args.thermal_plot}")
-    options.write_flight_stacks(args, res)
 
 
 def print_refuted(refuted, command):
