@@ -106,7 +106,6 @@ SLOW = {
     "test_diagnose.py::test_two_hidden_effects_both_named",
     "test_described_stands.py::test_derive_plan_simulate_estimate_diagnose",
     "test_described_stands.py::test_two_axis_plans_on_finer_grids_are_the_quarter_turn_plans",
-    "test_formats.py::test_every_result_json_follows_its_published_schema",
     "test_guarantee.py::test_data_that_refute_sigma_get_a_verdict_not_bounds",
     "test_guarantee.py::test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_position_by_position",
     "test_guarantee.py::test_no_false_alarms_on_clean_data",

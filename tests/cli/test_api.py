@@ -59,11 +59,14 @@ def test_results_are_objects_with_the_documented_fields(tmp_path):
     assert rows[7].split()[0] == "q7" and float(rows[7].split()[2]) == pytest.approx(res.guaranteed_error["q7"], 1e-5)
     with pytest.raises(AttributeError, match="no field 'nope'"):
         res.nope
-    assert all(k in res for k in results.Estimate.FIELDS if k != "thermal")     # thermal: with temperature=D
-    api = (ROOT / "docs" / "api.md").read_text()
-    for kind in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.Correction):
+    assert set(res) <= set(results.Estimate.FIELDS)           # every field of the result is one of its schema's
+    assert "guaranteed_error" in results.Estimate.FIELDS and "information set" in results.Estimate.FIELDS[
+        "guaranteed_error"]
+    api, fields = (ROOT / "docs" / "api.md").read_text(), (ROOT / "docs" / "fields.md").read_text()
+    for kind in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.NextPosition):
         assert f"`{kind.__name__}`" in api
-        assert all(f"`{name}`" in api for name in kind.FIELDS), kind.__name__
+        assert all(f"| `{name}`" in fields for name in kind.FIELDS), kind.__name__
+    assert all(f"`{name}`" in api for name in results.Correction.FIELDS)
 
 
 def test_api_errors_name_the_api_arguments(tmp_path):

@@ -129,6 +129,17 @@ def test_docs_cli_is_the_parser():
     assert all(f"## garant {name}" in doc.markdown() for name in doc.COMMANDS)
 
 
+def test_docs_fields_are_the_schemas():
+    # docs/fields.md is generated from docs/schemas/ (python -m verify.cli.doc --write): a field added to a schema
+    # and not to the page, or the other way round, turns it red.
+    from garant.verify.cli import doc
+    from garant.verify.io import schemas
+    assert doc.FIELDS_PATH.read_text() == doc.fields_markdown()
+    assert "| `sigma_fit` |" in doc.fields_markdown() and "## next.schema.json" in doc.fields_markdown()
+    assert doc.main(["--check"]) == 0
+    assert list(schemas.fields("estimate"))[0] == "consistent"
+
+
 def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
     # estimate printed lines of 330 characters, verify 659. On a terminal every line now wraps at 100
     # columns (continuations indented), a word longer than that (a path) is not cut; into a file, nothing wraps.

@@ -275,7 +275,8 @@ def test_the_noise_premise_is_the_one_the_bound_needs(scale):
         raw = (f + G * D * signs * f / np.linalg.norm(f, axis=0)).T
         stills = [Still(float(k), k + 1.0, r, np.zeros(3), 100, np.zeros(3)) for k, r in enumerate(raw)]
         res = calibrate_norm.run(N, stills, G, 9, "synthetic", delta_sigma=D)
-        assert res["consistent"] and "carried through M" in res["premises"] and "truth's correction" in res["premises"]
+        assert res["consistent"] and "carried through M" in res["premises"]["statement"] and (
+            "truth's correction" in res["premises"]["statement"])
         got = np.array(list(res["parameters"].values()))
         bound = np.array(list(res["guaranteed_error"].values()))
         assert np.all(np.abs(got - truth[:9]) <= bound), (np.abs(got - truth[:9]) / bound).max()

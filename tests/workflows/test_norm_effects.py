@@ -419,4 +419,8 @@ def test_every_key_of_calibrate_norms_json_is_in_its_schema(tmp_path):
             jobs.calibrate_norm(faces, fmt="imucal", rate=102.4, bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2})]
     keys = set().union(*(r.to_dict() for r in runs))
     assert keys - set(schema["properties"]) == set()
+    import jsonschema                                     # and every value as the schema states it, nothing else
+    for r in runs:
+        check = jsonschema.Draft202012Validator(schema)
+        assert [(list(e.absolute_path), e.message[:200]) for e in check.iter_errors(r.to_dict())] == []
     assert all(schema["properties"][k].get("description") or k in schema["required"] for k in keys)

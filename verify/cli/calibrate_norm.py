@@ -225,7 +225,7 @@ def _print(res, args):
         "noise rule") else source                            # each premise printed once
     print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * res['g']:.3e} m/s^2), from {source}; proven "
           f"remainder {res['remainder_bound']:.1e}")
-    print(f"premises: {res['premises']}")
+    print(f"premises: {res['premises']['statement']}")
     options.say_gravity(res["g_given"], res)
     print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
           + ("consistent" if res["consistent"] else
@@ -386,7 +386,7 @@ def _still_only(res, args):
     u = res["raw_unit"]
     print(f"{args.log}: {res['samples']} samples over {res['duration_s']:.1f} s, one orientation: "
           f"{res['intervals']} still pieces from {lo:.1f} to {hi:.1f} C (cut where the temperature moves)")
-    print(f"premises: {res['premises']}")
+    print(f"premises: {res['premises']['statement']}")
     if not res["consistent"]:
         print("INCONSISTENT: no drift linear in T meets every piece within its noise rule")
         if args.json:
@@ -485,7 +485,7 @@ def _report(res, args):
         verdict += ". The " + discrepancy(res)
     axes = ("x", "y", "z")
     sections = [("Verdict", verdict), ("Premises: what must hold for the bounds to hold",
-                                       report.Bullets(report.clauses(res["premises"]))),
+                                       report.Bullets(report.clauses(res["premises"]["statement"]))),
                 ("Calibration a = M (raw - b)", report.Table(
                     ("row", "M_i1 (m/s^2 per raw unit)", "M_i2 (m/s^2 per raw unit)", "M_i3 (m/s^2 per raw unit)",
                      "b_i (raw units)"),

@@ -65,7 +65,7 @@ def from_norm(res, axes):
            "delta": list(res.get("nonlinearity_delta_g") or [0.0, 0.0, 0.0]),
            "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",
-           "premises": res["premises"]}
+           "premises": res["premises"]["statement"]}
     return out
 
 

@@ -1,11 +1,12 @@
 """Results of the notebook API as objects: a dict whose keys are also attributes (like scipy's
 OptimizeResult), numpy arrays kept as arrays, `to_dict()` / `to_json()` for files, a short `repr` and an
-HTML table in notebooks. Each kind documents its fields in FIELDS (docs/api.md lists the same)."""
+HTML table in notebooks. Each kind's FIELDS are its JSON schema's properties with their meanings (docs/schemas/,
+the one home of every field; docs/fields.md lists them)."""
 import json
 
 import numpy as np
 
-from . import files
+from . import files, schemas
 from .report import json_value, write_text
 
 
@@ -22,6 +23,16 @@ def _short(v, width=72):
         return f"{type(v).__name__} of {len(v)}"
     text = repr(v)
     return text if len(text) <= width else text[:width - 3] + "..."
+
+
+class _Schema:
+    """FIELDS of a result kind: the properties of its schema, docs/schemas/NAME.schema.json, with their meanings."""
+
+    def __init__(self, name):
+        self.name = name
+
+    def __get__(self, obj, kind=None):
+        return schemas.fields(self.name)
 
 
 class Result(dict):
@@ -100,35 +111,13 @@ class Result(dict):
 class Plan(Result):
     """`garant.plan`: the optimal guaranteed errors and a minimal optimal plan (`garant plan --json`)."""
 
-    FIELDS = {"guaranteed_errors": "optimal guaranteed error of each q, units of sigma",
-              "min_positions": "positions of a minimal optimal plan",
-              "plan": "the preferred minimal plan: stand angles in degrees (and the mounting)",
-              "optimal_plans": "the minimal optimal plans found"}
+    FIELDS = _Schema("plan")
 
 
 class Estimate(Result):
     """`garant.estimate`: the verdict, q and guaranteed errors (`garant estimate --json`)."""
 
-    FIELDS = {"consistent": "whether the data are consistent with sigma and the premises",
-              "premises": "what has to hold for the bounds to hold (statement, meaning, a-priori bounds)",
-              "sigma": "the noise bound, dimensionless (units of g)",
-              "sigma_min_supported": "the smallest sigma the data support",
-              "q": "estimate of each q, in its unit (`units`)",
-              "guaranteed_error": "guaranteed error of each q: what these readings prove, the half-width of the "
-                                  "information set (every q that fits each reading within sigma plus the proven "
-                                  "remainder), never above the a-priori one",
-              "a_priori": "q and guaranteed_error of the optimal estimator ((7)-(8) of 000): what the plan guarantees "
-                          "for any readings within sigma (= guaranteed_error_linear + guaranteed_error_remainder)",
-              "guaranteed_error_linear": "sigma sum |W| of each q (the a-priori bound's linear part)",
-              "guaranteed_error_remainder": "the proven linearisation remainder part of each q's a-priori bound",
-              "guaranteed_error_sigma_wider": "each q's guaranteed error had sigma been sigma_wider (a sensitivity)",
-              "sigma_fit": "the smallest noise bound these readings fit within (minimax residual less the remainder)",
-              "units": "unit of each q (1: dimensionless; a bias q is over g)",
-              "definitions": "each q in the physical parameters ((4) of 000)",
-              "calibration": "the block's garant-calibration-1 dictionary `garant.apply` takes (when consistent and "
-                             "the stand separates the block's errors)",
-              "thermal": "with temperature=D: each q's coefficients in (T - t0_c)^k and one guaranteed bound over "
-                         "range_c, the estimate and bound at each chamber temperature (docs/thermal.md)"}
+    FIELDS = _Schema("estimate")
 
     STATUSES = {"consistent": "the readings fit sigma within the premises: q, the bounds and the calibration hold",
                 "refuted": "the readings refute sigma (or a premise): no bound is given",
@@ -158,14 +147,7 @@ class Estimate(Result):
 class NormCalibration(Result):
     """`garant.calibrate_norm`: a log calibrated through the norm relation (2.2) of 001."""
 
-    FIELDS = {"consistent": "whether the still intervals are consistent with the noise bound",
-              "premises": "what has to hold for the bounds to hold",
-              "delta_sigma_source": "where the noise bound comes from (statistical rule or --delta-sigma)",
-              "matrix": "M of a = M (raw - b)", "bias": "b, in the log's raw unit",
-              "calibration": "the garant-calibration-1 dictionary `garant.apply` takes (when consistent)",
-              "samples": "samples in the log", "duration_s": "length of the log, s",
-              "noise_density": "median noise density of the still intervals, m/s^2/sqrt(Hz) (Kalibr's)",
-              "rate_hz": "sample rate, Hz", "diagnosis": "the effect catalogue's test (with diagnose=True)"}
+    FIELDS = _Schema("calibrate-norm")
     STATUSES = {"consistent": "the still intervals fit the noise bound: M, b and their bounds hold",
                 "refuted": "the still intervals refute the noise bound: no bound is given"}
 
@@ -178,12 +160,7 @@ class NormCalibration(Result):
 class Diagnosis(Result):
     """`garant.diagnose`: where the model and the data disagree, and the effect that closes the gap."""
 
-    FIELDS = {"consistent_before": "whether the base model fits the data within sigma",
-              "effects": "the fewest effects that make the model consistent", "estimates": "each named effect's "
-                  "parameters",
-              "indistinguishable": "per named effect, it and the alternatives that, in its place, also make the model "
-                                   "consistent",
-              "blind_to": "effects these positions cannot see", "premises": "what the verdict assumes"}
+    FIELDS = _Schema("diagnose")
     STATUSES = {"consistent": "the model fits the data within sigma as it is",
                 "explained": "the effects named close the gap",
                 "unexplained": "no effect of the catalogue closes the gap"}
@@ -212,20 +189,7 @@ class Correction(Result):
 class NextPosition(Result):
     """`garant next --json`: where a calibration session stands and the position to measure next."""
 
-    FIELDS = {"names": "what the targets bound: q1..qm, or the block's parameters with --mount",
-              "of": "what `names` are, in words",
-              "done": "whether every q's guaranteed error is at or below its target",
-              "next": "the position to measure next: angles in degrees (and the mounting); None when done",
-              "still_needed": "positions still needed, the next one included",
-              "still_needed_proven": "whether still_needed is the fewest (else a lower bound)",
-              "guaranteed_error_before": "per q, on the positions measured so far (None: no estimator yet), units of q",
-              "guaranteed_error_after": "per q, once the next position is measured, units of q",
-              "target": "per q, units of q", "target_source": "where the target comes from",
-              "measured": "the distinct positions measured so far", "angles": "the stand's angle names",
-              "consistent": "whether the data so far are consistent with sigma (None while some q has no estimator, "
-                            "unless readings repeated at one position already refute it)",
-              "bounds_from": "what guaranteed_error_before is: estimate's printed bounds on the readings so far "
-                             "(done is decided on them), or the nominal optimal estimators before an estimate"}
+    FIELDS = _Schema("next")
     STATUSES = {"done": "every guaranteed error is at or below its target",
                 "measure": "measure the position `next`",
                 "refuted": "the readings so far refute sigma or a premise: find the cause before measuring more"}

@@ -18,6 +18,14 @@ def _validator(name):
     return jsonschema.Draft202012Validator(_inlined(schema, schema.get("$defs", {})))
 
 
+@functools.cache
+def fields(name):
+    """{field: its meaning} of docs/schemas/NAME.schema.json's top level, in the schema's order: the one home of
+    every field, which the API's result kinds (FIELDS) and docs/fields.md take."""
+    schema = json.loads((FOLDER / f"{name}.schema.json").read_text())
+    return {k: v.get("description", "") for k, v in schema["properties"].items()}
+
+
 def _inlined(node, defs):
     """The schema with each local reference "#/$defs/X" replaced by X itself (the published schemas are
     not recursive): the same constraints, checked without a reference lookup per value."""

@@ -360,12 +360,13 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
         "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
         "consistent": bool(consistent), "minimax_residual": fit_residual, "delta_sigma_max": dsig,
         "delta_sigma_source": source, "remainder_bound": rb,
-        "premises": ("the bounds hold if " + norm_noise.premise(dsig, source, delta_sigma is not None, si, g)
+        "premises": {"statement": "the bounds hold if " + norm_noise.premise(dsig, source, delta_sigma is not None, si,
+                                                                             g)
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
                      + ("takes g as exact" if box is not None else "of (2.3) takes g and delta_f as exact")
                      + "); the orientations are still" + norm_information.premise_box(box)
-                     + _misalignment_premise(premise, held)),
+                     + _misalignment_premise(premise, held), "g": g, "noise_bound": dsig, "noise_source": source},
         "sigma_min_supported": max(fit_residual - rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "noise_bound": float(nb),

@@ -155,6 +155,13 @@ def _misalignment_bounds(bound):
     return out
 
 
+def _norm_premises(premises, g_uncertainty, g_source, statement=""):
+    """A norm calibration's premises completed by the job: the gravity's uncertainty and source (the same type as an
+    estimate's premises: the statement and the figures it names)."""
+    return {**premises, "statement": premises["statement"] + statement, "g_uncertainty": g_uncertainty,
+            "g_source": g_source}
+
+
 def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=None, params=9, fmt=None, sensor=None,
                    imu=None, rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None,
                    temperature=None):
@@ -217,7 +224,9 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
                             f"{', '.join(norm_thermal.names(temperature))} itself)")
         stills = norm_thermal.split(data, stills, min_still)
         if stills and norm_thermal.one_orientation(stills):
-            return results.NormCalibration(norm_thermal.still_only(data, stills, note, g, recordings.quantum(data)))
+            res = norm_thermal.still_only(data, stills, note, g, recordings.quantum(data))
+            res["premises"] = _norm_premises(res["premises"], g_unc, g_src)
+            return results.NormCalibration(res)
         if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
             raise DataError(f"{data.path}: --temperature takes a log in m/s^2 (the flight stacks' unit); this one "
                             "is in counts")
@@ -236,8 +245,9 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                  _misalignment_bounds(bound))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
-    res["premises"] += (f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} "
-                        "m/s^2 (lambda* of (2.2) of 001), the calibration's bounds include it")
+    res["premises"] = _norm_premises(res["premises"], g_unc, g_src, (
+        f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} m/s^2 (lambda* of "
+        "(2.2) of 001), the calibration's bounds include it"))
     dt = float(recordings.median(np.diff(data.t)))
     per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
     res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
@@ -247,7 +257,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
                                        / np.sqrt(3) * np.sqrt(dt))})
     res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, stills, res["matrix"], res["bias"])
     if "thermal" in res:
-        res["thermal"].update(command="calibrate-norm", premise=res["premises"])
+        res["thermal"].update(command="calibrate-norm", premise=res["premises"]["statement"])
     if res["consistent"]:
         res["calibration"] = calibration.from_norm(res, mod.AXES)
         if ext is not None:

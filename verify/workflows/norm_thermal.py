@@ -241,6 +241,6 @@ def still_only(data, stills, note, g, quantum):
                               "of g, nor give the scale factors and biases themselves: each drift is their sum, right "
                               "in this orientation only; turn the unit through orientations while it warms "
                               "(calibrate-norm --temperature 1 on that log) to separate them"),
-            "premises": (f"the bounds hold if each axis of each still piece's raw mean is within its noise rule of the "
-                         f"truth ({rule}) and each "
-                         "axis's reading is linear in the temperature over the range")}
+            "premises": {"statement": f"the bounds hold if each axis of each still piece's raw mean is within its "
+                                      f"noise rule of the truth ({rule}) and each axis's reading is linear in the "
+                                      "temperature over the range", "g": g}}
