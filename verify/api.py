@@ -87,7 +87,7 @@ def calibrate_many(logs, *, g=None, g_uncertainty=None, delta_sigma=None, params
     its row, never the end of the batch."""
     from .workflows import batch
     if not isinstance(logs, (list, tuple)) or not logs:
-        raise DataError("logs: a list of log paths or arrays")
+        raise DataError("logs: a list of log paths or arrays", param="logs")
     return batch.calibrate_many(logs, jobs, batch.read_spec(spec) if spec else None, None, g=g, params=params,
                                 fmt=fmt, sensor=sensor, imu=imu, window=window, k=k, min_still=min_still,
                                 delta_sigma=delta_sigma, g_uncertainty=g_uncertainty, rate=rate)

@@ -148,16 +148,16 @@ def real_array(value, what):
     try:
         arr = np.asarray(value)
     except (TypeError, ValueError):
-        raise DataError(f"{what}: expected an array of numbers") from None
+        raise DataError(f"{what}: expected an array of numbers", param=what) from None
     if arr.dtype.kind == "c":
-        raise DataError(f"{what}: complex numbers are not readings; give real numbers")
+        raise DataError(f"{what}: complex numbers are not readings; give real numbers", param=what)
     if arr.dtype.kind not in "iuf":
         if arr.dtype.kind == "b" or any(isinstance(v, (str, bytes, bool, complex)) for v in arr.ravel()[:10 ** 6]):
-            raise DataError(f"{what}: every value must be a real number (a text or a truth value found)")
+            raise DataError(f"{what}: every value must be a real number (a text or a truth value found)", param=what)
         try:
             arr = arr.astype(float)
         except (TypeError, ValueError):
-            raise DataError(f"{what}: every value must be a real number") from None
+            raise DataError(f"{what}: every value must be a real number", param=what) from None
     return arr.astype(float)
 
 

@@ -68,9 +68,13 @@ def main(argv=None):
     except LPFailed as e:
         print(f"garant: error: {_plain(e)}", file=sys.stderr)
         return 2
-    except (DataError, ValueError) as e:
+    except DataError as e:
         print(f"garant: error: {e}", file=sys.stderr)
         return 2
+    except (ValueError, ArithmeticError, IndexError, KeyError, TypeError) as e:   # not the input: garant's own
+        print(f"garant: internal error: {type(e).__name__}: {str(e)[:300]} (not a problem with the input; please "
+              "report it with the command line)", file=sys.stderr)
+        return 1
     except MemoryError:
         print("garant: error: out of memory: the inputs are too large for this machine (see the size limits in "
               "docs/formats.md)", file=sys.stderr)
@@ -182,9 +186,9 @@ def _check_paths(args):
             continue
         for v in (value if isinstance(value, list) else [value]):
             if isinstance(v, str) and v != "-":
-                inputs.append(v)
+                inputs.append((v, attr))
     files.check_inputs(inputs)
-    files.check_outputs([(getattr(args, attr), what, kind) for attr, what, kind in outputs
+    files.check_outputs([(getattr(args, attr), what, kind, attr) for attr, what, kind in outputs
                          if getattr(args, attr, None) is not None])
     from ..io.report import figure_format
     for attr in ("plot", "thermal_plot"):

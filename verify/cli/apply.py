@@ -82,7 +82,7 @@ def _batch(args):
         try:
             if not os.path.isfile(cal):
                 raise DataError(f"no calibration {cal} for this log (the batch's folder holds one per log it "
-                                f"calibrated)")
+                                f"calibrated)", param="calibration")
             print(f"[{k}/{len(args.logs)}] {_apply(args, cal, log, folder / f'{stem}.csv')}")
         except DataError as e:
             failed += 1

@@ -69,14 +69,14 @@ def run(args):
     if len(args.logs) > 1 or args.out:
         return _batch(args)
     if args.jobs or args.spec:
-        raise DataError("--jobs and --spec apply to a batch: give several logs, or --out DIR")
+        raise DataError("--jobs and --spec apply to a batch: give several logs, or --out DIR", param="jobs")
     args.log = args.logs[0]
     if args.imu is None or args.imu != "all":
         if args.imu is not None:
             try:
                 args.imu = int(args.imu)
             except ValueError:
-                raise DataError(f"--imu {args.imu!r}: give an IMU number or all") from None
+                raise DataError(f"--imu {args.imu!r}: give an IMU number or all", param="imu") from None
         return _run(args)
     import copy
 
@@ -104,10 +104,11 @@ def _batch(args):
     exports.refuse(args, "calibrate-norm", "concerns one log: a batch writes each unit's calibration to --out DIR")
     single = [o for o in ("plot", "report", "json", "effect", "temperature") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:
-        raise DataError(f"--{(single or ['imu all' if args.imu == 'all' else 'diagnose'])[0].replace('_', '-')} "
-                        "concerns one log: a batch writes each unit's files to --out DIR")
+        first = (single or ["imu all" if args.imu == "all" else "diagnose"])[0]
+        raise DataError(f"--{first.replace('_', '-')} concerns one log: a batch writes each unit's files to --out DIR",
+                        param=first.split()[0])
     if not args.out:
-        raise DataError("several logs: give --out DIR for each unit's calibration and the summary")
+        raise DataError("several logs: give --out DIR for each unit's calibration and the summary", param="out")
     spec = batch.read_spec(args.spec) if args.spec else None
     imu = int(args.imu) if args.imu is not None else None
     folder = files.make_folder(args.out)             # before any work: a folder that cannot hold them stops here

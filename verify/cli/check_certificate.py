@@ -28,7 +28,7 @@ def run(args):
             cert = check.read(path)
             steps = check.check(cert, base=str(Path(path).resolve().parent))
         except check.MalformedCertificate as e:
-            raise DataError(f"{path}: not a valid certificate: {e}") from None
+            raise DataError(f"{path}: not a valid certificate: {e}", param="files") from None
         print(f"{_escaped(cert.get('claim', '?'))} ({_escaped(cert.get('model', '?'))}), value "
               f"{_escaped(cert.get('value', '?'))}")
         for step, ok, detail in steps:

@@ -23,7 +23,7 @@ def run(args):
         t0 = time.perf_counter()
         files = codegen.model_files(model, module_dir=args.out, docs_dir=args.out)
     except description.DescriptionError as e:
-        raise DataError(str(e)) from None
+        raise DataError(str(e), param="stand") from None
     for rel in report.write_files(files):
         print(f"wrote {rel}")
     mod = models.from_description(args.stand)

@@ -52,7 +52,7 @@ def add(sub):
 def run(args):
     """`garant plan`: parse, call the job, print; the exit status."""
     if args.temperature is not None and args.temperatures is None:
-        raise DataError("--temperature D applies with --temperatures T1,T2,...")
+        raise DataError("--temperature D applies with --temperatures T1,T2,...", param="temperature")
     if args.temperatures is not None:
         return run_thermal(args)
     if kind(args.model) == "norm":
@@ -61,7 +61,8 @@ def run(args):
         if given:
             raise DataError(f"{' and '.join(given)} {'apply' if len(given) > 1 else 'applies'} to a stand with angles; "
                             f"`plan norm` gives the orientations "
-                            "of 001 on the sphere, held by hand (their certificates: garant verify --certificates DIR)")
+                            "of 001 on the sphere, held by hand (their certificates: garant verify --certificates DIR)",
+                            param=given[0].lstrip("-"))
         return run_norm(args)
     from .. import models
     from ..io import report
@@ -241,7 +242,7 @@ def run_thermal(args):
                             ("--route", args.route or None), ("--plot", args.plot)) if v is not None]
     if other or args.model not in models.STANDS and not str(args.model).endswith(".toml"):
         raise DataError(f"--temperatures takes a stand ({', '.join(models.STANDS)} or a STAND.toml)"
-                        + (f" and not {', '.join(other)}" if other else ""))
+                        + (f" and not {', '.join(other)}" if other else ""), param="model")
     degree = args.temperature if args.temperature is not None else min(2, len(args.temperatures) - 1)
     plan, per, lower, mod = thermal.plan(args.model, args.temperatures, degree)
     names, mounts = models.layout(mod)

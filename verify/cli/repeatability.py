@@ -45,11 +45,11 @@ def _imus(args, fmt):
             return list(range(1, mimu.IMUS + 1))
         if fmt == "means":
             return means.imus(args.logs[0])
-        raise DataError(f"--imu all applies to a multi-IMU stream or a means file, not to a {fmt} log")
+        raise DataError(f"--imu all applies to a multi-IMU stream or a means file, not to a {fmt} log", param="imu")
     try:
         return [int(args.imu)]
     except ValueError:
-        raise DataError(f"--imu {args.imu!r}: give an IMU number or all") from None
+        raise DataError(f"--imu {args.imu!r}: give an IMU number or all", param="imu") from None
 
 
 def _runs(args, fmt, imu):
@@ -58,7 +58,7 @@ def _runs(args, fmt, imu):
     if fmt == "means":
         return [r for path in args.logs for r in means.read(path, imu, args.rate, args.count or 0.0)]
     if args.count or args.rate:
-        raise DataError("--count and --rate apply to a means file; a raw log states its own")
+        raise DataError("--count and --rate apply to a means file; a raw log states its own", param="count")
     out = []
     for path in args.logs:
         try:

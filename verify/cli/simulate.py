@@ -42,14 +42,15 @@ def run(args):
     mod = models.load(args.model)
     effects = [simulate.parse_effect(e, CATALOGUE, [a.name for a in base.stand.angles]) for e in args.effect]
     if args.truth and args.size:
-        raise DataError("--truth sets every error of the stand; --size draws them at random: give one")
+        raise DataError("--truth sets every error of the stand; --size draws them at random: give one", param="truth")
     given = simulate.read_truth(args.truth, mod, thermal=args.temperatures is not None) if args.truth else None
     sizes = simulate.parse_sizes(args.size or "1e-4")
     P, f, t, T, values, mounts = simulate.simulate(base, mod, args.plan, effects, args.sigma, args.seed, args.g,
                                                    sizes, given, args.temperatures)
     names, mount_names = models.layout(mod)
     if not np.all(np.isfinite(f)):
-        raise DataError("the simulated readings are not finite (an effect or option too large); nothing written")
+        raise DataError("the simulated readings are not finite (an effect or option too large); nothing written",
+                        param="effect")
     truth = truth_path(args.output)
     units = {p.name: p.unit for p in base.parameters}
     report.check_writable(truth, "the truth file")

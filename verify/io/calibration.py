@@ -150,14 +150,14 @@ def read(path):
     """A garant calibration file: checked against its published schema (docs/schemas/calibration.schema.json)
     and then for what a schema cannot state (M non-singular and well-conditioned, bound rows below 1);
     DataError naming the file and the field on any problem."""
-    files.regular(path, "the calibration file", MAX_BYTES)
+    files.regular(path, "the calibration file", MAX_BYTES, param="calibration")
     try:
         with open(path, "rb") as fh:
             data = files.json_text(fh.read(MAX_BYTES).decode("utf-8"), parse_int=_int)
     except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+        raise DataError(f"{path}: cannot read ({e.strerror})", param="calibration") from None
     except (UnicodeDecodeError, ValueError, RecursionError) as e:
-        raise DataError(f"{path}: not a JSON calibration file ({_short(e)})") from None
+        raise DataError(f"{path}: not a JSON calibration file ({_short(e)})", param="calibration") from None
     return checked(data, path)
 
 
@@ -165,11 +165,11 @@ def checked(data, path="calibration"):
     """A calibration dictionary (read from a file, or the one `calibrate_norm` returns) checked against the
     schema and for what it cannot state; numbers as numpy arrays. `path` names it in errors."""
     if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise DataError(f"{path}: not a {FORMAT} file (its \"format\" must be \"{FORMAT}\")")
+        raise DataError(f"{path}: not a {FORMAT} file (its \"format\" must be \"{FORMAT}\")", param="calibration")
     data = json.loads(json.dumps(data, default=json_value))      # numpy arrays and numbers as JSON has them
     where = _nan(data)
     if where is not None:                                       # NaN passes every minimum and maximum
-        raise DataError(f"{path}: {where}: NaN is not a number a calibration may hold")
+        raise DataError(f"{path}: {where}: NaN is not a number a calibration may hold", param="calibration")
     schemas.validate(data, "calibration", path)
     out = dict(data)
     for key in ("M", "b", "bound_matrix", "bound_bias", "bound_delta", "pendulosity_axes"):
@@ -178,21 +178,24 @@ def checked(data, path="calibration"):
     cond = np.linalg.cond(out["M"])
     if not np.isfinite(cond) or cond > MAX_CONDITION:
         raise DataError(f"{path}: M is singular or ill-conditioned (condition number {cond:.3g}, at most "
-                        f"{MAX_CONDITION:g}); a calibration's M is close to a scaled rotation")
+                        f"{MAX_CONDITION:g}); a calibration's M is close to a scaled rotation", param="calibration")
     if out["bound_matrix"].sum(axis=1).max() >= 1:
-        raise DataError(f"{path}: each row of bound_matrix must sum below 1 (the bound (I - B)^-1 needs it)")
+        raise DataError(f"{path}: each row of bound_matrix must sum below 1 (the bound (I - B)^-1 needs it)",
+                        param="calibration")
     if "effects" in data and (data.get("thermal") or np.any(out["delta"]) or data["kind"] != "norm"):
-        raise DataError(f"{path}: effects belong to a 9-parameter norm calibration (no delta, no thermal)")
+        raise DataError(f"{path}: effects belong to a 9-parameter norm calibration (no delta, no thermal)",
+                        param="calibration")
     if "thermal" in data:
         th = data["thermal"]
         lo, hi = th["range_c"]
         cuts = th["pieces_c"]
         if not (lo <= th["t0_c"] <= hi) or len(th["Gamma"]) != th["degree"] or len(th["bias"]) != th["degree"]:
-            raise DataError(f"{path}: thermal: t0_c must lie in range_c and Gamma and bias hold one term per degree")
+            raise DataError(f"{path}: thermal: t0_c must lie in range_c and Gamma and bias hold one term per degree",
+                            param="calibration")
         if (cuts[0] != lo or cuts[-1] != hi or any(x >= y for x, y in zip(cuts, cuts[1:]))
                 or len(th["bound_Gamma"]) != len(cuts) - 1 or len(th["bound_bias"]) != len(cuts) - 1):
             raise DataError(f"{path}: thermal: pieces_c must rise from range_c's first to its last temperature and "
-                            "bound_Gamma and bound_bias hold one bound per piece")
+                            "bound_Gamma and bound_bias hold one bound per piece", param="calibration")
         out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
     return out
 
@@ -263,11 +266,12 @@ def apply_thermal(cal, raw, T, path="the log"):
     out = np.flatnonzero((T < lo) | (T > hi) | ~np.isfinite(T))
     if out.size:
         raise DataError(f"{path}: {out.size} sample(s) at temperatures outside the calibrated range [{lo:g}, {hi:g}] "
-                        f"C (the first, sample {out[0] + 1}, at {T[out[0]]:g} C): the calibration holds nothing there")
+                        f"C (the first, sample {out[0] + 1}, at {T[out[0]]:g} C): the calibration holds nothing there",
+                        param="log")
     M, b, B, eb = thermal_at(cal, T)
     if B.sum(axis=2).max() >= 1:
         raise DataError(f"{path}: the calibration's bounds at these temperatures do not keep each row of the bound "
-                        "matrix below 1")
+                        "matrix below 1", param="log")
     a = np.einsum("nij,nj->ni", M, np.asarray(raw, float) - b)
     bound = np.linalg.solve(np.eye(3)[None] - B, (np.einsum("nij,nj->ni", B, np.abs(a)) + eb)[..., None])[..., 0]
     return a, bound * (1 + 1e-9)
@@ -341,14 +345,15 @@ def write_imu_tk(path, cal):
 
 def read_imu_tk(path):
     """(M, b) from an imu_tk calibration file: M = T K."""
-    files.regular(path, "the imu_tk calibration file", MAX_BYTES)
+    files.regular(path, "the imu_tk calibration file", MAX_BYTES, param="calibration")
     try:
         with open(path) as fh:
             vals = np.array(fh.read(MAX_BYTES).split(), dtype=float)
     except (OSError, ValueError) as e:
-        raise DataError(f"{path}: not an imu_tk calibration file ({e})") from None
+        raise DataError(f"{path}: not an imu_tk calibration file ({e})", param="calibration") from None
     if vals.size != 21:
-        raise DataError(f"{path}: an imu_tk calibration file has 21 numbers (T, K, B), found {vals.size}")
+        raise DataError(f"{path}: an imu_tk calibration file has 21 numbers (T, K, B), found {vals.size}",
+                        param="calibration")
     T, K, B = vals[:9].reshape(3, 3), vals[9:18].reshape(3, 3), vals[18:]
     return T @ K, B
 

@@ -19,10 +19,11 @@ ACC = ("acc_x", "acc_y", "acc_z")
 MAX_BYTES = 500_000_000
 
 
-def read_sections(path, sections=None):
+def read_sections(path, sections=None, param="data"):
     """{face: (samples (n, 3) of the accelerometer, in the file's unit)} for the six static sections of a
-    session: by the section list `sections` (a JSON path) or, without it, by the session's `part` column."""
-    files.regular(path, "the imucal session", MAX_BYTES)
+    session: by the section list `sections` (a JSON path) or, without it, by the session's `part` column.
+    `param`: the argument the session was given as (its errors name it)."""
+    files.regular(path, "the imucal session", MAX_BYTES, param=param)
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
@@ -30,7 +31,7 @@ def read_sections(path, sections=None):
             missing = [c for c in ACC if c not in header]
             if missing:
                 raise DataError(f"{path}: an imucal session needs the columns {', '.join(ACC)}; missing "
-                                f"{', '.join(missing)}")
+                                f"{', '.join(missing)}", param=param)
             cols = [header.index(c) for c in ACC]
             part = header.index("part") if "part" in header else None
             rows, labels = [], []
@@ -38,14 +39,15 @@ def read_sections(path, sections=None):
                 try:
                     rows.append([float(row[c]) for c in cols])
                 except (ValueError, IndexError):
-                    raise DataError(f"{path} line {k}: an accelerometer value is missing or not a number") from None
+                    raise DataError(f"{path} line {k}: an accelerometer value is missing or not a number",
+                                    param=param) from None
                 if part is not None:
                     labels.append(row[part].strip())
     except UnicodeDecodeError:
-        raise DataError(f"{path}: not a text CSV") from None
+        raise DataError(f"{path}: not a text CSV", param=param) from None
     data = np.array(rows, float).reshape(-1, 3)
     if not np.all(np.isfinite(data)):
-        raise DataError(f"{path}: an accelerometer value is not finite")
+        raise DataError(f"{path}: an accelerometer value is not finite", param=param)
     if sections is not None:
         spans = _section_list(sections, len(data))
         out = {face: data[spans[face][0]:spans[face][1]] for face in FACES}
@@ -57,21 +59,23 @@ def read_sections(path, sections=None):
     short = [f for f, x in out.items() if len(x) < 2]
     if short:
         raise DataError(f"{path}: the section(s) {', '.join(short)} hold fewer than 2 samples; a six-face session "
-                        f"needs all of {', '.join(FACES)}")
+                        f"needs all of {', '.join(FACES)}", param=param)
     return out
 
 
 def _section_list(path, n):
     """{face: (start, end)} from imucal's section list JSON, each a range of sample indices within n."""
-    data = files.read_json(path, "a JSON section list")
+    data = files.read_json(path, "a JSON section list", param="sections")
     out = {}
     for face in FACES:
         s = data.get(face) if isinstance(data, dict) else None
         if not isinstance(s, dict) or not all(isinstance(s.get(k), int) and not isinstance(s.get(k), bool)
                                               for k in ("start", "end")):
-            raise DataError(f'{path}: {face} must be {{"start": i, "end": j}}, sample indices (imucal\'s section list)')
+            raise DataError(f'{path}: {face} must be {{"start": i, "end": j}}, sample indices (imucal\'s section list)',
+                            param="sections")
         if not 0 <= s["start"] < s["end"] <= n:
-            raise DataError(f"{path}: {face} spans samples {s['start']} to {s['end']}, outside the session's {n}")
+            raise DataError(f"{path}: {face} spans samples {s['start']} to {s['end']}, outside the session's {n}",
+                            param="sections")
         out[face] = (s["start"], s["end"])
     return out
 
@@ -110,15 +114,16 @@ def calibration_json(cal, gyro=None, comment=""):
 
 def read_calibration(path):
     """An imucal calibration file's dictionary (for its gyroscope part)."""
-    data = files.read_json(path, "an imucal calibration")
+    data = files.read_json(path, "an imucal calibration", param="imucal_gyro")
     need = ("K_g", "R_g", "K_ga", "b_g")
     if not isinstance(data, dict) or any(k not in data for k in need):
-        raise DataError(f"{path}: an imucal Ferraris calibration has {', '.join(need)}")
+        raise DataError(f"{path}: an imucal Ferraris calibration has {', '.join(need)}", param="imucal_gyro")
     for key, shape in (("K_g", (3, 3)), ("R_g", (3, 3)), ("K_ga", (3, 3)), ("b_g", (3,))):
         try:
             value = np.array(data[key], dtype=float)
         except (TypeError, ValueError):
             value = None
         if value is None or value.shape != shape or not np.all(np.isfinite(value)):
-            raise DataError(f"{path}: {key} must be {' x '.join(map(str, shape))} finite numbers, as imucal writes it")
+            raise DataError(f"{path}: {key} must be {' x '.join(map(str, shape))} finite numbers, as imucal writes it",
+                            param="imucal_gyro")
     return data

@@ -32,7 +32,7 @@ class Run:
 
 
 def _rows(path):
-    files.regular(path, "the means file", MAX_BYTES)
+    files.regular(path, "the means file", MAX_BYTES, param="data")
     lines = []
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
@@ -40,26 +40,26 @@ def _rows(path):
                 if line.strip() and not line.lstrip().startswith("#"):
                     lines.append((k, line))
                     if len(lines) > MAX_ROWS + 1:
-                        raise DataError(f"{path}: more than {MAX_ROWS:,} rows (line {k})")
+                        raise DataError(f"{path}: more than {MAX_ROWS:,} rows (line {k})", param="data")
     except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+        raise DataError(f"{path}: cannot read ({e.strerror})", param="data") from None
     except UnicodeDecodeError:
-        raise DataError(f"{path}: not a UTF-8 text CSV file") from None
+        raise DataError(f"{path}: not a UTF-8 text CSV file", param="data") from None
     if not lines:
-        raise DataError(f"{path}: empty file; expected a header with {', '.join(REQUIRED)}")
+        raise DataError(f"{path}: empty file; expected a header with {', '.join(REQUIRED)}", param="data")
     if len(lines) > MAX_ROWS + 1:                     # the header and MAX_ROWS rows
-        raise DataError(f"{path}: more than {MAX_ROWS:,} rows")
+        raise DataError(f"{path}: more than {MAX_ROWS:,} rows", param="data")
     try:
         table = list(csv.reader(line for _, line in lines))
     except csv.Error as e:
-        raise DataError(f"{path}: not a CSV file ({e})") from None
+        raise DataError(f"{path}: not a CSV file ({e})", param="data") from None
     return [k for k, _ in lines], [h.strip().lower() for h in table[0]], table[1:]
 
 
 def _num(path, line, col, text, integer=False):
     v = _number(text, path, line, col)
     if integer and v != int(v):
-        raise DataError(f"{path} line {line}: column {col}: {text.strip()} is not an integer")
+        raise DataError(f"{path} line {line}: column {col}: {text.strip()} is not an integer", param="data")
     return v
 
 
@@ -83,7 +83,7 @@ def imus(path):
     out = []
     for line, cells in zip(lines[1:], body):
         if len(cells) != len(head):
-            raise DataError(f"{path} line {line}: {len(cells)} cells, the header has {len(head)}")
+            raise DataError(f"{path} line {line}: {len(cells)} cells, the header has {len(head)}", param="data")
         v = int(_num(path, line, "imu", cells[k], True))
         if v not in out:
             out.append(v)
@@ -95,10 +95,11 @@ def read(path, imu=None, rate=None, quantum=0.0):
     file has none). `imu` must be given exactly when the file has an `imu` column."""
     lines, head, body = _rows(path)
     if len(set(head)) != len(head):
-        raise DataError(f"{path}: duplicate column names in the header")
+        raise DataError(f"{path}: duplicate column names in the header", param="data")
     missing = [c for c in REQUIRED if c not in head]
     if missing:
-        raise DataError(f"{path}: missing column(s) {', '.join(missing)} of a means file (docs/formats.md)")
+        raise DataError(f"{path}: missing column(s) {', '.join(missing)} of a means file (docs/formats.md)",
+                        param="data")
     run_col = next((c for c in ("exp", "run") if c in head), None)
     if "imu" in head and imu is None:
         raise DataError(f"{path}: the file holds several IMUs (column imu); choose one with {opt('imu')} K or "
@@ -109,17 +110,17 @@ def read(path, imu=None, rate=None, quantum=0.0):
     runs = {}
     for line, cells in zip(lines[1:], body):
         if len(cells) != len(head):
-            raise DataError(f"{path} line {line}: {len(cells)} cells, the header has {len(head)}")
+            raise DataError(f"{path} line {line}: {len(cells)} cells, the header has {len(head)}", param="data")
         get = lambda c, integer=False: _num(path, line, c, cells[col[c]], integer)   # noqa: E731
         if imu is not None and get("imu", True) != imu:
             continue
         n = get("n_samples", True)
         if n < 2:
             raise DataError(f"{path} line {line}: column n_samples: {cells[col['n_samples']]} samples; a mean "
-                            "with a scatter needs at least 2")
+                            "with a scatter needs at least 2", param="data")
         std = np.array([get(f"std_{a}") for a in "xyz"])
         if np.any(std < 0):
-            raise DataError(f"{path} line {line}: a negative standard deviation")
+            raise DataError(f"{path} line {line}: a negative standard deviation", param="data")
         if "start_sample" in col and "stop_sample" in col and rate:
             start, stop = get("start_sample") / rate, get("stop_sample") / rate
         else:
@@ -131,7 +132,7 @@ def read(path, imu=None, rate=None, quantum=0.0):
         runs[key][0].append(still)
         runs[key][1].append(nominal)
     if not runs:
-        raise DataError(f"{path}: no rows" + (f" for IMU {imu}" if imu is not None else ""))
+        raise DataError(f"{path}: no rows" + (f" for IMU {imu}" if imu is not None else ""), param="data")
     out = []
     for key, (stills, nominal) in runs.items():
         nom = None if any(v is None for v in nominal) else np.array(nominal)
@@ -140,6 +141,6 @@ def read(path, imu=None, rate=None, quantum=0.0):
             if np.any(np.abs(norms - 1) > 1e-3):
                 k = int(np.flatnonzero(np.abs(norms - 1) > 1e-3)[0])
                 raise DataError(f"{path}: run {key}, position {k + 1}: the nominal direction is not a unit vector "
-                                f"(length {norms[k]:.4f})")
+                                f"(length {norms[k]:.4f})", param="data")
         out.append(Run(f"{path}#{run_col}={key}" if run_col else path, stills, nom, quantum))
     return out

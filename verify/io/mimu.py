@@ -34,9 +34,9 @@ def packets(path):
     try:
         b = np.fromfile(path, dtype=np.uint8)
     except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+        raise DataError(f"{path}: cannot read ({e.strerror})", param="log") from None
     if len(b) < PACKET:
-        raise DataError(f"{path}: {len(b)} bytes, shorter than one {PACKET}-byte MIMU packet")
+        raise DataError(f"{path}: {len(b)} bytes, shorter than one {PACKET}-byte MIMU packet", param="log")
     starts = np.flatnonzero(b[: len(b) - PACKET + 1] == 0xAA)
     c = np.concatenate([[0], np.cumsum(b, dtype=np.int64)])          # byte sums without a copy per packet
     stated = b[starts + PACKET - 2].astype(np.int64) * 256 + b[starts + PACKET - 1]
@@ -47,7 +47,7 @@ def packets(path):
             kept.append(s)
             end = s + PACKET
     if not kept:
-        raise DataError(f"{path}: no packet with a valid checksum; not a MIMU4444BT stream")
+        raise DataError(f"{path}: no packet with a valid checksum; not a MIMU4444BT stream", param="log")
     kept = np.array(kept)
     return b[kept[:, None] + np.arange(PACKET)], len(b) - len(kept) * PACKET
 
@@ -65,7 +65,7 @@ def read(path, imu):
     ticks = np.diff(ts) % (1 << 32)                                  # the 32-bit stamp wraps
     forward = (ticks > 0) & (ticks < 1 << 31)                        # back: over half the range modulo 2^32
     if not forward.any():
-        raise DataError(f"{path}: the time stamps do not advance")
+        raise DataError(f"{path}: the time stamps do not advance", param="log")
     step = float(np.median(ticks[forward]))
     jumps = int(np.count_nonzero(~forward | (ticks > 100 * step)))
     if jumps:

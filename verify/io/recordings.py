@@ -67,9 +67,9 @@ def guess_format(path):
 
 def _header(path, delimiter):
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
-        line = files.header_line(fh, path)
+        line = files.header_line(fh, path, param="log")
     if not line.strip():
-        raise DataError(f"{path}: empty file; expected a header line")
+        raise DataError(f"{path}: empty file; expected a header line", param="log")
     return [h.strip() for h in line.rstrip("\r\n").split(delimiter)]
 
 
@@ -82,18 +82,18 @@ def _load(path, delimiter, usecols, skip):
             data = np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
                               encoding="utf-8-sig", comments=None)
     except (ValueError, UnicodeDecodeError) as e:
-        raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}") from None
+        raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}", param="log") from None
     if data.shape[0] == 0:
-        raise DataError(f"{path}: no data rows")
+        raise DataError(f"{path}: no data rows", param="log")
     if not np.isfinite(data.sum()):                  # a NaN or an infinity makes the sum one (so can
         bad = np.flatnonzero(~np.isfinite(data).all(axis=1))             # an overflow: then no row is bad)
         if bad.size:
-            raise DataError(f"{path} line {int(bad[0]) + skip + 1}: NaN or infinite value")
+            raise DataError(f"{path} line {int(bad[0]) + skip + 1}: NaN or infinite value", param="log")
     big = np.abs(data) > MAX_VALUE
     if big.any():
         row, col = (int(v[0]) for v in np.nonzero(big))
         raise DataError(f"{path} line {row + skip + 1}: {data[row, col]:g} is beyond any reading or time stamp "
-                        f"(|value| > {MAX_VALUE:g})")
+                        f"(|value| > {MAX_VALUE:g})", param="log")
     return data
 
 
@@ -110,17 +110,17 @@ def _load_npy(path):
             raise ValueError(f"its header says shape {str(shape)[:60]}, which the file's bytes do not hold")
         data = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OverflowError, TypeError) as e:
-        raise DataError(f"{path}: not a NumPy array of numbers ({str(e)[:200]})") from None
+        raise DataError(f"{path}: not a NumPy array of numbers ({str(e)[:200]})", param="log") from None
     if data.ndim != 2 or data.shape[1] != 4 or data.dtype.kind not in "fiu":
         raise DataError(f"{path}: a .npy log must be an array of numbers of shape (N, 4): t (s), x, y, z; "
-                        f"this one is {data.dtype} of shape {data.shape}")
+                        f"this one is {data.dtype} of shape {data.shape}", param="log")
     data = np.asarray(data, dtype=float)
     if not np.isfinite(data.sum()):
         bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
         if bad.size:
-            raise DataError(f"{path} row {int(bad[0]) + 1}: NaN or infinite value")
+            raise DataError(f"{path} row {int(bad[0]) + 1}: NaN or infinite value", param="log")
     if np.abs(data).max(initial=0.0) > MAX_VALUE:
-        raise DataError(f"{path}: a value beyond any reading or time stamp (|value| > {MAX_VALUE:g})")
+        raise DataError(f"{path}: a value beyond any reading or time stamp (|value| > {MAX_VALUE:g})", param="log")
     return data
 
 
@@ -145,11 +145,11 @@ def _csv_columns(path, header):
     """(time column, its factor to s, three accelerometer columns) of a `csv` log header."""
     low = [h.lower() for h in header]
     if len(set(low)) != len(low):
-        raise DataError(f"{path}: duplicate column names in the header {','.join(header)}")
+        raise DataError(f"{path}: duplicate column names in the header {','.join(header)}", param="log")
     times = [h for h in low if h in TIME_COLUMNS]
     if len(times) != 1:
         raise DataError(f"{path}: expected one time column named {', '.join(TIME_COLUMNS)} "
-                        f"(the suffix states the unit); header is {','.join(header)}")
+                        f"(the suffix states the unit); header is {','.join(header)}", param="log")
     t = low.index(times[0])
     for names in ACCEL_COLUMNS:
         if all(n in low for n in names):
@@ -157,7 +157,7 @@ def _csv_columns(path, header):
     rest = [k for k in range(len(low)) if k != t and low[k] not in TEMP_COLUMNS]
     if len(rest) < 3:
         raise DataError(f"{path}: a csv log needs a time column and three accelerometer columns; header is "
-                        f"{','.join(header)}")
+                        f"{','.join(header)}", param="log")
     return t, TIME_COLUMNS[times[0]], rest[:3]
 
 
@@ -166,19 +166,20 @@ def _check_time(path, t, named_unit):
     time column whose stamps mostly repeat. Returns (the median sample interval, how many steps are 0)."""
     dt = np.diff(t)
     if np.all(dt == 0):
-        raise DataError(f"{path}: the time column is constant")
+        raise DataError(f"{path}: the time column is constant", param="log")
     back = np.flatnonzero(dt < 0)
     if back.size:
         raise DataError(f"{path}: time goes back at data row {int(back[0]) + 2} (a reset or a merged log); "
-                        "split the log or fix the time column")
+                        "split the log or fix the time column", param="log")
     step = float(median(dt))
     repeats = int(np.count_nonzero(dt == 0))
     if step == 0:
         raise DataError(f"{path}: {repeats} of {dt.size} time steps are 0 (each time stamp repeated): the time "
-                        "column does not give the sample times; fix it or give one row per sample")
+                        "column does not give the sample times; fix it or give one row per sample", param="log")
     if named_unit and not 1e-5 <= step <= 0.5:
         raise DataError(f"{path}: the time column has a median step of {step:g}, not a sample interval in "
-                        "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds")
+                        "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds",
+                        param="log")
     return step, repeats
 
 
@@ -214,7 +215,7 @@ def _read_openaxes(path, sensor, imu, rate):
     cols = ["TIME"] + [SENSORS[sensor].format(i) for i in range(3)]
     missing = [c for c in cols if c not in header]
     if missing:
-        raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an OpenAXES log")
+        raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an OpenAXES log", param="log")
     data = _load(path, ";", [header.index(c) for c in cols], 1)
     return Read(data[:, 0] * 1e-6, data[:, 1:4], False)                   # TIME in microseconds
 
@@ -246,7 +247,7 @@ def _read_imucal(path, sensor, imu, rate):
     index = next((c for c in ("n_samples", "samples") if c in header), None)
     missing = [c for c in ("acc_x", "acc_y", "acc_z") if c not in header] + ([] if index else ["n_samples"])
     if missing:
-        raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an imucal session")
+        raise DataError(f"{path}: missing column(s) {', '.join(missing)} for an imucal session", param="log")
     data = _load(path, ",", [header.index(c) for c in (index, "acc_x", "acc_y", "acc_z")], 1)
     data = data[np.argsort(data[:, 0], kind="stable")]
     return Read(data[:, 0] / rate, data[:, 1:4], True)
@@ -264,19 +265,19 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     line on any problem. `imu` picks one IMU of a multi-IMU stream (mimu: 1-8); `rate` (Hz) times a log
     of sample indices (imucal's session: a column n_samples or samples, acc_x, acc_y, acc_z; rows in any
     order, sorted by index)."""
-    files.regular(path, "the log", MAX_LOG_BYTES)
+    files.regular(path, "the log", MAX_LOG_BYTES, param="log")
     try:
         fmt = fmt or guess_format(path)
         if imu is not None and fmt != "mimu":
             raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu), not to a {fmt} log")
         if fmt not in READERS:
-            raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}")
+            raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}", param="fmt")
         got = READERS[fmt](path, sensor, imu, rate)
         t, raw, unit, step, note = got.t, got.raw, got.unit, got.step, got.note
     except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+        raise DataError(f"{path}: cannot read ({e.strerror})", param="log") from None
     if len(t) < MIN_SAMPLES:
-        raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording")
+        raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording", param="log")
     dt, repeats = _check_time(path, t, unit)
     if repeats:
         note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))

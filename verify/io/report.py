@@ -46,7 +46,7 @@ def write_json(path, obj):
     try:
         text = json.dumps(obj, indent=2, allow_nan=False, default=json_value) + "\n"
     except ValueError:
-        raise DataError(f"{path}: a result is not finite (NaN or infinity); nothing written") from None
+        raise DataError(f"{path}: a result is not finite (NaN or infinity); nothing written", param="json") from None
     write_text(path, text)
 
 
@@ -85,7 +85,8 @@ def figure_format(path, what="--plot"):
     """The format of a figure file by its name's suffix, or a one-line refusal (before any work)."""
     suffix = Path(str(path)).suffix.lower().lstrip(".")
     if suffix not in FIGURE_FORMATS:
-        raise DataError(f"{what} {str(path)[:80]}: name the file .png, .svg or .pdf (the format it is written in)")
+        raise DataError(f"{what} {str(path)[:80]}: name the file .png, .svg or .pdf (the format it is written in)",
+                        param=what.lstrip("-").replace("-", "_"))
     return suffix
 
 

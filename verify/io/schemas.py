@@ -46,11 +46,11 @@ def validate(data, name, path):
     Arrays longer than the schema allows are refused first, by length alone (no item is looked at)."""
     long = _too_long(data, _validator(name).schema)
     if long:
-        raise DataError(f"{path}: {_where(long[0])}: {long[1]} (schema {name}.schema.json)")
+        raise DataError(f"{path}: {_where(long[0])}: {long[1]} (schema {name}.schema.json)", param=name)
     errors = sorted(_validator(name).iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path])
     if errors:
         e = errors[0]
-        raise DataError(f"{path}: {_where(e.absolute_path)}: {_what(e)} (schema {name}.schema.json)")
+        raise DataError(f"{path}: {_where(e.absolute_path)}: {_what(e)} (schema {name}.schema.json)", param=name)
 
 
 def _where(place):

@@ -40,7 +40,7 @@ def _q_of(res, definition, what, option):
     name = next((q for q, d in res["definitions"].items() if d.strip() == definition and q in th["q"]), None)
     if name is None:
         raise DataError(f"{option}: this stand's q do not hold {what} alone ({definition}); the flight stack's "
-                        "parameters need it")
+                        "parameters need it", param=option.lstrip("-").replace("-", "_"))
     return name
 
 
@@ -70,7 +70,7 @@ def text(res, imu=1):
     """The .parm file: comments stating what it holds and rests on, then NAME VALUE lines."""
     th = res["thermal"]
     if th["degree"] > ORDER:
-        raise DataError(f"--export-ardupilot: ArduPilot holds a polynomial of degree {ORDER}")
+        raise DataError(f"--export-ardupilot: ArduPilot holds a polynomial of degree {ORDER}", param="export_ardupilot")
     poly, bounds = offset_polynomials(res, TEMP_REF)
     poly = {i: (d[1:] + [0.0] * ORDER)[:ORDER] for i, d in poly.items()}
     offs, scal = _at_t0(res, "--export-ardupilot")
@@ -118,9 +118,9 @@ def px4_text(res, instance=0, device_id=None):
     X0..X3 per axis (X0 = 0), and CAL_ACCn_ID, CAL_ACCn_xOFF, CAL_ACCn_xSCALE."""
     th = res["thermal"]
     if th["degree"] > ORDER:
-        raise DataError(f"--export-px4: PX4 holds a polynomial of degree {ORDER}")
+        raise DataError(f"--export-px4: PX4 holds a polynomial of degree {ORDER}", param="export_px4")
     if device_id is None:
-        raise DataError(PX4_NEEDS_ID)
+        raise DataError(PX4_NEEDS_ID, param="px4_device_id")
     poly, bounds = offset_polynomials(res, th["t0_c"], "--export-px4")
     offs, scal = _at_t0(res, "--export-px4")
     lo, hi = th["range_c"]
@@ -158,7 +158,8 @@ def _scale_q(res, i, option="--export-px4"):
     for q, d in res["definitions"].items():
         if q in th["q"] and d.replace(" ", "") in (f"Gamma{i + 1}{i + 1}", f"Gamma{i + 1}{i + 1}-Delta_g"):
             return q
-    raise DataError(f"{option}: this stand's q do not hold the scale of accelerometer {i + 1} alone")
+    raise DataError(f"{option}: this stand's q do not hold the scale of accelerometer {i + 1} alone",
+                    param=option.lstrip("-").replace("-", "_"))
 
 
 def write(path, res, imu=1):

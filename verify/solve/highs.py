@@ -304,7 +304,7 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
         elif status in stopped:
             which = "--search-seconds" if clock else "--search-nodes"
             raise DataError(f"the plan search found no plan within {which} on {S} candidate positions: raise it, or "
-                            "give fewer candidates")
+                            "give fewer candidates", param=which.lstrip("-").replace("-", "_"))
         if status != highspy.HighsModelStatus.kOptimal:
             if found:
                 return size, tuple(found), True, None, False

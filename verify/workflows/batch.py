@@ -34,28 +34,29 @@ def read_spec(path):
     for logs in raw counts, [nominal] sensitivity (counts per g: one number, or one per axis), to which the
     scale is relative, and offset (counts, the reading at zero: the biases are relative to it; default 0)."""
     from ..io import files
-    files.regular(path, "the specification", 1_000_000)
+    files.regular(path, "the specification", 1_000_000, param="spec")
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as e:
-        raise DataError(f"{path}: not valid TOML ({str(e)[:120]})") from None
+        raise DataError(f"{path}: not valid TOML ({str(e)[:120]})", param="spec") from None
     out = {}
     for table in ("limits", "bound_limits"):
         given = data.get(table, {})
         if not isinstance(given, dict):
-            raise DataError(f"{path}: [{table}] must be a table of scale, misalignment, bias")
+            raise DataError(f"{path}: [{table}] must be a table of scale, misalignment, bias", param="spec")
         for key, value in given.items():
             if key not in SPEC_KEYS:
-                raise DataError(f"{path}: [{table}] {key}: unknown; the keys are {', '.join(SPEC_KEYS)}")
+                raise DataError(f"{path}: [{table}] {key}: unknown; the keys are {', '.join(SPEC_KEYS)}", param="spec")
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
-                raise DataError(f"{path}: [{table}] {key} = {str(value)[:30]} must be a number > 0 and < 1")
+                raise DataError(f"{path}: [{table}] {key} = {str(value)[:30]} must be a number > 0 and < 1",
+                                param="spec")
         out[table] = {k: float(v) for k, v in given.items()}
     nominal = data.get("nominal", {})
     if not isinstance(nominal, dict) or set(nominal) - {"sensitivity", "offset"} or (
             "offset" in nominal and "sensitivity" not in nominal):
         raise DataError(f"{path}: [nominal] holds sensitivity (counts per g) and optionally offset (counts), of a "
-                        "log in raw counts")
+                        "log in raw counts", param="spec")
     for key, low in (("sensitivity", 0.0), ("offset", -1e12)):
         if key in nominal:
             S = nominal[key]
@@ -64,12 +65,13 @@ def read_spec(path):
                                   for v in S):
                 raise DataError(f"{path}: [nominal] {key} = {str(nominal[key])[:40]} must be a number"
                                 + (" > 0 (counts per g)" if key == "sensitivity" else " (counts)")
-                                + " or a list of three")
+                                + " or a list of three", param="spec")
             out[key] = [float(v) for v in S]
     unknown = set(data) - {"limits", "bound_limits", "nominal"}
     if unknown or not out["limits"]:
         raise DataError(f"{path}: a specification has [limits] (and optionally [bound_limits] and [nominal]) of "
-                        f"{', '.join(SPEC_KEYS)}" + (f"; unknown: {', '.join(sorted(unknown))}" if unknown else ""))
+                        f"{', '.join(SPEC_KEYS)}" + (f"; unknown: {', '.join(sorted(unknown))}" if unknown else ""),
+                        param="spec")
     return out
 
 

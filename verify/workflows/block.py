@@ -24,23 +24,23 @@ def calibration(mod, info, premises):
     of the block over the information set `info` (guarantee.InformationSet)."""
     names = list(mod.PARAMETER_NAMES)
     if not all(n in names for n in BLOCK):
-        raise DataError(f"model {mod.__name__}: no block parameters Gamma11..Gamma33, bias1..bias3")
+        raise DataError(f"model {mod.__name__}: no block parameters Gamma11..Gamma33, bias1..bias3", param="model")
     M = np.asarray(mod.PHYSICAL_TO_Q, float)
     kinds, b = premises.kinds, premises.bounds
     bounded = np.array([k in ("stand", "gravity", "mounting", "effect") and np.isfinite(x) for k, x in zip(kinds, b)])
     targets = [names.index(n) for n in BLOCK]
     ql, qh = info.q
     if np.any(ql > qh):
-        raise DataError(_CONTRADICT)
+        raise DataError(_CONTRADICT, param="bound")
     try:
         lo, hi, points = info.physical(M, np.where(bounded, -b, -np.inf), np.where(bounded, b, np.inf), targets)
     except hull.Empty:
-        raise DataError(_CONTRADICT) from None
+        raise DataError(_CONTRADICT, param="bound") from None
     except Unbounded as err:
         raise DataError(f"this stand does not separate the block's {BLOCK[err.args[0]]} (its range over the "
-                        "premises is unbounded): no calibration of the block from it") from None
+                        "premises is unbounded): no calibration of the block from it", param="bound") from None
     if np.any(lo > hi):
-        raise DataError(_CONTRADICT)
+        raise DataError(_CONTRADICT, param="bound")
     value, half, confounded = {}, {}, {}
     for name, k, lo_k, hi_k, ends in zip(BLOCK, targets, lo, hi, points):
         value[name], half[name] = (float(x) for x in taylor.midrad(lo_k, hi_k))

@@ -45,7 +45,7 @@ def initial_map(raw, g):
     X = np.column_stack([x**2, x])
     p, *_ = np.linalg.lstsq(X, np.ones(len(raw)), rcond=None)
     if np.any(p[:3] <= 0):
-        raise DataError("the still intervals do not span an ellipsoid; cannot start the fit")
+        raise DataError("the still intervals do not span an ellipsoid; cannot start the fit", param="log")
     c = -p[3:] / (2 * p[:3])
     R2 = 1 + np.sum(p[:3] * c**2)
     axes = scale * np.sqrt(R2 / p[:3])
@@ -174,12 +174,13 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
     if premise and not cause:
         if not unseen:
             raise DataError(f"{path}: --bound {', '.join(premise)}: these orientations identify the misalignments; "
-                            "a bound on them is taken only where they cannot (each orientation along an axis)")
+                            "a bound on them is taken only where they cannot (each orientation along an axis)",
+                            param="bound")
         if set(unseen) <= {3, 4, 5} and all(PARAM_LABELS[k] in premise for k in unseen):
             return list(unseen)
     if not unseen:
         if cause:
-            raise DataError(f"{path}: {cause}; record orientations between the axes (garant plan norm)")
+            raise DataError(f"{path}: {cause}; record orientations between the axes (garant plan norm)", param="log")
         return
     distinct = orientations(n)
     on_axes = all(np.abs(d).max() > np.cos(np.radians(within_deg)) for d in distinct)
@@ -198,7 +199,7 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
                        if set(unseen) <= {3, 4, 5} else "")
                     + "; add orientations such as "
                     + ", ".join("(" + ", ".join(f"{v:+.3f}" for v in p) + ")" for p in add)
-                    + " (garant plan norm lists them all)")
+                    + " (garant plan norm lists them all)", param="log")
 
 
 def guaranteed(mod, n, params, noise, cap=None):
@@ -281,7 +282,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
     free = held = None
     if premise:
         if ext is not None:
-            raise DataError(f"{path}: --bound (the misalignments of six faces) and --effect are not taken together")
+            raise DataError(f"{path}: --bound (the misalignments of six faces) and --effect are not taken together",
+                            param="bound")
         off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
         held = _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), premise=premise)
         free = [k for k in range(params) if k not in held]
@@ -293,7 +295,7 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
         if missing:
             raise DataError(f"{path}: beside scale, misalignment and bias these orientations cannot identify "
                             f"{', '.join(missing)} of {ext.option} (--diagnose lists the effects "
-                            "they cannot tell apart): add fewer effects, or orientations")
+                            "they cannot tell apart): add fewer effects, or orientations", param="log")
     try:
         res = fit(mod, raw, g, params, free=free)
     except Diverged as e:                      # say what the orientations, as they lie, cannot hold apart
@@ -319,14 +321,15 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
     err, missing = guaranteed(mod, res["n"], params, noise, cap)
     if missing:
         raise DataError(f"{path}: the {len(stills)} orientations cannot identify "
-                        f"{', '.join(mod.Q_NAMES[k] for k in missing)}; add orientations")
+                        f"{', '.join(mod.Q_NAMES[k] for k in missing)}; add orientations", param="log")
     nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(stills, quantum).T, axis=0) / g if delta_sigma is None
           else np.full(len(stills), np.linalg.norm(res["M"], 2) * dsig))
     info = box = exact = None
     if ext is not None:
         if params != 9 or not (delta_sigma is None or si):
             raise DataError(f"{path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
-                            "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)")
+                            "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
+                            param="effects")
         consistent, A, bnd, err = ext.verdict(res, noise, nu)
         base = noise * np.sqrt(1.0 - 2.0 * res["sigma"])             # noise / |F|, the units of sigma
         rb = float((bnd - base).max())
@@ -334,7 +337,8 @@ def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, p
             found = norm_information.exact_information(mod, res, noise, nu, ext, bnd)
             if found is None:
                 raise DataError(f"{path}: consistent with {ext.option}, but the remainder of the "
-                                "extended relation cannot be proven from any box around the fit: no bound")
+                                "extended relation cannot be proven from any box around the fit: no bound",
+                                param="effects")
             info, rb_k, box, shift = found
             rb, bnd = float(rb_k.max()), base + rb_k
             exact = (A, bnd, shift, ext)
@@ -400,7 +404,7 @@ def misalignment_cap(M_fit, params, premise, held, si):
     J = parameter_map(M_fit, params) if si else np.eye(params)
     for k in held:
         if np.count_nonzero(J[k]) != 1:
-            raise DataError("the fit's M is not diagonal: a misalignment premise cannot be carried to q")
+            raise DataError("the fit's M is not diagonal: a misalignment premise cannot be carried to q", param="bound")
         cap[k] = premise[PARAM_LABELS[k]] / abs(J[k, k]) * (1 + 1e-12)
     return cap
 

@@ -150,7 +150,7 @@ def diagnose(base_model, mod, positions, sigma, premises):
     A0 = study.A([])
     if rank(A0) < A0.shape[0]:
         raise DataError(f"{positions.path}: these positions cannot identify the current model; "
-                        f"see `garant identify --plan`")
+                        f"see `garant identify --plan`", param="data")
     lin = guarantee.linearise(mod, positions, study.z, A0, premises)
     before = guarantee.verdict(lin, study.z, sigma, lp.primal(lin.A)[0].T)
     rb = before.remainder

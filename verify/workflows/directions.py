@@ -36,7 +36,7 @@ def angles_for(mod, U, path="directions"):
         x = ranges[:, 0] + (x - ranges[:, 0]) % 360.0                     # the same turn, within the range
         if np.any(x > ranges[:, 1]) or np.linalg.norm(_up(mod, x) - u) > 1e-8:
             raise DataError(f"{path}: position {k + 1}: the stand cannot hold the block with up-direction "
-                            f"{np.round(u, 6).tolist()} within its angle ranges")
+                            f"{np.round(u, 6).tolist()} within its angle ranges", param="data")
         out.append(x)
     return np.array(out)
 

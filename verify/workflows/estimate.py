@@ -33,13 +33,13 @@ def variable_columns(mod, positions):
         if v not in positions.extra:
             raise DataError(f"{positions.path}: the model needs the column {v} "
                             f"({'s' if v == 'time_s' else 'degrees C'}) "
-                            "on every row")
+                            "on every row", param="data")
         try:
             out[v] = np.asarray(positions.extra[v], float)
         except ValueError:
-            raise DataError(f"{positions.path}: column {v} must hold a number on every row") from None
+            raise DataError(f"{positions.path}: column {v} must hold a number on every row", param="data") from None
         if not np.all(np.isfinite(out[v])):
-            raise DataError(f"{positions.path}: column {v} must hold a finite number on every row")
+            raise DataError(f"{positions.path}: column {v} must hold a finite number on every row", param="data")
     return out
 
 
@@ -159,9 +159,9 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     over the whole range (workflows/thermal.py).
     """
     if not (sigma > 0 and np.isfinite(sigma)):
-        raise DataError(f"sigma must be a finite number > 0 (got {sigma:g})")
+        raise DataError(f"sigma must be a finite number > 0 (got {sigma:g})", param="sigma")
     if not (g > 0 and np.isfinite(g)):
-        raise DataError(f"g must be a finite number > 0 m/s^2 (got {g:g})")
+        raise DataError(f"g must be a finite number > 0 m/s^2 (got {g:g})", param="g")
     premises = premises or make_premises(mod, sigma, g)
     Q = remount.MOUNTS[mount] if mount else np.eye(3)
     rows, all_rows = len(positions.f), positions
@@ -176,7 +176,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     missing = lp.unidentifiable(A)
     if missing:
         raise DataError(f"{positions.path}: the {distinct} distinct positions cannot identify "
-                        f"{describe(mod, missing)}; add positions (see `garant plan`)")
+                        f"{describe(mod, missing)}; add positions (see `garant plan`)", param="data")
     check_residual_size(residuals_table_axes(mod, all_rows, g, Q), positions.path)
     say = progress if progress is not None and distinct >= PROGRESS_ABOVE else (lambda text: None)
     say(f"{rows} rows, {distinct} distinct positions: the exact-model fit and the linearisation there")

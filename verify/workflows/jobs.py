@@ -63,7 +63,7 @@ def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
                         "calibrate a static log with calibrate_norm (garant calibrate-norm)", param="model")
     if fmt == "imucal" and model != "six-face":
         raise DataError(f"--format imucal: imucal's Ferraris session holds the unit on the faces of a cube, the "
-                        f"six-face model; {str(model)[:60]!r} is another stand's: give --model six-face")
+                        f"six-face model; {str(model)[:60]!r} is another stand's: give --model six-face", param="fmt")
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     thermal = None
@@ -113,7 +113,7 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
         if not 0.8 * G_DEFAULT < norm < 1.2 * G_DEFAULT:
             raise DataError(f"{data}: the six faces read {norm:.4g} in the file's unit, not about g: estimate takes a "
                             "session in m/s^2 (imucal's from_acc_unit m/s^2); calibrate raw counts through the norm "
-                            "with garant calibrate-norm")
+                            "with garant calibrate-norm", param="data")
         return Positions(str(data), angles_for(mod, U, data), F)
     if sections is not None:
         raise DataError(f"{opt('sections')} applies to {opt('fmt')} imucal")
@@ -132,7 +132,7 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
     run = runs[keys.index(which_run)] if which_run is not None else runs[0]
     if run.nominal is None:
         raise DataError(f"{data}: no nominal directions (nom_x, nom_y, nom_z); estimate needs known positions "
-                        "(garant calibrate-norm and repeatability need none)")
+                        "(garant calibrate-norm and repeatability need none)", param="data")
     return Positions(str(data), angles_for(mod, run.nominal, data), np.array([st.mean for st in run.stills]))
 
 
@@ -143,14 +143,15 @@ def _misalignment_bounds(bound):
         return None
     if not isinstance(bound, dict):
         raise DataError(f"bound: give the misalignments' bounds as a dict, e.g. {{'alpha': 1e-3}}, not "
-                        f"{type(bound).__name__}")
+                        f"{type(bound).__name__}", param="bound")
     out = {}
     for name, value in bound.items():
         if name not in ("alpha", "beta", "gamma"):
             raise DataError(f"--bound {str(name)[:40]}: calibrate-norm takes bounds of the misalignments alpha, beta, "
-                            "gamma (rad)")
+                            "gamma (rad)", param="bound")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 0.5:
-            raise DataError(f"--bound {name}={str(value)[:40]}: give a bound in rad, above 0 and below 0.5")
+            raise DataError(f"--bound {name}={str(value)[:40]}: give a bound in rad, above 0 and below 0.5",
+                            param="bound")
         out[name] = float(value)
     return out
 
@@ -218,10 +219,10 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         norm_thermal.check_degree(temperature)
         if data.temp is None:
             raise DataError(f"{data.path}: --temperature needs each sample's temperature, the IMU's own: a column "
-                            f"{' or '.join(recordings.TEMP_COLUMNS)} (C)")
+                            f"{' or '.join(recordings.TEMP_COLUMNS)} (C)", param="temperature")
         if effects is not None:
             raise DataError("--temperature and --effect are not taken together (--temperature adds "
-                            f"{', '.join(norm_thermal.names(temperature))} itself)")
+                            f"{', '.join(norm_thermal.names(temperature))} itself)", param="temperature")
         stills = norm_thermal.split(data, stills, min_still)
         if stills and norm_thermal.one_orientation(stills):
             res = norm_thermal.still_only(data, stills, note, g, recordings.quantum(data))
@@ -229,9 +230,9 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
             return results.NormCalibration(res)
         if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
             raise DataError(f"{data.path}: --temperature takes a log in m/s^2 (the flight stacks' unit); this one "
-                            "is in counts")
+                            "is in counts", param="log")
     if len(stills) < params + 3:
-        raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still))
+        raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still), param="log")
     temps, rates = (None, None) if data.temp is None else norm_thermal.of_intervals(data, stills)
     ext = None
     if effects is not None:
@@ -314,9 +315,9 @@ def read_log(log, fmt=None, sensor=None, imu=None, rate=None):
     arr = real_array(log, "log")
     if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) < recordings.MIN_SAMPLES:
         raise DataError(f"log: expected an array of shape (N, 4), N >= {recordings.MIN_SAMPLES}: time in s, x, y, z; "
-                        f"got shape {arr.shape}")
+                        f"got shape {arr.shape}", param="log")
     if not np.all(np.isfinite(arr)) or np.any(np.diff(arr[:, 0]) <= 0):
-        raise DataError("log: every value must be finite and the times increasing")
+        raise DataError("log: every value must be finite and the times increasing", param="log")
     return recordings.Log("array", arr[:, 0] - arr[0, 0], arr[:, 1:], fmt="array")
 
 
@@ -344,7 +345,7 @@ def _frame(df, rate=None):
         t = real_array(df.index, "log: the index") / rate
     else:
         raise DataError("log: a DataFrame without a time column (time_s, time_ms, ...) needs rate=HZ: its index "
-                        "counts samples")
+                        "counts samples", param="log")
     return np.column_stack([t, *(real_array(df[low[n]], f"log: column {n}") for n in acc)])
 
 
@@ -496,7 +497,8 @@ def apply(calibration, log, *, fmt=None, sensor=None, imu=None, rate=None, trust
     if "thermal" in cal:
         if data.temp is None:
             raise DataError(f"{data.path}: the calibration holds a temperature polynomial; the log needs each "
-                            f"sample's temperature (a csv log with a column {' or '.join(recordings.TEMP_COLUMNS)}, C)")
+                            f"sample's temperature (a csv log with a column {' or '.join(recordings.TEMP_COLUMNS)}, C)",
+                            param="log")
         if frame != "garant":
             raise DataError(f"{opt('frame')} imu_tk: the imu_tk form holds no temperature polynomial")
 

@@ -48,19 +48,20 @@ def parse(text, mod):
         text = ",".join(text)
     if not isinstance(text, str):
         raise DataError(f"effects: give names as text or a list of text, e.g. 'bias_drift,cross_coupling', not "
-                        f"{type(text).__name__}")
+                        f"{type(text).__name__}", param="effects")
     names = [x.strip() for x in text.split(",") if x.strip()]
     if not names:
-        raise DataError("--effect: give one or more effect names, e.g. --effect bias_drift,cross_coupling")
+        raise DataError("--effect: give one or more effect names, e.g. --effect bias_drift,cross_coupling",
+                        param="effects")
     for x in names:
         if x in mod.STAND_EFFECTS:
             raise DataError(f"--effect {x}: it needs a stand's angles; calibrate-norm can add "
-                            f"{', '.join(mod.EFFECTS)}")
+                            f"{', '.join(mod.EFFECTS)}", param="effects")
         if x not in mod.EFFECTS:
             raise DataError(f"--effect {x[:40]!r}: not an effect of the catalogue; calibrate-norm can add "
-                            f"{', '.join(mod.EFFECTS)}")
+                            f"{', '.join(mod.EFFECTS)}", param="effects")
     if len(set(names)) < len(names):
-        raise DataError("--effect: an effect is named twice")
+        raise DataError("--effect: an effect is named twice", param="effects")
     return tuple(sorted(names, key=list(mod.EFFECTS).index))
 
 
@@ -91,7 +92,8 @@ class Extension:
         if need & {"temp_c", "temp_rate_c_s"} and temps is None:
             raise DataError(f"{path}: --effect "
                             + ", ".join(x for x in names if {"temp_c", "temp_rate_c_s"} & set(mod.EFFECT_VARIABLES[x]))
-                            + " needs each sample's temperature: the log has no temperature column (temp_c, C)")
+                            + " needs each sample's temperature: the log has no temperature column (temp_c, C)",
+                            param="effects")
         # the effects' temperature counted from temp_ref (C): the generated basis reads T - 20, so T is shifted
         self.temp_ref = float(temp_ref)
         self.temp = np.full(len(stills), 20.0) if temps is None else np.asarray(temps, float) - self.temp_ref + 20.0
@@ -207,7 +209,7 @@ def verdict(mod, res, noise, nu, ext):
         raise DataError(f"{ext.path}: with {ext.option} the fit's effects are too "
                         f"large ({', '.join(f'{x}={v:+.2g}' for x, v in zip(ext.labels, ext.theta))}) for the "
                         "remainder of (2.2) to be bounded on the box the orientations guarantee: no verdict; "
-                        "--diagnose names what the data need")
+                        "--diagnose names what the data need", param="effects")
     t = weighted_fit(A, s, base + left)[1]
     return bool(t <= 1), A, base + left, err
 
@@ -262,13 +264,14 @@ def apply_term(cal, a0, temp, g, path):
     count = sum(len(mod.EFFECTS[x]) for x in names)
     if len(eff["theta"]) != count or len(eff["bound"]) != count:
         raise DataError(f"{path}: effects: theta and bound must hold one number per parameter of "
-                        f"{', '.join(names) or 'no effect'} ({count}), not {len(eff['theta'])} and {len(eff['bound'])}")
+                        f"{', '.join(names) or 'no effect'} ({count}), not {len(eff['theta'])} and {len(eff['bound'])}",
+                        param="calibration")
     N = a0.shape[1]
     T = np.full(N, 20.0)
     if any("temp_c" in mod.EFFECT_VARIABLES[x] for x in names):
         if temp is None:
             raise DataError(f"{path}: the calibration holds {', '.join(names)}: the log needs each sample's "
-                            "temperature (a temp_c column, C)")
+                            "temperature (a temp_c column, C)", param="log")
         T = np.asarray(temp, float)
         lo, hi = eff["temp_range_c"]
         shift = 20.0 - float(eff.get("temp_ref_c", 20.0))      # the basis reads T - 20: counted from temp_ref_c
@@ -276,7 +279,7 @@ def apply_term(cal, a0, temp, g, path):
         if out.size:
             raise DataError(f"{path}: {out.size} sample(s) at temperatures outside the calibrated range [{lo:g}, "
                             f"{hi:g}] C (the first, sample {out[0] + 1}, at {T[out[0]]:g} C): the effects' bound "
-                            "holds there only")
+                            "holds there only", param="log")
         T = T + shift
     p = a0 / np.maximum(np.linalg.norm(a0, axis=0), 1e-300)
     phi = np.concatenate([mod.effect_basis(x, p, 0.0, T) for x in names])
@@ -306,7 +309,8 @@ def apply(cal, raw, frame="garant", temp=None, path="the log"):
     grow = inverse @ (1.0 + F.sum(axis=1))                     # the bound's growth per unit of c |m - p|
     room = g - 2.0 * c * float(np.linalg.norm(grow))
     if np.any(room <= 0):
-        raise DataError(f"{path}: the calibration's effects are too large for their bound to close (|theta| L >= 1/2)")
+        raise DataError(f"{path}: the calibration's effects are too large for their bound to close (|theta| L >= 1/2)",
+                        param="calibration")
     moved = 2.0 * (np.linalg.norm(bound0, axis=0) + np.linalg.norm(term, axis=0)) / room
     bound = bound0 + grow[:, None] * (c * moved)
     if frame == "imu_tk":

@@ -54,7 +54,8 @@ def sample_range(data, stills):
 def check_degree(degree):
     """The degree of --temperature D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
-        raise DataError(f"--temperature {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3")
+        raise DataError(f"--temperature {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3",
+                        param="temperature")
     return degree
 
 
@@ -208,7 +209,7 @@ def still_only(data, stills, note, g, quantum):
     temps = np.array([float(np.mean(data.temp[(data.t >= st.start) & (data.t <= st.stop)])) for st in stills])
     if len(stills) < 2 or temps.max() - temps.min() < 2 * SPLIT_C:
         raise DataError(f"{data.path}: one orientation over {temps.min():.1f}-{temps.max():.1f} C: a drift in T needs "
-                        f"the temperature to move by {2 * SPLIT_C:g} C or more while the unit is still")
+                        f"the temperature to move by {2 * SPLIT_C:g} C or more while the unit is still", param="log")
     t_lo, t_hi = float(temps.min()), float(temps.max())
     t0 = round(0.5 * (t_lo + t_hi), 1)
     tau = temps - t0

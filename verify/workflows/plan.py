@@ -71,7 +71,7 @@ def refuse_variables(mod, model):
     if variables:
         raise DataError(f"{model}: H depends on {', '.join(variables)} (when or how warm each position is measured), "
                         "which a plan of positions cannot choose: plan with the base model, record "
-                        f"{', '.join(variables)} on every row, and estimate with this one")
+                        f"{', '.join(variables)} on every row, and estimate with this one", param="model")
 
 
 def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_CANDIDATES,

@@ -146,7 +146,7 @@ def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
     if len(runs) < 2:
         raise DataError("repeatability needs at least two usable runs (several logs, or a means file with a run "
                         "column)" + (f"; left out: {'; '.join(x['log'] + ': ' + x['reason'] for x in refused)}"
-                                     if refused else ""))
+                                     if refused else ""), param="logs")
     names = list(cn.PARAM_LABELS[:params])
     bad = [r.name for r, res in zip(runs, results) if not res["consistent"]]
     per_run = [{"run": k + 1, "log": r.name, "consistent": res["consistent"],
@@ -161,7 +161,7 @@ def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
         return out
     if any(res.get("parameters") is None for res in results):
         raise DataError("repeatability compares parameters of logs in m/s^2; give logs in m/s^2 "
-                        "(or a means file)")
+                        "(or a means file)", param="logs")
     a = np.array([[res["parameters"][n] for n in names] for res in results])
     e = np.array([[res["guaranteed_error"][n] for n in names] for res in results])
     comps = compare(a, e, names)

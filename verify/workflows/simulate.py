@@ -37,11 +37,12 @@ def plan_positions(mod, plan):
     else:
         m = re.fullmatch(r"grid:(\d+(?:\.\d+)?(?:x\d+(?:\.\d+)?)*)", plan)
         if not m:
-            raise DataError(f"unknown plan {plan!r}: use optimal10, quarter, grid:AxB or grid:A (degrees)")
+            raise DataError(f"unknown plan {plan!r}: use optimal10, quarter, grid:AxB or grid:A (degrees)",
+                            param="plan")
         steps = [float(v) for v in m.group(1).split("x")]
         steps = steps * n if len(steps) == 1 else steps
         if len(steps) != n or any(s <= 0 or 360 % s for s in steps):
-            raise DataError(f"{plan}: give {n} step(s) that divide 360 degrees")
+            raise DataError(f"{plan}: give {n} step(s) that divide 360 degrees", param="plan")
         P = reachable_grid(ranges, detents, steps, what=f"--plan {plan}")
     mounts = mod.MOUNTINGS
     if len(mounts) == 1:
@@ -55,14 +56,15 @@ def _check_reachable(mod, ranges, detents, P, where):
         k, i, v = bad
         can = (f"its detents are {', '.join(f'{d:g}' for d in detents[i])}" if len(detents[i])
                else f"its range is [{ranges[i][0]:g}, {ranges[i][1]:g}]")
-        raise DataError(f"{where}: position {k + 1}: {mod.ANGLES[i]} = {v:g} deg is not reachable ({can})")
+        raise DataError(f"{where}: position {k + 1}: {mod.ANGLES[i]} = {v:g} deg is not reachable ({can})",
+                        param="plan")
 
 
 def parse_effect(text, catalogue, base_angles=None):
     """'NAME=v1,v2,...' -> (name, values); one value per parameter of the effect, in its units."""
     name, _, vals = text.partition("=")
     if name not in catalogue:
-        raise DataError(f"unknown effect {name!r}; the catalogue: {', '.join(catalogue)}")
+        raise DataError(f"unknown effect {name!r}; the catalogue: {', '.join(catalogue)}", param="effect")
     try:
         values = [float(v) for v in vals.split(",")] if vals else []
     except ValueError:
@@ -139,18 +141,18 @@ def read_truth(path, mod, thermal=False):
     finite number with |value| < 1 (rad, dimensionless, a bias over g); with `thermal` also the coefficients
     p_Tk of (T - T0)^k of a block parameter p (per C^k)."""
     from ..io import files
-    data = files.read_json(path, "a JSON object of parameter values")
+    data = files.read_json(path, "a JSON object of parameter values", param="truth")
     if not isinstance(data, dict):
-        raise DataError(f'{path}: expected a JSON object such as {{"kappa": 5e-5, "bias1": 0.05}}')
+        raise DataError(f'{path}: expected a JSON object such as {{"kappa": 5e-5, "bias1": 0.05}}', param="truth")
     for name, v in data.items():
         if thermal and thermal_degree(name):
             pass
         elif name not in mod.PARAMETER_NAMES:
             raise DataError(f"{path}: {name[:40]!r} is not a parameter of this stand; its parameters: "
-                            + ", ".join(mod.PARAMETER_NAMES))
+                            + ", ".join(mod.PARAMETER_NAMES), param="truth")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and abs(v) < 1):
             raise DataError(f"{path}: {name}: {str(v)[:40]} must be a number with |value| < 1 (rad, dimensionless, "
-                            "or a bias over g)")
+                            "or a bias over g)", param="truth")
     return {k: float(v) for k, v in data.items()}
 
 

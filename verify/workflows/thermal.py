@@ -31,7 +31,7 @@ def temperatures(positions, path):
         raise DataError(f"{path}: {opt('temperature')} needs a temp_c column (degrees C) in the positions file")
     T = np.asarray(T, float)
     if not np.all(np.isfinite(T)) or np.abs(T).max() > 200:
-        raise DataError(f"{path}: temp_c must be finite temperatures within +-200 C")
+        raise DataError(f"{path}: temp_c must be finite temperatures within +-200 C", param="data")
     return T
 
 
@@ -235,7 +235,8 @@ def plan(model, temperatures, degree):
     missing = lp.unidentifiable(A)
     if missing:
         raise DataError(f"the stand's positions at {len(temps)} temperatures cannot identify "
-                        + ", ".join(f"{mod.Q_NAMES[k]} ({mod.Q_DEFINITIONS[k]})" for k in missing[:6]))
+                        + ", ".join(f"{mod.Q_NAMES[k]} ({mod.Q_DEFINITIONS[k]})" for k in missing[:6]),
+                        param="temperatures")
     per = max(len(c) for c in chosen.values())
     lower = -(-nq // (3 * len(temps)))
     out = {t: [(tuple(float(a) for a in P[i]), int(M[i])) for i in sorted(chosen[j])] for j, t in enumerate(temps)}
