@@ -179,3 +179,22 @@ def pytest_sessionfinish(session):
     import shutil
     if _OWN_CACHE and not hasattr(session.config, "workerinput"):
         shutil.rmtree(_OWN_CACHE, ignore_errors=True)
+
+
+def flat(text):
+    """Printed text with the command line's wrapping at 100 columns undone: every run of spaces and line breaks as
+    one space (a check for a phrase then holds wherever the line was wrapped)."""
+    return " ".join(text.split())
+
+
+def command_line(text, prefix):
+    """The command printed on the line that starts with `prefix` (after any indent), its shell continuations (a
+    backslash at a line's end) joined: what a user pastes into a shell."""
+    lines = text.splitlines()
+    k = next(i for i, x in enumerate(lines) if x.strip().startswith(prefix))
+    parts = [lines[k].strip()]
+    while parts[-1].endswith(" \\"):
+        k += 1
+        parts[-1] = parts[-1][:-2]
+        parts.append(lines[k].strip())
+    return " ".join(parts)

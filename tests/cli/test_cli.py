@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import REAL, needs_real, simulate, write_csv
+from conftest import REAL, needs_real, simulate, write_csv, flat, command_line
 from garant.verify import models
 from garant.verify.cli import main
 
@@ -140,10 +140,12 @@ def test_docs_fields_are_the_schemas():
     assert list(schemas.fields("estimate"))[0] == "consistent"
 
 
-def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
-    # estimate printed lines of 330 characters, verify 659. On a terminal every line now wraps at 100
-    # columns (continuations indented), a word longer than that (a path) is not cut; into a file, nothing wraps.
+def test_lines_wrap_at_100_columns_on_a_terminal_into_a_file_and_into_a_pipe():
+    # estimate printed lines of 330 characters, verify 659, and into a pipe or a file (a log kept with `tee`)
+    # calibrate-norm 937. Every line now wraps at 100 columns (continuations indented), a word longer than that
+    # (a path) is not cut; a command to run wraps with the shell's continuation, so it still runs when pasted.
     import io
+    import shlex
 
     from garant.verify.cli import WIDTH, _Output, wrap
     line = "premises: " + " ".join(["the bounds hold if every residual component"] * 12)
@@ -151,6 +153,10 @@ def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
     assert WIDTH == 100 and len(wrapped) > 1 and max(map(len, wrapped)) <= 100
     assert all(x.startswith("  ") for x in wrapped[1:]) and " ".join(w.strip() for w in wrapped) == line
     assert wrap("/" + "x" * 150) == "/" + "x" * 150
+    command = "  add them: garant calibrate-norm " + " ".join(f"/data/log{k}.csv" for k in range(12)) + " --g 9.81"
+    said = wrap(command)
+    assert max(map(len, said.splitlines())) <= 100 and command_line(said, "add them:") == command.strip()
+    assert shlex.split(said.replace(" \\\n", " "))[-2:] == ["--g", "9.81"]
 
     class Tty(io.StringIO):
         def isatty(self):
@@ -160,7 +166,26 @@ def test_terminal_lines_wrap_at_100_columns_and_files_get_them_whole():
         out = _Output(stream)
         out.write(line[:50])
         out.write(line[50:] + "\nshort\n")
-    assert max(map(len, tty.getvalue().splitlines())) <= 100 and plain.getvalue() == line + "\nshort\n"
+        assert max(map(len, stream.getvalue().splitlines())) <= 100
+        assert flat(stream.getvalue()) == flat(line + "\nshort\n")
+
+
+@needs_real
+def test_no_command_prints_a_line_over_100_columns_into_a_pipe(tmp_path):
+    # The widest outputs of the issue (estimate --units human --mount, calibrate-norm, plan), run as a user
+    # runs them with their output into a pipe.
+    import subprocess
+    import sys
+    from pathlib import Path
+    data = tmp_path / "d.csv"
+    run = [str(Path(sys.executable).with_name("garant"))]
+    subprocess.run([*run, "simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)],
+                   check=True, capture_output=True)
+    for args in (["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--units", "human", "--mount",
+                  "+x+y+z"], ["plan", "two-axis"], ["identify", "two-axis"],
+                 ["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", "9.81744", "--units", "human"]):
+        out = subprocess.run([*run, *args], capture_output=True, text=True, check=True).stdout
+        assert out and max(map(len, out.splitlines())) <= 100, args
 
 
 @needs_real

@@ -13,7 +13,7 @@ from garant.verify.errors import DataError
 from garant.verify.io import calibration, recordings
 from garant.verify.workflows import calibrate_norm
 
-from conftest import G_REAL as G, REAL, ROOT, needs_real
+from conftest import G_REAL as G, REAL, ROOT, needs_real, flat
 
 
 @needs_real
@@ -137,13 +137,13 @@ def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
     assert 1e-4 < float(fields["accelerometer_noise_density"]) < 1e-1
     assert float(fields["update_rate"]) == pytest.approx(100, rel=0.01)           # the log is about 100 Hz
     assert not {"gyroscope_noise_density", "accelerometer_random_walk"} & set(fields)   # 7 s intervals: no walk
-    assert "Kalibr's reader also needs: accelerometer_random_walk" in capsys.readouterr().out
+    assert "Kalibr's reader also needs: accelerometer_random_walk" in flat(capsys.readouterr().out)
     assert main(["calibrate-norm", str(REAL / "imu_tk_xsens_acc.txt"), "--g", str(G), "--export-kalibr", str(out),
                  "--kalibr-gyro", "1.7e-4,1.9e-5", "--kalibr-topic", "/xsens/imu"]) == 0
     fields = _kalibr_fields(out)
     assert set(KALIBR_KEYS) <= set(fields) and fields["rostopic"] == "/xsens/imu"
     assert all(float(fields[k]) > 0 for k in KALIBR_KEYS if k != "rostopic")     # the reader's own checks
-    assert "every field Kalibr's reader needs" in capsys.readouterr().out
+    assert "every field Kalibr's reader needs" in flat(capsys.readouterr().out)
     # Kalibr's reader (kalibr_common/ConfigReader.py, ParametersBase.readYaml) loads the file with PyYAML's
     # safe_load, a YAML 1.1 parser that reads 2.0e-05 as a number and 2e-05 as text, and then compares each
     # figure with 0.0 (ImuParameters.checkGyroStatistics): every figure must load as a float. Red with %.6g (2e-5

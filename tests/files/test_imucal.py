@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from garant.verify.cli import main
-from conftest import DATA
+from conftest import DATA, flat
 
 IMUCAL = DATA / "imucal"
 SESSION, SECTIONS = IMUCAL / "example_ferraris_session.csv", IMUCAL / "example_ferraris_session_list.json"
@@ -95,7 +95,7 @@ def test_imucals_session_calibrates_scale_and_bias_with_the_misalignment_premise
     premise = [x for name in ("alpha", "beta", "gamma") for x in ("--bound", f"{name}=1e-2")]
     out, cal = tmp_path / "r.json", tmp_path / "c.json"
     assert main(base + premise + ["--json", str(out), "--save", str(cal)]) == 0
-    said = capsys.readouterr().out
+    said = flat(capsys.readouterr().out)
     assert "the misalignments are within |alpha| <= 0.01 rad, |beta| <= 0.01 rad, |gamma| <= 0.01 rad (--bound" in said
     res = json.loads(out.read_text())
     assert res["misalignment_premise"] == {"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2}

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from garant.verify.cli import main
-from conftest import REAL, needs_real
+from conftest import REAL, needs_real, flat
 
 SPEC = """[limits]
 scale = 0.01
@@ -31,7 +31,7 @@ def test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line
         assert code == 5                                    # one log could not be judged: the bad one
         outs[jobs] = {p.name: p.read_bytes() for p in (tmp_path / jobs).iterdir() if p.suffix in (".json", ".csv")}
     assert outs["1"] == outs["2"] and len(outs["1"]) == 4     # three calibrations and the summary, whatever --jobs
-    out = capsys.readouterr().out
+    out = flat(capsys.readouterr().out)
     assert "bad.txt: error, retest (not calibrated: " in out
     assert "4 logs: 3 calibrated, 0 refuted their noise bound, 1 could not be calibrated" in out
     rows = (tmp_path / "1" / "summary.csv").read_text().splitlines()
@@ -68,7 +68,7 @@ def test_apply_corrects_each_log_by_its_own_calibration_from_the_batch_folder(tm
     assert main(["calibrate-norm", *logs, "--g", "9.81744", "--out", str(tmp_path / "cal"), "--jobs", "1"]) == 0
     (tmp_path / "stranger.txt").write_text((REAL / "repeat_session3_acc.txt").read_text())
     code = main(["apply", str(tmp_path / "cal"), *logs, str(tmp_path / "stranger.txt"), "--out", str(tmp_path / "out")])
-    out = capsys.readouterr().out
+    out = flat(capsys.readouterr().out)
     assert code == 1 and "stranger.txt: not corrected: no calibration " in out
     assert "3 logs: 2 corrected into " in out
     for log in logs:
@@ -101,7 +101,7 @@ def test_a_recording_that_proves_nothing_is_retest_not_fail(tmp_path, capsys):
     logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (1, 2)]
     code = main(["calibrate-norm", *logs, "--g", "9.81", "--delta-sigma", "1e-4", "--out", str(tmp_path / "o"),
                  "--spec", str(tmp_path / "spec.toml"), "--jobs", "1"])
-    out = capsys.readouterr().out
+    out = flat(capsys.readouterr().out)
     assert code == 5
     assert "repeat_session1_acc.txt: error, retest (not calibrated: " in out
     assert "repeat_session2_acc.txt: refuted, retest (the log refutes its noise bound at still interval(s) 1, " in out
@@ -125,7 +125,7 @@ def test_a_log_in_raw_counts_is_judged_against_its_nominal_sensitivity(tmp_path,
                                         f"[nominal]\nsensitivity = {S:g}\noffset = {off:g}\n")
     code = main(["calibrate-norm", str(src), "--g", "9.81", "--out", str(tmp_path / "o"),
                  "--spec", str(tmp_path / "spec.toml")])
-    out = capsys.readouterr().out
+    out = flat(capsys.readouterr().out)
     d = np.loadtxt(src)
     d[:, 1:] = (d[:, 1:] - off) * 9.81 / S
     np.savetxt(tmp_path / "si.txt", d, fmt="%.10e")
@@ -143,7 +143,7 @@ def test_a_log_in_raw_counts_is_judged_against_its_nominal_sensitivity(tmp_path,
     assert main(["calibrate-norm", str(src), "--g", "9.81", "--out", str(tmp_path / "b"),
                  "--spec", str(tmp_path / "bare.toml")]) == 0
     assert "undecided (a log in raw counts: its parameters are relative to the raw axes; give the nominal " \
-           "sensitivity (counts per g) as [nominal] sensitivity in the spec)" in capsys.readouterr().out
+           "sensitivity (counts per g) as [nominal] sensitivity in the spec)" in flat(capsys.readouterr().out)
 
 
 def test_batch_files_never_share_a_name_and_the_summary_is_csv(tmp_path, capsys):

@@ -8,7 +8,7 @@ from garant.generated import norm as N
 from garant.verify.io import recordings
 from garant.verify.workflows import calibrate_norm, norm_information
 from garant.verify.cli import main
-from conftest import G_REAL as G, REAL, needs_real
+from conftest import G_REAL as G, REAL, needs_real, flat
 
 
 def synthetic_log(path, params, directions, noise, seed=0, still_s=3.0, move_s=2.0, rate=100):
@@ -383,7 +383,7 @@ def test_the_output_says_how_much_a_bound_leans_on_the_noise_bound(tmp_path, cap
     out = tmp_path / "r.json"
     assert main(["calibrate-norm", str(REAL / "openaxes_imu9.csv"), "--sensor", "adxl355", "--g", str(G),
                  "--delta-sigma", "4e-4", "--json", str(out)]) == 0
-    text = capsys.readouterr().out
+    text = flat(capsys.readouterr().out)
     assert "delta_sigma x1.1" in text and "note: the bounds are " in text
     assert "The stated --delta-sigma must hold for every interval" in text
     assert "The data fit within a noise bound" in text
@@ -413,7 +413,7 @@ def test_a_refutation_names_each_interval_with_its_own_bound(tmp_path, capsys):
     out = tmp_path / "r.json"
     assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G), "--delta-sigma", "1e-4",
                  "--json", str(out)]) == 3
-    text = capsys.readouterr().out
+    text = flat(capsys.readouterr().out)
     res = json.loads(out.read_text())
     rows = res["per_interval"]
     beyond = [k + 1 for k, r in enumerate(rows)

@@ -10,7 +10,7 @@ from garant.generated import norm as N
 from garant.verify.cli import main
 from garant.verify.io import schemas
 from garant.verify.workflows import jobs
-from conftest import G_REAL, REAL, ROOT, needs_real
+from conftest import G_REAL, REAL, ROOT, needs_real, flat, command_line
 from test_diagnose_norm import EFFECTS, G, _warm_up, static_log
 
 #: The hidden effects' parameters as the generator of test_diagnose_norm.py adds them (over g, the units of the
@@ -126,7 +126,7 @@ def test_the_real_openaxes_log_is_named_added_and_calibrated(tmp_path, capsys):
     said = capsys.readouterr().out
     d = json.loads(out.read_text())["diagnosis"]
     assert d["max_residual_before"] > 1 and d["add"], d["checked"]
-    line = next(x.strip() for x in said.splitlines() if x.strip().startswith("add them:"))
+    line = command_line(said, "add them:")
     assert line.startswith(f"add them: garant calibrate-norm {log} --sensor adxl355 --g {G}"), line
     assert line.endswith(f" --effect {','.join(d['add'])}") and "--diagnose" not in line, line
     out = tmp_path / "e.json"
@@ -291,7 +291,7 @@ def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_sep
                fmt="%.9g")
     out = tmp_path / "s.json"
     assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1", "--json", str(out)]) == 0
-    said = capsys.readouterr().out
+    said = flat(capsys.readouterr().out)
     assert "one orientation" in said and "cannot separate a bias drift from a scale-factor drift" in said
     res = json.loads(out.read_text())
     assert res["intervals"] > 20 and res["range_c"][1] - res["range_c"][0] > 25

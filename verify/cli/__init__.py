@@ -7,6 +7,7 @@ import argparse
 import contextlib
 import importlib
 import os
+import re
 import signal
 import sys
 import warnings
@@ -92,13 +93,18 @@ def main(argv=None):
         files.check_inputs([])                         # the API after a command protects nothing stale
 
 
-#: The widest line printed to a terminal (narrower terminals wrap at their own width).
+#: The widest line printed (narrower terminals wrap at their own width); the tables' width too.
 WIDTH = 100
 
 
+#: A line that ends in a command to run (`add them: garant calibrate-norm ...`): wrapped with the shell's " \\"
+#: continuation, so it still runs when pasted.
+_COMMAND = re.compile(r"^\s*(?:[\w ,()-]+: )?garant [a-z-]+ ")
+
+
 def wrap(text, width=WIDTH):
-    """Each line of `text` longer than `width` wrapped at spaces, its continuation indented two columns
-    (a table row or a path with no space is left whole rather than cut)."""
+    """Each line of `text` longer than `width` wrapped at spaces, its continuation indented two columns (a command
+    to run: with a backslash at each break, four columns; a word longer than the width, a path, is left whole)."""
     import textwrap
     out = []
     for line in text.split("\n"):
@@ -106,24 +112,27 @@ def wrap(text, width=WIDTH):
             out.append(line[:width])
             continue
         indent = len(line) - len(line.lstrip(" "))
-        out.append(textwrap.fill(line, width, subsequent_indent=" " * (indent + 2), break_long_words=False,
-                                 break_on_hyphens=False, drop_whitespace=True))
+        command = bool(_COMMAND.match(line))
+        parts = textwrap.wrap(line, width - 2 * command, subsequent_indent=" " * (indent + 2 + 2 * command),
+                              break_long_words=False, break_on_hyphens=False, drop_whitespace=True)
+        out.append((" \\\n" if command else "\n").join(parts))
     return "\n".join(out)
 
 
 class _Output:
-    """Standard output that, on a terminal, wraps each line at WIDTH columns (or the terminal's width) and,
-    once its reader stops (`garant ... | head`), drops what is printed after: the command still finishes
-    its work and writes its files. Into a file or a pipe the lines go as they are, for programs."""
+    """Standard output that wraps each line at WIDTH columns (or a narrower terminal's width), on a terminal and
+    into a file or a pipe alike (people keep logs with `tee`), and, once its reader stops (`garant ... | head`),
+    drops what is printed after: the command still finishes its work and writes its files. What is for programs
+    (JSON, CSV) goes to files, or through `buffer` (apply -o -), never wrapped."""
 
     def __init__(self, stream):
         import shutil
         self.stream, self.stopped, self.pending = stream, False, ""
         tty = getattr(stream, "isatty", lambda: False)()
-        self.width = min(WIDTH, shutil.get_terminal_size((WIDTH, 24)).columns) if tty else None
+        self.width = min(WIDTH, shutil.get_terminal_size((WIDTH, 24)).columns) if tty else WIDTH
 
     def write(self, text):
-        """Write to the stream while its reader reads (wrapped on a terminal); afterwards, drop the text."""
+        """Write to the stream, wrapped, while its reader reads; afterwards, drop the text."""
         if self.width is not None:
             whole, _, self.pending = (self.pending + text).rpartition("\n")
             if not whole and "\n" not in text:

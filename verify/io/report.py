@@ -8,16 +8,32 @@ from ..errors import DataError
 from . import files
 
 
-def table(headers, rows, out=None):
-    """Print rows under headers, columns padded to their widest cell (to stdout unless `out`)."""
+#: The widest line a table prints (the command line wraps its prose at the same width).
+WIDTH = 100
+
+
+def table(headers, rows, out=None, width=WIDTH):
+    """Print rows under headers, columns padded to their widest cell (to stdout unless `out`). A table wider
+    than `width` is printed as several, one under the other, each repeating the first column (the row's name)
+    with as many of the others as fit."""
     out = out or sys.stdout
     cells = [[str(c) for c in r] for r in rows]
     widths = [max(len(h), *(len(r[i]) for r in cells)) if cells else len(h) for i, h in enumerate(headers)]
-    line = "  ".join(h.ljust(w) for h, w in zip(headers, widths))
-    print(line, file=out)
-    print("  ".join("-" * w for w in widths), file=out)
-    for r in cells:
-        print("  ".join(c.ljust(w) for c, w in zip(r, widths)), file=out)
+    groups, group = [], []
+    for i in range(1, len(headers)):
+        if group and widths[0] + sum(widths[j] + 2 for j in group) + widths[i] + 2 > width:
+            groups.append(group)
+            group = []
+        group.append(i)
+    groups.append(group)
+    for k, group in enumerate(groups):
+        cols = [0, *group]
+        if k:
+            print(file=out)
+        print("  ".join(headers[i].ljust(widths[i]) for i in cols).rstrip(), file=out)
+        print("  ".join("-" * widths[i] for i in cols), file=out)
+        for r in cells:
+            print("  ".join(r[i].ljust(widths[i]) for i in cols).rstrip(), file=out)
 
 
 def human(value, unit, bias=False, fixed=False):
