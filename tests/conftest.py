@@ -130,7 +130,7 @@ SLOW = {
     "test_premises.py::test_mems_unit_bounds_contain_the_truth_and_stay_useful",
     "test_premises.py::test_remainder_part_per_q_against_the_worst_nonlinear_error_found",
     "test_premises.py::test_smallest_supported_sigma_to_its_stated_tolerance",
-    "test_readme.py::test_the_first_calibration_runs_as_written",
+    "test_readme.py::test_the_first_calibration_runs_as_pasted_after_the_set_up_line",
     "test_remount.py::test_substitutions_26_27_hold_for_every_mounting",
     "test_repeatability.py::test_calibrate_norm_every_imu_of_the_stream",
     "test_repeatability.py::test_fixture_stand_with_known_directions",

@@ -1,10 +1,13 @@
 """The README is a front page: at most about 100 lines of at most 120 characters, and its first
-calibration runs as written, line by line, from a folder beside the clone's ../shared."""
+calibration runs as pasted into a fresh shell after the set-up line, in the clone beside ../shared."""
+import os
 import re
 import shlex
+import subprocess
+import sys
+from pathlib import Path
 
-from garant.verify.cli import main
-from conftest import ROOT
+from conftest import ROOT, flat
 
 SHARED = ROOT.parent / "shared"
 
@@ -22,17 +25,34 @@ def test_the_readme_is_a_front_page():
     assert len(lines) <= 100 and max(map(len, lines)) <= 120
 
 
-def test_the_first_calibration_runs_as_written(tmp_path, monkeypatch, capsys):
-    commands = _commands((ROOT / "README.md").read_text())
-    assert [c[1] for c in commands] == ["plan", "simulate", "estimate", "next", "calibrate-norm", "apply"]
-    monkeypatch.chdir(tmp_path)
-    for argv in commands:
-        argv = [a.replace("../shared", str(SHARED)) for a in argv[1:]]
-        assert main(argv) == 0, (argv, capsys.readouterr().err)
-    out = capsys.readouterr().out
-    assert "done: every guaranteed error is at or below its target" in out
+def _blocks(text):
+    """The shell blocks of the README's "First calibration" section, as written."""
+    section = text.split("## First calibration", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```sh\n(.*?)```", section, re.S)
+
+
+def test_the_first_calibration_runs_as_pasted_after_the_set_up_line(tmp_path):
+    # It once failed as pasted (`garant: command not found`: the set-up line's environment was never activated)
+    # and wrote its outputs into the work tree. Both blocks, pasted in turn into one fresh shell in the clone,
+    # whose environment is the set-up line's (.venv beside this interpreter); the clone gains no file.
+    assert [c[1] for c in _commands((ROOT / "README.md").read_text())] == [
+        "plan", "simulate", "estimate", "next", "calibrate-norm", "apply"]
+    venv = Path(sys.executable).parent.parent
+    clone = tmp_path / "clone"
+    clone.mkdir()
+    (clone / ".venv").symlink_to(venv)                     # the clone as the set-up line leaves it
+    (tmp_path / "shared").symlink_to(SHARED)
+    script = "set -e\n" + "".join(_blocks((ROOT / "README.md").read_text())) + 'echo "scratch=$PWD"\n'
+    env = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "PYTHONPATH")}
+    env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep) if not p.startswith(str(venv)))
+    done = subprocess.run(["bash", "--norc", "--noprofile"], input=script, cwd=clone, env=env, capture_output=True,
+                          text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "done: every guaranteed error is at or below its target" in flat(done.stdout)
+    scratch = Path(done.stdout.strip().splitlines()[-1].removeprefix("scratch="))
     for name in ("plan.csv", "readings.csv", "cal.json", "log_cal.json", "corrected.csv", "rep/index.html"):
-        assert (tmp_path / name).exists(), name
+        assert (scratch / name).exists(), name
+    assert sorted(p.name for p in clone.iterdir()) == [".venv"]             # nothing written into the clone
 
 
 def test_the_first_calibration_states_only_a_gravity_that_holds_for_its_log():
@@ -42,5 +62,5 @@ def test_the_first_calibration_states_only_a_gravity_that_holds_for_its_log():
     stated = float(re.search(r"gravity value used by the original authors for these recordings is ([0-9.]+)",
                              readme).group(1))
     for argv in _commands((ROOT / "README.md").read_text()):
-        if argv[1] == "calibrate-norm" and "--g" in argv:
+        if argv[1] == "calibrate-norm":
             assert float(argv[argv.index("--g") + 1]) == stated, argv
