@@ -79,7 +79,7 @@ def _power(k, mark=""):
 #: The rate of the logged temperature (C/s): a log's samples give it, no stand's positions file does.
 TEMP_RATE = sp.Symbol("temp_rate_c_s", real=True)
 
-#: Effects of a log's samples only (calibrate-norm --effect, --diagnose, --temperature D): the temperature's rate,
+#: Effects of a log's samples only (calibrate-norm --effect, --diagnose, --thermal-degree D): the temperature's rate,
 #: and the terms of degree 2 and 3 in T of a warm-up's polynomials (a stand's chamber has the `thermal` effect).
 LOG_EFFECTS = {e.name: e for e in (
     Effect("temperature_lag", "f_i += g L_i dT/dt (the bias lags the logged temperature: L_i = -tau d(bias_i/g)/dT, "

@@ -39,8 +39,8 @@ def test_one_registry_entry_gives_a_command_a_new_export(demo, tmp_path, capsys)
     # its path checked before any work, as every output: never over an input
     assert main(["calibrate-norm", log, "--export-demo", log]) == 2
     assert "input" in capsys.readouterr().err
-    # refused where it cannot be written: with --temperature, in a batch; the estimate command does not offer it
-    assert main(["calibrate-norm", log, "--temperature", "1", "--export-demo", str(tmp_path / "t.json")]) == 2
+    # refused where it cannot be written: with --thermal-degree, in a batch; the estimate command does not offer it
+    assert main(["calibrate-norm", log, "--thermal-degree", "1", "--export-demo", str(tmp_path / "t.json")]) == 2
     assert "--export-demo: that file holds no polynomial in T" in capsys.readouterr().err
     assert main(["calibrate-norm", log, log, "--out", str(tmp_path / "o"), "--export-demo", str(tmp_path / "b")]) == 2
     assert "--export-demo concerns one log" in capsys.readouterr().err

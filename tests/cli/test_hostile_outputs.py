@@ -317,7 +317,7 @@ def test_the_thermal_outputs_never_replace_an_input(tmp_path, capsys):
     data.write_text("alpha_deg,beta_deg,f1,f2,f3,temp_c\n0,0,0,0,9.81,20\n")
     before = data.read_bytes()
     for option in ("--thermal-plot", "--export-ardupilot"):
-        assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1",
+        assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--thermal-degree", "1",
                      option, str(data)]) == 2
         assert "would be written over an input of this command" in capsys.readouterr().err
     assert data.read_bytes() == before

@@ -81,7 +81,7 @@ def outputs(tmp_path_factory):
     _run(["simulate", "--model", "two-axis", "--plan", "quarter16", "--temperatures=-20,0,20,40,60", "--sigma", "1e-5",
           "-o", str(chamber)])
     run("estimate", "thermal", ["estimate", "--model", "two-axis", str(chamber), "--sigma", "1e-5", "--g", "9.81",
-                                "--temperature", "2"])
+                                "--thermal-degree", "2"])
     run("plan", "stand", ["plan", "two-axis"])
     run("plan-temperatures", "chamber", ["plan", "two-axis", "--temperatures=-20,0,20,40,60"])
     run("plan-norm", "001", ["plan", "norm"])

@@ -214,7 +214,7 @@ def test_each_intervals_remainder_with_effects_holds_at_the_vertices(names):
 
 def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remove_the_drift(tmp_path, capsys):
     # A unit turned through 36 still orientations while it warms from 20 C (to 43 C), its biases drifting 2e-5 g/C
-    # (bias_temperature of the generator): `calibrate-norm --temperature 1` is consistent; each axis's raw bias,
+    # (bias_temperature of the generator): `calibrate-norm --thermal-degree 1` is consistent; each axis's raw bias,
     # scale factor (Gamma_ii) and misalignment over the logged range lie within their one bound of the truth at 60
     # temperatures of it. The files it writes, applied as ArduPilot's and PX4's C++ does (test_thermal.py
     # re-implements both, as cited there) to the truth's readings of one direction across the range, leave at most
@@ -223,7 +223,7 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
     from test_thermal import _ardupilot, _px4
     log = static_log(tmp_path / "warm.csv", "bias_temperature", still_s=10.0)
     out = tmp_path / "r.json"
-    assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1", "--json", str(out),
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1", "--json", str(out),
                  "--export-ardupilot", str(tmp_path / "t.parm"), "--export-px4", str(tmp_path / "t.params"),
                  "--px4-device-id", "42", "--save", str(tmp_path / "cal.json")]) == 0
     said = capsys.readouterr().out
@@ -262,19 +262,19 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
                 _px4((tmp_path / "t.params").read_text(), 42)[0](raw, T)):
         left = np.abs(got - got[len(T) // 2]).max()
         assert left <= 0.1 * drift, (left, drift)
-    for argv, said in ((["--temperature", "4"], "give the degree of the polynomials in T, 1, 2 or 3"),
-                       (["--export-px4", str(tmp_path / "x.params")], "--export-px4 needs --temperature D")):
+    for argv, said in ((["--thermal-degree", "4"], "give the degree of the polynomials in T, 1, 2 or 3"),
+                       (["--export-px4", str(tmp_path / "x.params")], "--export-px4 needs --thermal-degree D")):
         assert main(["calibrate-norm", str(log), *argv]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and said in err, err
     no_temp = static_log(tmp_path / "cold.csv", "none", temperature=False)
-    assert main(["calibrate-norm", str(no_temp), "--temperature", "1"]) == 2
-    assert "--temperature needs each sample's temperature" in capsys.readouterr().err
+    assert main(["calibrate-norm", str(no_temp), "--thermal-degree", "1"]) == 2
+    assert "--thermal-degree needs each sample's temperature" in capsys.readouterr().err
 
 
 def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_separate(tmp_path, capsys):
     # ArduPilot's procedure: the board still, level, while it heats 20 -> 48 C over 20 min, each axis's reading
-    # drifting by g x (2e-5, -2e-5, 1.5e-5) per C, noise within 2e-4 m/s^2. `calibrate-norm --temperature 1` cuts
+    # drifting by g x (2e-5, -2e-5, 1.5e-5) per C, noise within 2e-4 m/s^2. `calibrate-norm --thermal-degree 1` cuts
     # the one still interval where the temperature moves and bounds each axis's slope over the information set:
     # the truth within each bound; it says that one orientation cannot separate a bias drift from a scale drift
     # times the axis's share of g, and refuses to write a calibration from it. Red when the still interval is not
@@ -290,7 +290,7 @@ def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_sep
     np.savetxt(log, np.column_stack([t, raw, T]), delimiter=",", header="time_s,ax,ay,az,temp_c", comments="",
                fmt="%.9g")
     out = tmp_path / "s.json"
-    assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1", "--json", str(out)]) == 0
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1", "--json", str(out)]) == 0
     said = flat(capsys.readouterr().out)
     assert "one orientation" in said and "cannot separate a bias drift from a scale-factor drift" in said
     res = json.loads(out.read_text())
@@ -298,7 +298,7 @@ def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_sep
     for i, axis in enumerate("xyz"):
         d = res["drift"][axis]
         assert abs(d["slope"] - slope[i]) <= d["slope_bound"] < 0.1 * abs(slope[i]), (axis, d)
-    assert main(["calibrate-norm", str(log), "--temperature", "1", "--save", str(tmp_path / "c.json")]) == 2
+    assert main(["calibrate-norm", str(log), "--thermal-degree", "1", "--save", str(tmp_path / "c.json")]) == 2
     assert "a still-only warm-up gives each axis's drift" in capsys.readouterr().err
     assert not (tmp_path / "c.json").exists()
 
@@ -356,7 +356,7 @@ def test_a_sensor_lagging_the_logged_temperature_is_named_and_calibrated(tmp_pat
 
 def test_a_warm_up_with_a_curved_drift_calibrates_with_degree_2(tmp_path, monkeypatch, capsys):
     # The biases drift as 2e-5 g/C plus 1e-6 g/C^2 of (T - 20 C) through a warm-up from 20 to 43 C: degree 1
-    # leaves the data refuted (the curvature is 5e-4 g over the range); `--temperature 2` is consistent and each
+    # leaves the data refuted (the curvature is 5e-4 g over the range); `--thermal-degree 2` is consistent and each
     # axis's raw bias lies within its one bound of the truth at 60 temperatures of the range (Bernstein control
     # points of each piece, norm_thermal.block); PX4's correction from its file leaves under 10 % of the drift.
     # Red when degree 1 is taken as consistent (the first command exits 3), or without the effects' temperature
@@ -366,9 +366,9 @@ def test_a_warm_up_with_a_curved_drift_calibrates_with_degree_2(tmp_path, monkey
     monkeypatch.setitem(EFFECTS, "curved", lambda w, t: G * (np.array(TRUE["bias_temperature"]) * (_warm_up(t) - 20)
                                                              + curve * (_warm_up(t) - 20) ** 2))
     log = static_log(tmp_path / "warm.csv", "curved", still_s=10.0)
-    assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "1"]) == 3
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1"]) == 3
     out = tmp_path / "r.json"
-    assert main(["calibrate-norm", str(log), "--g", str(G), "--temperature", "2", "--json", str(out),
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "2", "--json", str(out),
                  "--export-px4", str(tmp_path / "t.params"), "--px4-device-id", "7"]) == 0
     th = json.loads(out.read_text())["thermal"]
     assert th["degree"] == 2
@@ -400,7 +400,7 @@ def test_the_calibration_schema_names_every_effect_the_norm_relation_carries():
 @needs_real
 def test_every_key_of_calibrate_norms_json_is_in_its_schema(tmp_path):
     # 24 keys of calibrate-norm's JSON (directions_gain, duration_s, format, ...) were in no schema: every key of
-    # real runs (plain, --diagnose, --effect, --temperature 1, a still-only warm-up, six faces with --bound) is now
+    # real runs (plain, --diagnose, --effect, --thermal-degree 1, a still-only warm-up, six faces with --bound) is now
     # a property of docs/schemas/calibrate-norm.schema.json, with its meaning.
     schema = json.loads((ROOT / "docs" / "schemas" / "calibrate-norm.schema.json").read_text())
     log = str(REAL / "repeat_session2_acc.txt")

@@ -46,11 +46,11 @@ NOISES = {
 
 
 def _estimated(folder, truth, *options):
-    """A chamber session of `truth` (uniform noise) and `estimate --temperature 2 --json r.json` on it, with
+    """A chamber session of `truth` (uniform noise) and `estimate --thermal-degree 2 --json r.json` on it, with
     `options` (paths inside `folder`): (module, data path, the result's JSON)."""
     mod, data = _session(folder, truth, NOISES["uniform"])
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--json", str(folder / "r.json"), *[str(folder / o) if "." in o else o
+                 "--thermal-degree", "2", "--json", str(folder / "r.json"), *[str(folder / o) if "." in o else o
                                                                              for o in options]]) == 0
     return mod, data, json.loads((folder / "r.json").read_text())
 
@@ -80,7 +80,7 @@ def test_the_bound_over_the_range_holds_at_every_temperature_of_it(tmp_path, noi
     truth = {k: (signs * v if "_T" in k else v) for k, v in MEMS.items()}
     mod, data = _session(tmp_path, truth, NOISES[noise])
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+                 "--thermal-degree", "2", "--json", str(tmp_path / "r.json")]) == 0
     res = json.loads((tmp_path / "r.json").read_text())
     th = res["thermal"]
     assert th["t0_c"] == 20 and th["range_c"] == [-20.0, 60.0] and th["degree"] == 2
@@ -106,10 +106,10 @@ def test_too_few_temperatures_for_the_degree_are_refused_naming_what_is_missing(
     T = np.repeat([0.0, 40.0], len(P) // 2)
     f = mod.readings(*np.deg2rad(P).T, [0.0] * len(mod.PARAMETER_NAMES), G, temp_c=T).T
     data = _write(tmp_path / "two.csv", P, f, T)
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "2"]) == 2
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--thermal-degree", "2"]) == 2
     err = capsys.readouterr().err
     assert "2 distinct temperature(s) (0, 40 C) cannot identify a polynomial of degree 2 in T (it needs 3)" in err
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1"]) == 0
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--thermal-degree", "1"]) == 0
 
 
 def _ardupilot(parm, imu=1):
@@ -165,13 +165,13 @@ def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them
 
 
 def test_thermal_outputs_need_temperature_and_a_calibration_file_is_refused_with_it(tmp_path, capsys):
-    """--export-ardupilot or --thermal-plot without --temperature, or --export-imu-tk with it: one line, exit 2."""
+    """--export-ardupilot or --thermal-plot without --thermal-degree, or --export-imu-tk with it: one line, exit 2."""
     data = tmp_path / "d.csv"
     data.write_text("alpha_deg,beta_deg,f1,f2,f3,temp_c\n0,0,0,0,9.81,20\n")
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--export-ardupilot",
                  str(tmp_path / "t.parm")]) == 2
-    assert "--export-ardupilot needs --temperature D" in capsys.readouterr().err
-    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--temperature", "1",
+    assert "--export-ardupilot needs --thermal-degree D" in capsys.readouterr().err
+    assert main(["estimate", "--model", "two-axis", str(data), "--sigma", "1e-4", "--thermal-degree", "1",
                  "--export-imu-tk", str(tmp_path / "c.txt")]) == 2
     assert "--export-imu-tk: that file holds no polynomial in T" in capsys.readouterr().err
     assert not list(tmp_path.glob("t.parm")) and not list(tmp_path.glob("c.txt"))
@@ -179,7 +179,7 @@ def test_thermal_outputs_need_temperature_and_a_calibration_file_is_refused_with
 
 def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
     """`simulate --temperatures` repeats the plan at each temperature with temp_c set, and the truth's thermal
-    coefficients are what estimate --temperature finds (within its bounds)."""
+    coefficients are what estimate --thermal-degree finds (within its bounds)."""
     (tmp_path / "t.json").write_text(json.dumps(MEMS))
     assert main(["simulate", "--model", "two-axis", "--plan", "quarter16", "--temperatures=-20,0,20,40,60",
                  "--truth", str(tmp_path / "t.json"), "--sigma", str(SIGMA), "--seed", "3",
@@ -187,7 +187,7 @@ def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
     rows = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1)
     assert sorted(set(rows[:, -1])) == list(TEMPS) and len(rows) == 5 * 16
     assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA), "--g", "9.81",
-                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+                 "--thermal-degree", "2", "--json", str(tmp_path / "r.json")]) == 0
     th = json.loads((tmp_path / "r.json").read_text())["thermal"]
     for q, truth in (("q7", (0.05, 1e-3, 1e-5)), ("q11", (-0.03, -1e-3, -1e-5))):
         worst = max(abs(sum(c * t ** k for k, c in enumerate(th["q"][q]))
@@ -213,7 +213,7 @@ def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coe
     f = mod.readings(*np.deg2rad(rows[:, :2]).T, p, G, temp_c=rows[:, 2]).T
     _write(tmp_path / "d.csv", rows[:, :2], f, rows[:, 2])
     assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", "--json", str(tmp_path / "r.json")]) == 0
+                 "--thermal-degree", "2", "--json", str(tmp_path / "r.json")]) == 0
     res = json.loads((tmp_path / "r.json").read_text())
     q_true = models.q_of(mod, p)
     q, e = (np.array([res[k][n] for n in mod.Q_NAMES]) for k in ("q", "guaranteed_error"))
@@ -222,7 +222,7 @@ def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coe
         keep = np.arange(len(rows)) != drop
         _write(tmp_path / "d.csv", rows[keep, :2], f[keep], rows[keep, 2])
         assert main(["estimate", "--model", "two-axis", str(tmp_path / "d.csv"), "--sigma", str(SIGMA),
-                     "--temperature", "2"]) == 2
+                     "--thermal-degree", "2"]) == 2
         assert "cannot identify" in capsys.readouterr().err
 
 
@@ -260,7 +260,7 @@ def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drif
     (an xOFF then subtracts it twice), a sign, or the polynomial about the wrong TREF."""
     folder, truth, mod, data, res = biases_drift
     out = tmp_path / "tc.params"
-    argv = ["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G), "--temperature", "2",
+    argv = ["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G), "--thermal-degree", "2",
             "--export-px4", str(out), "--px4-instance", "3"]
     assert main(argv) == 2 and not out.exists()
     err = capsys.readouterr().err
@@ -292,7 +292,7 @@ def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drif
 
 @pytest.mark.parametrize("degree", [1, 2])
 def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_needs(tmp_path, degree):
-    """diagnose's thermal step (workflows/thermal.degree_needed, on estimate --temperature D): a unit whose
+    """diagnose's thermal step (workflows/thermal.degree_needed, on estimate --thermal-degree D): a unit whose
     biases and scale factors are linear in T needs degree 1, one with a quadratic part degree 2 (degree 1 is
     then refuted by the data). Red if a degree were taken as consistent without its verdict, or the scan
     stopped at the first degree."""
@@ -318,7 +318,7 @@ def _lower_turn(truth):
 
 
 def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_path, capsys, mems):
-    """`estimate --temperature 2 --save` holds the block at T0 and its polynomial in T; `apply` on a log with a
+    """`estimate --thermal-degree 2 --save` holds the block at T0 and its polynomial in T; `apply` on a log with a
     temp_c column corrects each sample at its own temperature: every component within its per-sample bound of
     the true specific force (the readings of a block without errors), at 2,000 random positions and
     temperatures of the range. Red if apply took the calibration at T0 for every sample (the biases drift by
@@ -389,7 +389,7 @@ def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_consta
 
 @pytest.mark.parametrize("mount", ["+y+z+x", "-x-y+z"])
 def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mount):
-    """`--mount` with `--temperature`: the block mounted by Q reads Q times the readings of the unit with
+    """`--mount` with `--thermal-degree`: the block mounted by Q reads Q times the readings of the unit with
     Gamma' = Q^T Gamma Q, bias' = Q^T bias and theta' = Q^T theta ((26)-(27) of 000, at every T); its file, in
     the block's axes and the frame the data define, corrects the block's own readings at 1,000 random
     positions and temperatures within each per-sample bound. Red when the mounting is ignored (the file would
@@ -418,7 +418,7 @@ def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mou
     f = block(P, T, MEMS) + G * np.random.default_rng(5).uniform(-SIGMA, SIGMA, (len(P), 3))
     data = _write(tmp_path / "chamber.csv", P, f, T)
     assert main(["estimate", "--model", "two-axis", str(data), "--sigma", str(SIGMA), "--g", str(G),
-                 "--temperature", "2", f"--mount={mount}", "--save", str(tmp_path / "cal.json")]) == 0
+                 "--thermal-degree", "2", f"--mount={mount}", "--save", str(tmp_path / "cal.json")]) == 0
     cal = calibration.read(tmp_path / "cal.json")
     rng = np.random.default_rng(2)
     angles, T = rng.uniform(0, 360, (1000, 2)), rng.uniform(-20, 60, 1000)

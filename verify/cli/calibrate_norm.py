@@ -1,7 +1,7 @@
 """garant calibrate-norm: a real static log calibrated through the norm relation (2.2) of 001."""
 import sys
 
-from ..errors import DataError
+from ..errors import FLAGS, DataError
 from ..defaults import FORMATS, SENSORS
 from . import args as options
 from . import exports
@@ -33,7 +33,7 @@ def add(sub):
                    help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
                         "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, "
                         "temperature_lag; --diagnose names the ones the data need)")
-    p.add_argument("--temperature", type=int, metavar="D",
+    p.add_argument("--thermal-degree", dest="temperature", type=int, metavar="D",
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
                         "bound over the logged range; with --export-ardupilot / --export-px4")
@@ -105,7 +105,8 @@ def _batch(args):
     single = [o for o in ("plot", "report", "json", "effect", "temperature") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:
         first = (single or ["imu all" if args.imu == "all" else "diagnose"])[0]
-        raise DataError(f"--{first.replace('_', '-')} concerns one log: a batch writes each unit's files to --out DIR",
+        flag = FLAGS.get(first, "--" + first.replace("_", "-"))
+        raise DataError(f"{flag} concerns one log: a batch writes each unit's files to --out DIR",
                         param=first.split()[0])
     if not args.out:
         raise DataError("several logs: give --out DIR for each unit's calibration and the summary", param="out")
@@ -404,7 +405,7 @@ def _still_only(res, args):
 
 
 def _print_thermal(res):
-    """--temperature: each axis's raw bias and scale factor as a polynomial in T, one bound over the range."""
+    """--thermal-degree: each axis's raw bias and scale factor as a polynomial in T, one bound over the range."""
     from ..io import report
     th = res["thermal"]
     lo, hi = th["range_c"]

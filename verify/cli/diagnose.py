@@ -50,7 +50,7 @@ def run(args):
             f"degree {t['degree']} in T: " + ("consistent" if t["consistent"] else "not identified" if
                                                t["consistent"] is None else "INCONSISTENT") for t in td["tried"])
               + (f" -> each block parameter needs a polynomial of degree {td['needed']} in T: garant estimate ... "
-                 f"--temperature {td['needed']}" if td["needed"] else " -> no degree up to 3 makes them consistent"))
+                 f"--thermal-degree {td['needed']}" if td["needed"] else " -> no degree up to 3 makes them consistent"))
     if res["effects"]:
         print("added: " + ", ".join(res["effects"]))
         report.table(("parameter", "estimate", "guaranteed error", "unit", "combination"),

@@ -32,10 +32,11 @@ def add(sub):
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
                                                    "tables, plots, the command, inputs SHA-256) and DIR/report.md")
-    p.add_argument("--temperature", type=int, choices=(1, 2, 3), metavar="D", help="each block parameter a "
-                   "polynomial of degree D (1-3) in T, the temp_c column (C): each q's coefficients and one guaranteed "
+    p.add_argument("--thermal-degree", dest="temperature", type=int, choices=(1, 2, 3), metavar="D",
+                   help="each block parameter a polynomial of degree D (1-3) in T, the temp_c column (C): each q's "
+                        "coefficients and one guaranteed "
                    "bound over the whole temperature range")
-    p.add_argument("--thermal-plot", metavar="FILE.png", help="with --temperature: each q(T) with its guaranteed "
+    p.add_argument("--thermal-plot", metavar="FILE.png", help="with --thermal-degree: each q(T) with its guaranteed "
                    "band over the range, and the estimate and bound at each chamber temperature")
     exports.add(p, "estimate")
     return p
@@ -47,7 +48,7 @@ def run(args):
     from ..io import report
     from ..workflows import jobs
     if args.thermal_plot and args.temperature is None:
-        raise DataError("--thermal-plot needs --temperature D", param="thermal_plot")
+        raise DataError("--thermal-plot needs --thermal-degree D", param="thermal_plot")
     exports.check(args, "estimate")
     res = jobs.estimate(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty, prior=args.prior,
                         bound=dict(args.bound), mount=args.mount, gamma=args.gamma, imu=args.imu,

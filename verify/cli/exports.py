@@ -19,9 +19,9 @@ class Export:
     what: str                   # the file in words, for messages ("the imu_tk calibration file")
     help: str
     commands: tuple             # the commands that offer it
-    takes: str                  # "calibration" (the block's, when consistent), "thermal" (needs --temperature) or
+    takes: str                  # "calibration" (the block's, when consistent), "thermal" (needs --thermal-degree) or
                                 # "noise" (the log's noise figures: calibrate-norm only)
-    temperature: bool = True    # whether it can carry a calibration in T (False: refused with --temperature)
+    temperature: bool = True    # whether it can carry a calibration in T (False: refused with --thermal-degree)
     effects: bool = True        # whether it carries the effects of --effect (False: a note says they are dropped)
     options: tuple = ()         # its own further options: (flags, argparse keywords), added with it
     check: object = None        # check(args) before any work, raising DataError
@@ -115,7 +115,7 @@ BOTH = ("estimate", "calibrate-norm")
 #: Every calibration file garant writes, in the order of --help.
 EXPORTS = (
     Export("--save", "CAL.json", "the calibration file", "write the calibration (garant-calibration-1, "
-           "docs/formats.md) for `garant apply`, from any stand; with --temperature it holds the polynomials in T",
+           "docs/formats.md) for `garant apply`, from any stand; with --thermal-degree it holds the polynomials in T",
            BOTH, "calibration", write=_save),
     Export("--export-imu-tk", "FILE", "the imu_tk calibration file", "also write the calibration in imu_tk's form "
            "(T, K, B)", BOTH, "calibration", temperature=False, effects=False, write=_imu_tk),
@@ -134,13 +134,13 @@ EXPORTS = (
                     (("--kalibr-topic",), dict(default="/imu0", metavar="TOPIC",
                                                help="the rostopic of --export-kalibr"))),
            write=_kalibr),
-    Export("--export-ardupilot", "FILE.parm", "the ArduPilot parameter file", "with --temperature: ArduPilot's "
+    Export("--export-ardupilot", "FILE.parm", "the ArduPilot parameter file", "with --thermal-degree: ArduPilot's "
            "INS_TCALn_* parameters (TMIN, TMAX, the offset polynomial ACC1-3 about 35 C, x 1e6) and INS_ACCn_CALTEMP, "
            "INS_ACCOFFS, INS_ACCSCAL at T0", BOTH, "thermal",
            options=((("--ardupilot-imu",), dict(type=int, choices=(1, 2, 3), default=1, metavar="N", help="the IMU "
                      "the ArduPilot parameters are for (INS_TCALN_*; default 1)")),),
            write=_ardupilot),
-    Export("--export-px4", "FILE.params", "the PX4 parameter file", "with --temperature and --px4-device-id: PX4's "
+    Export("--export-px4", "FILE.params", "the PX4 parameter file", "with --thermal-degree and --px4-device-id: PX4's "
            "TC_A* parameters (QGroundControl's .params: ID, TREF, TMIN, TMAX, the offset polynomial X0-X3 relative to "
            "TREF) and CAL_ACCn_ID, xOFF, xSCALE at TREF", BOTH, "thermal",
            options=((("--px4-instance",), dict(type=int, choices=(0, 1, 2, 3), default=0, metavar="N", help="the "
@@ -178,10 +178,10 @@ def check(args, command):
     """Before any work: each export asked for can be written with the options given."""
     for e in asked(args, command):
         if e.takes == "thermal" and args.temperature is None:
-            raise DataError(f"{e.option} needs --temperature D (the file holds the drift in T)", param=e.dest)
+            raise DataError(f"{e.option} needs --thermal-degree D (the file holds the drift in T)", param=e.dest)
         if not e.temperature and args.temperature is not None:
             could = ", ".join(x.option for x in of(command) if x.temperature)
-            raise DataError(f"{e.option}: that file holds no polynomial in T; with --temperature give {could}",
+            raise DataError(f"{e.option}: that file holds no polynomial in T; with --thermal-degree give {could}",
                             param=e.dest)
     for e in of(command):
         if e.check:

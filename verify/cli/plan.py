@@ -42,8 +42,9 @@ def add(sub):
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
     p.add_argument("--temperatures", type=options.temperatures, metavar="T1,T2,...",
                    help="chamber temperatures (C; write --temperatures=-20,...): which positions at which temperature "
-                        "identify every coefficient of the thermal model (--temperature D), the fewest per temperature")
-    p.add_argument("--temperature", type=int, choices=(1, 2, 3), metavar="D",
+                        "identify every coefficient of the thermal model (--thermal-degree D), the fewest per "
+                        "temperature")
+    p.add_argument("--thermal-degree", dest="temperature", type=int, choices=(1, 2, 3), metavar="D",
                    help="with --temperatures: the degree of each block parameter's polynomial in T (default 2, or one "
                         "less than the temperatures given)")
     return p
@@ -52,7 +53,7 @@ def add(sub):
 def run(args):
     """`garant plan`: parse, call the job, print; the exit status."""
     if args.temperature is not None and args.temperatures is None:
-        raise DataError("--temperature D applies with --temperatures T1,T2,...", param="temperature")
+        raise DataError("--thermal-degree D applies with --temperatures T1,T2,...", param="temperature")
     if args.temperatures is not None:
         return run_thermal(args)
     if kind(args.model) == "norm":

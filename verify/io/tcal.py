@@ -76,7 +76,7 @@ def text(res, imu=1):
     offs, scal = _at_t0(res, "--export-ardupilot")
     lo, hi = th["range_c"]
     n = "" if imu == 1 else str(imu)
-    lines = [f"# garant {th.get('command', 'estimate')} --temperature {th['degree']}: accelerometer thermal "
+    lines = [f"# garant {th.get('command', 'estimate')} --thermal-degree {th['degree']}: accelerometer thermal "
              "compensation for ArduPilot, "
              f"IMU {imu}, with the accelerometer calibration it is applied with",
              f"# valid over [{lo:g}, {hi:g}] C (TMIN, TMAX) of the IMU's own temperature; ArduPilot's reference 35 C",
@@ -133,7 +133,7 @@ def px4_text(res, instance=0, device_id=None):
     params.append((f"{c}_ID", int(device_id), 6))
     params += [(f"{c}_{'XYZ'[i]}OFF", offs[i], 9) for i in range(3)]
     params += [(f"{c}_{'XYZ'[i]}SCALE", scal[i], 9) for i in range(3)]
-    head = [f"# garant {th.get('command', 'estimate')} --temperature {th['degree']}: accelerometer thermal "
+    head = [f"# garant {th.get('command', 'estimate')} --thermal-degree {th['degree']}: accelerometer thermal "
             "compensation for PX4, instance "
             f"{instance}, device id {device_id}; valid over [{lo:g}, {hi:g}] C of the IMU's own temperature",
             f"# the thermal offset is relative to TREF = {th['t0_c']:g} C (X0 = 0, as PX4's process_sensor_caldata.py "

@@ -197,7 +197,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
         scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, temperature_lag).
     temperature : int, optional
-        D (`--temperature D`, 1-3): on a log with a temperature column, each still interval (cut where the
+        D (`--thermal-degree D`, 1-3): on a log with a temperature column, each still interval (cut where the
         temperature moves) at its own mean temperature, the biases and scale factors polynomials of degree D in
         T with one guaranteed bound over the logged range (`thermal`), for --export-ardupilot / --export-px4.
 
@@ -218,10 +218,10 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
     if temperature is not None:
         norm_thermal.check_degree(temperature)
         if data.temp is None:
-            raise DataError(f"{data.path}: --temperature needs each sample's temperature, the IMU's own: a column "
+            raise DataError(f"{data.path}: --thermal-degree needs each sample's temperature, the IMU's own: a column "
                             f"{' or '.join(recordings.TEMP_COLUMNS)} (C)", param="temperature")
         if effects is not None:
-            raise DataError("--temperature and --effect are not taken together (--temperature adds "
+            raise DataError("--thermal-degree and --effect are not taken together (--thermal-degree adds "
                             f"{', '.join(norm_thermal.names(temperature))} itself)", param="temperature")
         stills = norm_thermal.split(data, stills, min_still)
         if stills and norm_thermal.one_orientation(stills):
@@ -229,7 +229,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
             res["premises"] = _norm_premises(res["premises"], g_unc, g_src)
             return results.NormCalibration(res)
         if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
-            raise DataError(f"{data.path}: --temperature takes a log in m/s^2 (the flight stacks' unit); this one "
+            raise DataError(f"{data.path}: --thermal-degree takes a log in m/s^2 (the flight stacks' unit); this one "
                             "is in counts", param="log")
     if len(stills) < params + 3:
         raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still), param="log")
@@ -242,7 +242,7 @@ def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=N
         ext = norm_effects.Extension(mod, norm_thermal.names(temperature), stills, temps, data.path, rates,
                                      round(0.5 * sum(t_range), 1))
         ext.thermal_range = t_range
-        ext.option = f"--temperature {temperature} ({', '.join(ext.names)})"
+        ext.option = f"--thermal-degree {temperature} ({', '.join(ext.names)})"
     res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                  _misalignment_bounds(bound))
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})

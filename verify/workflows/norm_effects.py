@@ -102,7 +102,7 @@ class Extension:
         self.units = [u for x in names for u in mod.EFFECT_UNITS[x]]
         self.theta = np.zeros(len(self.labels))
         self.phi = self.jac = self.p = self.n = None
-        self.thermal_range = None     # (lowest, highest) C of the still intervals, with --temperature
+        self.thermal_range = None     # (lowest, highest) C of the still intervals, with --thermal-degree
         self.option = f"--effect {','.join(self.names)}"          # how the user asked for it, in messages
 
     def basis(self, p):

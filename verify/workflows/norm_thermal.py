@@ -1,4 +1,4 @@
-"""`garant calibrate-norm LOG --temperature D`, D = 1 to 3: a warm-up log's biases, scale factors and
+"""`garant calibrate-norm LOG --thermal-degree D`, D = 1 to 3: a warm-up log's biases, scale factors and
 misalignments, each a polynomial in the IMU's temperature T (its temp_c column), with one guaranteed bound over
 the logged range, and the files the flight stacks load (io/tcal.py) from it; a still-only warm-up's drift per axis.
 
@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import DataError
 
-#: The degrees of --temperature D calibrate-norm fits.
+#: The degrees of --thermal-degree D calibrate-norm fits.
 DEGREES = (1, 2, 3)
 
 
@@ -52,9 +52,9 @@ def sample_range(data, stills):
 
 
 def check_degree(degree):
-    """The degree of --temperature D, or a one-line refusal."""
+    """The degree of --thermal-degree D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
-        raise DataError(f"--temperature {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3",
+        raise DataError(f"--thermal-degree {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3",
                         param="temperature")
     return degree
 
@@ -85,7 +85,7 @@ PIECES = 8
 
 
 def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
-    """The thermal result (the shape of estimate --temperature's, which io/tcal.py writes the flight stacks'
+    """The thermal result (the shape of estimate --thermal-degree's, which io/tcal.py writes the flight stacks'
     files from): per axis the raw bias over g and the scale Gamma_ii as polynomials about t0 with one bound over
     the logged range, over the information set (A, s, bnd: |s - A^T w| <= bnd, q = w + s', |s'| <= shift, q
     within lo, hi; dq the set's midpoint, where the estimate is). M_fit, b_fit: the fit (m/s^2 per raw unit); J:
@@ -241,7 +241,7 @@ def still_only(data, stills, note, g, quantum):
                               "axes) cannot separate a bias drift from a scale-factor drift times that axis's share "
                               "of g, nor give the scale factors and biases themselves: each drift is their sum, right "
                               "in this orientation only; turn the unit through orientations while it warms "
-                              "(calibrate-norm --temperature 1 on that log) to separate them"),
+                              "(calibrate-norm --thermal-degree 1 on that log) to separate them"),
             "premises": {"statement": f"the bounds hold if each axis of each still piece's raw mean is within its "
                                       f"noise rule of the truth ({rule}) and each axis's reading is linear in the "
                                       "temperature over the range", "g": g}}

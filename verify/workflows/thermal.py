@@ -61,7 +61,7 @@ def chamber_levels(positions):
 
 def degree_needed(levels, estimate):
     """The least degree D (1 to 3, at most the chamber temperatures less one) whose thermal model the data
-    are consistent with (`estimate(D)` a result of estimate --temperature D), and each degree tried:
+    are consistent with (`estimate(D)` a result of estimate --thermal-degree D), and each degree tried:
     {"tried": [(D, consistent)], "needed": D or None}."""
     tried = []
     for degree in range(1, min(3, len(levels) - 1) + 1):

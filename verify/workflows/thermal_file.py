@@ -146,7 +146,7 @@ def block_section(mod, info, q_hat, T, t0, degree, g, block, u):
             owner.setdefault(names[used[0]], nu)
     missing = [n for n in BLOCK_NAMES if n not in owner]
     if missing:
-        raise DataError(f"--save with --temperature: this stand's q do not hold {', '.join(missing)} alone; the "
+        raise DataError(f"--save with --thermal-degree: this stand's q do not hold {', '.join(missing)} alone; the "
                         "calibration's temperature polynomial needs each block parameter", param="save")
     S = _series(mod, degree)
     rows = np.array([S[owner[n]] for n in BLOCK_NAMES])
