@@ -60,7 +60,7 @@ def _api(fn):
 def plan(model, *, grid=None, count_seconds=None, max_candidates=None, search_seconds=None, search_nodes=None,
          count_nodes=None):
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
-    as `garant plan MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
+    as `garant plan --model MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
     `max_candidates` bounds the size of the search, `search_nodes` and `count_nodes` its work (the same plan
     on every machine; `count_nodes=0`: the plan alone, the others not counted), `search_seconds` and
     `count_seconds` are its safety stops (None: the command's defaults)."""

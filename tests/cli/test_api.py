@@ -18,7 +18,7 @@ def test_plan_of_the_api_is_the_plan_of_the_command(tmp_path, capsys, model):
     # 3.0, 1.414, ... where `garant plan` gave 10 with 2.414, 1.0, ... (the step lived in the command).
     out = tmp_path / "p.json"
     # the search and the count are budgeted by work: the same JSON, whatever the machine's load
-    assert main(["plan", model, "--json", str(out), "--count-nodes", "5"]) == 0
+    assert main(["plan", "--model", model, "--json", str(out), "--count-nodes", "5"]) == 0
     assert garant.plan(model, count_nodes=5) == json.loads(out.read_text())
 
 

@@ -25,7 +25,7 @@ def run(argv, capsys):
 
 
 def test_plan_json(tmp_path, capsys):
-    rc, out, _ = run(["plan", "two-axis", "--json", str(tmp_path / "p.json")], capsys)
+    rc, out, _ = run(["plan", "--model", "two-axis", "--json", str(tmp_path / "p.json")], capsys)
     d = json.loads((tmp_path / "p.json").read_text())
     assert rc == 0
     assert d["q_names"] == [f"q{i}" for i in range(1, 16)]
@@ -182,7 +182,7 @@ def test_no_command_prints_a_line_over_100_columns_into_a_pipe(tmp_path):
     subprocess.run([*run, "simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)],
                    check=True, capture_output=True)
     for args in (["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--units", "human", "--mount",
-                  "+x+y+z"], ["plan", "two-axis"], ["identify", "two-axis"],
+                  "+x+y+z"], ["plan", "--model", "two-axis"], ["identify", "--model", "two-axis"],
                  ["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", "9.81744", "--units", "human"]):
         out = subprocess.run([*run, *args], capture_output=True, text=True, check=True).stdout
         assert out and max(map(len, out.splitlines())) <= 100, args

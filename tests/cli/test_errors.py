@@ -61,6 +61,6 @@ def test_a_value_error_that_is_not_bad_input_is_not_called_bad_input(monkeypatch
     def broken(*a, **k):
         raise ValueError("operands could not be broadcast together")
     monkeypatch.setattr(plan, "plan", broken)
-    assert main(["plan", "two-axis"]) == 1
+    assert main(["plan", "--model", "two-axis"]) == 1
     err = capsys.readouterr().err
     assert "internal error" in err and "Traceback" not in err

@@ -116,7 +116,7 @@ def test_oversized_or_undecodable_description_refused_fast(tmp_path, capsys, mak
     data = make()
     path = tmp_path / "s.toml"
     path.write_bytes(data if isinstance(data, bytes) else data.encode())
-    refused(["plan", path], capsys, *words)
+    refused(["plan", "--model", path], capsys, *words)
 
 
 def test_description_with_bom_is_read(tmp_path, capsys):
@@ -310,7 +310,7 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
       "{tmp}/r.json"], "must be < 1"),
     (["diagnose", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--report", "{tmp}/afile/y"],
       "is not a writable folder"),
-    (["plan", "norm", "--certificates", "{tmp}/c", "--grid", "5"], "apply to a stand with angles"),
+    (["plan", "--model", "norm", "--certificates", "{tmp}/c", "--grid", "5"], "apply to a stand with angles"),
     (["calibrate-norm", "{data}", "--delta-sigma", "1e308", "--json", "{tmp}/r.json"], "must be < 1"),
     # Each of these ended in a traceback or a message that named no cause.
     (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--g", "5e-324", "--json", "{tmp}/r.json"],
@@ -321,10 +321,10 @@ def test_repeated_readings_within_two_sigma_are_averaged(tmp_path):
       "{tmp}/d.csv"], "--size: the bound '1e308' must be a number >= 0 and < 1"),
     (["simulate", "--model", "two-axis", "--plan", "grid:0.0009765625", "--sigma", "1e-5", "-o", "{tmp}/d.csv"],
      "--plan grid:0.0009765625 has 1.36e+11 positions, over the limit of 1,000,000"),
-    (["plan", "two-axis", "--grid", "0.0009765625", "--json", "{tmp}/p.json"],
+    (["plan", "--model", "two-axis", "--grid", "0.0009765625", "--json", "{tmp}/p.json"],
      "--grid 0.000976562 has 1.36e+11 positions, over the limit of 10,000: use a coarser step, or raise "
      "--max-candidates"),
-    (["plan", "two-axis", "--grid", "1", "--max-candidates", "129599", "--json", "{tmp}/p.json"],
+    (["plan", "--model", "two-axis", "--grid", "1", "--max-candidates", "129599", "--json", "{tmp}/p.json"],
      "--grid 1 has 1.3e+05 positions, over the limit of 129,599"),
     (["estimate", "--model", "two-axis", "{data}", "--sigma", "1e308"], "--sigma: '1e308' must be < 1"),
     (["repeatability", "--format", "means", "{data}", "--rate", "1e-300"], "must be a sample rate in Hz"),
@@ -354,7 +354,7 @@ def test_a_table_with_120_degree_detents_derives_plans_and_certifies(tmp_path, c
                                                                   "detents_deg = [0, 120]")
     stand = tmp_path / "table120.toml"
     stand.write_text(text)
-    assert main(["plan", str(stand), "--certificates", str(tmp_path / "c")]) == 0
+    assert main(["plan", "--model", str(stand), "--certificates", str(tmp_path / "c")]) == 0
     out = capsys.readouterr().out
     assert "(0, +x+y+z), (120, +x+y+z)" in out
     certs = sorted((tmp_path / "c").glob("*.json"))
@@ -498,10 +498,10 @@ def _positions(tmp_path):
     (lambda d, t: ["estimate", "--model", "two-axis", t / "fifo", "--sigma", "1e-5"], "not a FIFO"),
     (lambda d, t: ["estimate", "--model", "two-axis", "/dev/zero", "--sigma", "1e-5"], "not a character device"),
     (lambda d, t: ["calibrate-norm", "/dev/zero"], "not a character device"),
-    (lambda d, t: ["plan", "two-axis", "--csv", t / "fifo"], "over a FIFO"),
+    (lambda d, t: ["plan", "--model", "two-axis", "--csv", t / "fifo"], "over a FIFO"),
     (lambda d, t: ["simulate", "--model", t / "s.toml", "--plan", "quarter", "--sigma", "1e-5", "-o", t / "s.toml"],
      "over an input"),
-    (lambda d, t: ["plan", t / "s.toml", "--csv", t / "s.toml"], "over an input"),
+    (lambda d, t: ["plan", "--model", t / "s.toml", "--csv", t / "s.toml"], "over an input"),
 ])
 def test_no_output_ever_replaces_an_input_or_a_special_file(tmp_path, capsys, make_argv, words):
     # Every command wrote over its own input when an output option named it (also through a
@@ -544,7 +544,7 @@ def wedge_certificates(tmp_path_factory):
     """The plan certificates of the 45-degree wedge table (detents 0, 90, 180, 270), as `garant plan` writes them."""
     folder = tmp_path_factory.mktemp("wedge")
     (folder / "wedge45.toml").write_text((STANDS / "wedge45.toml").read_text())
-    assert main(["plan", str(folder / "wedge45.toml"), "--certificates", str(folder / "c")]) == 0
+    assert main(["plan", "--model", str(folder / "wedge45.toml"), "--certificates", str(folder / "c")]) == 0
     return folder
 
 
@@ -621,7 +621,7 @@ def test_an_angle_named_pi_is_refused_in_a_description_and_a_certificate(tmp_pat
     desc = tmp_path / "p.toml"
     desc.write_text((STANDS / "wedge45.toml").read_text().replace('name = "phi"', 'name = "pi"')
                     .replace("phi", "pi"))
-    refused(["plan", desc], capsys, "'pi' is reserved")
+    refused(["plan", "--model", desc], capsys, "'pi' is reserved")
     name = sorted(p.name for p in (wedge_certificates / "c").glob("*.json"))[0]
     path = _forged(wedge_certificates, name, lambda c: c["domain"].update(names=["pi"]))
     refused(["check-certificate", path], capsys, "'pi' is a constant or function of the expression grammar")
@@ -680,7 +680,7 @@ def test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor(tmp_
     assert old in BASE
     (tmp_path / "m12.toml").write_text(BASE.replace(old, "mountings = " + json.dumps(_mountings(12))))
     out = tmp_path / "p.json"
-    code = main(["plan", str(tmp_path / "m12.toml"), "--search-nodes", "1", "--json", str(out)])
+    code = main(["plan", "--model", str(tmp_path / "m12.toml"), "--search-nodes", "1", "--json", str(out)])
     captured = capsys.readouterr()
     assert code == 0, captured.err
     assert "48 candidate positions" in captured.err
@@ -697,7 +697,8 @@ def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_
     assert "axis = [0, 1, 1]" in text
     (tmp_path / "t.toml").write_text(text.replace("axis = [0, 1, 1]", "axis = [0.123456789012345, 0.234567890123456, "
                                                                     "0.964285714285714]"))
-    refused(["plan", tmp_path / "t.toml", "--certificates", tmp_path / "c", "--json", tmp_path / "p.json"], capsys,
+    refused(["plan", "--model", tmp_path / "t.toml", "--certificates", tmp_path / "c", "--json", tmp_path / "p.json"],
+            capsys,
             "--certificates: H is not exact in Q(sqrt2, sqrt3)", outputs=[tmp_path / "c", tmp_path / "p.json"])
 
 

@@ -70,7 +70,7 @@ def test_an_output_that_is_a_link_is_refused_even_one_to_standard_output(tmp_pat
 @pytest.mark.parametrize("argv, words", [
     (["diagnose", "--model", "two-axis", "{data}", "--sigma", "1e-5", "--report", "{t}/rep", "--json",
       "{t}/rep/index.html"], "lies inside the report folder"),
-    (["plan", "two-axis", "--certificates", "{t}/c", "--json", "{t}/c/two-axis_plan_q1.json"],
+    (["plan", "--model", "two-axis", "--certificates", "{t}/c", "--json", "{t}/c/two-axis_plan_q1.json"],
      "lies inside the certificate folder"),
     (["verify", "--certificates", "{t}/certs", "--json", "{t}/certs/two-axis_q1.json"],
      "lies inside the certificate folder"),
@@ -211,13 +211,13 @@ def test_a_route_at_a_speed_of_5e_324_is_refused(tmp_path, capsys):
     # A speed of 5e-324 deg/s gave a 1-position route and "total 0 s".
     text = (STANDS_DIR / "two_axis.toml").read_text().replace("[[angle]]\n", "[[angle]]\nspeed_deg_s = 5e-324\n", 1)
     (tmp_path / "s.toml").write_text(text)
-    refused(["plan", tmp_path / "s.toml", "--route"], capsys, "speed_deg_s: 5e-324 is not a deg/s figure")
+    refused(["plan", "--model", tmp_path / "s.toml", "--route"], capsys, "speed_deg_s: 5e-324 is not a deg/s figure")
 
 
 def test_plan_norm_draws_its_plot_and_refuses_a_route(tmp_path, capsys):
     # `plan norm --route --plot` ignored both options.
-    refused(["plan", "norm", "--route"], capsys, "--route applies to a stand with angles")
-    assert main(["plan", "norm", "--plot", str(tmp_path / "n.png")]) == 0
+    refused(["plan", "--model", "norm", "--route"], capsys, "--route applies to a stand with angles")
+    assert main(["plan", "--model", "norm", "--plot", str(tmp_path / "n.png")]) == 0
     assert (tmp_path / "n.png").read_bytes()[:4] == b"\x89PNG"
 
 
@@ -254,7 +254,7 @@ def test_next_finds_20000_measured_positions_among_the_candidates_in_one_pass():
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["plan", "two-axis", "--grid", "5e-324"], "more than 1e18 positions"),
+    (["plan", "--model", "two-axis", "--grid", "5e-324"], "more than 1e18 positions"),
     (["next", "--model", "two-axis", "{huge}", "--sigma", "1e-5"], "alpha_deg holds 1e+300 degrees"),
     (["calibrate-norm", "{npy}"], "which the file's bytes do not hold"),
     (["check-certificate", "{radical}"], "the root sqrt(5) is not sqrt(2), sqrt(3) or sqrt(6)"),
@@ -358,15 +358,15 @@ def test_imucal_gyro_is_checked_before_any_work_and_never_ignored(tmp_path, caps
 @pytest.mark.parametrize("name, magic", [("p.svg", b"<?xml"), ("p.pdf", b"%PDF"), ("p.png", b"\x89PNG")])
 def test_a_plot_is_written_in_the_format_its_name_says(tmp_path, capsys, name, magic):
     # `plan --plot p.svg` wrote PNG bytes under an .svg name.
-    assert main(["plan", "two-axis", "--plot", str(tmp_path / name)]) == 0
+    assert main(["plan", "--model", "two-axis", "--plot", str(tmp_path / name)]) == 0
     assert (tmp_path / name).read_bytes().startswith(magic)
     # the same input gives the same file: no date, the same svg ids (red without svg.hashsalt: ids are random)
-    assert main(["plan", "two-axis", "--plot", str(tmp_path / ("again_" + name))]) == 0
+    assert main(["plan", "--model", "two-axis", "--plot", str(tmp_path / ("again_" + name))]) == 0
     assert (tmp_path / ("again_" + name)).read_bytes() == (tmp_path / name).read_bytes()
 
 
 def test_a_plot_of_another_format_is_refused_before_any_work(tmp_path, capsys):
-    refused(["plan", "two-axis", "--plot", tmp_path / "p.txt", "--json", tmp_path / "p.json"], capsys,
+    refused(["plan", "--model", "two-axis", "--plot", tmp_path / "p.txt", "--json", tmp_path / "p.json"], capsys,
             "name the file .png, .svg or .pdf", outputs=[tmp_path / "p.txt", tmp_path / "p.json"])
 
 

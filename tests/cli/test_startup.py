@@ -33,7 +33,7 @@ def test_help_and_argument_errors_load_no_numerics():
     # `garant --help` took 0.45 s, 0.41 s over a bare interpreter: the argument definitions imported the models,
     # the noise rule and the plan search, which load numpy and more. Red when a command's parser imports one.
     argvs = [["--help"], ["--version"]] + [[c, "--help"] for c in COMMANDS]
-    argvs += [["calibrate-norm", "--bogus"], ["estimate"], ["plan", "two-axis", "--search-nodes", "x"]]
+    argvs += [["calibrate-norm", "--bogus"], ["estimate"], ["plan", "--model", "two-axis", "--search-nodes", "x"]]
     got = _probe(argvs)
     assert got["heavy"] == [], got
     assert got["codes"][:len(COMMANDS) + 2] == [0] * (len(COMMANDS) + 2)

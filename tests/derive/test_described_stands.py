@@ -54,7 +54,7 @@ def test_derive_plan_simulate_estimate_diagnose(stand, tmp_path, capsys):
     toml = str(STANDS / f"{stand}.toml")
     assert main(["derive", toml, "--out", str(tmp_path / "gen")]) == 0
     plan, certs = tmp_path / "plan.csv", tmp_path / "certs"
-    assert main(["plan", toml, "--csv", str(plan), "--certificates", str(certs), "--count-nodes", "5"]) == 0
+    assert main(["plan", "--model", toml, "--csv", str(plan), "--certificates", str(certs), "--count-nodes", "5"]) == 0
     mod = models.load(toml)
     files = sorted(certs.glob("*.json"))
     assert len(files) == len(mod.Q_NAMES)                  # every q's optimality on the plan's candidates
@@ -96,7 +96,7 @@ def test_a_plan_certificate_is_tied_to_its_description(tmp_path, capsys):
     toml = tmp_path / "wedge45.toml"
     toml.write_text((STANDS / "wedge45.toml").read_text())
     certs = tmp_path / "certs"
-    assert main(["plan", str(toml), "--certificates", str(certs)]) == 0
+    assert main(["plan", "--model", str(toml), "--certificates", str(certs)]) == 0
     cert = certs / "wedge45_plan_q1.json"
     assert main(["check-certificate", str(cert)]) == 0
     forged = json.loads(cert.read_text())
@@ -112,7 +112,7 @@ def test_a_plan_certificate_is_tied_to_its_description(tmp_path, capsys):
 def test_two_axis_plans_on_finer_grids_are_the_quarter_turn_plans(capsys):
     """The number of optimal 10-position plans on the 30-degree grid, exactly confirmed: the
     same 64 as on quarter turns (Table 2 of 000), every one on quarter turns."""
-    assert main(["plan", "two-axis", "--grid", "30", "--count-nodes", "5000"]) == 0
+    assert main(["plan", "--model", "two-axis", "--grid", "30", "--count-nodes", "5000"]) == 0
     out = capsys.readouterr().out
     assert "optimal plans of 10 positions on that grid: 64;" in out and "every one on quarter turns" in out
     assert "confirmed exactly" in out

@@ -62,6 +62,6 @@ def test_a_cache_folder_others_can_write_is_refused_in_one_line(cache, capsys):
     cache.chmod(0o777)
     with pytest.raises(DataError, match="GARANT_CACHE"):
         models.load(str(STAND))
-    assert main(["plan", str(STAND)]) == 2
+    assert main(["plan", "--model", str(STAND)]) == 2
     err = capsys.readouterr().err
     assert "writable by others" in err and len(err.strip().splitlines()) == 1

@@ -22,7 +22,7 @@ def test_two_axis_description_reproduces_the_spine(mod):
 def test_builtin_stands_plan(name, m, n_min, tmp_path, capsys):
     # --count-nodes 0: the fewest positions proven and one plan, no count of the others
     out = tmp_path / "p.json"
-    assert main(["plan", name, "--json", str(out), "--count-nodes", "0"]) == 0
+    assert main(["plan", "--model", name, "--json", str(out), "--count-nodes", "0"]) == 0
     res = json.loads(out.read_text())
     assert len(res["q_names"]) == m and res["min_positions"] == n_min and res["min_positions_proven"]
     assert all(e >= 1 for e in res["guaranteed_errors"])
@@ -68,7 +68,7 @@ def test_description_file_as_model(tmp_path, capsys):
     src = STANDS_DIR / "single_axis.toml"
     assert main(["derive", str(src), "--out", str(tmp_path)]) == 0
     assert (tmp_path / "single_axis.py").exists() and (tmp_path / "derivation_single_axis.md").exists()
-    assert main(["plan", str(src)]) == 0
+    assert main(["plan", "--model", str(src)]) == 0
     assert "minimal number of positions" in capsys.readouterr().out
 
 
@@ -115,7 +115,7 @@ def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, ca
     # `plan --csv` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
     # the data; `estimate` on the data then bounds every q of the saved truth.
     plan, data, est = tmp_path / "p.csv", tmp_path / "d.csv", tmp_path / "e.json"
-    assert main(["plan", name, "--csv", str(plan)]) == 0
+    assert main(["plan", "--model", name, "--csv", str(plan)]) == 0
     assert main(["simulate", "--model", name, "--plan", str(plan), "--sigma", str(SIGMA), "-o", str(data)]) == 0
     truth = json.loads((tmp_path / "d.truth.json").read_text())
     assert main(["estimate", "--model", name, str(data), "--sigma", str(SIGMA), "--json", str(est)]) == 0
@@ -127,7 +127,7 @@ def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, ca
 
 def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
     # identify works for every stand; an encoder effect on an angle the stand lacks is named as such.
-    assert main(["identify", "single-axis"]) == 0
+    assert main(["identify", "--model", "single-axis"]) == 0
     assert "Delta_g + phi[Gamma11]" in capsys.readouterr().out.replace("phi[Delta_g] + phi[Gamma11]", "Delta_g + "
         "phi[Gamma11]")
     assert main(["simulate", "--model", "single-axis", "--plan", "quarter", "--effect", "beta_encoder_harmonic=1e-5,0",
@@ -150,7 +150,7 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
     mod = models.load(str(stand))
     assert mod.ANGLES == ("g",) and {"t1", "t2", "DG", "K", "np"} <= set(mod.PARAMETER_NAMES)
     plan, data = tmp_path / "p.csv", tmp_path / "d.csv"
-    assert main(["plan", str(stand), "--csv", str(plan)]) == 0
+    assert main(["plan", "--model", str(stand), "--csv", str(plan)]) == 0
     assert main(["simulate", "--model", str(stand), "--plan", str(plan), "--sigma", "1e-5", "-o", str(data)]) == 0
     assert main(["estimate", "--model", str(stand), str(data), "--sigma", "1e-5", "--json",
                  str(tmp_path / "e.json")]) == 0

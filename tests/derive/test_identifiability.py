@@ -42,10 +42,10 @@ def test_identify_cli_with_plan(tmp_path, capsys):
     plan = tmp_path / "plan.csv"
     plan.write_text("alpha_deg,beta_deg\n0,0\n0,180\n180,90\n180,270\n90,90\n")
     out = tmp_path / "i.json"
-    assert main(["identify", "two-axis", "--plan", str(plan), "--json", str(out)]) == 0
+    assert main(["identify", "--model", "two-axis", "--plan", str(plan), "--json", str(out)]) == 0
     res = json.loads(out.read_text())
     assert [s.split(" =")[0] for s in res["plan"]["not_identifiable"]] == ["q6", "q10", "q13"]
-    assert main(["identify", "two-axis", "--plan", str(tmp_path / "missing.csv")]) == 2
+    assert main(["identify", "--model", "two-axis", "--plan", str(tmp_path / "missing.csv")]) == 2
 
 
 @pytest.mark.parametrize("r, q, N", [(3, 1, 4), (4, 2, 5), (6, 4, 3)])

@@ -262,7 +262,7 @@ def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, caps
     rng = np.random.default_rng(11)
     name, mod, (P, M, mounts), readings, clean, data = _stand_readings(tmp_path, model, rng)
     cal, tk = tmp_path / "c.json", tmp_path / "c.calib"
-    assert main(["plan", name, "--json", str(tmp_path / "plan.json"), "--count-nodes", "0"]) == 0   # its optimal plan
+    assert main(["plan", "--model", name, "--json", str(tmp_path / "plan.json"), "--count-nodes", "0"]) == 0  # its plan
     plan = json.loads((tmp_path / "plan.json").read_text())
     assert plan["min_positions"] <= len(P)                # the readings below: the plan's whole candidate set
     assert main(["estimate", "--model", name, str(data), "--sigma", "1e-5", "--g", "9.81", "--save", str(cal),

@@ -122,7 +122,8 @@ def test_the_plan_plot_shows_the_up_direction_of_each_position(tmp_path, capsys,
     from garant.verify import models
     from garant.verify.workflows.directions import up_in_block
     out = tmp_path / "p.json"
-    assert main(["plan", model, "--json", str(out), "--plot", str(tmp_path / "p.png"), "--count-nodes", "0"]) == 0
+    assert main(["plan", "--model", model, "--json", str(out), "--plot", str(tmp_path / "p.png"),
+                 "--count-nodes", "0"]) == 0
     assert (tmp_path / "p.png").stat().st_size > 10_000
     mod = models.load(model)
     names, mounts = models.layout(mod)

@@ -82,9 +82,9 @@ def outputs(tmp_path_factory):
           "-o", str(chamber)])
     run("estimate", "thermal", ["estimate", "--model", "two-axis", str(chamber), "--sigma", "1e-5", "--g", "9.81",
                                 "--thermal-degree", "2"])
-    run("plan", "stand", ["plan", "two-axis"])
-    run("plan-temperatures", "chamber", ["plan", "two-axis", "--temperatures=-20,0,20,40,60"])
-    run("plan-norm", "001", ["plan", "norm"])
+    run("plan", "stand", ["plan", "--model", "two-axis"])
+    run("plan-temperatures", "chamber", ["plan", "--model", "two-axis", "--temperatures=-20,0,20,40,60"])
+    run("plan-norm", "001", ["plan", "--model", "norm"])
     return out
 
 

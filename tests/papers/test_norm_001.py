@@ -105,7 +105,7 @@ def test_plan_norm_command(tmp_path, capsys):
     # `garant plan norm` was a traceback; now it gives the orientations to hold the IMU in.
     from garant.verify.cli import main
     out = tmp_path / "p.json"
-    assert main(["plan", "norm", "--json", str(out)]) == 0
+    assert main(["plan", "--model", "norm", "--json", str(out)]) == 0
     import json
     d = json.loads(out.read_text())
     assert d["guaranteed_errors"] == pytest.approx([1, 1, 1, 2, 2, 2, 1, 1, 1, 4, 4, 4])   # 001, section 4

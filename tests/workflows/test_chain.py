@@ -48,7 +48,7 @@ def test_a_time_effects_model_is_refused_by_plan_in_one_line(tmp_path, capsys):
     files = codegen.model_files(cat.extend(MODELS["two_axis"], ["bias_drift"]), str(tmp_path), str(tmp_path))
     for path, text in files.items():
         open(path, "w").write(text)
-    assert main(["plan", str(tmp_path / "two_axis_bias_drift.py")]) == 2
+    assert main(["plan", "--model", str(tmp_path / "two_axis_bias_drift.py")]) == 2
     assert "H depends on time_s" in capsys.readouterr().err
 
 
@@ -119,7 +119,7 @@ def test_a_unit_other_than_rad_or_1_is_refused(tmp_path, capsys):
     from garant.derive.builtin import STANDS_DIR
     text = (STANDS_DIR / "single_axis.toml").read_text().replace('unit = "rad"', 'unit = "mrad"', 1)
     (tmp_path / "s.toml").write_text(text)
-    assert main(["plan", str(tmp_path / "s.toml")]) == 2
+    assert main(["plan", "--model", str(tmp_path / "s.toml")]) == 2
     assert "'mrad' is not a unit the model computes in" in capsys.readouterr().err
 
 

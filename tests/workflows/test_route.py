@@ -52,7 +52,7 @@ def _stand_with_speeds(tmp_path):
 def test_the_route_of_the_two_axis_plan_is_the_fastest_order(tmp_path, capsys):
     import json
     path = _stand_with_speeds(tmp_path)
-    assert main(["plan", str(path), "--route", "--json", str(tmp_path / "p.json"), "--csv",
+    assert main(["plan", "--model", str(path), "--route", "--json", str(tmp_path / "p.json"), "--csv",
                  str(tmp_path / "r.csv")]) == 0
     out = capsys.readouterr().out
     d = json.loads((tmp_path / "p.json").read_text())
@@ -86,6 +86,6 @@ def test_above_twelve_positions_the_heuristic_states_its_gap_to_a_lower_bound():
 def test_a_motion_figure_that_is_not_a_positive_number_is_one_line(tmp_path, capsys, bad):
     text = (STANDS_DIR / "two_axis.toml").read_text().replace("[[angle]]\n", f"[[angle]]\n{bad}\n", 1)
     (tmp_path / "s.toml").write_text(text)
-    assert main(["plan", str(tmp_path / "s.toml"), "--route"]) == 2
+    assert main(["plan", "--model", str(tmp_path / "s.toml"), "--route"]) == 2
     err = capsys.readouterr().err
     assert "angle[1].speed_deg_s" in err and err.count("\n") == 1

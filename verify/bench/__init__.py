@@ -283,7 +283,7 @@ def bench_scale(rows=(1_000, 10_000, 100_000, 1_000_000), distinct=96):
             np.savetxt(path, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3",
                        comments="", fmt="%.10g")
             for argv in (["estimate", "--model", "two-axis", path, "--sigma", "1e-5"],
-                         ["identify", "two-axis", "--plan", path]):
+                         ["identify", "--model", "two-axis", "--plan", path]):
                 code = ("import sys, time; from garant.verify.cli import main; t = time.perf_counter(); "
                         f"main({argv!r}); print(time.perf_counter() - t, file=sys.stderr)\n" + PEAK_KIB)
                 r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -178,7 +178,7 @@ def _plain(e):
     low = text.lower()
     if "unbounded" in low or "infeasible" in low:
         return (f"{what}: the positions cannot estimate every combination q (no unbiased estimator exists on "
-                "them); add positions (garant identify STAND --plan PLAN.csv says which q are missing)")
+                "them); add positions (garant identify --model STAND --plan PLAN.csv says which q are missing)")
     return f"{what}: the linear program did not reach an optimum ({text.split(':', 1)[-1].strip()}); " \
            "check the positions and the noise bound for extreme values"
 

@@ -27,13 +27,9 @@ def temperatures(text):
     return values
 
 
-def model(p, *, positional=False):
-    """--model (or a positional MODEL): a built-in stand or a STAND.toml."""
-    help_ = f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml"
-    if positional:
-        p.add_argument("model", help=help_)
-    else:
-        p.add_argument("--model", required=True, help=help_)
+def model(p):
+    """--model: a built-in stand or a STAND.toml (every command that takes a model spells it so)."""
+    p.add_argument("--model", required=True, help=f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml")
 
 
 def sigma(p, help_="bound on each residual component, dimensionless (units of g), (5) of 000"):

@@ -6,8 +6,8 @@ from . import args as options
 def add(sub):
     """The `garant identify` subcommand and its options."""
     p = sub.add_parser("identify", help="estimable combinations, confounded parameters, a plan's blind spots")
-    p.add_argument("model", help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or 003-example1 / "
-                   "003-example2")
+    p.add_argument("--model", required=True,
+                   help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or 003-example1 / 003-example2")
     p.add_argument("--plan", metavar="FILE", help="CSV with <angle>_deg columns (and mount): what this plan "
                    "cannot separate")
     options.json(p)

@@ -10,8 +10,8 @@ from . import args as options
 def add(sub):
     """The `garant plan` subcommand and its options."""
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
-    p.add_argument("model", help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or norm (the coarse stand "
-                   "of 001: which orientations to hold the IMU in)")
+    p.add_argument("--model", required=True, help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or norm "
+                   "(the coarse stand of 001: which orientations to hold the IMU in)")
     options.json(p)
     p.add_argument("--grid", type=options.positive, metavar="STEP", help="search positions every STEP degrees (detents "
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
@@ -213,7 +213,7 @@ def run_norm(args):
 
         from ..io import plots
         U = np.array(d["directions"]["12"], float)
-        plots.plan_directions(U, args.plot, f"garant plan norm: the {len(U)} orientations optimal for all 12 "
+        plots.plan_directions(U, args.plot, f"garant plan --model norm: the {len(U)} orientations optimal for all 12 "
                                             "parameters (-gravity in sensor axes)")
         print(f"wrote {args.plot}")
     return 0
@@ -228,7 +228,7 @@ def _plot(mod, d, args):
     positions = d["route"]["positions"] if args.route else d["plan"]
     U = up_in_block(mod, [p[:len(names)] for p in positions],
                     [mounts.index(p[len(names)]) for p in positions] if len(mounts) > 1 else None)
-    plots.plan_directions(U, args.plot, f"garant plan {args.model}: {len(positions)} positions"
+    plots.plan_directions(U, args.plot, f"garant plan --model {args.model}: {len(positions)} positions"
                           + (" in the route's order" if args.route else ""))
     print(f"wrote {args.plot}")
 

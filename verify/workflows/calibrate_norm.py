@@ -180,7 +180,8 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
             return list(unseen)
     if not unseen:
         if cause:
-            raise DataError(f"{path}: {cause}; record orientations between the axes (garant plan norm)", param="log")
+            raise DataError(f"{path}: {cause}; record orientations between the axes (garant plan --model norm)",
+                            param="log")
         return
     distinct = orientations(n)
     on_axes = all(np.abs(d).max() > np.cos(np.radians(within_deg)) for d in distinct)
@@ -199,7 +200,7 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
                        if set(unseen) <= {3, 4, 5} else "")
                     + "; add orientations such as "
                     + ", ".join("(" + ", ".join(f"{v:+.3f}" for v in p) + ")" for p in add)
-                    + " (garant plan norm lists them all)", param="log")
+                    + " (garant plan --model norm lists them all)", param="log")
 
 
 def guaranteed(mod, n, params, noise, cap=None):

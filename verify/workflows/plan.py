@@ -181,7 +181,7 @@ def _preferred_plan(mod, r):
 def norm_plan(mod):
     """The coarse stand of 001: optimal errors on the sphere (units of delta_sigma_max) and the fewest
     orientations optimal for the 9 linear parameters and for all 12 (unit vectors, -gravity in sensor
-    axes), as a dictionary (the JSON of `garant plan norm`)."""
+    axes), as a dictionary (the JSON of `garant plan --model norm`)."""
     from ..solve import lp
     from ..solve.sphere import minimal_plan
     _, errors = lp.primal(mod.H(mod.PLAN.T))

@@ -28,8 +28,8 @@ def plan_positions(mod, plan):
         return P, mounts
     if plan == "optimal10":
         if not len(mod.PLAN_DEG):
-            raise DataError(f"this model has no optimal plan of its own; write one with `garant plan STAND --csv "
-                            f"PLAN.csv` and pass {opt('plan')} PLAN.csv, or use quarter or grid:STEP")
+            raise DataError(f"this model has no optimal plan of its own; write one with `garant plan --model STAND "
+                            f"--csv PLAN.csv` and pass {opt('plan')} PLAN.csv, or use quarter or grid:STEP")
         P = np.asarray(mod.PLAN_DEG, float)
         _check_reachable(mod, ranges, detents, P, "the model's plan")
     elif plan in ("quarter16", "quarter"):
