@@ -12,6 +12,7 @@ from garant.verify.cli import main
 STANDS = ROOT / "tests" / "data" / "stands"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["two-axis", "single-axis", str(STANDS / "tilted_inner.toml"), "norm"])
 def test_plan_of_the_api_is_the_plan_of_the_command(tmp_path, capsys, model):
     # tilted_inner: the exchange positions are candidates there; garant.plan gave 8 positions with errors
@@ -101,6 +102,7 @@ def test_calibrate_norm_and_apply_of_the_api_are_the_commands(tmp_path, capsys):
         garant.calibrate_norm(raw[:, :3])
 
 
+@pytest.mark.slow
 def test_diagnose_of_the_api_is_the_command(tmp_path, capsys):
     from garant.generated import two_axis as mod
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
@@ -151,6 +153,7 @@ def test_an_error_names_the_option_as_the_caller_spells_it(tmp_path, capsys):
     assert "--imu and --run apply to a means file" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_every_result_has_a_status_and_its_message(tmp_path):
     # Like scipy's OptimizeResult, every result says what came out in a word and a line.
     from garant.verify.io import results

@@ -96,6 +96,7 @@ def test_missing_file(capsys):
     assert rc == 2 and "cannot read" in err
 
 
+@pytest.mark.slow
 def test_garant_verify_console_script(tmp_path):
     out = subprocess.run([sys.executable, "-m", "verify", "--json", str(tmp_path / "v.json")],
                          capture_output=True, text=True)

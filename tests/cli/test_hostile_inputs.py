@@ -41,6 +41,7 @@ def refused(argv, capsys, *words, outputs=()):
 HOSTILE_UNIT = "rad\", __import__('os').system('touch pwned'), \""
 
 
+@pytest.mark.slow
 def test_string_in_a_description_cannot_run_code(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     old_unit = 'unit = "rad"\nmeaning = "encoder offset (read - true)"'
@@ -347,6 +348,7 @@ def test_a_failing_command_writes_nothing(tmp_path, capsys, argv, words):
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
+@pytest.mark.slow
 def test_a_table_with_120_degree_detents_derives_plans_and_certifies(tmp_path, capsys):
     # Detents [0, 120] stopped code generation with "Exceeds the limit (4300 digits) for integer
     # string conversion": H on the reachable set grew integers of 650,000 digits from unsimplified radicals.
@@ -603,6 +605,7 @@ def test_a_forged_plan_certificate_is_rejected(wedge_certificates, capsys, edit,
     assert not any(line.lstrip().startswith("PASS") or line == "certificate holds" for line in lines)
 
 
+@pytest.mark.slow
 def test_a_box_certificate_relabelled_as_the_plan_candidates_is_rejected(tmp_path, capsys):
     # single-axis q15's certificate over the whole box of angles (2 + sqrt(2), from 45-degree
     # positions) relabelled "on the 12 candidate positions of the plan search", where the detent optimum is 4.
@@ -671,6 +674,7 @@ def _mountings(n):
     return out[:n]
 
 
+@pytest.mark.slow
 def test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor(tmp_path, capsys):
     # A four-detent table in all 24 mountings ran for minutes with no word. The search now says
     # its size first, keeps its best plan after --search-nodes (work, not seconds, so the same on
@@ -690,6 +694,7 @@ def test_a_plan_search_beyond_its_budget_keeps_its_plan_with_a_proven_floor(tmp_
     assert d["min_positions_at_least"] >= 5        # 15 q need 15 independent readings, 3 per position
 
 
+@pytest.mark.slow
 def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_search(tmp_path, capsys):
     # An axis of 15-digit components searched for 12 s, wrote the plan's JSON, then failed on
     # sqrt(1000110612605718049052708272757) with no word of why.

@@ -113,6 +113,7 @@ def test_a_result_never_writes_over_the_file_it_was_computed_from(tmp_path):
 
 # ---------------------------------------------------------------- a failing command writes nothing
 
+@pytest.mark.slow
 def test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one(tmp_path, capsys, monkeypatch):
     # estimate wrote r.json and residuals.png, then failed on the report, leaving them (and the
     # report folder) behind. Now each output is held complete beside its name until the command succeeds.
@@ -214,6 +215,7 @@ def test_a_route_at_a_speed_of_5e_324_is_refused(tmp_path, capsys):
     refused(["plan", "--model", tmp_path / "s.toml", "--route"], capsys, "speed_deg_s: 5e-324 is not a deg/s figure")
 
 
+@pytest.mark.slow
 def test_plan_norm_draws_its_plot_and_refuses_a_route(tmp_path, capsys):
     # `plan norm --route --plot` ignored both options.
     refused(["plan", "--model", "norm", "--route"], capsys, "--route applies to a stand with angles")
@@ -221,6 +223,7 @@ def test_plan_norm_draws_its_plot_and_refuses_a_route(tmp_path, capsys):
     assert (tmp_path / "n.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_next_draws_its_plot_when_done(tmp_path, capsys):
     # `next` at "done" ignored --plot.
     data = _positions(tmp_path)

@@ -144,6 +144,7 @@ def test_largest_room_under_a_third_of_the_code():
     assert size < total / 3, f"{room} holds {size} of {total} lines"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (ROOT / "pyproject.toml").exists(), reason="needs the source tree")
 def test_wheel_installs_only_the_garant_namespace(tmp_path):
     shutil.rmtree(ROOT / "build", ignore_errors=True)      # setuptools' build/ keeps modules since moved away

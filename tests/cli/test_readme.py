@@ -1,5 +1,6 @@
 """The README is a front page: at most about 100 lines of at most 120 characters, and its first
 calibration runs as pasted into a fresh shell after the set-up line, in the clone beside ../shared."""
+import pytest
 import os
 import re
 import shlex
@@ -31,6 +32,7 @@ def _blocks(text):
     return re.findall(r"```sh\n(.*?)```", section, re.S)
 
 
+@pytest.mark.slow
 def test_the_first_calibration_runs_as_pasted_after_the_set_up_line(tmp_path):
     # It once failed as pasted (`garant: command not found`: the set-up line's environment was never activated)
     # and wrote its outputs into the work tree. Both blocks, pasted in turn into one fresh shell in the clone,

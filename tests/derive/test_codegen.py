@@ -16,12 +16,14 @@ def rendered():
     return codegen.outputs()
 
 
+@pytest.mark.slow
 def test_no_drift(rendered):
     # Same check as `python -m derive --check`: regenerate in memory, compare byte for byte.
     diffs = codegen.drift(files=rendered)
     assert not diffs, "generated files are stale; run `python -m derive`\n" + "".join(diffs)
 
 
+@pytest.mark.slow
 def test_headers_and_no_timestamps(rendered):
     for rel, text in rendered.items():
         head = text.splitlines()[:3]
@@ -31,6 +33,7 @@ def test_headers_and_no_timestamps(rendered):
         assert not re.search(r"\b(19|20)\d\d-[01]\d-[0-3]\d\b|\b[0-2]\d:[0-5]\d(:[0-5]\d)?\b", text), rel
 
 
+@pytest.mark.slow
 def test_check_command_reports_drift(tmp_path, rendered):
     for rel, text in rendered.items():
         (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
@@ -49,6 +52,7 @@ def test_generated_imports_without_sympy():
     assert out.stdout.strip() == "(3, 15)"
 
 
+@pytest.mark.slow
 def test_python_m_derive_check_passes():
     out = subprocess.run([sys.executable, "-m", "derive", "--check"], cwd=ROOT, capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr

@@ -49,6 +49,7 @@ def readings(stand, mod, angles_deg, mounts, e):
     return np.array(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stand", sorted(CHAINS))
 def test_derive_plan_simulate_estimate_diagnose(stand, tmp_path, capsys):
     toml = str(STANDS / f"{stand}.toml")
@@ -109,6 +110,7 @@ def test_a_plan_certificate_is_tied_to_its_description(tmp_path, capsys):
     assert "SHA-256 differs" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_two_axis_plans_on_finer_grids_are_the_quarter_turn_plans(capsys):
     """The number of optimal 10-position plans on the 30-degree grid, exactly confirmed: the
     same 64 as on quarter turns (Table 2 of 000), every one on quarter turns."""

@@ -29,6 +29,7 @@ def _planted(marker):
     return f"import pathlib\npathlib.Path({str(marker)!r}).write_text('ran')\n"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", ["wrong hash", "no header", "old name that sorts first", "empty"])
 def test_a_planted_entry_is_never_run_and_is_replaced(cache, tmp_path, how):
     # A file planted under the key (or, before, any `<key>-*.py`, the first in sort order) was executed by plan,

@@ -18,6 +18,7 @@ def test_two_axis_description_reproduces_the_spine(mod):
     assert r.min_positions == 10 and len(r.optimal_plans) == 64 and all(r.proven)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, m, n_min", [("single-axis", 15, 8), ("three-axis", 17, 9)])
 def test_builtin_stands_plan(name, m, n_min, tmp_path, capsys):
     # --count-nodes 0: the fewest positions proven and one plan, no count of the others
@@ -40,6 +41,7 @@ def write_multi_csv(path, angles, mounts, names, mount_names, f):
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["single-axis", "three-axis"])
 def test_simulate_estimate_round_trip(name, tmp_path):
     mod = models.load(name)
@@ -64,6 +66,7 @@ def test_simulate_estimate_round_trip(name, tmp_path):
     assert np.all(np.abs(q_hat - models.q_of(mod, p)) <= bound)             # remainder included
 
 
+@pytest.mark.slow
 def test_description_file_as_model(tmp_path, capsys):
     src = STANDS_DIR / "single_axis.toml"
     assert main(["derive", str(src), "--out", str(tmp_path)]) == 0
@@ -110,6 +113,7 @@ def test_builtin_files_are_the_registered_models():
         assert str(m.source_file).endswith(f"stands/{key}.toml")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["single-axis", "two-axis"])
 def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, capsys):
     # `plan --csv` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
@@ -136,6 +140,7 @@ def test_identify_any_stand_and_effect_checks_the_angle(tmp_path, capsys):
     assert "encoder of angle 'beta'" in err and "b_s" not in err
 
 
+@pytest.mark.slow
 def test_any_identifier_a_user_picks_works(tmp_path, capsys):
     # t1 (tilt 1) and all-capital names (K, DG) were refused as "reserved" because the generated
     # code used such names itself. Now the code keeps its own names apart: the single-axis description
@@ -163,6 +168,7 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
         assert "is reserved" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_description_is_derived_once_and_again_when_it_changes(tmp_path, monkeypatch, capsys):
     # A TOML stand was re-derived by SymPy on every command (6-15 s for three angles). Its module
     # is now cached by the SHA-256 of the description and of the generator: the second load derives nothing

@@ -72,6 +72,7 @@ DETENT_STANDS = ["single-axis", *(str(STANDS / f"{n}.toml")
                                   for n in ("wedge45", "wedge90", "table120"))]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", DETENT_STANDS)
 def test_detents_that_see_the_whole_circle_give_the_rank_of_every_reachable_position(name):
     from itertools import product

@@ -23,6 +23,7 @@ def test_24_proper_mountings():
     assert len({tuple(np.array(Q, int).ravel()) for Q in Qs.values()}) == 24
 
 
+@pytest.mark.slow
 def test_substitutions_26_27_hold_for_every_mounting():
     d = derive(TWO_AXIS_MODEL)
     assert all(substitution_holds(d, Q) for Q in mountings().values())

@@ -84,6 +84,7 @@ def test_simulate_estimate_each_q_inside_its_bound(tmp_path, stand, plan):
         assert abs(q - truth["q"][name]) <= res["guaranteed_error"][name], name
 
 
+@pytest.mark.slow
 def test_diagnose_advises_only_reachable_positions(tmp_path, capsys):
     data = tmp_path / "d.csv"
     assert main(["simulate", "--model", str(STANDS / "wedge45.toml"), "--plan", "quarter", "--sigma", "1e-6",

@@ -102,6 +102,7 @@ def test_stand_estimate_applied_at_new_positions(tmp_path, capsys):
     assert np.all(np.abs(a - w) <= bound) and bound.max() < 1.03 * 9.81 * 5e-3
 
 
+@pytest.mark.slow
 def test_reports_for_estimate_and_calibrate_norm(tmp_path, capsys):
     # --report DIR: one Markdown page with the verdict, the tables, the plots and the command.
     data = tmp_path / "d.csv"
@@ -255,6 +256,7 @@ def _stand_readings(tmp_path, model, rng, g=9.81, set_=None):
     return name, mod, (P, M, mounts), readings, clean, data
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["single-axis", "three-axis", "tests/data/stands/wedge90.toml"])
 def test_every_stand_ends_in_a_calibration_that_apply_carries_out(tmp_path, capsys, model):
     # Any stand: readings at the stand's grid, estimate --save, then apply to readings at other positions: each

@@ -39,6 +39,7 @@ def _reports(tmp_path):
     return {"e": data, "c": log, "d": hidden, "r": means}
 
 
+@pytest.mark.slow
 def test_each_report_is_one_self_contained_page(reports):
     tmp_path, inputs = reports
     for name, source in inputs.items():
@@ -76,6 +77,7 @@ def _chromium():
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")
 def test_each_report_renders_in_headless_chromium(reports):
     tmp_path, _ = reports
@@ -95,6 +97,7 @@ def test_each_report_renders_in_headless_chromium(reports):
         assert all(float(h) > 10 for h in tables), tables        # drawn: the heights are the layout's
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")
 def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
     # The batch's summary page (each unit's row) is one self-contained page a browser draws.
@@ -113,6 +116,7 @@ def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
     assert tables and all(float(h) > 10 for h in tables), tables
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["two-axis", "single-axis", "three-axis"])
 def test_the_plan_plot_shows_the_up_direction_of_each_position(tmp_path, capsys, model):
     """plan --plot draws, per position, the direction the readings of an error-free block point along
@@ -136,6 +140,7 @@ def test_the_plan_plot_shows_the_up_direction_of_each_position(tmp_path, capsys,
         np.testing.assert_allclose(u, np.ravel(f) / 9.81, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_next_plots_each_bound_before_and_after(tmp_path, capsys):
     data = tmp_path / "q.csv"
     assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)]) == 0

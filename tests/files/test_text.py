@@ -2,6 +2,7 @@
 rounded to the stated digits, and a column rounded up never prints below the value (checked exactly with
 rational arithmetic). Deciding the values next to a whole number without exact arithmetic, or rounding
 bounds to nearest, turns the exact checks red."""
+import pytest
 from fractions import Fraction
 
 import numpy as np
@@ -18,6 +19,7 @@ def _read(data, ncol):
     return [[Fraction(v) for v in r.split(",")] for r in rows]
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(st.lists(FINITE, min_size=1, max_size=50), st.sampled_from([4, 8, 12]))
 def test_up_never_below_and_nearest_within_half_a_unit(values, digits):
@@ -52,6 +54,7 @@ def test_known_texts():
     assert csv_bytes([np.array([9.81])]).decode() == "+9.8100000e+00\n"   # two exponent digits when they suffice
 
 
+@pytest.mark.slow
 def test_next_to_every_power_of_ten():
     # Where log10 is one off and the scaled value lands on 10**digits (1e-12 at 12 digits printed 1e-13
     # before the fix): every power of ten from 1e-300 to 1e299 and its two float neighbours.

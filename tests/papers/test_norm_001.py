@@ -9,6 +9,7 @@ from garant.verify.papers import norm_001
 from garant.verify.solve import sphere
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("axes", [(2, 3, 1), (3, 1, 2), (2, 1, 1)])
 def test_sigma_expansion_is_H_q_to_first_order(axes):
     # (2.2) of 001: the derived sigma = (|f|^2 - g^2)/(2|f|^2) has linear part H(n)^T q + n.u;
@@ -74,6 +75,7 @@ def test_bound_is_second_order_with_first_order_noise():
     assert first == {(0, 0, 0, 1, 0): sp.sqrt(3)}          # only sqrt(3) delta_f_max
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("group", [g for g, _ in norm_001.all_groups(N)])
 def test_norm_checks_pass(group):
     rows = list(group(N))

@@ -1,5 +1,6 @@
 """Every row of `garant verify` can fail: for each check group, a wrong input (a perturbed
 value, a wrong count, a broken estimator) turns its rows red. Each test names the wrong input."""
+import pytest
 import json
 import dataclasses
 import types
@@ -127,6 +128,7 @@ def test_norm_grid_lp_red_on_a_scaled_H():
     assert len(failed(norm_001.grid_lp(variant(NORM, H=lambda n: 2 * H(n)), step=15))) == 12
 
 
+@pytest.mark.slow
 def test_norm_plans_red_on_a_plan_missing_a_direction():
     # A 29-direction plan: the LP on it no longer reaches the optimal errors, and the count differs.
     names = {r.name for r in failed(norm_001.plans(variant(NORM, PLAN=NORM.PLAN[:-1])))}

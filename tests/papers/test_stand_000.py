@@ -39,6 +39,7 @@ def test_plan_search(mod):
     assert starred in r.optimal_plans
 
 
+@pytest.mark.slow
 def test_primal_dual_chebyshev_agree_on_a_coarse_grid(mod):
     g = np.deg2rad(np.arange(0, 360, 45))
     A = lp.measurement_matrix(mod.H, np.array([(x, y) for x in g for y in g]))

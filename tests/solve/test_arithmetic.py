@@ -116,6 +116,7 @@ def qf_mp(x):
     return a + b * mpmath.sqrt(2) + c * mpmath.sqrt(3) + d * mpmath.sqrt(6)
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(st.lists(RATIONAL, min_size=4, max_size=4), st.lists(RATIONAL, min_size=4, max_size=4))
 def test_field_arithmetic_is_that_of_the_reals(u, v):

@@ -148,6 +148,7 @@ def test_malformed_certificate_files_give_one_line(tmp_path, capsys, content):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_every_certificate_in_verify_holds(tmp_path):
     rows = list(certificates(tmp_path))
     assert rows and all(r.passed for r in rows)
@@ -157,6 +158,7 @@ def test_every_certificate_in_verify_holds(tmp_path):
         json.loads(f.read_text())
 
 
+@pytest.mark.slow
 def test_committed_certificates_are_what_the_builder_builds():
     # `garant verify` re-checks the committed certificates (verify/proof/certificates/); a change to the
     # models or the builder that is not rebuilt (`python -m verify.proof`) fails here, as --check does.
@@ -166,6 +168,7 @@ def test_committed_certificates_are_what_the_builder_builds():
     assert [n for n in fresh if fresh[n] != old[n]] == []
 
 
+@pytest.mark.slow
 def test_continuum_solver_matches_the_proven_optima():
     mod = models.load("two-axis")
     sol = continuum.exchange(mod.H, 2, np.eye(15))
@@ -175,6 +178,7 @@ def test_continuum_solver_matches_the_proven_optima():
     assert sol.values[14] == pytest.approx(2 + np.sqrt(2), abs=1e-6)   # better than 4 on quarter turns
 
 
+@pytest.mark.slow
 def test_example_stands_fully_certified():
     # Every optimal value of the example stands, including single-axis q15 = 2 + sqrt(2) on the continuum: the
     # committed certificates, which test_committed_certificates_are_what_the_builder_builds holds to the builder's.

@@ -19,6 +19,7 @@ scale = 0.005
 """
 
 
+@pytest.mark.slow
 @needs_real
 def test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line(tmp_path, capsys):
     logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3, 4)]

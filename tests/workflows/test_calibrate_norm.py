@@ -80,6 +80,7 @@ def test_bad_log_one_line(tmp_path, capsys):
     assert "'x' is not a number" in err and err.count("\n") == 1
 
 
+@pytest.mark.slow
 @needs_real
 @pytest.mark.parametrize("name, args, consistent", [
     ("imu_tk_xsens_acc.txt", [], True), ("repeat_session2_acc.txt", [], True), ("repeat_session3_acc.txt", [], True),
@@ -180,6 +181,7 @@ def split_half_exceedances(rule):
     return out
 
 
+@pytest.mark.slow
 @needs_real
 def test_noise_rule_holds_on_split_halves_of_every_real_log():
     # The noise rule must hold for correlated noise. Split each still interval of every
@@ -196,6 +198,7 @@ def test_noise_rule_holds_on_split_halves_of_every_real_log():
     assert bad_w > 0.01 * total, white
 
 
+@pytest.mark.slow
 def test_k_batch_is_the_student_t_point():
     # K_BATCH: the two-sided 99.73 % point (that of 3 sigma for a normal law) of Student's t with
     # BATCHES - 1 = 7 degrees of freedom, by quadrature of its density.
@@ -353,6 +356,7 @@ def test_the_norm_bounds_sit_at_the_limit_the_readings_prove(tmp_path, n, seed):
     assert np.median(np.array(list(res["guaranteed_error_q"].values())) / _independent_hull(res)) <= 1.01
 
 
+@pytest.mark.slow
 @needs_real
 @pytest.mark.parametrize("name", ["repeat_session2_acc.txt", "repeat_session3_acc.txt", "repeat_session4_acc.txt",
                                   "imu_tk_xsens_acc.txt"])

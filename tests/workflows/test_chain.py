@@ -15,6 +15,7 @@ from conftest import command_line, flat
 EFFECTS = cat.applicable(MODELS["two_axis"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", EFFECTS)
 def test_every_effects_extended_model_estimates_and_bounds_the_truth(tmp_path, capsys, name):
     # estimate with diagnose's extended model ended in "TypeError: unsupported operand type(s) for
@@ -89,6 +90,7 @@ def test_sizes_per_kind_draw_each_kind_within_its_own_bound(tmp_path, capsys):
 
 # ---------------------------------------------------------------- a stand error past its stated bound
 
+@pytest.mark.slow
 def test_a_stand_error_past_its_bound_names_the_parameter_and_a_wider_bound_passes(tmp_path, capsys):
     # An axis tilt of 1.6e-4 rad on the built-in stand (bound 1e-4, stand description) ended in
     # "the data contradict a premise" with no table and no name, though q1 is kappa itself.
@@ -125,6 +127,7 @@ def test_a_unit_other_than_rad_or_1_is_refused(tmp_path, capsys):
 
 # ---------------------------------------------------------------- g, next at done, the command's own
 
+@pytest.mark.slow
 def test_an_assumed_g_is_said_on_its_own_line_by_estimate_and_calibrate_norm(tmp_path, capsys):
     # Without --g, estimate widened its saved bounds by 5e-3 inside a 300-character premise;
     # calibrate-norm said nothing and saved the bounds of an exact g. One rule, one line, for both.
@@ -151,6 +154,7 @@ def test_an_assumed_g_is_said_on_its_own_line_by_estimate_and_calibrate_norm(tmp
     assert np.all(np.diag(saved["assumed"]) - np.diag(saved["local"]) >= 5e-3 - 1e-5 - 1e-9)
 
 
+@pytest.mark.slow
 def test_next_at_done_says_the_verdict_and_the_command_that_calibrates(tmp_path, capsys):
     # `next` at "done" printed no verdict and no next step.
     data, _ = _simulated(tmp_path)

@@ -32,6 +32,7 @@ def values(name, k):
     return [k * S * s] + [0.0] * (n - 2) + ([-0.6 * k * S * s] if n > 1 else [])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CATALOGUE))
 @pytest.mark.parametrize("k, seed", [(3, 0), (10, 1), (20, 2)])
 def test_hidden_effect_is_named(tmp_path, name, k, seed):
@@ -43,12 +44,14 @@ def test_hidden_effect_is_named(tmp_path, name, k, seed):
     assert abs(est["value"] - values(name, k)[0]) <= est["bound"] + 1e-7 * SCALE.get(name, 1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(3))
 def test_no_effect_no_alarm(tmp_path, seed):
     res = run(tmp_path, "grid:30x45", [], seed)
     assert res["consistent_before"] and res["effects"] == [] and res["consistent_after"]
 
 
+@pytest.mark.slow
 def test_two_hidden_effects_both_named(tmp_path):
     res = run(tmp_path, "grid:30x45", [("scale_quadratic", [8 * S, 0, 0]),
                                        ("bias_drift", [10 * S / 5760, 0, -5 * S / 5760])], 3)
@@ -69,6 +72,7 @@ def test_indistinguishable_on_quarter_turns(tmp_path):
     assert all((p["alpha_deg"] % 90, p["beta_deg"] % 90) != (0, 0) for p in sep)
 
 
+@pytest.mark.slow
 def test_cli_simulate_and_diagnose(tmp_path, capsys):
     data, out = tmp_path / "d.csv", tmp_path / "r.json"
     assert main(["simulate", "--model", "two-axis", "--plan", "grid:30x45", "--effect",
@@ -96,6 +100,7 @@ def test_bad_arguments(capsys, argv, message):
     assert message in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stand, plan, effect, values", [
     ("single-axis", "grid:30", "scale_quadratic", [0, 1e-4, 0]),
     ("three-axis", "grid:90x45x90", "bias_drift", [1e-4 / 5000, 0, 0]),
@@ -111,6 +116,7 @@ def test_diagnose_described_stands(tmp_path, capsys, stand, plan, effect, values
     assert not res["consistent_before"] and res["effects"] == [effect] and res["consistent_after"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pair, seed", [(("scale_quadratic", "bias_drift"), 0), (("cross_coupling",
                                                                                   "bias_temperature"), 1),
                                         (("beta_encoder_harmonic", "scale_asymmetry"), 2)])
@@ -156,10 +162,11 @@ def test_the_net_signature_of_power_is_what_the_model_cannot_absorb():
     assert lab.signature(bump, P, mounts, net=False) == pytest.approx(3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_an_encoder_harmonic_near_the_floor_is_named_for_a_mems_size_unit(seed):
-    # Before: with scale errors of 1e-2 and biases of 5e-2 g, the allowance for the nonlinearity around
-    # zero errors swamped a harmonic at 1.8 sigma on 96 positions and nothing was named.
+    # Red when, with scale errors of 1e-2 and biases of 5e-2 g, the allowance for the nonlinearity around
+    # zero errors swamps a harmonic at 1.8 sigma on 96 positions and nothing is named.
     power, lab = _lab()
     pos = power.make_set(lab, "grid:30x45", "MEMS", {"alpha_encoder_harmonic": 1.8}, "uniform", seed)
     named, tied, consistent, _ = power.diagnosis(lab, pos)
@@ -167,6 +174,7 @@ def test_an_encoder_harmonic_near_the_floor_is_named_for_a_mems_size_unit(seed):
     assert named <= {"alpha_encoder_harmonic"} | tied
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("size, noise, seed", [("MEMS", "uniform", 0), ("MEMS", "clipped", 1), ("small", "clipped", 2)])
 def test_clean_sets_raise_no_alarm_whatever_the_unit(size, noise, seed):
     power, lab = _lab()
@@ -174,10 +182,11 @@ def test_clean_sets_raise_no_alarm_whatever_the_unit(size, noise, seed):
     assert consistent and not named
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_two_effects_at_two_sigma_are_named_and_no_third(seed):
-    # Before: temperature coefficient and quadratic scale factor at 2 sigma each brought scale_asymmetry in
-    # as a third effect (forward selection never asked whether a named effect was still needed).
+    # Red when a temperature coefficient and quadratic scale factor at 2 sigma each bring scale_asymmetry in
+    # as a third effect (forward selection not asking whether a named effect is still needed).
     power, lab = _lab()
     hidden = {"bias_temperature": 2.0, "scale_quadratic": 2.0}
     pos = power.make_set(lab, "grid:30x45", "small", hidden, "uniform", seed)

@@ -97,6 +97,7 @@ def simulate_file(tmp_path, mod, p, sigma, seed=0, step=(30, 45)):
     return write_csv(tmp_path / "d.csv", P, f)
 
 
+@pytest.mark.slow
 def test_data_that_refute_sigma_get_a_verdict_not_bounds(tmp_path, capsys):
     # Noise 1e-5, claimed sigma 1e-6: every bound was violated and printed as guaranteed.
     mod = models.load("two-axis")
@@ -130,6 +131,7 @@ def test_bounds_hold_with_errors_as_large_as_the_prior(tmp_path, capsys, seed):
     assert d["premises"]["a_priori"]["kappa"] == {"kind": "stand", "bound": 1e-3, "source": "--prior"}
 
 
+@pytest.mark.slow
 def test_no_false_alarms_on_clean_data():
     # Clean simulated sets, errors up to 1e-3 and sigma from 1e-6 to 1e-4: the verdict is consistent.
     mod = models.load("two-axis")
@@ -239,6 +241,7 @@ def test_a_large_estimate_says_what_it_is_doing(tmp_path, monkeypatch, capsys):
     assert "the proven remainder" in err
 
 
+@pytest.mark.slow
 def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_position_by_position(monkeypatch):
     # Interpolated bounds are up to about twice as wide, but the guaranteed errors depend only on the
     # estimator's own positions, which the last box always encloses one by one: the errors are those

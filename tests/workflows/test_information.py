@@ -41,6 +41,7 @@ def test_a_proof_from_any_multipliers_bounds_the_lp_and_fails_when_cut():
     assert not c @ x_max <= out_hi[0] - 1e-3 * abs(out_hi[0])
 
 
+@pytest.mark.slow
 def test_96_positions_prove_a_quarter_of_sigma_and_match_an_independent_hull():
     # The target: on the 12 x 8 grid, uniform noise within sigma, a small unit, the median printed bound
     # is at most 0.25 sigma and within 5 % of an LP hull of the same set computed independently (cvxpy, H of (3)

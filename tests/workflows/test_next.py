@@ -33,6 +33,7 @@ def _row_at(header, rows, position):
     raise AssertionError(f"no reading at {position}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["two-axis", "single-axis"])
 def test_a_session_reaches_the_optimal_errors_in_the_fewest_positions(tmp_path, capsys, model):
     mod = models.load(model)
@@ -62,6 +63,7 @@ def test_a_session_reaches_the_optimal_errors_in_the_fewest_positions(tmp_path, 
     assert json.loads((tmp_path / "n.json").read_text())["done"]
 
 
+@pytest.mark.slow
 def test_data_that_refute_sigma_stop_the_session(tmp_path, capsys):
     header, rows = _readings(tmp_path, "two-axis")
     cells = rows[0].split(",")
@@ -81,6 +83,7 @@ def test_a_target_below_the_optimum_is_refused_and_a_looser_one_is_reached(tmp_p
     assert not res.still_needed_proven and res.still_needed >= 5    # 15 q, three readings per position
 
 
+@pytest.mark.slow
 def test_a_session_for_the_block_parameters_reaches_their_targets(tmp_path, capsys):
     """next --mount: the targets bound the block's parameters of (28)-(29) of 000 in the mounting the readings
     are in; each 'at least' of positions still needed is a true lower bound (never more than the session then
@@ -102,6 +105,7 @@ def test_a_session_for_the_block_parameters_reaches_their_targets(tmp_path, caps
     assert "--mount needs" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_done_means_estimate_prints_every_bound_at_its_target(tmp_path):
     # next said "done" on 10 positions where estimate on the same readings printed a q9 bound 1.22x the
     # target (next planned with the nominal H; estimate linearises where the unit is and adds the remainder). A

@@ -14,6 +14,7 @@ from garant.verify.power import (G, SIGMA, estimator_weights as _weights, mems_g
                                  mems_readings as readings, mems_run as run, mems_truth as truth)
 from garant.verify.workflows.estimate import estimate
 from garant.verify.workflows.premises import premises
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["two-axis", "single-axis", "three-axis"])
 def test_mems_unit_bounds_contain_the_truth_and_stay_useful(name):
     # Monte Carlo and adversarial: truths at box vertices, noise at +-sigma with the signs of an
@@ -78,6 +79,7 @@ def test_a_mems_block_through_the_command_is_bounded_with_its_premises(tmp_path)
     assert prem["statement"].startswith("the bounds hold if every residual component of (5) is within sigma")
 
 
+@pytest.mark.slow
 def test_a_unit_outside_its_premises_is_named_and_inside_them_is_sound(tmp_path, capsys):
     # Scale errors and Delta_g of 5e-3, no noise, sigma 1e-6, a local --g, once printed
     # a bound the truth exceeded 8x. Delta_g is now absorbed into Gamma exactly (no premise): every q of
@@ -167,6 +169,7 @@ def test_a_minimal_plan_says_which_estimators_it_cannot_check(tmp_path, capsys):
     assert not any("rest on sigma" in w for w in r["warnings"])
 
 
+@pytest.mark.slow
 def test_smallest_supported_sigma_to_its_stated_tolerance(tmp_path):
     # Item 6: the data refute sigma = 1e-6 (noise 1e-5); the smallest sigma they support is found to the
     # stated relative tolerance: the data support it, and refute it less the tolerance.
@@ -182,6 +185,7 @@ def test_smallest_supported_sigma_to_its_stated_tolerance(tmp_path):
     assert not estimate(mod, Positions("n", P, f), s / (1 + tol) ** 2, G)["consistent"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["two-axis", "single-axis", "three-axis"])
 def test_remainder_part_per_q_against_the_worst_nonlinear_error_found(name):
     # Each q's remainder part against the worst nonlinear error of its estimate that a search finds where
@@ -222,6 +226,7 @@ def test_remainder_part_per_q_against_the_worst_nonlinear_error_found(name):
     assert np.all(ratio <= 3), ratio
 
 
+@pytest.mark.slow
 def test_mems_blocks_on_ten_sets_are_bounded_within_ten_sigma():
     # The target: MEMS-size blocks (mounting to 5e-3 rad, stand errors to 2e-5 rad), --g,
     # the defaults, noise at +-sigma = 1e-5: bounds on at least 8 of 10 sets, each containing the truth (the
@@ -348,6 +353,7 @@ def _single_axis_csv(path, mod, p):
     return path
 
 
+@pytest.mark.slow
 def test_an_estimate_that_contradicts_the_premises_says_so_instead_of_a_block(tmp_path, capsys):
     # The table's tilt kappa at 5e-4 against its stated bound of 1e-4: the readings fit, but put q1 = kappa
     # beyond it, so no bound is guaranteed and no block is calibrated: the premise is named with its source

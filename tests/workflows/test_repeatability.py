@@ -97,6 +97,7 @@ def _runs(changes, seed=0, scale=None):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, changes, scale", [
     ("none", [np.zeros(3)] * 4, None),
     ("bias_turn_on", [np.zeros(3), [0, 0, 0.03], [0.02, 0, 0.05], [0.02, -0.02, 0.06]], None),
@@ -149,6 +150,7 @@ def test_raw_stream_agrees_with_the_published_means():
         assert np.allclose(f[a:b].mean(axis=0), [float(v) for v in r[11:14]], atol=2e-3)
 
 
+@pytest.mark.slow
 @needs_real
 def test_repeatability_on_mimu4444bt_runs_1_to_5(tmp_path):
     """The target figures: with the envelope >= 95 % of comparisons inside, every exceedance of
@@ -166,6 +168,7 @@ def test_repeatability_on_mimu4444bt_runs_1_to_5(tmp_path):
     assert {r["named_effect"] for r in res.values()} == {"bias_turn_on"}
 
 
+@pytest.mark.slow
 @needs_real
 def test_fixture_stand_with_known_directions(capsys):
     """The fixture stand (docs/stands/icosahedral_fixture.toml) estimated from the means file: the data
@@ -183,6 +186,7 @@ def test_fixture_stand_with_known_directions(capsys):
     assert abs(est - a) <= err + e and err > 10 * e
 
 
+@pytest.mark.slow
 @needs_real
 def test_calibrate_norm_every_imu_of_the_stream(tmp_path):
     out = tmp_path / "all.json"
@@ -195,6 +199,7 @@ def test_calibrate_norm_every_imu_of_the_stream(tmp_path):
     assert not (tmp_path / "c.json").exists()
 
 
+@pytest.mark.slow
 @needs_real
 def test_the_published_repeatability_tables_are_what_the_command_writes(tmp_path, monkeypatch):
     """docs/repeatability_mimu4444bt.md is the output of the command it names: rerun it and compare."""

@@ -49,6 +49,7 @@ def _stand_with_speeds(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_the_route_of_the_two_axis_plan_is_the_fastest_order(tmp_path, capsys):
     import json
     path = _stand_with_speeds(tmp_path)

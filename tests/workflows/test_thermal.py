@@ -70,6 +70,7 @@ def biases_drift(tmp_path_factory):
     return (folder, truth) + _estimated(folder, truth, "--export-ardupilot", "tcal.parm")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signs, noise", [(1, "uniform"), (-1, "tilting"), (1, "bending"), (-1, "bending")])
 def test_the_bound_over_the_range_holds_at_every_temperature_of_it(tmp_path, noise, signs):
     """A MEMS-size unit at the extremes of its thermal coefficients (both signs) and noise at +-sigma that
@@ -99,6 +100,7 @@ def test_the_bound_over_the_range_holds_at_every_temperature_of_it(tmp_path, noi
     assert th["bound"]["q7"] > res["guaranteed_error"]["q7"]             # T0's own bound would not hold at the ends
 
 
+@pytest.mark.slow
 def test_too_few_temperatures_for_the_degree_are_refused_naming_what_is_missing(tmp_path, capsys):
     """Two chamber temperatures cannot identify a quadratic: one line naming them and what to add, exit 2."""
     mod = models.thermal("two-axis", 1, 20)
@@ -134,6 +136,7 @@ def _ardupilot(parm, imu=1):
     return correct, values
 
 
+@pytest.mark.slow
 def test_the_ardupilot_parameters_correct_the_readings_as_ardupilot_applies_them(biases_drift):
     """A unit whose biases alone drift with T (quadratic): ArduPilot's own correction with the file as loaded (its
     INS_ACC1_CALTEMP, offsets and scales included) takes each reading to what its calibration at T0 = 20 C gives
@@ -177,6 +180,7 @@ def test_thermal_outputs_need_temperature_and_a_calibration_file_is_refused_with
     assert not list(tmp_path.glob("t.parm")) and not list(tmp_path.glob("c.txt"))
 
 
+@pytest.mark.slow
 def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
     """`simulate --temperatures` repeats the plan at each temperature with temp_c set, and the truth's thermal
     coefficients are what estimate --thermal-degree finds (within its bounds)."""
@@ -195,6 +199,7 @@ def test_simulate_runs_the_plan_at_each_chamber_temperature(tmp_path):
         assert worst <= th["bound"][q]
 
 
+@pytest.mark.slow
 def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coefficient(tmp_path, capsys):
     """`plan --temperatures`: 3 positions per temperature at five temperatures identify the 39 q of the quadratic
     thermal two-axis model, proven fewest by counting (2 x 3 readings x 5 temperatures = 30 < 39); estimate on
@@ -250,6 +255,7 @@ def _px4(params, device_id):
     return correct, values
 
 
+@pytest.mark.slow
 def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drift, tmp_path, capsys):
     """A unit whose biases alone drift with T: PX4's own correction with the file as loaded (slot 3, device id
     1310988) takes each reading to its value at TREF within twice the bias bound plus twice the noise, leaving
@@ -290,6 +296,7 @@ def test_the_px4_parameters_correct_the_readings_as_px4_applies_them(biases_drif
     assert np.abs(other - np.tile(other[T == 20.0], (len(TEMPS), 1))).max() > 0.5 * drift
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("degree", [1, 2])
 def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_needs(tmp_path, degree):
     """diagnose's thermal step (workflows/thermal.degree_needed, on estimate --thermal-degree D): a unit whose
@@ -317,6 +324,7 @@ def _lower_turn(truth):
     return np.linalg.solve(L0, EG)
 
 
+@pytest.mark.slow
 def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_path, capsys, mems):
     """`estimate --thermal-degree 2 --save` holds the block at T0 and its polynomial in T; `apply` on a log with a
     temp_c column corrects each sample at its own temperature: every component within its per-sample bound of
@@ -428,6 +436,7 @@ def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mou
     assert np.all(np.abs(a - truth) <= bound) and bound.max() < 1e-2
 
 
+@pytest.mark.slow
 def test_the_api_takes_a_temperature_degree_as_the_command_does(mems):
     """garant.estimate(..., temperature=2) gives the command's `thermal` (the same job); a degree that is not a
     whole number 1 to 3 (True, 4, "2") is refused naming the argument (verify/options.py `degree`)."""
