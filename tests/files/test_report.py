@@ -104,8 +104,10 @@ def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
     logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3)]
     assert main(["calibrate-norm", *logs, "--g", "9.81", "--out", str(tmp_path / "b"), "--jobs", "1"]) == 0
     page = tmp_path / "b" / "index.html"
-    assert "repeat_session3_acc.txt" in page.read_text() and not re.search(r"""(src|href)=["'](?!data:)""",
+    assert "repeat_session3_acc.txt" in page.read_text() and not re.search(r"""src=["'](?!data:)""",
                                                                            page.read_text())
+    assert set(re.findall(r'href="([^"]*)"', page.read_text())) == {"repeat_session2_acc.json",
+                                                                    "repeat_session3_acc.json"}   # beside it
     probe = tmp_path / "b" / "probe.html"
     probe.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
     dom = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000",

@@ -43,7 +43,14 @@ def test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line
     assert "0 fail, 1 undecided, 1 retest" in out
     cal = json.loads((tmp_path / "1" / "repeat_session2_acc.json").read_text())
     assert cal["format"] == "garant-calibration-1" and cal["kind"] == "norm"
-    assert (tmp_path / "1" / "index.html").exists()
+    # the page: each unit's verdict in its colour and a link to its calibration file; the limits and every
+    # parameter in a stated unit (summary.csv keeps the same in SI for programs)
+    page = (tmp_path / "1" / "index.html").read_text()
+    assert '<td class="v-pass">' in page and '<td class="v-retest">' in page and '<td class="v-undecided">' in page
+    assert '<a href="repeat_session2_acc.json">' in page and 'href="bad.json"' not in page
+    assert "<th>lambda1 (ppm)</th>" in page and "<th>alpha (mrad)</th>" in page and "<th>eps1/g (mg)</th>" in page
+X
+    assert " ± " in page
 
 
 def test_a_specification_is_checked_and_single_log_outputs_are_refused_in_a_batch(tmp_path, capsys):

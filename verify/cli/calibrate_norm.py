@@ -137,14 +137,53 @@ def _batch(args):
                 f"{verdicts['undecided']} undecided, {verdicts['retest']} retest (the recording proves nothing of "
                 "the unit)" if spec else ""))
     report.write_page(folder, f"Batch: {len(rows)} logs", report.command_line(args, "garant calibrate-norm ..."),
-                      [("Summary", said), ("Each unit (parameters of (1.3) of 001 with their guaranteed errors; "
-                                            "biases over g)", report.Table(head, table))], args.logs)
+                      batch_sections(rows, names, spec, args.spec, said), args.logs)
     for row in rows:
         print(f"{row['log']}: {row['status']}" + (f", {row['verdict']} ({row['reason']})" if spec else
                                                   f": {row['message']}" if row["message"] else ""))
     print(said)
     print(f"wrote {folder}/summary.csv, {folder}/index.html and {counts['consistent']} calibration file(s)")
     return batch_status(rows, spec is not None)
+
+
+def batch_sections(rows, stems, spec, spec_path, said):
+    """The batch page's sections: the summary, the specification's limits with their units, each unit's verdict
+    (coloured) linking to its calibration file, and each unit's parameters of (1.3) of 001 with their guaranteed
+    errors in ppm, mrad or mg (summary.csv holds the same in SI, for programs)."""
+    from ..io import report
+    from ..workflows import batch
+    from ..workflows.calibrate_norm import PARAM_LABELS
+    sections = [("Summary", said)]
+    if spec:
+        unit = {"scale": "ppm", "misalignment": "mrad", "bias": "mg"}
+        factor = {"scale": 1e6, "misalignment": 1e3, "bias": 1e3}
+        sections.append((f"The specification ({spec_path}): a unit passes when every parameter's whole guaranteed "
+                         "interval lies within its limit (and its guaranteed error within its bound limit)",
+                         report.Table(("kind", "parameters", "limit on the value, either sign",
+                                       "limit on the guaranteed error"), [
+                             (kind, ", ".join(batch.SPEC_KEYS[kind][0]),
+                              *(f"{spec[t][kind] * factor[kind]:g} {unit[kind]}" if kind in spec.get(t, {}) else "none"
+                                for t in ("limits", "bound_limits"))) for kind in batch.SPEC_KEYS])))
+    sections.append(("Each unit: its verdict and its calibration file", report.Table(
+        ("log", "status", "verdict", "reason", "noise bound (units of g)", "still intervals", "calibration file"),
+        [(r["log"], r["status"], report.Verdict(r.get("verdict", "")), r.get("reason") or r["message"] or "",
+          f"{r['result']['delta_sigma_max']:.3g}" if r["result"] else "", str((r["result"] or {}).get("intervals", "")),
+          report.Link(r["file"], r["file"]) if r.get("file") else "") for r in rows])))
+    labels = PARAM_LABELS[:9]
+    cells = []
+    for stem, r in zip(stems, rows):
+        res = r["result"] or {}
+        pars, errs = r.get("nominal") or (res.get("parameters") or {}, res.get("guaranteed_error") or {})
+        cells.append((stem, *(f"{_side(k, pars[k])} ± {_side(k, errs[k]).lstrip('+')}".replace(
+            f" {_unit_of(k)} ±", " ±") if k in pars and k in errs else "" for k in labels)))
+    sections.append(("Each unit's parameters of (1.3) of 001: estimate ± guaranteed error over its information set",
+                     report.Table(("unit", *(f"{k} ({_unit_of(k)})" for k in labels)), cells)))
+    return sections
+
+
+def _unit_of(k):
+    """The unit a parameter is shown in on the batch page: ppm, mrad or mg."""
+    return "ppm" if k.startswith("lambda") else "mrad" if k[0] in "abg" else "mg"
 
 
 #: A batch's exit statuses, apart from 1 (a check failed), 2 (bad input) and 3 (refuted) of one log.

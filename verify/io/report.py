@@ -138,6 +138,20 @@ class Table(tuple):
         return super().__new__(cls, (tuple(headers), [tuple(r) for r in rows]))
 
 
+class Link(str):
+    """A table cell that links to a file beside the page (a unit's calibration file): its text and `href`."""
+
+    def __new__(cls, text, href):
+        """The text shown and the relative path it links to."""
+        out = super().__new__(cls, text)
+        out.href = href
+        return out
+
+
+class Verdict(str):
+    """A table cell holding a verdict (pass, fail, undecided, retest), coloured by it on the page."""
+
+
 class Image(str):
     """A section's plot: the name of a PNG file in the report's folder."""
 
@@ -186,7 +200,9 @@ def command_line(args, fallback):
 
 def _markdown(body):
     if isinstance(body, Table):
-        return markdown_table(*body)
+        headers, rows = body
+        return markdown_table(headers, [[f"[{c}]({c.href})" if isinstance(c, Link) else
+                                         f"**{c}**" if isinstance(c, Verdict) and c else c for c in r] for r in rows])
     if isinstance(body, Image):
         return f"![{Path(body).stem}]({body})"
     if isinstance(body, Bullets):
@@ -198,7 +214,18 @@ HTML_STYLE = """body{font-family:sans-serif;max-width:60em;margin:1em auto;paddi
 table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}th,td{border:1px solid #999;padding:2px 6px;
 text-align:left}th{background:#eee}img{max-width:100%}pre{background:#f4f4f4;padding:0.5em;white-space:pre-wrap}
 @page{size:A4;margin:15mm}@media print{body{max-width:none;margin:0}h2{break-after:avoid}
-table,img{break-inside:avoid}}"""
+table,img{break-inside:avoid}}td.v-pass{background:#c8efc8}td.v-fail{background:#f6c6c6}
+td.v-undecided{background:#fbeab0}td.v-retest{background:#ddd}"""
+
+
+def _cell(c):
+    """One table cell as HTML: escaped text, a link to a file beside the page, or a verdict in its colour."""
+    from html import escape
+    if isinstance(c, Link):
+        return f'<td><a href="{escape(c.href)}">{escape(str(c))}</a></td>'
+    if isinstance(c, Verdict) and c:
+        return f'<td class="v-{escape(str(c))}"><strong>{escape(str(c))}</strong></td>'
+    return f"<td>{escape(str(c))}</td>"
 
 
 def _html(folder, title, command, sections, inputs):
@@ -218,7 +245,7 @@ def _html(folder, title, command, sections, inputs):
         if isinstance(body, Table):
             headers, rows = body
             out.append("<table><tr>" + "".join(f"<th>{escape(str(h))}</th>" for h in headers) + "</tr>"
-                       + "".join("<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+                       + "".join("<tr>" + "".join(_cell(c) for c in r) + "</tr>" for r in rows)
                        + "</table>")
         elif isinstance(body, Image):
             data = base64.b64encode(files.written(folder / body)).decode()
