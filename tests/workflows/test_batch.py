@@ -49,7 +49,7 @@ def test_a_batch_calibrates_each_log_judges_it_and_reports_a_bad_one_on_its_line
     assert '<td class="v-pass">' in page and '<td class="v-retest">' in page and '<td class="v-undecided">' in page
     assert '<a href="repeat_session2_acc.json">' in page and 'href="bad.json"' not in page
     assert "<th>lambda1 (ppm)</th>" in page and "<th>alpha (mrad)</th>" in page and "<th>eps1/g (mg)</th>" in page
-X
+    assert "<td>scale</td><td>lambda1, lambda2, lambda3</td><td>10000 ppm</td><td>5000 ppm</td>" in page   # SPEC
     assert " ± " in page
 
 
