@@ -2,14 +2,17 @@
 # Template: derive/templates/runtime/RUNTIME.py.jinja.
 # Do not edit by hand: regenerate with `python -m derive` (check with --check).
 
-"""What every generated stand module shares (numpy only): the helpers its functions call.
+"""What every generated model module shares (numpy only): the helpers its functions call, and the typed
+protocols a stand module and the norm module follow.
 
 Rendered once (SymForce's sym/util.py in spirit), so each model module holds its own expressions and nothing
 else; a module derived from a description imports these as the built-in ones do.
 """
+from typing import Callable, Protocol, runtime_checkable
+
 import numpy as np
 
-__all__ = ["broadcast", "by_mount", "turn_angle"]
+__all__ = ["broadcast", "by_mount", "turn_angle", "plan_weights", "on_plan", "StandModel", "NormModel"]
 
 
 def broadcast(*angles):
@@ -35,3 +38,89 @@ def turn_angle(A0, A1, A2):
     base, half = np.arctan2(A2, A1), np.arccos(np.clip(-A0 / rho, -1.0, 1.0))
     roots = np.remainder(np.array([base + half, base - half]) + np.pi, 2 * np.pi) - np.pi
     return roots[np.argmin(np.abs(roots))]
+
+
+def plan_weights(terms, shape):
+    """PSI of a module: its optimal estimators' exact terms (index..., numerator, denominator) per q as floats in an
+    array of `shape` (q first)."""
+    psi = np.zeros(shape)
+    for nu, row in enumerate(terms):
+        for *index, num, den in row:
+            psi[(nu, *index)] = num / den
+    return psi
+
+
+def on_plan(psi, z, shape, source):
+    """q from the residuals z on the module's plan, of `shape` as `source` returns them: the optimal estimators
+    PSI applied (z's last axis is the plan's; a leading axis, the reading's component)."""
+    z = np.asarray(z, dtype=float)
+    if z.shape != shape:
+        raise ValueError(f"z must have shape {shape} as {source} returns it, not {z.shape}")
+    return psi.reshape(len(psi), -1) @ np.moveaxis(z, 0, -1).reshape(-1)
+
+
+@runtime_checkable
+class StandModel(Protocol):
+    """A stand's generated module: its description, the residual (1) of 000, H (3), q (4) and the estimators on
+    its plan. Every built-in stand and every `garant derive STAND.toml --out DIR` module follows it."""
+
+    ANGLES: tuple                  # the stand's angle names
+    VARIABLES: tuple               # per-position variables beside the angles (temp_c, ...)
+    ANGLE_RANGES_DEG: tuple        # each angle's range, degrees
+    ANGLE_DETENTS_DEG: tuple       # each angle's detents, degrees (empty: any angle)
+    TRIG_DEGREE: tuple             # each angle's highest harmonic in H
+    PARAMETERS: tuple              # (name, kind, a-priori bound, meaning) of each physical parameter
+    PARAMETER_NAMES: tuple
+    PARAMETER_KINDS: tuple         # stand, mounting, gravity, block, bias, effect
+    PARAMETER_BOUNDS: tuple        # a-priori bounds (None: none stated)
+    Q_NAMES: tuple                 # the identifiable combinations q of (4) of 000
+    Q_DEFINITIONS: tuple           # each q in the physical parameters
+    Q_UNITS: tuple                 # "rad" or "1"
+    H_EXACT: tuple                 # H's entries as exact text
+    PHYSICAL_TO_Q: np.ndarray      # q = PHYSICAL_TO_Q @ physical (to first order)
+    UNSEPARABLE: np.ndarray        # directions of the physical parameters no position separates
+    ABSORBED: tuple                # parameters absorbed into q
+    TURN_AXIS: object              # the axis of the absorbed turn, or None
+    MOUNTINGS: tuple               # the block's mountings
+    equivalent: Callable           # the equivalent unit's parameters (what q bounds)
+    H: Callable                    # H(angles..., mount=0), (3) of 000
+    H_SUP: np.ndarray              # sup over positions of |H| entries
+    up_nominal: Callable           # the nominal up-direction in block axes
+    readings: Callable             # the exact readings (1) of 000
+    residual: Callable             # z = f/g - u(angles)
+    PLAN_DEG: np.ndarray           # the optimal plan, degrees
+    ESTIMATOR_TERMS: tuple         # the optimal estimators' exact terms
+    PSI: np.ndarray                # their weights, PSI[nu, s, p]
+    estimate_on_plan: Callable     # q from z on PLAN_DEG
+
+
+@runtime_checkable
+class NormModel(Protocol):
+    """The norm relation (2.2) of 001's generated module: H(n), the remainder bound and the effects it carries."""
+
+    AXES: tuple                    # the pendulosity axes of B(w) in (1.3)
+    Q_NAMES: tuple
+    Q_UNITS: tuple
+    PARAMETERS: tuple
+    H: Callable                    # H(n), (2.2) of 001
+    H_EXPONENTS: tuple
+    readings: Callable
+    residual: Callable             # sigma(n) of (2.2)
+    q_of: Callable
+    remainder: Callable
+    a_max_norm: Callable
+    remainder_bound: Callable      # the proven bound on delta_sigma's remainder
+    published_bound: Callable      # (2.3) of 001 as printed
+    PLAN: np.ndarray               # the optimal orientations, unit vectors
+    PLAN_EXACT: tuple
+    DUALS: np.ndarray
+    ESTIMATOR_TERMS: tuple
+    PSI: np.ndarray                # PSI[nu, k]
+    estimate_on_plan: Callable     # q from sigma on PLAN
+    EFFECTS: dict                  # effect name -> its parameters
+    EFFECT_UNITS: dict
+    EFFECT_PHYSICS: dict
+    EFFECT_VARIABLES: dict
+    STAND_EFFECTS: tuple
+    effect_basis: Callable
+    effect_jacobian_bound: Callable

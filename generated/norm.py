@@ -10,6 +10,8 @@ sigma(n) = H(n)^T q + delta_sigma(n), n = f/|f|, and |delta_sigma| <= delta_sigm
 """
 import numpy as np
 
+from garant.generated._runtime import on_plan as _on_plan, plan_weights as _plan_weights
+
 __all__ = ["AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
            "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
            "ESTIMATOR_TERMS", "PSI", "estimate_on_plan", "EFFECTS", "EFFECT_UNITS", "EFFECT_PHYSICS",
@@ -228,24 +230,13 @@ ESTIMATOR_TERMS = (
 )
 
 
-def _psi():
-    psi = np.zeros((len(Q_NAMES), len(PLAN)))
-    for nu, terms in enumerate(ESTIMATOR_TERMS):
-        for k, num, den in terms:
-            psi[nu, k] = num / den
-    return psi
-
-
 #: PSI[nu, k]: weight of sigma(PLAN[k]) in the optimal estimate of q_nu; sum |PSI[nu]| = a^T lambda.
-PSI = _psi()
+PSI = _plan_weights(ESTIMATOR_TERMS, (len(Q_NAMES), len(PLAN)))
 
 
 def estimate_on_plan(z):
     """q, shape (12,), from sigma at the directions of PLAN as `residual` returns them, shape (len(PLAN),)."""
-    z = np.asarray(z, dtype=float)
-    if z.shape != (len(PLAN),):
-        raise ValueError(f"z must have shape ({len(PLAN)},) as residual() returns it at PLAN, not {z.shape}")
-    return PSI @ z
+    return _on_plan(PSI, z, (len(PLAN),), "residual() at PLAN")
 
 
 #: The catalogue effects (derive/effects.py) the norm relation can carry: name -> parameter names. Each adds

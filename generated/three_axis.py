@@ -9,7 +9,8 @@ Linearised residual (2)-(3): z^(p) = H^(p)(angles)^T q + rho^(p), |rho^(p)| <= s
 """
 import numpy as np
 
-from garant.generated._runtime import broadcast as _broadcast, by_mount as _by_mount
+from garant.generated._runtime import broadcast as _broadcast, by_mount as _by_mount, on_plan as _on_plan, \
+    plan_weights as _plan_weights
 
 __all__ = ["ANGLES", "VARIABLES", "ANGLE_RANGES_DEG", "ANGLE_DETENTS_DEG", "TRIG_DEGREE", "PARAMETERS",
            "PARAMETER_NAMES", "PARAMETER_KINDS", "PARAMETER_BOUNDS", "Q_NAMES", "Q_DEFINITIONS", "Q_UNITS",
@@ -358,24 +359,13 @@ ESTIMATOR_TERMS = (
 )
 
 
-def _psi():
-    psi = np.zeros((len(Q_NAMES), len(PLAN_DEG), 3))
-    for nu, terms in enumerate(ESTIMATOR_TERMS):
-        for s, p, num, den in terms:
-            psi[nu, s, p] = num / den
-    return psi
-
-
 #: PSI[nu, s, p]: weight of z^(p) at PLAN_DEG[s] in the estimate of q_nu; sum |PSI[nu]| = 1.
-PSI = _psi()
+PSI = _plan_weights(ESTIMATOR_TERMS, (len(Q_NAMES), len(PLAN_DEG), 3))
 
 
 def estimate_on_plan(z) -> np.ndarray:
     """q, shape (len(Q_NAMES),), from the residuals z at PLAN_DEG as `residual` returns them, shape
     (3, len(PLAN_DEG)); guaranteed error sigma each. A model whose description gives no plan has none."""
-    z = np.asarray(z, dtype=float)
     if not len(PLAN_DEG):
         raise ValueError("this model has no plan (plan_deg in its description): use `garant estimate`")
-    if z.shape != (3, len(PLAN_DEG)):
-        raise ValueError(f"z must have shape (3, {len(PLAN_DEG)}) as residual() returns it at PLAN_DEG, not {z.shape}")
-    return np.einsum("nsp,ps->n", PSI, z)
+    return _on_plan(PSI, z, (3, len(PLAN_DEG)), "residual() at PLAN_DEG")
