@@ -4,8 +4,10 @@ Each returns a result object (verify/io/results.py): a dict of the command's JSO
 as attributes, with numpy arrays, `to_dict()`, `to_json()` and a short repr; errors are raised as
 DataError.
 """
+from __future__ import annotations
 
 import os
+from typing import Optional, Sequence
 
 from . import models, options as checks
 from .errors import DataError
@@ -57,8 +59,9 @@ def _api(fn):
 
 
 @_api
-def plan(model, *, grid=None, count_seconds=None, max_candidates=None, search_seconds=None, search_nodes=None,
-         count_nodes=None):
+def plan(model: str, *, grid: Optional[float] = None, count_seconds: Optional[float] = None,
+         max_candidates: Optional[int] = None, search_seconds: Optional[float] = None,
+         search_nodes: Optional[int] = None, count_nodes: Optional[int] = None) -> results.Plan:
     """Optimal guaranteed errors (units of sigma), the minimal optimal plans and the preferred one, exactly
     as `garant plan --model MODEL --json` (workflows/plan.py does both); `norm` gives the orientations of 001.
     `max_candidates` bounds the size of the search, `search_nodes` and `count_nodes` its work (the same plan
@@ -74,8 +77,11 @@ def plan(model, *, grid=None, count_seconds=None, max_candidates=None, search_se
 
 
 @_api
-def calibrate_many(logs, *, g=None, g_uncertainty=None, delta_sigma=None, params=9, fmt=None, sensor=None, imu=None,
-                   rate=None, window=1.0, k=10.0, min_still=2.0, jobs=None, spec=None):
+def calibrate_many(logs: Sequence, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
+                   delta_sigma: Optional[float] = None, params: int = 9, fmt: Optional[str] = None,
+                   sensor: Optional[str] = None, imu: Optional[int] = None, rate: Optional[float] = None,
+                   window: float = 1.0, k: float = 10.0, min_still: float = 2.0, jobs: Optional[int] = None,
+                   spec: Optional[str] = None) -> list:
     """Many logs calibrated as `calibrate_norm`, in one process pool (`jobs`, default every core; the same
     results whatever it is), as `garant calibrate-norm LOG... --out DIR`: a list of rows, one per log in
     order, each {"log", "status" (consistent, refuted or error), "message", "result" (the calibration's

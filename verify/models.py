@@ -1,20 +1,26 @@
 """The models the command line knows: built-in generated modules, or a stand description file."""
+from __future__ import annotations
+
 import importlib
 import math
 import os
 import types
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from garant.generated import API, MODELS as REGISTRY
 
 from .errors import DataError
+
+if TYPE_CHECKING:                                   # numpy is loaded only by the functions that use it
+    import numpy
 
 #: The built-in models (the registry `python -m derive` renders in generated/__init__.py): name -> module.
 MODELS = {name: f"garant.generated.{e['module']}" for name, e in REGISTRY.items()}
 STANDS = [name for name, e in REGISTRY.items() if e["kind"] == "stand"]     # stand models (plan, estimate)
 
 
-def kind(name):
+def kind(name: str) -> str:
     """What a model name is: "stand" (a built-in stand, a STAND.toml or a module `garant derive --out` wrote),
     "norm" (the norm relation of 001), or None (not a model garant knows)."""
     if str(name).endswith((".toml", ".py")):
@@ -22,7 +28,7 @@ def kind(name):
     return REGISTRY.get(name, {}).get("kind")
 
 
-def load(name):
+def load(name: str | os.PathLike) -> types.ModuleType:
     """The generated module of a built-in model, of a description file (derived, or from the cache), or
     a module `garant derive STAND.toml --out DIR` wrote (DIR/stand.py); checked once here against the
     protocol of its kind (API: the names every module of that kind exports), so no caller needs a default."""
@@ -102,7 +108,7 @@ def _load_description(path):
         raise DataError(str(e), param="model") from None
 
 
-def from_description(path):
+def from_description(path: str | os.PathLike) -> types.ModuleType:
     """The rendered module of a stand description: from the cache when one was derived from these very
     bytes by this very generator, else derived (SymPy), kept in the cache (best effort), and executed. No
     file beside the description is written."""
@@ -110,7 +116,7 @@ def from_description(path):
     return _execute(text, name, Path(path).resolve())
 
 
-def thermal(model, degree, t0):
+def thermal(model: str, degree: int, t0: float) -> types.ModuleType:
     """The thermal extension of a built-in stand or a description (each block parameter a polynomial of
     `degree` in T about t0, derive/effects.py `thermal`): derived once and kept in the cache like a
     description (keyed by the base, the degree and t0)."""
@@ -224,7 +230,7 @@ def _execute(text, name, source):
     return mod
 
 
-def stand_model(name):
+def stand_model(name: str) -> types.ModuleType:
     """The symbolic Model (derive/) of a built-in stand or of a description file."""
     from garant.derive import description
     from garant.derive.builtin import MODELS as BUILTIN
@@ -295,7 +301,7 @@ def unreachable(ranges, detents, P):
     return None
 
 
-def layout(mod):
+def layout(mod: types.ModuleType) -> tuple:
     """Angle names and mounting names of a stand module (one mounting: ('+x+y+z',))."""
     return list(mod.ANGLES), list(mod.MOUNTINGS)
 
@@ -309,7 +315,7 @@ def H_at(mod, angles_rad, mounts=None, variables=()):
     return mod.H(*cols, mount=0 if mounts is None else np.asarray(mounts))
 
 
-def q_of(mod, physical):
+def q_of(mod: types.ModuleType, physical) -> numpy.ndarray:
     """The q (4) of 000 an estimate bounds for a unit with these physical errors: those of the unit that
     reads the same with the model's ABSORBED parameters at 0 (`equivalent`; the unit itself when none)."""
     import numpy as np

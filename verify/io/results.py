@@ -2,6 +2,8 @@
 OptimizeResult), numpy arrays kept as arrays, `to_dict()` / `to_json()` for files, a short `repr` and an
 HTML table in notebooks. Each kind's FIELDS are its JSON schema's properties with their meanings (docs/schemas/,
 the one home of every field; docs/fields.md lists them)."""
+from __future__ import annotations
+
 import json
 
 import numpy as np
@@ -52,23 +54,23 @@ class Result(dict):
                                  f"it has {', '.join(self.keys())}") from None
 
     @property
-    def status(self):
+    def status(self) -> str:
         """What came out, in a word (a key of STATUSES): consistent, refuted, premise refuted, done, ..."""
         return "done"
 
     @property
-    def message(self):
+    def message(self) -> str:
         """The status in a line."""
         return self.STATUSES[self.status]
 
     def __dir__(self):
         return sorted(set(super().__dir__()) | set(self.keys()))
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         """Plain JSON types only: arrays as lists (what the command's --json file holds)."""
         return json.loads(json.dumps(self, default=json_value))
 
-    def to_json(self, path=None):
+    def to_json(self, path: str | None = None) -> str | None:
         """The JSON text, or written to `path` (atomically) when given."""
         text = json.dumps(self, default=json_value, indent=1) + "\n"
         if path is None:
@@ -81,7 +83,7 @@ class Result(dict):
             files.check_inputs([])
         return None
 
-    def table(self, *fields):
+    def table(self, *fields: str) -> str:
         """The fields that hold one value per name (q, guaranteed_error, units, ... of an estimate) side by side, a
         row per name, as text; `fields` picks them (default every such field, in FIELDS order)."""
         order = fields or [k for k in self.FIELDS if k in self] + [k for k in self.keys() if k not in self.FIELDS]
@@ -136,7 +138,7 @@ class Estimate(Result):
         """The q's names, in the model's order (empty when the data refute sigma)."""
         return tuple(self.get("q", {}))
 
-    def array(self, field="q"):
+    def array(self, field: str = "q") -> np.ndarray:
         """A per-q field (q, guaranteed_error, guaranteed_error_linear, ...) as a numpy array in `names`' order."""
         values = self[field] if field in self else None
         if not isinstance(values, dict) or set(values) != set(self.names):

@@ -4,7 +4,10 @@ The command (cli/) parses its options, calls one of these and prints the result;
 (api.py) calls the same function and returns the result: the two cannot disagree. Results are the
 objects of io/results.py (a dict whose keys are also attributes, with `to_json()`).
 """
+from __future__ import annotations
+
 import os
+from typing import TYPE_CHECKING, Callable, Iterator, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -14,9 +17,23 @@ from ..options import real_array
 from ..io import results
 from .premises import G_DEFAULT, premises as make_premises
 
+if TYPE_CHECKING:                          # the types of the seams, for readers and type checkers (not loaded)
+    import pandas
 
-def estimate(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, bound=None, mount=None, gamma="lower",
-             imu=None, which_run=None, fmt=None, sections=None, temperature=None, progress=None):
+    #: A file the user names.
+    Path = Union[str, os.PathLike]
+    #: Readings at positions: a positions CSV (or a means file, imucal's session), or an array / DataFrame.
+    Data = Union[Path, np.ndarray, pandas.DataFrame, Sequence[Sequence[float]]]
+    #: A raw log: a path of any supported format, an array (N, 4) of time (s) and three axes, or a DataFrame.
+    Log = Union[Path, np.ndarray, pandas.DataFrame]
+
+
+def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
+             g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
+             bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
+             imu: Optional[int] = None, which_run: Optional[str] = None, fmt: Optional[str] = None,
+             sections: Optional[Path] = None, temperature: Optional[int] = None,
+             progress: Optional[Callable[[str], None]] = None) -> results.Estimate:
     """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors, from
     positions: `garant estimate --json`.
 
@@ -163,9 +180,12 @@ def _norm_premises(premises, g_uncertainty, g_source, statement=""):
             "g_source": g_source}
 
 
-def calibrate_norm(log, *, g=None, g_uncertainty=None, bound=None, delta_sigma=None, params=9, fmt=None, sensor=None,
-                   imu=None, rate=None, window=1.0, k=10.0, min_still=2.0, diagnose=False, effects=None,
-                   temperature=None):
+def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
+                   bound: Optional[Mapping[str, float]] = None, delta_sigma: Optional[float] = None, params: int = 9,
+                   fmt: Optional[str] = None, sensor: Optional[str] = None, imu: Optional[int] = None,
+                   rate: Optional[float] = None, window: float = 1.0, k: float = 10.0, min_still: float = 2.0,
+                   diagnose: bool = False, effects: Union[str, Sequence[str], None] = None,
+                   temperature: Optional[int] = None) -> results.NormCalibration:
     """Calibrate a static log through the norm relation (2.2) of 001: `garant calibrate-norm --json`.
 
     Parameters
@@ -349,8 +369,12 @@ def _frame(df, rate=None):
     return np.column_stack([t, *(real_array(df[low[n]], f"log: column {n}") for n in acc)])
 
 
-def next_position(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, bound=None, mount=None,
-                  gamma="lower", target=None, grid=None, search_seconds=None, max_candidates=None):
+def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
+                  g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
+                  bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
+                  target: Optional[float] = None, grid: Optional[float] = None,
+                  search_seconds: Optional[float] = None,
+                  max_candidates: Optional[int] = None) -> results.NextPosition:
     """The position to measure next, from the positions measured so far: `garant next --json`.
 
     Parameters
@@ -412,7 +436,9 @@ def _repeats_refute(pos, sigma, g):
     return len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g)) > 0
 
 
-def diagnose(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, bound=None):
+def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
+             g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
+             bound: Optional[Mapping[str, float]] = None) -> results.Diagnosis:
     """The missing-effect workflow on positions: `garant diagnose --json`.
 
     Parameters
@@ -454,8 +480,9 @@ def diagnose(model, data, sigma, *, g=None, g_uncertainty=None, prior=None, boun
     return out
 
 
-def apply(calibration, log, *, fmt=None, sensor=None, imu=None, rate=None, trust_units=False, frame="garant",
-          chunk=None):
+def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = None, sensor: Optional[str] = None,
+          imu: Optional[int] = None, rate: Optional[float] = None, trust_units: bool = False, frame: str = "garant",
+          chunk: Optional[int] = None) -> Union[results.Correction, pandas.DataFrame, Iterator[results.Correction]]:
     """Correct a raw log with a calibration: `garant apply`.
 
     Parameters
