@@ -748,3 +748,15 @@ def test_out_of_memory_is_one_line(tmp_path, capsys, monkeypatch):
     np.savetxt(tmp_path / "d.csv", np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3",
                comments="")
     refused(["estimate", "--model", "two-axis", tmp_path / "d.csv", "--sigma", "1e-5"], capsys, "out of memory")
+
+
+def test_a_log_sampled_once_a_minute_is_refused_for_what_it_is(tmp_path, capsys):
+    # A seconds column with 60 s steps was refused as "not a sample interval in seconds": it is one, too sparse
+    # for the still intervals' moving window.
+    t = np.arange(0, 60.0 * 5000, 60.0)
+    path = tmp_path / "slow.csv"
+    np.savetxt(path, np.column_stack([t, np.zeros_like(t), np.zeros_like(t), np.full_like(t, 9.81)]), delimiter=",",
+               header="time_s,ax,ay,az", comments="")
+    assert main(["calibrate-norm", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "median step of 60 s" in err and "at least every 0.5 s" in err and "not a sample interval" not in err

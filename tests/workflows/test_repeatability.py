@@ -14,7 +14,7 @@ from garant.verify.errors import DataError
 from garant.verify.io import means, mimu
 from garant.verify.io.recordings import Still
 from garant.verify.workflows import repeatability as rp
-from conftest import REAL, ROOT
+from conftest import REAL, ROOT, flat
 
 MIMU = REAL / "mimu4444bt"
 needs_real = pytest.mark.skipif(not MIMU.is_dir() and not os.environ.get("CI"), reason="mimu4444bt not present")
@@ -268,3 +268,14 @@ def test_the_fixture_ends_in_a_calibration_that_holds_on_another_run(tmp_path, c
     assert np.all(np.abs(np.linalg.norm(a, axis=1) - G) <= np.linalg.norm(bound, axis=1) + 0.02 * G)
     M, b = calibration.read_imu_tk(tk)
     np.testing.assert_allclose(M, calibration.read(cal)["M"], rtol=1e-12)
+
+
+@needs_real
+def test_three_runs_say_which_judgement_needs_a_fourth_and_name_each_run_by_its_file(capsys):
+    # With 3 runs the pairs' envelope said "n/a (needs 3 or 4 runs)" and the runs were numbers only.
+    logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3, 4)]
+    main(["repeatability", *logs, "--g", "9.81744"])
+    out = flat(capsys.readouterr().out)
+    assert "run pairs n/a (needs at least 4 runs)" in out and "needs 3 or 4" not in out
+    assert "each run against the envelope of the others n/a" not in out
+    assert all(f"{k} {log}" in out for k, log in enumerate(logs, 1))

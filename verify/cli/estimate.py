@@ -245,8 +245,9 @@ def print_block(res, human=False):
     rows = [(f"Gamma{i + 1}{j + 1}", blk['Gamma'][i][j], blk['Gamma_bound'][i][j], "1", False)
             for i in range(3) for j in range(3)]
     rows += [(f"bias{i + 1}", g * blk['bias'][i], g * blk['bias_bound'][i], "m/s^2", True) for i in range(3)]
-    print("\nthe block's errors in its own axes: f = (E + Gamma) a + bias, so a = (E + Gamma)^-1 (f - bias), "
-          "f the readings and a the specific force (m/s^2); Gamma11 > 0: accelerometer 1 reads high")
+    print("\nthe block's errors as the stand's frame sees them (the mounting folded in; --mount gives them in the "
+          "block's own axes, (28)-(29) of 000): f = (E + Gamma) a + bias, so a = (E + Gamma)^-1 (f - bias), f the "
+          "readings and a the specific force (m/s^2); Gamma11 > 0: accelerometer 1 reads high")
     report.table(("parameter", "estimate", "guaranteed error", "unit") + (("estimate",
                                                                            "guaranteed error") if human else ()),
                  [(n, f"{v:+.6e}", f"{e:.3e}", u) + ((report.human(v, u, b), report.human(e, u, b).lstrip("+"))

@@ -135,8 +135,10 @@ def _print(label, res):
     report.table(*_rows(res))
     print("  (estimate ± guaranteed error per run; units: lambda 1, alpha/beta/gamma rad, eps over g)")
     print(f"  run pairs x parameters inside their per-run bounds: {res['coverage_per_run_bounds']:.1%}")
-    print(f"  with the envelope, judged on runs left out of it: run pairs {_pct(res['coverage_with_envelope_pairs'])},"
-          f" each run against the envelope of the others {_pct(res['coverage_with_envelope_leave_one_out'])}")
+    print(f"  with the envelope, judged on runs left out of it: run pairs "
+          f"{_pct(res['coverage_with_envelope_pairs'], PAIRS_NEED)}, each run against the envelope of the others "
+          f"{_pct(res['coverage_with_envelope_leave_one_out'], OTHERS_NEED)}")
+    print("  runs: " + "; ".join(f"{r['run']} {r['log']}" for r in res["runs"]))
     print("  effects, all runs fitted at once (worst exact residual in noise units; <= 1 is consistent): "
           + ", ".join(f"{x['effect']} {x['worst_in_noise_units']:.2f}" if "skipped" not in x
                       else f"{x['effect']} (skipped: {x['skipped']})" for x in res["effects"]))
@@ -154,8 +156,13 @@ def _print(label, res):
             + ("" if c.get("explained_by") else " UNEXPLAINED") for c in out))
 
 
-def _pct(x):
-    return "n/a (needs 3 or 4 runs)" if x is None else f"{x:.1%}"
+#: Runs the envelope needs to be judged on runs left out of it: each pair against the envelope of the others
+#: needs two others (4 runs), each run against the envelope of the others two (3 runs).
+PAIRS_NEED, OTHERS_NEED = 4, 3
+
+
+def _pct(x, need):
+    return f"n/a (needs at least {need} runs)" if x is None else f"{x:.1%}"
 
 
 def _coverage(results):
@@ -179,7 +186,8 @@ def _summary(results):
                  [[_p(x) if x is None or isinstance(x, float) else x for x in row] for row in rows])
     comps, per_run, pairs, loo = _coverage(results)
     print(f"all: {per_run:.1%} of {len(comps)} run-pair x parameter comparisons inside the per-run bounds; with the "
-          f"envelope {_pct(pairs)} (pairs), {_pct(loo)} (runs against the envelope of the others)")
+          f"envelope {_pct(pairs, PAIRS_NEED)} (pairs), {_pct(loo, OTHERS_NEED)} (runs against the envelope of the "
+          "others)")
 
 
 def sections(results):

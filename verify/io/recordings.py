@@ -177,9 +177,10 @@ def _check_time(path, t, named_unit):
         raise DataError(f"{path}: {repeats} of {dt.size} time steps are 0 (each time stamp repeated): the time "
                         "column does not give the sample times; fix it or give one row per sample", param="log")
     if named_unit and not 1e-5 <= step <= 0.5:
-        raise DataError(f"{path}: the time column has a median step of {step:g}, not a sample interval in "
-                        "seconds; name the column time_ms or time_us if it is in milliseconds or microseconds",
-                        param="log")
+        raise DataError(f"{path}: the time column has a median step of {step:g} s; a static calibration finds its "
+                        "still intervals in a moving window of samples at least every 0.5 s (and at most 1e5 a "
+                        "second): give the raw samples, or name the column time_ms or time_us if it is in "
+                        "milliseconds or microseconds", param="log")
     return step, repeats
 
 
