@@ -12,7 +12,7 @@ from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.io.positions import Positions
 from garant.verify.solve import lp, taylor, worst
-from garant.verify.workflows import guarantee
+from garant.verify.workflows import guarantee, remainder
 from garant.verify.workflows.premises import premises
 
 G = 9.81
@@ -27,7 +27,7 @@ def at_zero(mod, pos, prior, z=None):
     prem = premises(mod, 1e-5, G, prior=prior, g_uncertainty=prior)
     prem = dataclasses.replace(prem, bounds=np.where(np.isfinite(prem.bounds), prior, prem.bounds), absorbed=())
     lin = guarantee.linearise(mod, pos, np.zeros(A.shape[1]) if z is None else z, A, prem, at_zero=True)
-    rem = guarantee.Remainder(lin)
+    rem = remainder.Remainder(lin)
     return (rem.Lv, *guarantee.box(lin), lin, rem)
 
 
@@ -220,7 +220,7 @@ def test_remainder_with_many_positions_equals_the_remainder_position_by_position
     L, lo, hi, _, rem = at_zero(mod, pos, 1e-4)
     assert rem.interp is not None
     rb, _ = rem(lo, hi)
-    direct = guarantee.Remainder.__new__(guarantee.Remainder)
+    direct = remainder.Remainder.__new__(remainder.Remainder)
     direct.__dict__.update(rem.__dict__, interp=None)
     rb_direct, _ = direct(lo, hi)
     assert rb.max() <= 1.5 * rb_direct.max() and rb_direct.max() <= 1.5 * rb.max()   # as tight, either way
@@ -255,7 +255,7 @@ def test_interpolating_for_many_positions_keeps_the_guaranteed_errors_of_positio
          + np.random.default_rng(4).uniform(-1e-5, 1e-5, (len(pos.f), 3))).reshape(-1)
     lin, W = relinearised(mod, pos, z)
     interpolated = guarantee.verdict(lin, z, 1e-5, W)
-    assert guarantee.Remainder(lin).interpolates()
+    assert remainder.Remainder(lin).interpolates()
     monkeypatch.setattr(taylor.Interpolation, "usable", classmethod(lambda cls, *a: False))
     direct = guarantee.verdict(lin, z, 1e-5, W)
     assert np.all(np.abs(interpolated.guaranteed_error / direct.guaranteed_error - 1) <= 1e-3)
@@ -272,20 +272,20 @@ def test_kept_enclosures_on_the_last_box_equal_fresh_ones():
     rows = np.array([7, 3, 20, 3])
     rem._enclosure(lo, hi, np.arange(10), direct=True)                 # 3 and 7 kept, 20 new
     kept = rem._enclosure(lo, hi, rows, direct=True)
-    fresh = guarantee.Remainder(rem.lin)._enclosure(lo, hi, rows, direct=True)
+    fresh = remainder.Remainder(rem.lin)._enclosure(lo, hi, rows, direct=True)
     assert all(np.array_equal(a, b) for a, b in zip(kept, fresh))
     other = rem._enclosure(lo / 2, hi / 2, rows, direct=True)         # another box: not the kept one
     assert all(np.array_equal(a, b) for a, b in
-               zip(other, guarantee.Remainder(rem.lin)._enclosure(lo / 2, hi / 2, rows, direct=True)))
+               zip(other, remainder.Remainder(rem.lin)._enclosure(lo / 2, hi / 2, rows, direct=True)))
     assert np.any(other[1] != kept[1])
-    rem = guarantee.Remainder(rem.lin)                                  # at most DIRECT_ROWS positions kept
+    rem = remainder.Remainder(rem.lin)                                  # at most DIRECT_ROWS positions kept
     rem.DIRECT_ROWS = 12
     rem._enclosure(lo, hi, np.arange(10), direct=True)
     rem._enclosure(lo, hi, rows, direct=True)                           # 20 added: 11 kept
     many = rem._enclosure(lo, hi, np.arange(30), direct=True)           # 19 more would pass 12: not kept
     assert len(rem._direct) == 11
     assert all(np.array_equal(a, b) for a, b in
-               zip(many, guarantee.Remainder(rem.lin)._enclosure(lo, hi, np.arange(30), direct=True)))
+               zip(many, remainder.Remainder(rem.lin)._enclosure(lo, hi, np.arange(30), direct=True)))
 
 
 @pytest.mark.parametrize("size", [1e-4, 1e-2])

@@ -99,8 +99,9 @@ def run(args):
 def _batch(args):
     """Many logs in one process (workflows/batch.py): each unit's calibration file in --out, the summary as
     CSV and a page, a progress line on standard error; the exit status is `batch_status`'s."""
-    from ..io import files, report
+    from ..io import files, pages, report
     from ..workflows import batch
+    from ..workflows.calibrate_norm import PARAM_LABELS
     exports.refuse(args, "calibrate-norm", "concerns one log: a batch writes each unit's calibration to --out DIR")
     single = [o for o in ("plot", "report", "json", "effect", "temperature") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:
@@ -137,53 +138,14 @@ def _batch(args):
                 f"{verdicts['undecided']} undecided, {verdicts['retest']} retest (the recording proves nothing of "
                 "the unit)" if spec else ""))
     report.write_page(folder, f"Batch: {len(rows)} logs", report.command_line(args, "garant calibrate-norm ..."),
-                      batch_sections(rows, names, spec, args.spec, said), args.logs)
+                      pages.batch_sections(rows, names, spec, args.spec, said, PARAM_LABELS[:9], batch.SPEC_KEYS),
+                      args.logs)
     for row in rows:
         print(f"{row['log']}: {row['status']}" + (f", {row['verdict']} ({row['reason']})" if spec else
                                                   f": {row['message']}" if row["message"] else ""))
     print(said)
     print(f"wrote {folder}/summary.csv, {folder}/index.html and {counts['consistent']} calibration file(s)")
     return batch_status(rows, spec is not None)
-
-
-def batch_sections(rows, stems, spec, spec_path, said):
-    """The batch page's sections: the summary, the specification's limits with their units, each unit's verdict
-    (coloured) linking to its calibration file, and each unit's parameters of (1.3) of 001 with their guaranteed
-    errors in ppm, mrad or mg (summary.csv holds the same in SI, for programs)."""
-    from ..io import report
-    from ..workflows import batch
-    from ..workflows.calibrate_norm import PARAM_LABELS
-    sections = [("Summary", said)]
-    if spec:
-        unit = {"scale": "ppm", "misalignment": "mrad", "bias": "mg"}
-        factor = {"scale": 1e6, "misalignment": 1e3, "bias": 1e3}
-        sections.append((f"The specification ({spec_path}): a unit passes when every parameter's whole guaranteed "
-                         "interval lies within its limit (and its guaranteed error within its bound limit)",
-                         report.Table(("kind", "parameters", "limit on the value, either sign",
-                                       "limit on the guaranteed error"), [
-                             (kind, ", ".join(batch.SPEC_KEYS[kind][0]),
-                              *(f"{spec[t][kind] * factor[kind]:g} {unit[kind]}" if kind in spec.get(t, {}) else "none"
-                                for t in ("limits", "bound_limits"))) for kind in batch.SPEC_KEYS])))
-    sections.append(("Each unit: its verdict and its calibration file", report.Table(
-        ("log", "status", "verdict", "reason", "noise bound (units of g)", "still intervals", "calibration file"),
-        [(r["log"], r["status"], report.Verdict(r.get("verdict", "")), r.get("reason") or r["message"] or "",
-          f"{r['result']['delta_sigma_max']:.3g}" if r["result"] else "", str((r["result"] or {}).get("intervals", "")),
-          report.Link(r["file"], r["file"]) if r.get("file") else "") for r in rows])))
-    labels = PARAM_LABELS[:9]
-    cells = []
-    for stem, r in zip(stems, rows):
-        res = r["result"] or {}
-        pars, errs = r.get("nominal") or (res.get("parameters") or {}, res.get("guaranteed_error") or {})
-        cells.append((stem, *(f"{_side(k, pars[k])} ± {_side(k, errs[k]).lstrip('+')}".replace(
-            f" {_unit_of(k)} ±", " ±") if k in pars and k in errs else "" for k in labels)))
-    sections.append(("Each unit's parameters of (1.3) of 001: estimate ± guaranteed error over its information set",
-                     report.Table(("unit", *(f"{k} ({_unit_of(k)})" for k in labels)), cells)))
-    return sections
-
-
-def _unit_of(k):
-    """The unit a parameter is shown in on the batch page: ppm, mrad or mg."""
-    return "ppm" if k.startswith("lambda") else "mrad" if k[0] in "abg" else "mg"
 
 
 #: A batch's exit statuses, apart from 1 (a check failed), 2 (bad input) and 3 (refuted) of one log.
@@ -227,7 +189,9 @@ def _run(args, into=None):
         print(f"wrote {args.plot}", file=sys.stderr)
     exports.write(args, res, "calibrate-norm")
     if args.report:
-        _report(res, args)
+        from ..io import pages
+        command = report.command_line(args, f"garant calibrate-norm {args.log} --params {args.params}")
+        print(f"wrote {pages.norm(res, args.report, args.log, _log_of(args), command)}")
     if into is not None:
         into.update(res)
     return 0 if res["consistent"] else options.EXIT_INCONSISTENT
@@ -237,7 +201,7 @@ def _print(res, args):
     """The log, the calibration and the verdict, then the bounds (when consistent) and the diagnosis."""
     import numpy as np
 
-    from ..io import recordings
+    from ..io import pages, recordings
     if res["log_note"]:
         print(res["log_note"])
     if res["format"] == "openaxes":
@@ -274,21 +238,13 @@ def _print(res, args):
              "remainder at the best fit, so the data refute the noise bound there; no bound is given. A uniform "
              f"--delta-sigma would need at least {res['sigma_min_supported']:.3e} (units of g). Try --diagnose."))
     if "model_discrepancy" in res:
-        print(discrepancy(res))
+        print(pages.discrepancy(res))
     if not res["consistent"]:
         print(refutations(res))
     if res["consistent"]:
         _print_bounds(res, args)
     if "diagnosis" in res:
         _print_diagnosis(res["diagnosis"], args.params, args)
-
-
-def discrepancy(res):
-    """The worst residual without and with the effects added (--effect), in units of each interval's noise rule."""
-    d = res["model_discrepancy"]
-    return (f"worst residual in units of {d['units']}: {d['max_residual_before']:.2f} without the effects "
-            f"({'consistent' if d['max_residual_before'] <= 1 else 'INCONSISTENT'}) -> {d['max_residual_after']:.2f} "
-            f"with {', '.join(res['effect_names'])}")
 
 
 def refutations(res, count=12):
@@ -356,22 +312,8 @@ def _print_diagnosis(d, params, args):
             print(f"  not tried: {e} ({why})")
 
 
-UNITS = {"lambda": "1", "alpha": "rad", "beta": "rad", "gamma": "rad", "eps": "1 (over g)", "delta": "1 (x g)"}
-
-
-def _unit(k):
-    return next(u for p, u in UNITS.items() if k.startswith(p))
-
-
-def _side(k, x):
-    """A parameter's value in ppm, mrad or mg, one unit per kind (the nonlinearity as it is)."""
-    from ..io import report
-    return report.human(x, "1" if k.startswith(("lambda", "eps")) else _unit(k), bias=k.startswith("eps"),
-                        fixed=True) if not k.startswith("delta") else f"{x:+.4g} {_unit(k)}"
-
-
 def _print_bounds(res, args=None):
-    from ..io import report
+    from ..io import pages, report
     pars = res["parameters"]
     if pars is None:
         print("parameters of (1.3): the log is in raw units, so only M and b above are estimated; the "
@@ -386,7 +328,8 @@ def _print_bounds(res, args=None):
                  [(k, f"{pars[k]:+.4e}" if pars else "(raw units)", f"{v:.3e}",
                    f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_sigma_wider'][k]:.3e}",
                    f"{res['guaranteed_error_optimal_plan'][k]:.3e}",
-                   _unit(k)) + ((_side(k, pars[k]) if pars else "", _side(k, v).lstrip("+")) if human else ())
+                   pages.unit(k)) + ((pages.side(k, pars[k]) if pars else "", pages.side(k, v).lstrip("+"))
+                                     if human else ())
                   for k, v in res["guaranteed_error"].items()])
     print(f"guaranteed error: over the information set (every correction of the fit that meets each interval's noise "
           f"bound plus its remainder); a priori: the LP estimator's, what these orientations guarantee for any data "
@@ -503,59 +446,3 @@ def _log_of(args):
     return data.t, data.raw
 
 
-def _report(res, args):
-
-    import numpy as np
-
-    from ..io import files, plots, report
-    folder = files.make_folder(args.report)
-    plots.norm_residuals(res, _log_of(args), folder / "residuals.png")
-    rows = res["per_interval"]
-    M, b = np.array(res["matrix"]), np.array(res["bias"])
-    plots.residuals_by_direction(np.array([r["direction"] for r in rows]).T, [r["residual_after_ms2"] for r in rows],
-                                 [res["g"] * r["noise_rule"] for r in rows],
-                                 folder / "directions.png", f"{args.log}: residual against the direction of gravity")
-    verdict = (("**consistent**: every still interval's reading fits the model of (2.2) of 001 within its own noise "
-                "bound, so the calibration below holds for this unit with the guaranteed errors shown, as long as "
-                "the premises (next) hold" if res["consistent"] else
-                "**INCONSISTENT**: some still intervals lie beyond their noise bound at the best fit, so the data "
-                "refute the noise bound or the model; no bound is given and no calibration should be used")
-               + f". Minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} "
-               f"({res['delta_sigma_source']}), proven remainder {res['remainder_bound']:.1e} (units of g)")
-    if "model_discrepancy" in res:
-        verdict += ". The " + discrepancy(res)
-    axes = ("x", "y", "z")
-    sections = [("Verdict", verdict), ("Premises: what must hold for the bounds to hold",
-                                       report.Bullets(report.clauses(res["premises"]["statement"]))),
-                ("Calibration a = M (raw - b)", report.Table(
-                    ("row", "M_i1 (m/s^2 per raw unit)", "M_i2 (m/s^2 per raw unit)", "M_i3 (m/s^2 per raw unit)",
-                     "b_i (raw units)"),
-                    [(axes[i], *(f"{v:+.6e}" for v in M[i]), f"{b[i]:+.6e}") for i in range(3)]))]
-    if res["consistent"]:
-        pars = res.get("parameters") or {}
-        sections.append(("Parameters of (1.3) of 001 and their guaranteed errors", report.Table(
-            ("parameter", "unit", "estimate", "guaranteed error (over the information set)",
-             "estimate (ppm, mrad or mg)", "guaranteed error (ppm, mrad or mg)",
-             "a priori (these orientations, any data within the noise bound)",
-             "on the optimal plan (the 18 orientations of 001's plan, the same noise)"),
-            [(k, _unit(k), f"{pars[k]:+.4e}" if k in pars else "(raw units)", f"{v:.3e}",
-              _side(k, pars[k]) if k in pars else "", _side(k, v).lstrip("+"),
-              f"{res['guaranteed_error_a_priori'][k]:.3e}", f"{res['guaranteed_error_optimal_plan'][k]:.3e}")
-             for k, v in res["guaranteed_error"].items()])))
-        sections.append(("How to read the parameters",
-                         "A guaranteed error is the largest distance, over every set of parameters that fits every "
-                         "interval within its noise bound, from the estimate: the truth lies within it when the "
-                         "premises hold. The a-priori column is what these orientations guarantee for any data; the "
-                         "optimal plan's is what the best set of orientations would give with the same noise, so a "
-                         "large ratio between the two says more orientations would pay."))
-    if res.get("effects"):
-        ref = res["effect_reference"]
-        sections.append((f"Effects added to the reading (over g; time from {ref['time_s']:g} s of the log, temperature "
-                         f"from {ref['temp_c']:g} C), guaranteed errors over the same information set", report.Table(
-            ("effect", "parameter", "estimate", "guaranteed error", "a priori", "unit"),
-            [(name, p, f"{v['estimate']:+.4e}", f"{v['guaranteed_error']:.3e}", f"{v['guaranteed_error_a_priori']:.3e}",
-              v["unit"]) for name, e in res["effects"].items() for p, v in e["parameters"].items()])))
-    sections += [("The log, its still intervals, and the residual of each", report.Image("residuals.png")),
-                 ("Residual against the direction of gravity", report.Image("directions.png"))]
-    command = report.command_line(args, f"garant calibrate-norm {args.log} --params {args.params}")
-    print(f"wrote {report.write_page(folder, f'Norm calibration: {args.log}', command, sections, [args.log])}")

@@ -64,46 +64,16 @@ def run(args):
     if args.json:
         report.write_json(args.json, res)
     if (args.plot or args.report) and "residual_minimax" in res:
-        _plots(res, mod, args)
+        from ..io import pages
+        command = report.command_line(args, f"garant estimate --model {args.model} {args.data} --sigma "
+                                            f"{args.sigma:g} --g {res['g']:g}")
+        page = pages.estimate(res, mod.ANGLES, mod.Q_NAMES, args.sigma, args.data, args.model, args.plot, args.report,
+                              command)
+        if page:
+            print(f"wrote {page}")
     code = print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
     options.say_gravity(args.g is not None, res["premises"])
     return code
-
-
-def _plots(res, mod, args):
-    from pathlib import Path
-
-    import numpy as np
-
-    from ..io import files, plots, report
-    title = f"{args.data}: residuals of the minimax fit, " + ("consistent" if res["consistent"] else "INCONSISTENT")
-    targets = [p for p in (args.plot, args.report and str(Path(args.report) / "residuals.png")) if p]
-    if args.report:
-        files.make_folder(args.report)
-    for path in targets:
-        plots.residuals_by_angle(np.array(res["positions_deg"]), list(mod.ANGLES), res["residual_minimax"],
-                                 args.sigma, path, title)
-    if args.report:
-        verdict = (f"**consistent** with sigma = {args.sigma:g}: minimax residual of the exact model "
-                   f"{res['minimax_residual']:.3e}, proven remainder left after absorption into q <= "
-                   f"{res['remainder_left_bound']:.2e}"
-                   if res["consistent"] else
-                   f"**INCONSISTENT**: the data refute sigma = {args.sigma:g}; they support sigma >= "
-                   f"{res['sigma_min_supported']:.3g}. No bound is given.")
-        sections = [("Verdict", verdict), ("Premises", " ".join(filter(None, (res["premises"]["statement"] + ".",
-                                                                    res["premises"]["meaning"]))))]
-        if res["consistent"]:
-            sections.append(("Estimates (guaranteed error = linear + remainder)", report.Table(
-                ("q", "definition", "estimate", "guaranteed error", "linear", "remainder", "unit"),
-                [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
-                  f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
-                  res["units"][q]) for q in mod.Q_NAMES])))
-        sections.append(("Residuals against each stand angle", report.Image("residuals.png")))
-        command = report.command_line(args, f"garant estimate --model {args.model} {args.data} --sigma {args.sigma:g} "
-                                            f"--g {res['g']:g}")
-        page = report.write_page(args.report, f"Estimate: {args.data}", command, sections,
-                                 [args.data, *([args.model] if str(args.model).endswith(".toml") else [])])
-        print(f"wrote {page}")
 
 
 def print_verdict(res, mod, path):

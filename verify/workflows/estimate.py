@@ -4,7 +4,7 @@ import numpy as np
 from ..errors import DataError, opt
 from ..io.positions import Positions
 from ..solve import lp, taylor
-from . import block, guarantee, mounting, nearby
+from . import block, guarantee, mounting, nearby, remainder
 from .premises import NEAR_EDGE, premises as make_premises
 
 EXACT_DEG = 1e-6   # positions closer than this to the plan count as on it
@@ -359,7 +359,7 @@ def beyond_prior(lin, q, e):
     bound, source) whose bounds to widen (--bound NAME=VALUE)."""
     mod, prem = lin.mod, lin.premises
     R = np.asarray(mod.PHYSICAL_TO_Q, float)
-    biases = R[:, guarantee.linear_parameters(mod)].any(axis=1)
+    biases = R[:, remainder.linear_parameters(mod)].any(axis=1)
     stated = lin.stated_bounds
     source = [prem.split[n][1] if n in prem.split else s for n, s in zip(prem.names, prem.sources)]
     out = []
@@ -379,7 +379,7 @@ def near_prior(lin, q, e):
     allowed = lin.q_prior
     R = np.asarray(mod.PHYSICAL_TO_Q, float)
     out = []
-    biases = np.asarray(mod.PHYSICAL_TO_Q, float)[:, guarantee.linear_parameters(mod)].any(axis=1)
+    biases = np.asarray(mod.PHYSICAL_TO_Q, float)[:, remainder.linear_parameters(mod)].any(axis=1)
     for nu in np.flatnonzero((np.abs(q) + e > NEAR_EDGE * allowed) & (np.abs(q) - e <= allowed * (1 + 1e-9))
                              & ~biases):
         names = [prem.names[k] for k in np.flatnonzero(R[nu]) if 0 < lin.stated_bounds[k] < np.inf]
