@@ -216,3 +216,20 @@ def test_verify_prints_a_summary_and_every_row_with_verbose(capsys):
     assert out.count("\n") < 40 and "(--verbose prints every check" in out
     assert main(["verify", "--verbose"]) == 0
     assert capsys.readouterr().out.count("PASS") > 200
+
+
+def test_one_spelling_of_the_model_and_of_each_kind_of_output_across_commands():
+    # The model was positional in plan and identify and --model elsewhere; a data file was --csv in plan and -o
+    # elsewhere; the degree in T was --temperature beside --temperatures.
+    from garant.verify import cli
+    spelled = {"json": ["--json"], "plot": ["--plot"], "output": ["-o", "--output"], "report": ["--report"],
+               "save": ["--save"], "out": ["--out"], "certificates": ["--certificates"], "markdown": ["--markdown"],
+               "thermal_plot": ["--thermal-plot"], "model": ["--model"], "temperature": ["--thermal-degree"]}
+    commands = cli.parser()._subparsers._group_actions[0].choices
+    for name, sub in commands.items():
+        for action in sub._actions:
+            if action.dest in spelled:
+                assert action.option_strings == spelled[action.dest], (name, action.option_strings)
+            assert action.dest not in ("csv", "stand_model") and "--temperature" not in action.option_strings, name
+    assert all(any(a.dest == "model" for a in commands[c]._actions) for c in
+               ("plan", "identify", "estimate", "next", "simulate", "diagnose"))

@@ -500,10 +500,10 @@ def _positions(tmp_path):
     (lambda d, t: ["estimate", "--model", "two-axis", t / "fifo", "--sigma", "1e-5"], "not a FIFO"),
     (lambda d, t: ["estimate", "--model", "two-axis", "/dev/zero", "--sigma", "1e-5"], "not a character device"),
     (lambda d, t: ["calibrate-norm", "/dev/zero"], "not a character device"),
-    (lambda d, t: ["plan", "--model", "two-axis", "--csv", t / "fifo"], "over a FIFO"),
+    (lambda d, t: ["plan", "--model", "two-axis", "-o", t / "fifo"], "over a FIFO"),
     (lambda d, t: ["simulate", "--model", t / "s.toml", "--plan", "quarter", "--sigma", "1e-5", "-o", t / "s.toml"],
      "over an input"),
-    (lambda d, t: ["plan", "--model", t / "s.toml", "--csv", t / "s.toml"], "over an input"),
+    (lambda d, t: ["plan", "--model", t / "s.toml", "-o", t / "s.toml"], "over an input"),
 ])
 def test_no_output_ever_replaces_an_input_or_a_special_file(tmp_path, capsys, make_argv, words):
     # Every command wrote over its own input when an output option named it (also through a

@@ -55,7 +55,7 @@ def test_derive_plan_simulate_estimate_diagnose(stand, tmp_path, capsys):
     toml = str(STANDS / f"{stand}.toml")
     assert main(["derive", toml, "--out", str(tmp_path / "gen")]) == 0
     plan, certs = tmp_path / "plan.csv", tmp_path / "certs"
-    assert main(["plan", "--model", toml, "--csv", str(plan), "--certificates", str(certs), "--count-nodes", "5"]) == 0
+    assert main(["plan", "--model", toml, "-o", str(plan), "--certificates", str(certs), "--count-nodes", "5"]) == 0
     mod = models.load(toml)
     files = sorted(certs.glob("*.json"))
     assert len(files) == len(mod.Q_NAMES)                  # every q's optimality on the plan's candidates

@@ -116,10 +116,10 @@ def test_builtin_files_are_the_registered_models():
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["single-axis", "two-axis"])
 def test_plan_file_travels_to_simulate_and_the_truth_is_saved(name, tmp_path, capsys):
-    # `plan --csv` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
+    # `plan -o` writes the plan, `simulate --plan FILE` reads it and saves the truth beside
     # the data; `estimate` on the data then bounds every q of the saved truth.
     plan, data, est = tmp_path / "p.csv", tmp_path / "d.csv", tmp_path / "e.json"
-    assert main(["plan", "--model", name, "--csv", str(plan)]) == 0
+    assert main(["plan", "--model", name, "-o", str(plan)]) == 0
     assert main(["simulate", "--model", name, "--plan", str(plan), "--sigma", str(SIGMA), "-o", str(data)]) == 0
     truth = json.loads((tmp_path / "d.truth.json").read_text())
     assert main(["estimate", "--model", name, str(data), "--sigma", str(SIGMA), "--json", str(est)]) == 0
@@ -155,7 +155,7 @@ def test_any_identifier_a_user_picks_works(tmp_path, capsys):
     mod = models.load(str(stand))
     assert mod.ANGLES == ("g",) and {"t1", "t2", "DG", "K", "np"} <= set(mod.PARAMETER_NAMES)
     plan, data = tmp_path / "p.csv", tmp_path / "d.csv"
-    assert main(["plan", "--model", str(stand), "--csv", str(plan)]) == 0
+    assert main(["plan", "--model", str(stand), "-o", str(plan)]) == 0
     assert main(["simulate", "--model", str(stand), "--plan", str(plan), "--sigma", "1e-5", "-o", str(data)]) == 0
     assert main(["estimate", "--model", str(stand), str(data), "--sigma", "1e-5", "--json",
                  str(tmp_path / "e.json")]) == 0

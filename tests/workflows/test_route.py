@@ -1,6 +1,6 @@
 """garant plan --route: the order of a plan's positions of least total stand time, exact by
 Held-Karp (checked against every order by brute force), the trapezoidal move times, the schedule printed
-and carried by --csv."""
+and carried by plan -o."""
 import itertools
 import re
 
@@ -53,7 +53,7 @@ def _stand_with_speeds(tmp_path):
 def test_the_route_of_the_two_axis_plan_is_the_fastest_order(tmp_path, capsys):
     import json
     path = _stand_with_speeds(tmp_path)
-    assert main(["plan", "--model", str(path), "--route", "--json", str(tmp_path / "p.json"), "--csv",
+    assert main(["plan", "--model", str(path), "--route", "--json", str(tmp_path / "p.json"), "-o",
                  str(tmp_path / "r.csv")]) == 0
     out = capsys.readouterr().out
     d = json.loads((tmp_path / "p.json").read_text())

@@ -205,7 +205,7 @@ def test_plan_gives_the_fewest_positions_per_temperature_that_identify_every_coe
     thermal two-axis model, proven fewest by counting (2 x 3 readings x 5 temperatures = 30 < 39); estimate on
     readings there identifies every q and holds the truth, and without any one of the positions it cannot.
     Red if the plan missed a coefficient, or if a position of it were idle."""
-    assert main(["plan", "--model", "two-axis", "--temperatures=-20,0,20,40,60", "--csv", str(tmp_path / "p.csv"),
+    assert main(["plan", "--model", "two-axis", "--temperatures=-20,0,20,40,60", "-o", str(tmp_path / "p.csv"),
                  "--json", str(tmp_path / "p.json")]) == 0
     out = capsys.readouterr().out
     assert "3 position(s) per temperature identify every q" in out and "the fewest, proven" in out

@@ -30,7 +30,7 @@ COMMANDS = {"verify": "verify", "plan": "plan", "next": "next", "estimate": "est
 #: Output options of the commands: (attribute, what it is, a file or a folder); the exports' are in exports.py.
 OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("output", "the data file", "file"),
            ("report", "the report folder", "folder"), ("certificates", "the certificate folder", "folder"),
-           ("out", "the output folder", "folder"), ("csv", "the plan file", "file"),
+           ("out", "the output folder", "folder"),
            ("markdown", "the Markdown file", "file"), ("thermal_plot", "the thermal plot", "file"))
 
 class _Parser(argparse.ArgumentParser):

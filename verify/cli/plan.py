@@ -35,10 +35,10 @@ def add(sub):
                    "q (garant check-certificate re-checks it without any solver)")
     p.add_argument("--route", action="store_true", help="order the plan's positions for the least total stand "
                    "time (the description's speed_deg_s, acceleration_deg_s2, settle_s, remount_s), or without speeds "
-                   "for the least largest angle per move; print the schedule (--csv carries it)")
+                   "for the least largest angle per move; print the schedule (-o carries it)")
     p.add_argument("--plot", metavar="FILE.png", help="the up-direction in block axes at each position of the plan "
                    "(in the route's order with --route): arrows on the unit sphere, the faces that point up")
-    p.add_argument("--csv", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
+    p.add_argument("-o", "--output", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
     p.add_argument("--temperatures", type=options.temperatures, metavar="T1,T2,...",
                    help="chamber temperatures (C; write --temperatures=-20,...): which positions at which temperature "
@@ -87,7 +87,7 @@ def run(args):
         _write_certificates(mod, args.certificates, certs)
     if args.plot:
         _plot(mod, d, args)
-    if args.csv:
+    if args.output:
         header = [f"{a}_deg" for a in names] + (["mount"] if res.multi else [])
         rows = [[*pos] for pos in d["plan"]]
         if args.route:
@@ -96,9 +96,9 @@ def run(args):
                        "move_s" if rt["arrive_s"] else "largest_turn_deg"] + (["arrive_s"] if rt["arrive_s"] else [])
             rows = [[*pos, k + 1, mv, *([rt["arrive_s"][k]] if rt["arrive_s"] else [])]
                     for k, (pos, mv) in enumerate(zip(rt["positions"], rt["move"]))]
-        report.write_text(args.csv, "\n".join([",".join(header)] + [",".join(
+        report.write_text(args.output, "\n".join([",".join(header)] + [",".join(
             f"{v:g}" if not isinstance(v, str) else v for v in row) for row in rows]) + "\n")
-        print(f"wrote {args.csv}")
+        print(f"wrote {args.output}")
     return 0
 
 
@@ -204,10 +204,10 @@ def run_norm(args):
             print("   (" + ", ".join(f"{v:+.4f}" for v in n) + ")")
     if args.json:
         report.write_json(args.json, d)
-    if args.csv:
-        report.write_text(args.csv, "n1,n2,n3\n" + "\n".join(",".join(f"{v:.17g}" for v in n)
+    if args.output:
+        report.write_text(args.output, "n1,n2,n3\n" + "\n".join(",".join(f"{v:.17g}" for v in n)
                                                               for n in d["directions"]["12"]) + "\n")
-        print(f"wrote {args.csv}")
+        print(f"wrote {args.output}")
     if args.plot:
         import numpy as np
 
@@ -265,8 +265,8 @@ def run_thermal(args):
                                       "plan": {f"{t:g}": [{"angles_deg": list(pos), **({"mount": mounts[m]} if multi
                                                                                       else {})} for pos, m in ps]
                                                for t, ps in plan.items()}})
-    if args.csv:
+    if args.output:
         header = [f"{a}_deg" for a in names] + (["mount"] if multi else []) + ["temp_c"]
-        report.write_text(args.csv, "\n".join(",".join(str(c) for c in r) for r in [header, *rows]) + "\n")
-        print(f"wrote {args.csv}")
+        report.write_text(args.output, "\n".join(",".join(str(c) for c in r) for r in [header, *rows]) + "\n")
+        print(f"wrote {args.output}")
     return 0

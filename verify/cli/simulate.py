@@ -7,7 +7,7 @@ def add(sub):
     p = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
     options.model(p)
     p.add_argument("--plan", required=True, help="optimal10, quarter16, grid:AxB (steps per angle in degrees), or a "
-                   "plan file PLAN.csv (`garant plan --csv`)")
+                   "plan file PLAN.csv (`garant plan -o`)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
                    help="a catalogue effect and its parameter values (repeatable)")
     options.sigma(p, "noise bound, units of g")

@@ -167,7 +167,7 @@ def _numeric(path, required, others=False):
 
 def read_plan(path, angles, mountings=None):
     """A plan file: columns <angle>_deg for each angle (degrees), and `mount` when the stand uses several
-    mountings (the file `garant plan --csv` writes). Returns (angles_deg (N, n), mounts (N,) or None)."""
+    mountings (the file `garant plan -o` writes). Returns (angles_deg (N, n), mounts (N,) or None)."""
     files.regular(path, "the plan file", MAX_BYTES, param="plan")
     multi = mountings is not None and len(mountings) > 1
     cols = [f"{a}_deg" for a in angles] + (["mount"] if multi else [])

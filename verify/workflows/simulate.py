@@ -21,7 +21,7 @@ def plan_positions(mod, plan):
     n = len(mod.ANGLES)
     ranges = mod.ANGLE_RANGES_DEG
     detents = mod.ANGLE_DETENTS_DEG
-    if str(plan).endswith(".csv"):                          # a plan file, as `garant plan --csv` writes it
+    if str(plan).endswith(".csv"):                          # a plan file, as `garant plan -o` writes it
         names, mount_names = layout(mod)
         P, mounts = read_plan(plan, names, mount_names if len(mount_names) > 1 else None)
         _check_reachable(mod, ranges, detents, P, plan)
@@ -29,7 +29,7 @@ def plan_positions(mod, plan):
     if plan == "optimal10":
         if not len(mod.PLAN_DEG):
             raise DataError(f"this model has no optimal plan of its own; write one with `garant plan --model STAND "
-                            f"--csv PLAN.csv` and pass {opt('plan')} PLAN.csv, or use quarter or grid:STEP")
+                            f"-o PLAN.csv` and pass {opt('plan')} PLAN.csv, or use quarter or grid:STEP")
         P = np.asarray(mod.PLAN_DEG, float)
         _check_reachable(mod, ranges, detents, P, "the model's plan")
     elif plan in ("quarter16", "quarter"):
