@@ -233,3 +233,17 @@ def test_one_spelling_of_the_model_and_of_each_kind_of_output_across_commands():
             assert action.dest not in ("csv", "stand_model") and "--temperature" not in action.option_strings, name
     assert all(any(a.dest == "model" for a in commands[c]._actions) for c in
                ("plan", "identify", "estimate", "next", "simulate", "diagnose"))
+
+
+def test_every_command_lists_its_options_in_one_order():
+    # Each command added its options in its own order (estimate: --sigma, --g, --format, ..., --g-uncertainty;
+    # plan: --json second). Now every --help reads: inputs, the model, how they are read, the noise bound, g and
+    # the premises, the command's own options, what it writes, the calibration files.
+    from garant.verify import cli
+    expected = ["--model", "--format", "--imu", "--sigma", "--g", "--g-uncertainty", "--bound", "--prior",
+                "--thermal-degree", "--json", "--plot", "--report", "--save", "--export-imu-tk"]
+    text = cli.parser("estimate")._subparsers._group_actions[0].choices["estimate"].format_help()
+    at = [text.index(f"\n  {flag} ") for flag in expected]
+    assert at == sorted(at)
+    plan = cli.parser("plan")._subparsers._group_actions[0].choices["plan"].format_help()
+    assert plan.index("\n  --grid ") < plan.index("\n  --json ") < plan.index("\n  -o PLAN.csv, --output")

@@ -49,8 +49,39 @@ def parser(only=None):
     sub = ap.add_subparsers(dest="command", required=True)
     for name in ([only] if only in COMMANDS else COMMANDS):
         command = importlib.import_module(f".{COMMANDS[name]}", __name__)
-        command.add(sub).set_defaults(run=command.run)
+        p = command.add(sub)
+        _in_order(p)
+        p.set_defaults(run=command.run)
     return ap
+
+
+#: The one order of options in every command's --help and usage: its inputs, the model, how the inputs are read,
+#: the noise bound, g and the premises, then the command's own options, then what it writes and the calibration
+#: files (each export's own options after it).
+ORDER = (("--model",), ("--format", "--sensor", "--imu", "--run", "--sections", "--rate"),
+         ("--sigma", "--delta-sigma", "--g", "--g-uncertainty", "--bound", "--prior"), (),
+         ("--units", "--json", "--plot", "--thermal-plot", "--markdown", "--report", "--output", "--out",
+          "--certificates"))
+
+
+def _in_order(p):
+    """The parser's options sorted into ORDER (stable: a group keeps the order its command added them in)."""
+    rank = {flag: (g, i) for g, flags in enumerate(ORDER) for i, flag in enumerate(flags)}
+    export = {}
+    for k, e in enumerate(exports.EXPORTS):
+        for j, flag in enumerate([e.option, *(f[0] for f, _ in e.options)]):
+            export[flag] = (len(ORDER), 100 * k + j)
+
+    def key(action):
+        if not action.option_strings:
+            return (-1, 0)                           # positionals first, as given
+        if "-h" in action.option_strings:
+            return (-2, 0)
+        flag = action.option_strings[-1]
+        return rank.get(flag) or export.get(flag) or (ORDER.index(()), 0)
+    p._actions.sort(key=key)
+    for group in p._action_groups:
+        group._group_actions.sort(key=key)
 
 
 def main(argv=None):
