@@ -1,0 +1,100 @@
+"""solve/hull.py: each linear function's least and largest value over a polytope, each end proven by weak duality
+(the information set's hull, whose ends garant prints as bounds)."""
+import itertools
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from garant.verify.solve import highs, hull
+
+
+def test_a_proof_from_any_multipliers_bounds_the_lp_and_fails_when_cut():
+    # Weak duality: any lambda bounds max c^T x; the solver's own lambda gives the optimum. A bound a thousandth
+    # below the optimum would be wrong, and a feasible point (the optimum HiGHS found) shows it.
+    rng = np.random.default_rng(0)
+    B = rng.normal(size=(40, 4))
+    x0 = rng.normal(size=4)
+    lo, hi = B @ x0 - 1.0, B @ x0 + 1.0
+    c = rng.normal(size=4)
+    out_lo, out_hi, pts = hull.ranges(B, lo, hi, x0 - 10, x0 + 10, c[None], points=True)
+    x_max = pts[0][1]
+    assert np.all(B @ x_max <= hi + 1e-7) and np.all(B @ x_max >= lo - 1e-7)
+    assert c @ x_max <= out_hi[0] and out_hi[0] - c @ x_max <= 1e-6 * (1 + abs(out_hi[0]))
+    assert hull.upper(c, B, lo, hi, x0 - 10, x0 + 10, np.zeros(40)) >= out_hi[0]       # lambda = 0: the box
+    assert not c @ x_max <= out_hi[0] - 1e-3 * abs(out_hi[0])
+
+
+def _exact_max(c, B, lo, hi, xl, xh):
+    """max c^T x over {lo <= B x <= hi, xl <= x <= xh} in two dimensions, exactly: the best vertex, each the
+    meeting of two of the constraint lines, solved in rationals."""
+    F = Fraction
+    lines = [(list(map(F, B[i])), F(v)) for i in range(len(B)) for v in (lo[i], hi[i])]
+    lines += [([F(1), F(0)], F(v)) for v in (xl[0], xh[0])] + [([F(0), F(1)], F(v)) for v in (xl[1], xh[1])]
+    best = None
+    for (a, p), (b, q) in itertools.combinations(lines, 2):
+        det = a[0] * b[1] - a[1] * b[0]
+        if det == 0:
+            continue
+        x = ((p * b[1] - a[1] * q) / det, (a[0] * q - p * b[0]) / det)
+        inside = all(F(lo[i]) <= F(B[i][0]) * x[0] + F(B[i][1]) * x[1] <= F(hi[i]) for i in range(len(B)))
+        inside = inside and all(F(xl[k]) <= x[k] <= F(xh[k]) for k in range(2))
+        if inside:
+            value = F(c[0]) * x[0] + F(c[1]) * x[1]
+            best = value if best is None or value > best else best
+    return best
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_each_end_is_above_the_exact_optimum_and_within_a_millionth_of_it(seed):
+    # The exact optimum over the vertices in rationals: a proven end below it would be a wrong bound.
+    rng = np.random.default_rng(seed)
+    B = rng.normal(size=(12, 2))
+    x0 = rng.normal(size=2)
+    lo, hi = B @ x0 - rng.uniform(0.1, 1, 12), B @ x0 + rng.uniform(0.1, 1, 12)
+    xl, xh = x0 - 5, x0 + 5
+    C = rng.normal(size=(3, 2))
+    got_lo, got_hi = hull.ranges(B, lo, hi, xl, xh, C)
+    for k, c in enumerate(C):
+        top, bottom = _exact_max(c, B, lo, hi, xl, xh), -_exact_max(-c, B, lo, hi, xl, xh)
+        assert Fraction(got_hi[k]) >= top and Fraction(got_lo[k]) <= bottom
+        assert got_hi[k] - float(top) <= 1e-6 and float(bottom) - got_lo[k] <= 1e-6
+
+
+def test_multipliers_found_on_one_set_prove_a_bound_on_another_with_no_lp():
+    # hull.proven: the multipliers of one set bound any set with the same rows and columns; on a wider set
+    # the bound still holds (a point of the wider set's optimum never exceeds it), on a narrower one too.
+    rng = np.random.default_rng(3)
+    B = rng.normal(size=(30, 3))
+    x0 = rng.normal(size=3)
+    lo, hi = B @ x0 - 0.5, B @ x0 + 0.5
+    C = np.eye(3)
+    *_, lams = hull.ranges(B, lo, hi, x0 - 3, x0 + 3, C, multipliers=True)
+    for widen in (0.8, 1.5):
+        lo2, hi2 = B @ x0 - 0.5 * widen, B @ x0 + 0.5 * widen
+        p_lo, p_hi = hull.proven(B, lo2, hi2, x0 - 3, x0 + 3, C, [lams])
+        t_lo, t_hi = hull.ranges(B, lo2, hi2, x0 - 3, x0 + 3, C)
+        assert np.all(p_hi >= t_hi - 1e-12) and np.all(p_lo <= t_lo + 1e-12)
+
+
+def test_many_rows_by_row_generation_give_the_ends_of_all_rows(monkeypatch):
+    # Above GENERATE_ABOVE rows the LPs start on the tightest rows and add violated ones: the same optimum as
+    # with every row in the model from the start.
+    rng = np.random.default_rng(4)
+    rows = highs.GENERATE_ABOVE * 3
+    B = rng.normal(size=(rows, 4))
+    x0 = rng.normal(size=4)
+    lo, hi = B @ x0 - rng.uniform(0.5, 2, rows), B @ x0 + rng.uniform(0.5, 2, rows)
+    C = rng.normal(size=(4, 4))
+    g_lo, g_hi = hull.ranges(B, lo, hi, x0 - 4, x0 + 4, C)
+    monkeypatch.setattr(hull, "GENERATE_ABOVE", 10 * rows)
+    a_lo, a_hi = hull.ranges(B, lo, hi, x0 - 4, x0 + 4, C)
+    np.testing.assert_allclose(g_lo, a_lo, rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(g_hi, a_hi, rtol=1e-7, atol=1e-9)
+    assert np.all(g_hi - g_lo < 7.9)                          # the rows cut the column box: a real test
+
+
+def test_an_empty_set_is_said_not_bounded():
+    B = np.array([[1.0, 0.0], [1.0, 0.0]])
+    with pytest.raises(hull.Empty):
+        hull.ranges(B, np.array([0.0, 2.0]), np.array([1.0, 3.0]), -np.ones(2) * 5, np.ones(2) * 5, np.eye(2))
