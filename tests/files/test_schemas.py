@@ -83,6 +83,14 @@ def outputs(tmp_path_factory):
     run("estimate", "thermal", ["estimate", "--model", "two-axis", str(chamber), "--sigma", "1e-5", "--g", "9.81",
                                 "--thermal-degree", "2"])
     run("plan", "stand", ["plan", "--model", "two-axis"])
+    run("identify", "stand", ["identify", "--model", "two-axis"])
+    run("identify", "plan", ["identify", "--model", "two-axis", "--plan", str(d)])
+    run("identify", "003", ["identify", "--model", "003-example1"])
+    run("verify", "all", ["verify"])
+    out["truth", "simulate"] = json.loads(d.with_suffix(".truth.json").read_text())
+    out["truth", "chamber"] = json.loads(chamber.with_suffix(".truth.json").read_text())
+    logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3, 4)]
+    run("repeatability", "three runs", ["repeatability", *logs, "--g", "9.81744"])
     run("plan-temperatures", "chamber", ["plan", "--model", "two-axis", "--temperatures=-20,0,20,40,60"])
     run("plan-norm", "001", ["plan", "--model", "norm"])
     return out
@@ -90,7 +98,9 @@ def outputs(tmp_path_factory):
 
 EXPECTED = {("estimate", k) for k in ("consistent", "mounting", "inconsistent", "repeated", "thermal")} | {
     ("next", "measure"), ("next", "start"), ("diagnose", "consistent"), ("diagnose", "inconsistent"),
-    ("plan", "stand"), ("plan-temperatures", "chamber"), ("plan-norm", "001")}
+    ("plan", "stand"), ("plan-temperatures", "chamber"), ("plan-norm", "001"), ("identify", "stand"),
+    ("identify", "plan"), ("identify", "003"), ("verify", "all"), ("truth", "simulate"), ("truth", "chamber"),
+    ("repeatability", "three runs")}
 
 
 @pytest.mark.parametrize("schema, kind", sorted(EXPECTED))

@@ -210,7 +210,7 @@ def sections(results):
                            f"with the envelope {_p(pairs)} (pairs) and {_p(loo)} (runs against the envelope of the "
                            f"others).")]
     out.append(("Premises", "Each run's bounds are those of calibrate-norm, on its own premises; run 1 of "
-                f"{next(iter(results))}: {first['runs'][0]['premises']}."))
+                f"{next(iter(results))}: {first['runs'][0]['premises']['statement']}."))
     for label, res in results.items():
         if "envelope" not in res:
             out.append((label, "Inconsistent run(s): " + ", ".join(res["inconsistent_runs"])))

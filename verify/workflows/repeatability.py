@@ -152,7 +152,7 @@ def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
     per_run = [{"run": k + 1, "log": r.name, "consistent": res["consistent"],
                 "delta_sigma_max": res["delta_sigma_max"], "minimax_residual": res["minimax_residual"],
                 "parameters": res.get("parameters"), "guaranteed_error": res.get("guaranteed_error"),
-                "premises": res["premises"]["statement"]}
+                "premises": res["premises"]}
                for k, (r, res) in enumerate(zip(runs, results))]
     out = {"runs": per_run, "refused_runs": refused, "parameters": names, "envelope_rule": ENVELOPE_RULE,
            "comparison_rule": "runs i and j agree on a parameter when |a_i - a_j| <= e_i + e_j"}
