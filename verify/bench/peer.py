@@ -151,6 +151,8 @@ def main():
     if binary is None:
         print("imu_tk is not built (../shared/peers/imu_tk/build.sh, or IMU_TK_ACC=path): no peer rows")
         return
+    from . import byte_compiled
+    print(byte_compiled())
     if "--batch" in sys.argv[1:]:
         batch(binary)
         return

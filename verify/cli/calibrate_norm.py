@@ -426,10 +426,12 @@ def leaning(res):
     the readings pin the parameters only as far as every interval's noise bound holds, and how much 10 % more
     would widen them."""
     import numpy as np
+
+    from ..io.recordings import median                  # np.median would load numpy.ma: a tenth of a small run
     e = np.array(list(res["guaranteed_error"].values()))
     a = np.array([res["guaranteed_error_a_priori"][k] for k in res["guaranteed_error"]])
     w = np.array([res["guaranteed_error_sigma_wider"][k] for k in res["guaranteed_error"]])
-    ratio = float(np.median(a / np.maximum(e, 1e-300)))
+    ratio = float(median(a / np.maximum(e, 1e-300)))
     if ratio < FAR_BELOW:
         return []
     return [f"the bounds are {ratio:.1f}x below what these orientations guarantee a priori (median): the readings "
