@@ -6,7 +6,7 @@ import pytest
 
 from garant.generated import norm as N
 from garant.verify.io import recordings
-from garant.verify.workflows import calibrate_norm, norm_information
+from garant.verify.workflows import calibrate_norm, norm_bounds, norm_information
 from garant.verify.cli import main
 from conftest import G_REAL as G, REAL, needs_real, flat
 
@@ -137,20 +137,20 @@ def test_real_diagnosis_is_reported(tmp_path):
 
 
 def test_parameter_bounds_carry_the_q_box_exactly():
-    """calibrate_norm.parameter_bounds: the printed parameters (inv(M) - I entries, b/g) move by
+    """norm_bounds.parameter_bounds: the printed parameters (inv(M) - I entries, b/g) move by
     P_fit dA and P_fit dq_b over the box |dq| <= e; the vertices of the box reach the bound (linear)."""
     import itertools
-    from garant.verify.workflows import calibrate_norm as cn
+    from garant.verify.workflows import norm_bounds as nb
     rng = np.random.default_rng(5)
     M = np.tril(np.eye(3) + rng.uniform(-0.05, 0.05, (3, 3)))
     e = rng.uniform(1e-4, 1e-3, 9)
-    bound = cn.parameter_bounds(M, e)
-    base = cn.parameters(*cn.fold(M, np.zeros(3), np.zeros(3), np.zeros(9), 9.81)[:2], 9.81)
+    bound = nb.parameter_bounds(M, e)
+    base = nb.parameters(*nb.fold(M, np.zeros(3), np.zeros(3), np.zeros(9), 9.81)[:2], 9.81)
     worst = np.zeros(9)
     for signs in itertools.product((-1, 1), repeat=9):
         q = np.array(signs) * e
-        M2, b2, _ = cn.fold(M, np.zeros(3), np.zeros(3), q, 9.81)
-        worst = np.maximum(worst, np.abs(cn.parameters(M2, b2, 9.81) - base))
+        M2, b2, _ = nb.fold(M, np.zeros(3), np.zeros(3), q, 9.81)
+        worst = np.maximum(worst, np.abs(nb.parameters(M2, b2, 9.81) - base))
     assert np.all(worst <= bound * (1 + 1e-12)) and np.allclose(worst, bound, rtol=1e-9)   # equal: linear
     assert not np.allclose(bound, e, rtol=1e-3)          # the old bound (e itself) is not this one
 
@@ -399,7 +399,7 @@ def test_the_output_says_how_much_a_bound_leans_on_the_noise_bound(tmp_path, cap
     n = np.array([r["direction"] for r in res["per_interval"]]).T
     s = np.array([r["residual_after_ms2"] for r in res["per_interval"]]) / G
     bound = 1.1 * np.array([r["noise_bound"] for r in res["per_interval"]]) + res["remainder_bound"]
-    J = calibrate_norm.parameter_map(np.array(res["matrix_fit"]), 9)    # the printed parameters move by J q
+    J = norm_bounds.parameter_map(np.array(res["matrix_fit"]), 9)    # the printed parameters move by J q
     q = cp.Variable(9)
     for k in range(9):
         ends = [cp.Problem(sense(J[k] @ q), [cp.abs(s - N.H(n)[:9].T @ q) <= bound]).solve()

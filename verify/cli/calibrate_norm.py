@@ -101,7 +101,7 @@ def _batch(args):
     CSV and a page, a progress line on standard error; the exit status is `batch_status`'s."""
     from ..io import files, pages, report
     from ..workflows import batch
-    from ..workflows.calibrate_norm import PARAM_LABELS
+    from ..workflows.norm_bounds import PARAM_LABELS
     exports.refuse(args, "calibrate-norm", "concerns one log: a batch writes each unit's calibration to --out DIR")
     single = [o for o in ("plot", "report", "json", "effect", "temperature") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:

@@ -215,7 +215,7 @@ def summary_rows(rows):
     """The summary table: per log its status, verdict, noise bound, still intervals, each parameter with its
     guaranteed error (empty where the log was not calibrated; a log in raw counts relative to the spec's
     [nominal]) and the name of its calibration file."""
-    from .calibrate_norm import PARAM_LABELS
+    from .norm_bounds import PARAM_LABELS
     head = ["log", "status", "verdict", "reason", "delta_sigma_max", "intervals"]
     head += [x for name in PARAM_LABELS[:9] for x in (name, f"{name}_bound")] + ["calibration_file"]
     table = []

@@ -89,7 +89,7 @@ def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
     files from): per axis the raw bias over g and the scale Gamma_ii as polynomials about t0 with one bound over
     the logged range, over the information set (A, s, bnd: |s - A^T w| <= bnd, q = w + s', |s'| <= shift, q
     within lo, hi; dq the set's midpoint, where the estimate is). M_fit, b_fit: the fit (m/s^2 per raw unit); J:
-    how the printed lambda_i (P_ii - 1) and eps_i/g (b_i/g) move with q (calibrate_norm.parameter_map).
+    how the printed lambda_i (P_ii - 1) and eps_i/g (b_i/g) move with q (norm_bounds.parameter_map).
 
     With x = T - ref (the effects' reference temperature, ext.temp_ref), beta_i(T) = b_i/g + sum_k x^k (P (E +
     A(q)) T_k)_i and Gamma_ii(T) = (P (E + A(q)))_ii (1 + sum_k x^k S_k,i) - 1. Their parts linear in q are

@@ -14,7 +14,7 @@ import itertools
 import numpy as np
 
 from ..errors import DataError, opt
-from . import calibrate_norm as cn, norm_noise
+from . import calibrate_norm as cn, norm_bounds as nb, norm_noise
 from ..defaults import MAX_RUNS
 
 #: Candidate effects between runs: (name, physics, which of the 9 parameters move per run, within-run
@@ -115,17 +115,17 @@ def effect_test(mod, runs, ref, g, params):
                 q_r = q[:params].copy()
                 if r and free:
                     q_r[list(free)] += q[params + (r - 1) * len(free): params + r * len(free)]
-                Ms[r], bs[r], _ = cn.fold(Ms[r], bs[r], np.zeros(3), q_r, g)
+                Ms[r], bs[r], _ = nb.fold(Ms[r], bs[r], np.zeros(3), q_r, g)
             if timed:
                 D = D + q[-3:]
             if np.abs(q).max() < 1e-12:
                 break
         worst = float(np.max(np.abs(s) / bounds))
-        p0 = cn.parameters(Ms[0], bs[0], g)
-        changes = {f"run {r + 1} - run 1": {cn.PARAM_LABELS[p]: float(v) for p, v in
-                                            zip(free, (cn.parameters(Ms[r], bs[r], g) - p0)[list(free)])}
+        p0 = nb.parameters(Ms[0], bs[0], g)
+        changes = {f"run {r + 1} - run 1": {nb.PARAM_LABELS[p]: float(v) for p, v in
+                                            zip(free, (nb.parameters(Ms[r], bs[r], g) - p0)[list(free)])}
                    for r in range(1, R)} if free else {}
-        out.append({"effect": name, "physics": physics, "parameters_per_run": [cn.PARAM_LABELS[p] for p in free],
+        out.append({"effect": name, "physics": physics, "parameters_per_run": [nb.PARAM_LABELS[p] for p in free],
                     "worst_in_noise_units": worst, "consistent": bool(worst <= 1), "changes": changes,
                     **({"drift_per_s": (D).tolist()} if timed else {})})
     return out
@@ -147,7 +147,7 @@ def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
         raise DataError("repeatability needs at least two usable runs (several logs, or a means file with a run "
                         "column)" + (f"; left out: {'; '.join(x['log'] + ': ' + x['reason'] for x in refused)}"
                                      if refused else ""), param="logs")
-    names = list(cn.PARAM_LABELS[:params])
+    names = list(nb.PARAM_LABELS[:params])
     bad = [r.name for r, res in zip(runs, results) if not res["consistent"]]
     per_run = [{"run": k + 1, "log": r.name, "consistent": res["consistent"],
                 "delta_sigma_max": res["delta_sigma_max"], "minimax_residual": res["minimax_residual"],
