@@ -55,3 +55,13 @@ def test_the_registry_names_every_calibration_file_of_the_commands():
         options = {o for a in cli.parser(command)._subparsers._group_actions[0].choices[command]._actions
                    for o in a.option_strings if o.startswith("--export-") or o == "--save"}
         assert options == {e.option for e in exports.of(command)}, command
+
+
+@pytest.mark.parametrize("option, value", [("--px4-device-id", "7"), ("--ardupilot-imu", "2"),
+                                           ("--kalibr-topic", "/imu1"), ("--imucal-gyro", "g.json")])
+def test_an_exports_own_option_without_the_export_is_refused_not_ignored(tmp_path, capsys, option, value):
+    log = tmp_path / "log.txt"
+    log.write_text("0 0 0 9.81\n")
+    assert main(["calibrate-norm", str(log), option, value]) == 2
+    err = capsys.readouterr().err
+    assert option in err and ("goes with" in err or "--export-imucal" in err)

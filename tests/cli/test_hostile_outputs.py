@@ -355,7 +355,7 @@ def test_imucal_gyro_is_checked_before_any_work_and_never_ignored(tmp_path, caps
     good = tmp_path / "good.json"
     good.write_text(json.dumps({"K_g": np.eye(3).tolist(), "R_g": np.eye(3).tolist(), "K_ga": np.zeros((3, 3))
                                 .tolist(), "b_g": [0, 0, 0]}))
-    refused(["calibrate-norm", REAL_LOG, "--imucal-gyro", good], capsys, "goes into --export-imucal's file only")
+    refused(["calibrate-norm", REAL_LOG, "--imucal-gyro", good], capsys, "goes with --export-imucal")
 
 
 @pytest.mark.parametrize("name, magic", [("p.svg", b"<?xml"), ("p.pdf", b"%PDF"), ("p.png", b"\x89PNG")])

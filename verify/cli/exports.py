@@ -55,12 +55,9 @@ def _imucal(path, res, args):
 
 
 def _check_imucal(args):
-    """--imucal-gyro is carried by --export-imucal only, and read now (a bad file stops here)."""
+    """--imucal-gyro read now (a bad file stops here)."""
     if args.imucal_gyro:
         from ..io import imucal
-        if not args.export_imucal:
-            raise DataError("--imucal-gyro: its gyroscope goes into --export-imucal's file only; give --export-imucal "
-                            "FILE.json, or leave it out", param="imucal_gyro")
         imucal.read_calibration(args.imucal_gyro)
 
 
@@ -184,6 +181,11 @@ def check(args, command):
             raise DataError(f"{e.option}: that file holds no polynomial in T; with --thermal-degree give {could}",
                             param=e.dest)
     for e in of(command):
+        for flags, keywords in e.options:                # an export's own option without the export: not ignored
+            dest = flags[0].lstrip("-").replace("-", "_")
+            if not getattr(args, e.dest, None) and getattr(args, dest, None) != keywords.get("default"):
+                raise DataError(f"{flags[0]} goes with {e.option}, which was not given: give {e.option} "
+                                f"{e.metavar}, or leave {flags[0]} out", param=dest)
         if e.check:
             e.check(args)
 
