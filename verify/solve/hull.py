@@ -30,11 +30,12 @@ def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
     be stacks, one objective and its multipliers a row: then an array of bounds, one a row."""
     C, L = np.atleast_2d(c), np.atleast_2d(lam)
     lo_ok, hi_ok = np.isfinite(row_lo), np.isfinite(row_hi)
-    L = np.where((L > 0) & ~hi_ok | (L < 0) & ~lo_ok, 0.0, L)
+    if not (lo_ok.all() and hi_ok.all()):              # (all finite: nothing to drop)
+        L = np.where((L > 0) & ~hi_ok | (L < 0) & ~lo_ok, 0.0, L)
     n = B.shape[0] + 2                                  # terms of each entry of L B (zeros add no error)
     mu = C - L @ B
     slack = 1.01 * n * EPS * (np.abs(C) + np.abs(L) @ np.abs(B))     # |mu_true - mu| (rounding of L B)
-    rows = np.where(L > 0, L * np.where(hi_ok, row_hi, 0.0), L * np.where(lo_ok, row_lo, 0.0))
+    rows = L * np.where(L > 0, np.where(hi_ok, row_hi, 0.0), np.where(lo_ok, row_lo, 0.0))   # the same products
     cols = np.maximum(mu * col_lo, mu * col_hi) + slack * np.maximum(np.abs(col_lo), np.abs(col_hi))
     terms = np.hstack([rows, cols])
     out = terms.sum(axis=1) + 1.01 * (terms.shape[1] + 2) * EPS * np.abs(terms).sum(axis=1)
@@ -68,7 +69,8 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     xc, dc = 0.5 * (col_lo + col_hi), np.maximum(0.5 * (col_hi - col_lo), 1e-300)
     both = np.isfinite(row_lo) & np.isfinite(row_hi)
     r = np.where(both, 0.5 * (row_hi - row_lo), 0.0)
-    r = np.where(r > 0, r, np.abs(B) @ dc)          # rows of width 2 (one-sided: entries at most 1)
+    if not (r > 0).all():                          # rows of width 2 (one-sided: entries at most 1)
+        r = np.where(r > 0, r, np.abs(B) @ dc)
     r = np.where(r > 0, r, 1.0)
     Bs = B * dc / r[:, None]
     shift = B @ xc
@@ -98,12 +100,13 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
         keys = list(pts_)
         X = np.array([pts_[e] for e in keys]).T
         BX = Bs @ X
-        V = np.maximum(lo_s[:, None] - BX, BX - hi_s[:, None])
+        V = lo_s[:, None] - BX
+        np.maximum(V, BX - hi_s[:, None], out=V)
         V[S] = -np.inf
         if not (V > TOLERANCE).any():
             break
         per_end = max(1, GENERATE_ABOVE // 9 // V.shape[1])    # each violated end's worst rows
-        top = np.argpartition(-V, min(per_end, rows - 1), axis=0)[:per_end]
+        top = np.argpartition(np.negative(V.T, order="C"), min(per_end, rows - 1), axis=1)[:, :per_end].T   # rows
         new = np.unique(top[V[top, np.arange(V.shape[1])] > TOLERANCE])
         _add_rows(h, Bs[new], lo_s[new], hi_s[new])
         S = np.r_[S, new]                          # in the model's row order

@@ -142,8 +142,16 @@ class Remainder:
             block = rows[b:b + self.BLOCK]
             mid, rad, err = self._enclosure(lo, hi, block, direct)
             fit = (self.A[:, _columns(block)].T @ self.C).reshape(mid.shape)
-            margin = taylor.SUM_ERROR * (1 + np.abs(fit) + np.abs(mid))
-            rb[b:b + self.BLOCK] = (np.abs(mid - fit) + rad + margin) @ w + err
+            # (|mid - fit| + rad) + SUM_ERROR (1 + |fit| + |mid|), in place: the same operations in the same order
+            margin = np.abs(fit)
+            margin += 1
+            margin += np.abs(mid)
+            margin *= taylor.SUM_ERROR
+            d = np.subtract(mid, fit, out=fit)
+            np.abs(d, out=d)
+            d += rad
+            d += margin
+            rb[b:b + self.BLOCK] = d @ w + err
         cb = np.abs(self.C) @ w
         return rb.reshape(-1) * (1 + taylor.SUM_ERROR), cb * (1 + taylor.SUM_ERROR)
 
