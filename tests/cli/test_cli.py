@@ -158,6 +158,11 @@ def test_lines_wrap_at_100_columns_on_a_terminal_into_a_file_and_into_a_pipe():
     said = wrap(command)
     assert max(map(len, said.splitlines())) <= 100 and command_line(said, "add them:") == command.strip()
     assert shlex.split(said.replace(" \\\n", " "))[-2:] == ["--g", "9.81"]
+    quoted = "  add them: garant calibrate-norm " + " ".join(f"'/my data/log {k}.csv'" for k in range(8)) + " --g 9.81"
+    said = wrap(quoted)                                  # a path with a space is never cut inside its quotes
+    assert max(map(len, said.splitlines())) <= 100
+    assert all(line.count("'") % 2 == 0 for line in said.splitlines())           # no line ends inside quotes
+    assert shlex.split(said.replace(" \\\n", " "))[4:12] == [f"/my data/log {k}.csv" for k in range(8)]
 
     class Tty(io.StringIO):
         def isatty(self):

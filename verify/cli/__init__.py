@@ -144,9 +144,11 @@ def wrap(text, width=WIDTH):
             continue
         indent = len(line) - len(line.lstrip(" "))
         command = bool(_COMMAND.match(line))
+        if command:                                      # never break inside a shell-quoted word ('my log.csv')
+            line = re.sub(r"'[^']*'", lambda m: m.group(0).replace(" ", "\0"), line)
         parts = textwrap.wrap(line, width - 2 * command, subsequent_indent=" " * (indent + 2 + 2 * command),
                               break_long_words=False, break_on_hyphens=False, drop_whitespace=True)
-        out.append((" \\\n" if command else "\n").join(parts))
+        out.append((" \\\n" if command else "\n").join(parts).replace("\0", " "))
     return "\n".join(out)
 
 
@@ -164,11 +166,10 @@ class _Output:
 
     def write(self, text):
         """Write to the stream, wrapped, while its reader reads; afterwards, drop the text."""
-        if self.width is not None:
-            whole, _, self.pending = (self.pending + text).rpartition("\n")
-            if not whole and "\n" not in text:
-                return len(text)
-            text = wrap(whole, self.width) + "\n"
+        whole, _, self.pending = (self.pending + text).rpartition("\n")
+        if not whole and "\n" not in text:                # a partial line waits for its end
+            return len(text)
+        text = wrap(whole, self.width) + "\n"
         if not self.stopped:
             try:
                 self.stream.write(text)
@@ -196,7 +197,7 @@ def _reader_may_stop():
         yield
     finally:
         if out.pending and not out.stopped:
-            out.stream.write(wrap(out.pending, out.width or WIDTH))
+            out.stream.write(wrap(out.pending, out.width))
         sys.stdout = out.stream
         if out.stopped:                                # no flush of what the reader will never read
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -59,8 +59,8 @@ def batch_sections(rows, stems, spec, spec_path, said, labels, spec_keys):
 
 
 def unit_of(k):
-    """The unit a parameter is shown in on the batch page: ppm, mrad or mg."""
-    return "ppm" if k.startswith("lambda") else "mrad" if k[0] in "abg" else "mg"
+    """The unit a parameter is shown in on the batch page: the one `side` writes it in (ppm, mrad or mg)."""
+    return side(k, 1.0).split(" ", 1)[1]
 
 
 def norm(res, folder, log, log_data, command):
