@@ -24,6 +24,11 @@ class Empty(Exception):
     """HiGHS finds X empty (to its tolerances): no x meets every constraint."""
 
 
+class Beyond(Exception):
+    """An end of the hull is proven past the limit the caller gave (`ranges(..., beyond=...)`): the caller rejects
+    such a hull whatever its other ends, so they are not solved."""
+
+
 def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
     """A proven upper bound of c^T x over X from the multipliers lam (a multiplier on a side that is
     infinite is dropped: it would bound nothing; rows without a multiplier cost nothing). c and lam may
@@ -49,7 +54,7 @@ TOLERANCE = 1e-9                          # a row violated by less (relative to 
 SIMPLEX = 4
 
 
-def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False, start=()):
+def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False, start=(), beyond=None):
     """(lo, hi): the least and largest value over X of c^T x for each row c of C, each end proven
     (`upper`); with `points`, also the solver's x at each end ((x_min, x_max) per row; None where it
     gave none); with `multipliers`, the lambda that proves each end ((for -c, for c) per row), which
@@ -58,7 +63,9 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     the multipliers it returns are mapped back and proven on X. Many rows: the LPs are solved on the rows
     tightest at the box's centre (and `start`: rows known to bind, e.g. a previous set's), and rows an
     optimum violates are added until none is (the optimum over them is then the optimum over all; any
-    subset's multipliers prove a bound on X, which lies inside the subset's polytope)."""
+    subset's multipliers prove a bound on X, which lies inside the subset's polytope). `beyond` = (lo, hi) per
+    row of C: Beyond as soon as an end is proven past them (below lo, above hi, by more than the proofs' rounding),
+    the rest unsolved; an end within them is what it would be without."""
     B = np.asarray(B, float)
     C = np.atleast_2d(np.asarray(C, float))
     row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)
@@ -92,6 +99,9 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     for _ in range(100):
         for k, sign in todo:
             found[k, sign] = _solve(h, -sign * Cs[k])
+            if beyond is not None and len(S) == rows:           # this end's bound as below: the last LP solved it
+                _past(C[k] * sign, B, row_lo, row_hi, col_lo, col_hi, found[k, sign], S, unit[k] / r[S],
+                      beyond[1][k] if sign > 0 else -beyond[0][k])
         if len(S) == rows:
             break
         pts_ = {e: v[1] for e, v in found.items() if v is not None}
@@ -131,6 +141,18 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
            for k in range(K)]
     lams = [(used[k, 1], used[k, 0]) for k in range(K)]
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
+
+
+def _past(c, B, row_lo, row_hi, col_lo, col_hi, got, S, scale, limit):
+    """Beyond when the end max c^T x, proven as `ranges` proves it (the better of the solver's multipliers and
+    none), is above `limit` by more than 1e-9 of either (a bound within that margin is left to the caller's own
+    test, unchanged)."""
+    lam = np.zeros((2, B.shape[0]))
+    if got is not None:
+        lam[1, S[:len(got[0])]] = -got[0] * scale
+    end = upper(np.vstack([c, c]), B, row_lo, row_hi, col_lo, col_hi, lam).min()
+    if end - limit > 1e-9 * max(abs(end), abs(limit)):
+        raise Beyond()
 
 
 def proven(B, row_lo, row_hi, col_lo, col_hi, C, proofs):

@@ -7,6 +7,8 @@ contracts from it (`exact_information`).
 """
 import numpy as np
 
+from ..solve import hull
+
 def premise_box(X):
     """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used)."""
     if X is None:
@@ -101,9 +103,10 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
     base = noise / f
     cap = np.full(A.shape[0], np.inf) if cap is None else np.r_[cap, np.full(A.shape[0] - len(cap), np.inf)]
 
-    def step(reach, X=None, proofs=None):
+    def step(reach, X=None, proofs=None, within=False):
         """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
-        or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP."""
+        or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP. `within`: None as
+        soon as an LP proves some |q| past X (the premise box is then rejected whatever the other ends)."""
         A_box = lower(reach)
         extra = None if ext is None else ext.extra(reach[9:], A_box, reach[6:9], nu)
         left, shift = remainder_per_interval(F, A_box, reach[6:9], nu, extra)
@@ -111,7 +114,10 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
         if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
             return None
         box = None if X is None and not np.isfinite(cap).any() else np.minimum(1.0 if X is None else X, cap) + shift
-        lo, hi, lams = _hull(A, s, base + left, box, proofs)
+        try:
+            lo, hi, lams = _hull(A, s, base + left, box, proofs, (shift - X, X - shift) if within else None)
+        except hull.Beyond:
+            return None
         return lo - shift, hi + shift, left, lams, shift
 
     lo, hi, lams = _hull(A, s, base if start is None else start, np.minimum(1.0, cap))    # the box's scale
@@ -131,7 +137,7 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
         break
     for factor in PREMISE_FACTORS:                           # each box tried by those multipliers, then by LPs
         X = factor * own
-        got = next((got for by in (proofs, None) for got in [step(X, X, by)]
+        got = next((got for by in (proofs, None) for got in [step(X, X, by, within=True)]
                     if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X)), None)
         if got is not None:
             break
@@ -152,15 +158,15 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
     return (lo, hi), left, X, got[4]
 
 
-def _hull(A, s, bound, X=None, proofs=None):
+def _hull(A, s, bound, X=None, proofs=None, beyond=None):
     """(lo, hi) of each q over |s_k - a_k^T q| <= bound_k and |q| <= X (default 1: no correction of a fit is as
-    large), proven (solve/hull.py), and the multipliers that prove it; from `proofs` alone when given."""
-    from ..solve import hull
+    large), proven (solve/hull.py), and the multipliers that prove it; from `proofs` alone when given. `beyond`:
+    hull.Beyond as soon as an end is proven past it (hull.ranges)."""
     box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
     args = (A.T, s - bound, s + bound, -box, box, np.eye(A.shape[0]))
     if proofs is not None:
         return (*hull.proven(*args, proofs), None)
     try:
-        return hull.ranges(*args, multipliers=True)
+        return hull.ranges(*args, multipliers=True, beyond=beyond)
     except hull.Empty:
         return -box, box, [(np.zeros(len(s)), np.zeros(len(s)))] * A.shape[0]
