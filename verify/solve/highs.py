@@ -7,6 +7,7 @@ with M dense (rows x cols), handed over column-wise. One quiet solver per call; 
 prints on its first construction is kept off standard output.
 """
 import os
+import threading
 
 import highspy
 import numpy as np
@@ -41,6 +42,27 @@ def new(presolve=True):
     return h
 
 
+_small = threading.local()
+
+
+def small(cost, col_lo, col_hi, row_lo, row_hi, start, index, value, strategy=1):
+    """The thread's HiGHS for small LPs (no presolve, `strategy` its simplex_strategy), holding the LP
+    min cost^T x, row_lo <= M x <= row_hi, col_lo <= x <= col_hi, M column-wise (column j's entries are
+    value[start[j]:start[j+1]] in the rows index[start[j]:start[j+1]]), and nothing of the last. A HiGHS built
+    per LP cost 140 us more (`new` and a HighsLp passed), more than most of these LPs take to solve, and gives the
+    same solutions bit for bit. The instance is shared: use it before asking for the next."""
+    h = getattr(_small, "h", None)
+    if h is None:
+        h = _small.h = new(presolve=False)
+    else:
+        h.clearModel()
+    h.setOptionValue("simplex_strategy", strategy)
+    cols = len(cost)
+    h.passModel(cols, len(row_lo), len(index), 1, 1, 0.0, cost, col_lo, col_hi, row_lo, row_hi, start[:cols], index,
+                value, np.zeros(cols, dtype=np.int32))   # 1, 1: column-wise, minimise
+    return h
+
+
 def run(h):
     """h.run(), and once more after resetting HiGHS's global thread scheduler when another HiGHS of this process
     (the caller's own, cvxpy's) started it with more threads than the one asked for here: HiGHS then refuses to
@@ -56,18 +78,10 @@ def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
     """(x, row duals, objective) of the LP above; LPFailed unless optimal."""
     M = np.asarray(M, float)
     rows, cols = M.shape
-    lp = highspy.HighsLp()
-    lp.num_col_, lp.num_row_ = cols, rows
-    lp.col_cost_ = np.asarray(c, float)
-    lp.col_lower_, lp.col_upper_ = np.broadcast_to(col_lo, cols).astype(float), np.broadcast_to(col_hi,
-                                                                                                cols).astype(float)
-    lp.row_lower_, lp.row_upper_ = np.asarray(row_lo, float), np.asarray(row_hi, float)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = np.arange(0, rows * cols + 1, rows, dtype=np.int32)
-    lp.a_matrix_.index_ = np.tile(np.arange(rows, dtype=np.int32), cols)
-    lp.a_matrix_.value_ = np.ascontiguousarray(M.T).ravel()
-    h = new(presolve=False)
-    h.passModel(lp)
+    h = small(np.asarray(c, float), np.broadcast_to(col_lo, cols).astype(float),
+              np.broadcast_to(col_hi, cols).astype(float), np.asarray(row_lo, float), np.asarray(row_hi, float),
+              np.arange(0, rows * cols + 1, rows, dtype=np.int32), np.tile(np.arange(rows, dtype=np.int32), cols),
+              np.ascontiguousarray(M.T).ravel())
     run(h)
     status = h.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
@@ -172,21 +186,12 @@ def l1_estimators(A, targets=None):
 def _l1(A, T):
     """(Phi, sum |Phi|, row duals lambda (m x n)) on the measurements A."""
     m, K = A.shape
-    lp = highspy.HighsLp()
-    lp.num_col_, lp.num_row_ = 2 * K, m
-    lp.col_cost_ = np.ones(2 * K)
-    lp.col_lower_, lp.col_upper_ = np.zeros(2 * K), np.full(2 * K, INF)
-    lp.row_lower_, lp.row_upper_ = T[:, 0].copy(), T[:, 0].copy()
     nz = A != 0
     counts = nz.sum(axis=0)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = np.r_[0, np.cumsum(np.r_[counts, counts])].astype(np.int32)
     rows = np.nonzero(nz.T)[1].astype(np.int32)                 # row indices, column by column
     vals = A.T[nz.T]
-    lp.a_matrix_.index_ = np.r_[rows, rows]
-    lp.a_matrix_.value_ = np.r_[vals, -vals]
-    h = new(presolve=False)
-    h.passModel(lp)
+    h = small(np.ones(2 * K), np.zeros(2 * K), np.full(2 * K, INF), T[:, 0].copy(), T[:, 0].copy(),
+              np.r_[0, np.cumsum(np.r_[counts, counts])].astype(np.int32), np.r_[rows, rows], np.r_[vals, -vals])
     idx = np.arange(m, dtype=np.int32)
     Phi, err, Y = np.zeros((K, T.shape[1])), np.zeros(T.shape[1]), np.zeros((m, T.shape[1]))
     for k in range(T.shape[1]):

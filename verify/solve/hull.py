@@ -196,18 +196,9 @@ def _add_rows(h, B, lo, hi):
 
 
 def _model(B, row_lo, row_hi):
-    """A HiGHS model of the scaled rows, the columns in their scaled box [-1, 1], no objective yet."""
+    """The thread's HiGHS for small LPs (highs.small) holding the scaled rows, the columns in their scaled box
+    [-1, 1], no objective yet."""
     rows, cols = B.shape
-    lp = highspy.HighsLp()
-    lp.num_col_, lp.num_row_ = cols, rows
-    lp.col_cost_ = np.zeros(cols)
-    lp.col_lower_, lp.col_upper_ = -np.ones(cols), np.ones(cols)
-    lp.row_lower_, lp.row_upper_ = row_lo, row_hi
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = np.arange(0, rows * cols + 1, rows, dtype=np.int32)
-    lp.a_matrix_.index_ = np.tile(np.arange(rows, dtype=np.int32), cols)
-    lp.a_matrix_.value_ = np.ascontiguousarray(B.T).ravel()
-    h = highs.new(presolve=False)
-    h.setOptionValue("simplex_strategy", SIMPLEX)
-    h.passModel(lp)
-    return h
+    return highs.small(np.zeros(cols), -np.ones(cols), np.ones(cols), row_lo, row_hi,
+                       np.arange(0, rows * cols + 1, rows, dtype=np.int32),
+                       np.tile(np.arange(rows, dtype=np.int32), cols), np.ascontiguousarray(B.T).ravel(), SIMPLEX)
