@@ -98,3 +98,81 @@ def test_an_empty_set_is_said_not_bounded():
     B = np.array([[1.0, 0.0], [1.0, 0.0]])
     with pytest.raises(hull.Empty):
         hull.ranges(B, np.array([0.0, 2.0]), np.array([1.0, 3.0]), -np.ones(2) * 5, np.ones(2) * 5, np.eye(2))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_limit_stops_the_hull_only_when_an_end_is_proven_past_it(seed):
+    # `beyond` lets the premise box's hull stop at its first end past the box (norm_information): with limits a
+    # millionth beyond every end nothing stops and every end is the one without limits, bit for bit; with one limit
+    # a millionth inside its end, Beyond. Red if the stop fired on an end within its limit (the box would be
+    # rejected that the full hull accepts) or the ends solved were changed by the check.
+    rng = np.random.default_rng(seed)
+    B = rng.normal(size=(30, 5))
+    x0 = rng.normal(size=5)
+    lo, hi = B @ x0 - rng.uniform(0.1, 1, 30), B @ x0 + rng.uniform(0.1, 1, 30)
+    C = np.eye(5)
+    plain = hull.ranges(B, lo, hi, x0 - 5, x0 + 5, C, multipliers=True)
+    width = plain[1] - plain[0]
+    within = (plain[0] - 1e-6 * width, plain[1] + 1e-6 * width)
+    got = hull.ranges(B, lo, hi, x0 - 5, x0 + 5, C, multipliers=True, beyond=within)
+    assert np.array_equal(got[0], plain[0]) and np.array_equal(got[1], plain[1])
+    assert all(np.array_equal(a, b) for p, q in zip(got[2], plain[2]) for a, b in zip(p, q))
+    k = seed % 5
+    for side in (0, 1):
+        limits = [within[0].copy(), within[1].copy()]
+        limits[side][k] = plain[side][k] + (1e-6 if side == 0 else -1e-6) * width[k]
+        with pytest.raises(hull.Beyond):
+            hull.ranges(B, lo, hi, x0 - 5, x0 + 5, C, beyond=limits)
+
+
+def test_the_shared_small_lp_solver_gives_each_lp_what_a_fresh_highs_gives_bit_for_bit():
+    # highs.small passes each LP into this thread's one HiGHS, cleared of the last: a hull, a minimax fit and the
+    # l1 estimators, in turn and of different sizes, give the solutions a new HiGHS per LP gives, bit for bit, and
+    # another thread has its own instance. Red if the last model's rows, basis or options (the hull's primal
+    # simplex) carried over into the next.
+    import threading
+    import highspy
+    rng = np.random.default_rng(7)
+    B = rng.normal(size=(30, 4))
+    lo, hi = B @ np.ones(4) - 1, B @ np.ones(4) + 1
+
+    def fresh(cost, M, row_lo, row_hi, col_lo, col_hi, strategy):
+        h = highs.new(presolve=False)
+        h.setOptionValue("simplex_strategy", strategy)
+        lp = highspy.HighsLp()
+        lp.num_col_, lp.num_row_ = M.shape[1], M.shape[0]
+        lp.col_cost_, lp.col_lower_, lp.col_upper_ = cost, col_lo, col_hi
+        lp.row_lower_, lp.row_upper_ = row_lo, row_hi
+        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = np.arange(0, M.size + 1, M.shape[0], dtype=np.int32)
+        lp.a_matrix_.index_ = np.tile(np.arange(M.shape[0], dtype=np.int32), M.shape[1])
+        lp.a_matrix_.value_ = np.ascontiguousarray(M.T).ravel()
+        h.passModel(lp)
+        highs.run(h)
+        sol = h.getSolution()
+        return np.array(sol.col_value), np.array(sol.row_dual)
+
+    def matrix(M):
+        return (np.arange(0, M.size + 1, M.shape[0], dtype=np.int32),
+                np.tile(np.arange(M.shape[0], dtype=np.int32), M.shape[1]), np.ascontiguousarray(M.T).ravel())
+
+    def shared(cost, M, row_lo, row_hi, col_lo, col_hi, strategy):
+        h = highs.small(cost, col_lo, col_hi, row_lo, row_hi, *matrix(M), strategy)
+        highs.run(h)
+        sol = h.getSolution()
+        return np.array(sol.col_value), np.array(sol.row_dual)
+
+    lps = [(rng.normal(size=4), B, lo, hi, np.full(4, -5.0), np.full(4, 5.0), 4),
+           (rng.normal(size=2), B[:7, :2], lo[:7], hi[:7], np.full(2, -3.0), np.full(2, 3.0), 1),
+           (rng.normal(size=4), B, lo, hi, np.full(4, -5.0), np.full(4, 5.0), 1)]
+    want = [fresh(*lp) for lp in lps]
+    for lp, w in zip(lps * 2, want * 2):
+        got = shared(*lp)
+        assert np.array_equal(got[0], w[0]) and np.array_equal(got[1], w[1])
+    cost, M, row_lo, row_hi, col_lo, col_hi, strategy = lps[1]
+    other = []
+    worker = threading.Thread(target=lambda: other.append(highs.small(cost, col_lo, col_hi, row_lo, row_hi,
+                                                                      *matrix(M), strategy)))
+    worker.start()
+    worker.join()
+    assert other[0] is not highs.small(cost, col_lo, col_hi, row_lo, row_hi, *matrix(M), strategy)
