@@ -73,14 +73,25 @@ def _header(path, delimiter):
     return [h.strip() for h in line.rstrip("\r\n").split(delimiter)]
 
 
-def _load(path, delimiter, usecols, skip):
+def _parse(path, delimiter, usecols, skip):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)                 # "input contained no data": said below
+        return np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
+                          encoding="utf-8-sig", comments=None)
+
+
+def _load(path, delimiter, usecols, skip, first=None):
     """The numeric columns `usecols` of a delimited text file, read in C; one line naming the first bad
-    cell when a cell is not a finite number."""
+    cell when a cell is not a finite number. `first`: a delimiter tried before `delimiter`, quietly (a file it
+    cannot read is read, or refused, by `delimiter` alone): the same numbers, by the same parser."""
+    data = None
+    if first is not None:
+        try:
+            data = _parse(path, first, usecols, skip)
+        except (ValueError, UnicodeDecodeError):
+            pass
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)             # "input contained no data": said below
-            data = np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
-                              encoding="utf-8-sig", comments=None)
+        data = _parse(path, delimiter, usecols, skip) if data is None else data
     except (ValueError, UnicodeDecodeError) as e:
         raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}", param="log") from None
     if data.shape[0] == 0:
@@ -231,7 +242,9 @@ def _read_csv(path, sensor, imu, rate):
 
 
 def _read_imu_tk(path, sensor, imu, rate):
-    data = _load(path, None, [0, 1, 2, 3], 0)
+    with open(path, "rb") as fh:                # columns split by single tabs, as imu_tk's own logs: read as such
+        line = fh.read(512).split(b"\n")[0]     # a third faster than by any whitespace
+    data = _load(path, None, [0, 1, 2, 3], 0, "\t" if b"\t" in line and b" " not in line else None)
     return Read(data[:, 0], data[:, 1:4], True)
 
 
@@ -278,7 +291,8 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror})", param="log") from None
     if len(t) < MIN_SAMPLES:
-        raise DataError(f"{path}: only {len(t)} samples; a static calibration needs a long recording", param="log")
+        raise DataError(f"{path}: only {len(t)} sample{'s' if len(t) != 1 else ''}; a static calibration needs a long "
+                        f"recording (at least {MIN_SAMPLES} samples)", param="log")
     dt, repeats = _check_time(path, t, unit)
     if repeats:
         note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))
