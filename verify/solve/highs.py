@@ -158,8 +158,8 @@ def _chebyshev(A, z, w, s, free, what):
     M = np.block([[A.T, w[:, None]], [A.T, -w[:, None]]])
     c = np.zeros(m + 1)
     c[-1] = 1.0
-    x, _, t = minimize(c, M, np.r_[z - s, np.full(K, -INF)], np.r_[np.full(K, INF), z + s],
-                    np.r_[np.full(m, -INF), -INF if free else 0.0], INF, what)
+    x, _, t = minimize(c, M, np.concatenate([z - s, np.full(K, -INF)]), np.concatenate([np.full(K, INF), z + s]),
+                    np.concatenate([np.full(m, -INF), [-INF if free else 0.0]]), INF, what)
     q = x[:m]
     return q, float(t), z - A.T @ q
 
@@ -191,7 +191,8 @@ def _l1(A, T):
     rows = np.nonzero(nz.T)[1].astype(np.int32)                 # row indices, column by column
     vals = A.T[nz.T]
     h = small(np.ones(2 * K), np.zeros(2 * K), np.full(2 * K, INF), T[:, 0].copy(), T[:, 0].copy(),
-              np.r_[0, np.cumsum(np.r_[counts, counts])].astype(np.int32), np.r_[rows, rows], np.r_[vals, -vals])
+              np.concatenate([[0], np.cumsum(np.concatenate([counts, counts]))]).astype(np.int32),
+              np.concatenate([rows, rows]), np.concatenate([vals, -vals]))
     idx = np.arange(m, dtype=np.int32)
     Phi, err, Y = np.zeros((K, T.shape[1])), np.zeros(T.shape[1]), np.zeros((m, T.shape[1]))
     for k in range(T.shape[1]):

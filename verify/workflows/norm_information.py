@@ -66,8 +66,8 @@ def remainder_per_interval(F, A_box, e_box, nu, extra=None):
     third = a * a * b * f * (aF + d) + (d + aF) * tail + 0.5 * tail ** 2
     left = (in_u + third) / f ** 2 + 0.5 * e * e * np.abs(1.0 / f ** 2 - 1.0) + rho / f
     P = 0.5 * A_box.T @ A_box + A_box @ A_box                 # |n^T (A^T A / 2 + A^2) n|: coefficients bounded by P
-    shift = np.r_[np.diag(P) + 0.5 * e * e, P[0, 1] + P[1, 0], P[0, 2] + P[2, 0], P[1, 2] + P[2, 1],
-                  A_box.T @ e_box + A_box @ e_box]
+    shift = np.concatenate([np.diag(P) + 0.5 * e * e, [P[0, 1] + P[1, 0], P[0, 2] + P[2, 0], P[1, 2] + P[2, 1]],
+                            A_box.T @ e_box + A_box @ e_box])
     return left * (1 + 1e-12) + 1e-16, shift * (1 + 1e-12) + 1e-16
 
 
@@ -110,7 +110,7 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
         A_box = lower(reach)
         extra = None if ext is None else ext.extra(reach[9:], A_box, reach[6:9], nu)
         left, shift = remainder_per_interval(F, A_box, reach[6:9], nu, extra)
-        shift = np.r_[shift, np.zeros(len(reach) - 9)]
+        shift = np.concatenate([shift, np.zeros(len(reach) - 9)])
         if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
             return None
         box = None if X is None and not np.isfinite(cap).any() else np.minimum(1.0 if X is None else X, cap) + shift
