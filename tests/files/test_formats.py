@@ -101,35 +101,3 @@ def test_a_plan_file_with_other_numeric_columns_is_read_in_c_and_a_text_column_f
     quoted.write_text("\n".join([text[0] + ",note"] + [t + ',"a, b"' for t in text[1:]]) + "\n")
     assert positions._numeric(str(quoted), ["alpha_deg", "beta_deg"], others=True) is None
     assert np.array_equal(positions.read_plan(str(quoted), ("alpha", "beta"))[0], rows[:, :2])
-
-
-def test_an_imu_tk_log_split_by_tabs_is_read_as_by_whitespace_and_any_other_falls_back(tmp_path, monkeypatch):
-    # imu_tk's own logs split their columns by single tabs: read with that delimiter (a third faster), the numbers
-    # are those of the whitespace reader, bit for bit. A log whose first line has tabs but whose later lines mix
-    # in spaces or doubled tabs is read by whitespace, as before; a bad cell is named by the whitespace reader.
-    # Red if the tab reader's numbers differed, or a log it cannot split were refused or cut short.
-    rng = np.random.default_rng(2)
-    rows = np.column_stack([np.arange(300) * 0.01, rng.normal(0, 9.81, (300, 3))])
-    tabs = tmp_path / "tabs.txt"
-    tabs.write_text("\n".join("\t".join(f"{x:.7e}" for x in r) for r in rows) + "\n")
-    seen = []
-    parse = recordings._parse
-
-    def spied(path, delimiter, *a):
-        seen.append(delimiter)
-        return parse(path, delimiter, *a)
-    monkeypatch.setattr(recordings, "_parse", spied)
-    fast = recordings._read_imu_tk(str(tabs), None, None, None).raw
-    assert seen == ["\t"]
-    assert np.array_equal(fast, recordings._load(str(tabs), None, [0, 1, 2, 3], 0)[:, 1:4])
-    for k, (old, new) in enumerate((("\t", " "), ("\t", "\t\t"))):
-        mixed = tmp_path / f"mixed{k}.txt"
-        lines = tabs.read_text().splitlines()
-        mixed.write_text("\n".join(lines[:5] + [line.replace(old, new) for line in lines[5:]]) + "\n")
-        seen.clear()
-        got = recordings._read_imu_tk(str(mixed), None, None, None).raw
-        assert seen == ["\t", None] and np.array_equal(got, fast)
-    bad = tmp_path / "bad.txt"
-    bad.write_text(tabs.read_text().replace(f"{rows[9, 2]:.7e}", "x", 1))
-    with pytest.raises(DataError, match="line 10: 'x' is not a number"):
-        recordings._read_imu_tk(str(bad), None, None, None)

@@ -73,25 +73,14 @@ def _header(path, delimiter):
     return [h.strip() for h in line.rstrip("\r\n").split(delimiter)]
 
 
-def _parse(path, delimiter, usecols, skip):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)                 # "input contained no data": said below
-        return np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
-                          encoding="utf-8-sig", comments=None)
-
-
-def _load(path, delimiter, usecols, skip, first=None):
+def _load(path, delimiter, usecols, skip):
     """The numeric columns `usecols` of a delimited text file, read in C; one line naming the first bad
-    cell when a cell is not a finite number. `first`: a delimiter tried before `delimiter`, quietly (a file it
-    cannot read is read, or refused, by `delimiter` alone): the same numbers, by the same parser."""
-    data = None
-    if first is not None:
-        try:
-            data = _parse(path, first, usecols, skip)
-        except (ValueError, UnicodeDecodeError):
-            pass
+    cell when a cell is not a finite number."""
     try:
-        data = _parse(path, delimiter, usecols, skip) if data is None else data
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)             # "input contained no data": said below
+            data = np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
+                              encoding="utf-8-sig", comments=None)
     except (ValueError, UnicodeDecodeError) as e:
         raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}", param="log") from None
     if data.shape[0] == 0:
@@ -242,9 +231,7 @@ def _read_csv(path, sensor, imu, rate):
 
 
 def _read_imu_tk(path, sensor, imu, rate):
-    with open(path, "rb") as fh:                # columns split by single tabs, as imu_tk's own logs: read as such
-        line = fh.read(512).split(b"\n")[0]     # a third faster than by any whitespace
-    data = _load(path, None, [0, 1, 2, 3], 0, "\t" if b"\t" in line and b" " not in line else None)
+    data = _load(path, None, [0, 1, 2, 3], 0)
     return Read(data[:, 0], data[:, 1:4], True)
 
 
