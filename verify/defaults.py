@@ -5,6 +5,10 @@ argument error answer before numpy loads (each module that computes imports its 
 #: The gravity assumed when none is given, m/s^2.
 G_DEFAULT = 9.81
 
+#: Every information set is also bounded for the noise bound (sigma, or each interval's) this much larger: the
+#: figures `sigma_wider` print, how much the bounds lean on it.
+SIGMA_WIDER = 1.1
+
 #: Nodes of the branch and bound for the fewest positions (a mixed-integer program: solve/highs.py; the
 #: built-in stands prove their minimum in a few), then nodes for counting the plans of that size (in all).
 #: Budgeted by work, the result is the same on every machine; the time limits are a safety stop only.

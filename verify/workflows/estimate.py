@@ -1,6 +1,7 @@
 """Estimate q, with guaranteed error bounds, from readings at any set of positions ((6)-(8) of 000)."""
 import numpy as np
 
+from ..defaults import SIGMA_WIDER
 from ..errors import DataError, opt
 from ..io.positions import Positions
 from ..solve import lp, taylor
@@ -207,7 +208,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     y = z.reshape(-1) - lin.z0
     q_apriori, e_apriori = lin.q0 + W @ y, v.guaranteed_error
     q, e = _midpoint(*v.interval, q_apriori, e_apriori)
-    q_wider, e_wider = _midpoint(*v.interval_wider, q_apriori, guarantee.SIGMA_WIDER * e_apriori)
+    q_wider, e_wider = _midpoint(*v.interval_wider, q_apriori, SIGMA_WIDER * e_apriori)
     out.update({
         "method": method,
         "q": dict(zip(mod.Q_NAMES, q.tolist())),
@@ -216,7 +217,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
                      "guaranteed_error": dict(zip(mod.Q_NAMES, e_apriori.tolist()))},
         "guaranteed_error_linear": dict(zip(mod.Q_NAMES, v.error_linear.tolist())),
         "guaranteed_error_remainder": dict(zip(mod.Q_NAMES, v.error_remainder.tolist())),
-        "sigma_wider": guarantee.SIGMA_WIDER * sigma,
+        "sigma_wider": SIGMA_WIDER * sigma,
         "guaranteed_error_sigma_wider": dict(zip(mod.Q_NAMES, e_wider.tolist())),
         "sigma_fit": max(float(v.minimax_less_remainder), 0.0),
         "remainder_parts": {k: dict(zip(mod.Q_NAMES, x.tolist())) for k, x in v.parts.items()},

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..defaults import SIGMA_WIDER
 from ..solve import highs, hull, taylor
 from .premises import Premises
 from .remainder import EPS, ROUNDING, Remainder, _columns, _extra, linear_parameters
@@ -322,7 +323,6 @@ class Verdict:
 
 
 SIGMA_TOLERANCE = 0.01     # relative: the smallest supported sigma is bracketed this closely
-SIGMA_WIDER = 1.1          # the information set is also bounded for sigma this much larger: how much it leans on sigma
 #: No further a posteriori box once each q's remainder part that the box sets (left after absorption,
 #: absorbed) is within this fraction of its linear part: a smaller box lowers no bound by more.
 BOX_GAIN = 0.001

@@ -5,10 +5,10 @@ import functools
 
 import numpy as np
 
+from ..defaults import SIGMA_WIDER
 from ..io.recordings import median, raw_unit
 from ..solve import lp, taylor
 from . import norm_information
-from .guarantee import SIGMA_WIDER
 
 
 def fold(M, b, delta, q, g):
