@@ -3,7 +3,8 @@ costs more than the solve (python -m verify.bench measures both).
 
     minimise c^T x  subject to  row_lo <= M x <= row_hi,  col_lo <= x <= col_hi,
 
-with M dense (rows x cols), handed over column-wise. One quiet solver per call; the banner HiGHS
+with M dense (rows x cols), handed over column-wise. The small LPs (hulls, minimax fits, l1 estimators) share one
+quiet solver per thread (`small`), each LP passed into it afresh; the plan search has its own. The banner HiGHS
 prints on its first construction is kept off standard output.
 """
 import os
