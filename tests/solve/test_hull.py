@@ -45,13 +45,18 @@ def _exact_max(c, B, lo, hi, xl, xh):
     return best
 
 
+def _polytope(rng, rows, cols):
+    """(B, x0, lo, hi): random rows around a random point x0, each of width 0.2 to 2 about it."""
+    B = rng.normal(size=(rows, cols))
+    x0 = rng.normal(size=cols)
+    return B, x0, B @ x0 - rng.uniform(0.1, 1, rows), B @ x0 + rng.uniform(0.1, 1, rows)
+
+
 @pytest.mark.parametrize("seed", range(5))
 def test_each_end_is_above_the_exact_optimum_and_within_a_millionth_of_it(seed):
     # The exact optimum over the vertices in rationals: a proven end below it would be a wrong bound.
     rng = np.random.default_rng(seed)
-    B = rng.normal(size=(12, 2))
-    x0 = rng.normal(size=2)
-    lo, hi = B @ x0 - rng.uniform(0.1, 1, 12), B @ x0 + rng.uniform(0.1, 1, 12)
+    B, x0, lo, hi = _polytope(rng, 12, 2)
     xl, xh = x0 - 5, x0 + 5
     C = rng.normal(size=(3, 2))
     got_lo, got_hi = hull.ranges(B, lo, hi, xl, xh, C)
@@ -106,10 +111,7 @@ def test_a_limit_stops_the_hull_only_when_an_end_is_proven_past_it(seed):
     # millionth beyond every end nothing stops and every end is the one without limits, bit for bit; with one limit
     # a millionth inside its end, Beyond. Red if the stop fired on an end within its limit (the box would be
     # rejected that the full hull accepts) or the ends solved were changed by the check.
-    rng = np.random.default_rng(seed)
-    B = rng.normal(size=(30, 5))
-    x0 = rng.normal(size=5)
-    lo, hi = B @ x0 - rng.uniform(0.1, 1, 30), B @ x0 + rng.uniform(0.1, 1, 30)
+    B, x0, lo, hi = _polytope(np.random.default_rng(seed), 30, 5)
     C = np.eye(5)
     plain = hull.ranges(B, lo, hi, x0 - 5, x0 + 5, C, multipliers=True)
     width = plain[1] - plain[0]
