@@ -201,11 +201,12 @@ def duals(model):
     return out
 
 
-def touching(model, lam, directions):
-    """Indices and signs of the plan directions where |H(n)^T lambda| reaches 1."""
+def touching(lam, cols):
+    """Indices and signs of the plan directions where |H(n)^T lambda| reaches 1, `cols` their exact H(n) (entries
+    in the field of sqrt 2 and sqrt 3, so each value comes out of expand in its canonical form, +-1 included)."""
     out = []
-    for k, n in enumerate(directions):
-        v = sp.nsimplify(sp.expand((H(model, list(n)).T * sp.Matrix(lam))[0]))
+    for k, h in enumerate(cols):
+        v = sp.expand(sum((c * w for c, w in zip(h, lam) if w), sp.Integer(0)))
         if abs(v) == 1:
             out.append((k, int(sp.sign(v))))
     return out
@@ -226,7 +227,7 @@ def estimators(model):
     approx = {k: np.array([float(v) for v in c]) for k, c in cols.items()}
     out = []
     for nu, lam in enumerate(duals(model)):
-        cand = touching(model, lam, dirs)
+        cand = touching(lam, list(cols.values()))
         e = sp.Matrix([int(i == nu) for i in range(12)])
         target = np.eye(12)[nu]
         found = None
