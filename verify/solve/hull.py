@@ -100,7 +100,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
         for k, sign in todo:
             found[k, sign] = _solve(h, -sign * Cs[k])
             if beyond is not None and len(S) == rows:           # this end's bound as below: the last LP solved it
-                _past(C[k] * sign, B, row_lo, row_hi, col_lo, col_hi, found[k, sign], S, unit[k] / r[S],
+                _past(C[k] * sign, B, row_lo, row_hi, col_lo, col_hi, _multipliers(found[k, sign], S, unit[k], r),
                       beyond[1][k] if sign > 0 else -beyond[0][k])
         if len(S) == rows:
             break
@@ -126,10 +126,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     objectives = (signs[None, :, None] * C[:, None, :]).reshape(2 * K, -1)     # (k, +), (k, -), ...
     lam = np.zeros((2 * K, rows))
     for i, (k, sign) in enumerate((k, sign) for k in range(K) for sign in signs):
-        got = found[k, sign]
-        if got is not None:
-            y = got[0]
-            lam[i, S[:len(y)]] = -y * unit[k] / r[S[:len(y)]]
+        lam[i] = _multipliers(found[k, sign], S, unit[k], r)
     # lambda = 0 (the column box) is always valid: each end the better of the two proofs
     both = upper(np.vstack([objectives, objectives]), B, row_lo, row_hi, col_lo, col_hi,
                  np.vstack([np.zeros_like(lam), lam])).reshape(2, K, 2)
@@ -143,14 +140,21 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
 
 
-def _past(c, B, row_lo, row_hi, col_lo, col_hi, got, S, scale, limit):
-    """Beyond when the end max c^T x, proven as `ranges` proves it (the better of the solver's multipliers and
-    none), is above `limit` by more than 1e-9 of either (a bound within that margin is left to the caller's own
-    test, unchanged)."""
-    lam = np.zeros((2, B.shape[0]))
+def _multipliers(got, S, unit, r):
+    """The multipliers of one end on the unscaled rows, from the row duals HiGHS gave over the rows S of the
+    model as it then was (0 on the rest; all 0 where it gave none)."""
+    lam = np.zeros(len(r))
     if got is not None:
-        lam[1, S[:len(got[0])]] = -got[0] * scale
-    end = upper(np.vstack([c, c]), B, row_lo, row_hi, col_lo, col_hi, lam).min()
+        y = got[0]
+        lam[S[:len(y)]] = -y * unit / r[S[:len(y)]]
+    return lam
+
+
+def _past(c, B, row_lo, row_hi, col_lo, col_hi, lam, limit):
+    """Beyond when the end max c^T x, proven as `ranges` proves it (the better of the multipliers lam and none),
+    is above `limit` by more than 1e-9 of either (a bound within that margin is left to the caller's own test,
+    unchanged)."""
+    end = upper(np.vstack([c, c]), B, row_lo, row_hi, col_lo, col_hi, np.vstack([np.zeros_like(lam), lam])).min()
     if end - limit > 1e-9 * max(abs(end), abs(limit)):
         raise Beyond()
 

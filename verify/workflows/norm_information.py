@@ -9,6 +9,7 @@ import numpy as np
 
 from ..solve import hull
 
+
 def premise_box(X):
     """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used)."""
     if X is None:
