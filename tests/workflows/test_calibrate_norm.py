@@ -428,3 +428,31 @@ def test_a_refutation_names_each_interval_with_its_own_bound(tmp_path, capsys):
     assert (f"refuting intervals (residual at the best fit > its noise bound + remainder, units of g): {beyond[0]} "
             f"({first['start_s']:.1f}-{first['stop_s']:.1f} s): |{first['residual_after_ms2'] / G:.3e}| > "
             f"{first['noise_bound']:.3e} (--delta-sigma)") in text
+
+
+@needs_real
+@pytest.mark.parametrize("name", ["repeat_session2_acc.txt", "repeat_session4_acc.txt"])
+def test_a_premise_box_the_set_does_not_fit_is_rejected_at_its_first_end_past_it_and_nothing_else_moves(
+        name, monkeypatch):
+    # On these real sessions the boxes 64 and 32 times the information set's own do not hold it: the premise search
+    # (norm_information.exact_information) rejects them when an LP proves one end past the box, without solving the
+    # other ends (hull.Beyond). The calibration is the one the search makes with every end solved, bit for bit.
+    # Red if the stop never fires here (the LPs it saves are back) or the calibration differs in any byte; a stop
+    # that fires on an end within its limit is red in tests/solve/test_hull.py (here the box taken, 16 times the
+    # set's own, is proven by earlier multipliers without an LP, so such a stop would not show).
+    from garant.verify.solve import hull
+    from garant.verify.workflows import jobs
+    stops, plain = [], hull.ranges
+
+    def counted(*a, beyond=None, **k):
+        try:
+            return plain(*a, beyond=beyond, **k)
+        except hull.Beyond:
+            stops.append(1)
+            raise
+    monkeypatch.setattr(hull, "ranges", counted)
+    fast = jobs.calibrate_norm(str(REAL / name), g=G).to_json()
+    assert stops
+    monkeypatch.setattr(hull, "ranges", lambda *a, beyond=None, **k: plain(*a, **k))
+    full = jobs.calibrate_norm(str(REAL / name), g=G).to_json()
+    assert fast == full

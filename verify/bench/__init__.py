@@ -292,22 +292,29 @@ def bench_scale(rows=(1_000, 10_000, 100_000, 1_000_000), distinct=96):
     return out
 
 
+def distinct_positions(n, path, seed=0):
+    """Write a two-axis positions file of n distinct random positions (both angles uniform), read by the exact
+    model with errors within 1e-4 and noise within 1e-5 g (10 digits): what `bench_estimate` times, to run
+    `garant estimate --model two-axis PATH --sigma 1e-5` on at any size (docs/bench.md). Returns the path."""
+    mod = load("two-axis")
+    rng = np.random.default_rng(seed)
+    p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    P = rng.uniform(0, 360, (n, 2))
+    f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (n, 3))
+    np.savetxt(path, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="",
+               fmt="%.10g")
+    return path
+
+
 def bench_estimate(ns=(100, 1_000, 10_000)):
     """`garant estimate` on N distinct random two-axis positions vs the per-target baseline
     (baseline.per_target_estimate), each a fresh process, interpreter start and imports included on both sides.
     N = 1e5 (baseline about a minute per run) is left to `garant estimate` alone (docs/bench.md)."""
     import tempfile
-    mod = load("two-axis")
-    rng = np.random.default_rng(0)
     out = []
     with tempfile.TemporaryDirectory() as tmp:
         for n in ns:
-            p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
-            P = rng.uniform(0, 360, (n, 2))
-            f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (n, 3))
-            path = f"{tmp}/d{n}.csv"
-            np.savetxt(path, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3",
-                       comments="", fmt="%.10g")
+            path = distinct_positions(n, f"{tmp}/d{n}.csv")
             garant = [sys.executable, "-c", "import sys; from garant.verify.cli import main; sys.exit(main())",
                       "estimate", "--model", "two-axis", path, "--sigma", "1e-5"]
             t, _ = timed(lambda: subprocess.run(garant, check=True, capture_output=True))

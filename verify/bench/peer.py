@@ -108,11 +108,7 @@ def batch(binary, repeat=3):
     import filecmp
     import shutil
     with tempfile.TemporaryDirectory() as tmp:
-        logs = []
-        for copy in range(BATCH_COPIES):
-            for k in (2, 3, 4):
-                logs.append(Path(tmp) / f"unit{copy:02d}_session{k}.txt")
-                shutil.copyfile(REAL / f"repeat_session{k}_acc.txt", logs[-1])
+        logs = _batch_logs(tmp)
         garant = str(Path(sys.executable).with_name("garant"))
         runs = {"garant, every core": [], "garant --jobs 1": [], "imu_tk, once per log": []}
         for _ in range(repeat):
@@ -144,9 +140,84 @@ def batch(binary, repeat=3):
     return med, same
 
 
+def _batch_logs(tmp):
+    """The production line's 30 logs in the folder tmp: BATCH_COPIES copies of repeat sessions 2-4."""
+    import shutil
+    logs = []
+    for copy in range(BATCH_COPIES):
+        for k in (2, 3, 4):
+            logs.append(Path(tmp) / f"unit{copy:02d}_session{k}.txt")
+            shutil.copyfile(REAL / f"repeat_session{k}_acc.txt", logs[-1])
+    return logs
+
+
+def profile():
+    """Where the production line's CPU goes: its 30 logs calibrated in this process (`--jobs 1`), once to load
+    every module, then again with HiGHS's solves, the logs' reading and their still intervals timed apart (CPU of
+    this process), and the LP ends a rejected premise box did not solve (hull.Beyond: it stops at its first end
+    proven past the box)."""
+    import contextlib
+    import io
+    from garant.verify.cli import main as garant         # the installed package's modules, as the command runs them
+    from garant.verify.io import recordings
+    from garant.verify.solve import highs, hull
+    spent, count = {"solves": 0.0, "read": 0.0, "still": 0.0}, {"solves": 0, "unsolved": 0}
+
+    def timing(owner, name, key):
+        inner = getattr(owner, name)
+
+        def timed_call(*a, **k):
+            t = time.process_time()
+            try:
+                return inner(*a, **k)
+            finally:
+                spent[key] += time.process_time() - t
+                count["solves"] += key == "solves"
+        return inner, timed_call
+
+    def ranges(*a, **k):
+        before = count["solves"]
+        try:
+            return plain_ranges(*a, **k)
+        except hull.Beyond:           # the ends of C it did not solve
+            count["unsolved"] += 2 * len(np.atleast_2d(a[5])) - (count["solves"] - before)
+            raise
+    plain_ranges = hull.ranges
+    patches = [(highs, "run", *timing(highs, "run", "solves")), (recordings, "read_log",
+               *timing(recordings, "read_log", "read")), (recordings, "still_intervals",
+               *timing(recordings, "still_intervals", "still")), (hull, "ranges", plain_ranges, ranges)]
+    with tempfile.TemporaryDirectory() as tmp:
+        logs = _batch_logs(tmp)
+        argv = ["calibrate-norm", *map(str, logs), "--g", str(G_LOGS), "--out", f"{tmp}/out", "--jobs", "1"]
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            garant(argv)
+            for owner, name, _, patched in patches:
+                setattr(owner, name, patched)
+            try:
+                t = time.process_time()
+                garant(argv[:-4] + ["--out", f"{tmp}/again", "--jobs", "1"])
+                total = time.process_time() - t
+            finally:
+                for owner, name, inner, _ in patches:
+                    setattr(owner, name, inner)
+    rest = total - sum(spent.values())
+    print(f"Where the production line's CPU goes: {len(logs)} logs in one process (--jobs 1), its modules loaded")
+    for label, value in ((f"all {len(logs)} logs", total),
+                         (f"HiGHS's solves ({count['solves']:,} LPs, {count['solves'] / len(logs):.1f} per log)",
+                          spent["solves"]), ("reading the logs", spent["read"]),
+                         ("their still intervals", spent["still"]),
+                         ("the rest: fits, remainders, proofs and files, in Python", rest)):
+        print(f"  {label:64s} {value:6.3f} s")
+    print(f"  LP ends a rejected premise box did not solve (it stops at its first end proven past the box): "
+          f"{count['unsolved']:,}")
+
+
 def main():
     """Both tools on every real log, then on synthetic logs of 1e5 and 1e6 samples; then the production line
-    (`--batch`: that alone)."""
+    (`--batch`: that alone; `--profile`: where its CPU goes, no imu_tk needed)."""
+    if "--profile" in sys.argv[1:]:
+        profile()
+        return
     binary = imu_tk_binary()
     if binary is None:
         print("imu_tk is not built (../shared/peers/imu_tk/build.sh, or IMU_TK_ACC=path): no peer rows")
