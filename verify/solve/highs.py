@@ -49,9 +49,10 @@ _small = threading.local()
 def small(cost, col_lo, col_hi, row_lo, row_hi, start, index, value, strategy=1):
     """The thread's HiGHS for small LPs (no presolve, `strategy` its simplex_strategy), holding the LP
     min cost^T x, row_lo <= M x <= row_hi, col_lo <= x <= col_hi, M column-wise (column j's entries are
-    value[start[j]:start[j+1]] in the rows index[start[j]:start[j+1]]), and nothing of the last. A HiGHS built
-    per LP cost 140 us more (`new` and a HighsLp passed), about what one of these LPs takes to solve, for the same
-    solutions bit for bit (tests/solve/test_hull.py). The instance is shared: done with one LP before the next."""
+    value[start[j]:start[j+1]] in the rows index[start[j]:start[j+1]]), and nothing of the last: a HiGHS built
+    per LP (`new` and a HighsLp passed) costs about as much as solving one of these LPs, for the same solutions bit
+    for bit (tests/solve/test_hull.py; python -m verify.bench.outputs). The instance is shared: done with one LP
+    before the next."""
     h = getattr(_small, "h", None)
     if h is None:
         h = _small.h = new(presolve=False)
