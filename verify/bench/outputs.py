@@ -10,7 +10,6 @@ effect, and over temperature with both flight-stack files), and a plan. The repr
 name OUT, so those two files are left out.
 """
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -47,17 +46,18 @@ def warm_up_log(path, seed=0, directions=36, still_s=10.0, move_s=2.0, rate=100)
     return path
 
 
-def commands(inputs, out):
-    """(name, argv) of every command; each writes into out."""
+def commands(out):
+    """(name, argv) of every command, run in the folder of the inputs made here (d1e5.csv, sim.csv, warm.csv);
+    each writes into out."""
     sessions = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3, 4)]
-    warm, g = str(inputs / "warm.csv"), "9.81"
+    warm, g = "warm.csv", "9.81"
     faces = [str(IMUCAL / "example_ferraris_session.csv"), "--format", "imucal"]
     return [
-        ("estimate 1e5", ["estimate", "--model", "two-axis", str(inputs / "d1e5.csv"), "--sigma", "1e-5",
+        ("estimate 1e5", ["estimate", "--model", "two-axis", "d1e5.csv", "--sigma", "1e-5",
                           "--json", f"{out}/estimate.json"]),
-        ("next", ["next", "--model", "two-axis", str(inputs / "sim.csv"), "--sigma", "1e-5", "--json",
+        ("next", ["next", "--model", "two-axis", "sim.csv", "--sigma", "1e-5", "--json",
                   f"{out}/next.json"]),
-        ("diagnose", ["diagnose", "--model", "two-axis", str(inputs / "sim.csv"), "--sigma", "1e-6", "--json",
+        ("diagnose", ["diagnose", "--model", "two-axis", "sim.csv", "--sigma", "1e-6", "--json",
                       f"{out}/diagnose.json"]),
         ("six faces", ["estimate", "--model", "six-face", *faces, "--sections",
                        str(IMUCAL / "example_ferraris_session_list.json"), "--sigma", "1e-3", "--json",
@@ -88,22 +88,19 @@ def main():
     if not (tree / "verify" / "cli" / "__init__.py").is_file():
         raise SystemExit(f"{tree}: not a garant checkout")
     out.mkdir(parents=True, exist_ok=True)
-    inputs = Path(tempfile.gettempdir()) / "garant-bench-outputs"    # one place, so both runs name the same logs
-    shutil.rmtree(inputs, ignore_errors=True)
-    try:
-        (inputs / "pkg").mkdir(parents=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        inputs = Path(tmp)
+        (inputs / "pkg").mkdir()
         (inputs / "pkg" / "garant").symlink_to(tree)              # `import garant` is that checkout
         env = {**os.environ, "PYTHONPATH": str(inputs / "pkg"), "OPENBLAS_NUM_THREADS": "1"}
         garant = [sys.executable, "-c", "import sys; from garant.verify.cli import main; sys.exit(main())"]
         distinct_positions(100_000, inputs / "d1e5.csv")
         warm_up_log(inputs / "warm.csv")
         subprocess.run(garant + ["simulate", "--model", "two-axis", "--sigma", "1e-5", "--plan", "quarter16",
-                                 "-o", str(inputs / "sim.csv")], env=env, check=True, capture_output=True)
-        for name, argv in commands(inputs, out):
-            code = subprocess.run(garant + argv, env=env, capture_output=True).returncode
+                                 "-o", "sim.csv"], env=env, cwd=inputs, check=True, capture_output=True)
+        for name, argv in commands(out):          # the inputs made here by relative names: the same in every run
+            code = subprocess.run(garant + argv, env=env, cwd=inputs, capture_output=True).returncode
             print(f"{name:18s} exit {code}")        # 3 (refuted) and 5 (a log proves nothing) write their files too
-    finally:
-        shutil.rmtree(inputs, ignore_errors=True)
     for page in ("index.html", "report.md"):                  # they name OUT in their reproduce line
         (out / "batch" / page).unlink(missing_ok=True)
     print(f"wrote {out} (from {tree}); compare two such folders with diff -r")
