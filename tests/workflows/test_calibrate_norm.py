@@ -8,6 +8,7 @@ from garant.generated import norm as N
 from garant.verify.io import recordings
 from garant.verify.workflows import calibrate_norm, norm_bounds, norm_information
 from garant.verify.cli import main
+from garant.verify.workflows.norm_problem import problem
 from conftest import G_REAL as G, REAL, needs_real, flat
 
 
@@ -40,7 +41,7 @@ def test_synthetic_log_recovers_errors_within_bounds(tmp_path):
     assert len(stills) == len(dirs) + 1
     box = dict(k_max=2e-3, v_max=2e-3, eps_max=2e-3, delta_max=0.0, df_max=1e-5,
                dg_max=0.0)   # hard bound of the mean noise
-    res = calibrate_norm.run(N, stills, G, 9, str(path), delta_sigma=N.remainder_bound(**box))
+    res = calibrate_norm.run(problem(N, stills, G, 9, str(path), delta_sigma=N.remainder_bound(**box)))
     got = np.array(list(res["parameters"].values()))
     bound = np.array(list(res["guaranteed_error"].values()))
     assert np.all(np.abs(got - truth[:9]) <= bound)
@@ -115,7 +116,7 @@ def test_repeat_sessions_agree_within_bounds():
     for s in (2, 3, 4):
         log = recordings.read_log(str(REAL / f"repeat_session{s}_acc.txt"))
         stills, _ = recordings.still_intervals(log)
-        res[s] = calibrate_norm.run(N, stills, G, 9, log.path)
+        res[s] = calibrate_norm.run(problem(N, stills, G, 9, log.path))
     for a, b in ((2, 3), (2, 4), (3, 4)):
         for k in res[a]["parameters"]:
             diff = abs(res[a]["parameters"][k] - res[b]["parameters"][k])
@@ -221,7 +222,7 @@ def test_orientations_are_suggested_only_when_they_shrink_a_bound(tmp_path):
     for dirs, expect in ((list(N.PLAN[:18]), False), (list(N.PLAN[:12]) + list(rng.normal(size=(3, 3))), True)):
         path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
         stills, _ = recordings.still_intervals(recordings.read_log(str(path), "imu_tk"))
-        res = calibrate_norm.run(N, stills, G, 9, str(path), delta_sigma=1e-4)
+        res = calibrate_norm.run(problem(N, stills, G, 9, str(path), delta_sigma=1e-4))
         gain = res["directions_gain"]
         assert bool(res["directions_to_add"]) is expect and (gain["factor"] >= 1.25) is expect, gain
 
@@ -250,7 +251,7 @@ def test_a_12_parameter_calibration_file_takes_out_its_nonlinearity(tmp_path):
     dirs = list(N.PLAN) + list(rng.normal(size=(10, 3)))
     path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
     stills, _ = recordings.still_intervals(recordings.read_log(str(path), "imu_tk"))
-    res = calibrate_norm.run(N, stills, G, 12, str(path), delta_sigma=5e-5)
+    res = calibrate_norm.run(problem(N, stills, G, 12, str(path), delta_sigma=5e-5))
     assert res["consistent"] and abs(res["nonlinearity_delta_g"][0] - 2e-3) < 1e-5
     cal = calibration.checked(calibration.from_norm(res, N.AXES))
     assert cal["delta"][0] == res["nonlinearity_delta_g"][0]
@@ -277,7 +278,7 @@ def test_the_noise_premise_is_the_one_the_bound_needs(scale):
     for signs in (np.ones(len(dirs)), -np.ones(len(dirs)), rng.choice([-1.0, 1.0], len(dirs))):
         raw = (f + G * D * signs * f / np.linalg.norm(f, axis=0)).T
         stills = [Still(float(k), k + 1.0, r, np.zeros(3), 100, np.zeros(3)) for k, r in enumerate(raw)]
-        res = calibrate_norm.run(N, stills, G, 9, "synthetic", delta_sigma=D)
+        res = calibrate_norm.run(problem(N, stills, G, 9, "synthetic", delta_sigma=D))
         assert res["consistent"] and "carried through M" in res["premises"]["statement"] and (
             "truth's correction" in res["premises"]["statement"])
         got = np.array(list(res["parameters"].values()))
@@ -351,7 +352,7 @@ def test_the_norm_bounds_sit_at_the_limit_the_readings_prove(tmp_path, n, seed):
                          move_s=1.0)
     log = recordings.read_log(str(path), "imu_tk")
     stills, _ = recordings.still_intervals(log)
-    res = calibrate_norm.run(N, stills, G, 9, str(path), quantum=recordings.quantum(log))
+    res = calibrate_norm.run(problem(N, stills, G, 9, str(path), quantum=recordings.quantum(log)))
     assert res["consistent"] and len(stills) == n
     assert np.median(np.array(list(res["guaranteed_error_q"].values())) / _independent_hull(res)) <= 1.01
 
@@ -368,7 +369,7 @@ def test_real_log_bounds_are_the_information_sets(name):
     # 3.6x delta_sigma_max (session 3).
     log = recordings.read_log(str(REAL / name), "imu_tk")
     stills, _ = recordings.still_intervals(log)
-    res = calibrate_norm.run(N, stills, G, 9, log.path, quantum=recordings.quantum(log))
+    res = calibrate_norm.run(problem(N, stills, G, 9, log.path, quantum=recordings.quantum(log)))
     assert res["consistent"] and res["remainder_bound"] <= 0.1 * res["delta_sigma_max"]
     half = _independent_hull(res)
     printed = np.array(list(res["guaranteed_error_q"].values()))

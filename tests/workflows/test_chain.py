@@ -238,8 +238,10 @@ def test_six_faces_with_a_misalignment_premise_bound_the_truth(tmp_path):
 
 def test_a_norm_fit_that_runs_away_stops_with_a_line():
     # The fit set a misalignment to 1.6 rad at its first step and went on for 60 steps.
+    from garant.verify.io.recordings import Still
     from garant.verify.workflows import calibrate_norm as cn
+    from garant.verify.workflows.norm_problem import problem
     faces = np.tile(np.vstack([np.eye(3), -np.eye(3)]), (2, 1)) * 9.81
     faces[6:] += np.random.default_rng(1).normal(0, 1e-3, (6, 3))
     with pytest.raises(DataError, match="the norm fit diverges at step 1"):
-        cn.fit(models.load("norm"), faces * 1.02 + 0.1, 9.81, 9)
+        cn.fit(problem(models.load("norm"), [Still(0.0, 1.0, r, np.zeros(3), 1) for r in faces * 1.02 + 0.1], 9.81))

@@ -404,7 +404,7 @@ def bench_calibrate_norm(samples=1_000_000):
     import tempfile
 
     from ..io import recordings
-    from ..workflows import calibrate_norm
+    from ..workflows import calibrate_norm, norm_problem
     mod = load("norm")
     rng = np.random.default_rng(0)
     rows = []
@@ -423,7 +423,7 @@ def bench_calibrate_norm(samples=1_000_000):
         def garant():
             log = recordings.read_log(path, "imu_tk")
             stills, _ = recordings.still_intervals(log)
-            return calibrate_norm.run(mod, stills, 9.81, 9, path, quantum=recordings.quantum(log))
+            return calibrate_norm.run(norm_problem.problem(mod, stills, 9.81, 9, path, quantum=recordings.quantum(log)))
         t_run, res = timed(garant)
         base, _ = timed(lambda: _imu_tk_style(path))
     return (f"calibrate-norm, {samples:.0e} samples (read, still, fit, verdict, bounds)", t_run,

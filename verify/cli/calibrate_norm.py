@@ -232,11 +232,13 @@ def _print(res, args):
           f"remainder {res['remainder_bound']:.1e}")
     print(f"premises: {res['premises']['statement']}")
     options.say_gravity(res["g_given"], res)
-    print(f"minimax residual of the exact norm relation: {res['minimax_residual']:.3e} -> "
+    print(f"verdict: the worst still interval's residual is {res['worst_over_bound']:.3f} of its own bound (its noise "
+          "bound plus the proven remainder) at the fit minimax in those units -> "
           + ("consistent" if res["consistent"] else
-             f"INCONSISTENT: {len(res['disagreements'])} still interval(s) lie beyond their own noise bound plus the "
-             "remainder at the best fit, so the data refute the noise bound there; no bound is given. A uniform "
-             f"--delta-sigma would need at least {res['sigma_min_supported']:.3e} (units of g). Try --diagnose."))
+             f"INCONSISTENT: no correction of the relation meets every interval's bound, so the data refute the "
+             f"noise bound; no bound is given. {len(res['disagreements'])} still interval(s) lie beyond their bound at "
+             f"that fit. A uniform --delta-sigma would need at least {res['sigma_min_supported']:.3e} (units of g). "
+             "Try --diagnose."))
     if "model_discrepancy" in res:
         print(pages.discrepancy(res))
     if not res["consistent"]:
@@ -255,10 +257,10 @@ def refutations(res, count=12):
     for k in res["disagreements"][:count]:
         r = rows[k - 1]
         parts.append(f"{k} ({r['start_s']:.1f}-{r['stop_s']:.1f} s): |{r['residual_after_ms2'] / res['g']:.3e}| > "
-                     f"{r['noise_bound']:.3e} ({r['noise_source']}) + {res['remainder_bound']:.1e}")
+                     f"{r['noise_bound']:.3e} ({r['noise_source']}) + {r['bound'] - r['noise_bound']:.1e}")
     more = len(res["disagreements"]) - count
-    return "refuting intervals (residual at the best fit > its noise bound + remainder, units of g): " + "; ".join(
-        parts) + (f"; and {more} more" if more > 0 else "")
+    return ("refuting intervals (residual at the best fit > its noise bound + remainder, units of g): " + "; ".join(
+        parts) + (f"; and {more} more" if more > 0 else ""))
 
 
 def _with_effect(args, names):
@@ -280,9 +282,12 @@ def _with_effect(args, names):
 
 
 def _print_diagnosis(d, params, args):
-    print(f"\nmodel discrepancy (residuals in units of each interval's noise, {d['noise_bound']}):")
-    print(f"  {params}-parameter model: worst {d['max_residual_before']:.1f} -> "
-          + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
+    print(f"\nmodel discrepancy (the noise bound from {d['noise_bound']}):")
+    print(f"  {params}-parameter model: worst {d['max_residual_before']:.2f} of its bound, the verdict's (noise plus the "
+          "proven remainder) -> " + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
+    if d["scores"]:
+        print("  the effects screened to first order, the worst residual in units of each interval's noise bound alone "
+              "(stricter than the verdict); each set named is then checked by its whole calibration:")
     for step in d["scores"]:
         ranked = sorted(step.items(), key=lambda kv: kv[1])
         print("  try: " + "; ".join(f"{k} {v:.1f}" for k, v in ranked[:6])

@@ -80,9 +80,10 @@ def norm(res, folder, log, log_data, command):
     verdict = (("**consistent**: every still interval's reading fits the model of (2.2) of 001 within its own noise "
                 "bound, so the calibration below holds for this unit with the guaranteed errors shown, as long as "
                 "the premises (next) hold" if res["consistent"] else
-                "**INCONSISTENT**: some still intervals lie beyond their noise bound at the best fit, so the data "
+                "**INCONSISTENT**: no correction of the model meets every still interval's own bound, so the data "
                 "refute the noise bound or the model; no bound is given and no calibration should be used")
-               + f". Minimax residual {res['minimax_residual']:.3e}, noise bound {res['delta_sigma_max']:.3e} "
+               + f". The worst interval is {res['worst_over_bound']:.3f} of its own bound (noise plus the proven "
+               f"remainder) at the fit minimax in those units; noise bound at most {res['delta_sigma_max']:.3e} "
                f"({res['delta_sigma_source']}), proven remainder {res['remainder_bound']:.1e} (units of g)")
     if "model_discrepancy" in res:
         verdict += ". The " + discrepancy(res)

@@ -11,11 +11,11 @@ residual, which would make the bounds circular), plus the proven remainder (2.3)
 import numpy as np
 
 from ..errors import DataError, opt
-from ..io.recordings import raw_unit
 from ..solve import highs, lp
 from . import norm_information, norm_noise
 from .norm_noise import noise_axes, noise_rule, noise_rule_name
 from .norm_bounds import PARAM_LABELS, bounds, fold, guaranteed, information, parameter_map
+from .norm_problem import NormVerdict
 
 MAX_ITER = 60
 #: The largest correction one step of the fit may make (a scale of 50 %, half a radian): a larger one is
@@ -34,9 +34,9 @@ def chebyshev_fit(Hk, s):
     return q, t
 
 
-def initial_map(raw, g):
-    """Identity for logs already near g in m/s^2; else an axis-aligned ellipsoid fit."""
-    if raw_unit(raw, g) == "m/s^2":
+def initial_map(raw, g, si):
+    """Identity for logs already in m/s^2 (`si`); else an axis-aligned ellipsoid fit."""
+    if si:
         return np.eye(3), np.zeros(3), "log in m/s^2: starting from the identity"
     mu, scale = raw.mean(axis=0), raw.std(axis=0).max()
     x = (raw - mu) / scale                                   # centred and scaled for conditioning
@@ -68,50 +68,53 @@ def sigma_and_n(f):
     return (r2 - 1) / (2 * r2), (f / np.sqrt(r2)[:, None]).T
 
 
-def fit(mod, raw, g, params=9, ext=None, start=None, weights=None, free=None):
-    """Iterate the norm relation to convergence: M, b, delta (12 params), residuals, iterations. With catalogue
-    effects (`ext`, norm_effects.Extension) their parameters ext.theta are fitted beside, the term evaluated at
-    the direction p of M (raw - b) and taken out of the reading; then p is in the result. `start`: (M, b, note)
-    to start from (default `initial_map`); `weights`: each interval's noise bound, the fit then minimax in their
-    units (many parameters on few intervals: the plain fit would follow the noisiest); `free`: the corrections
-    fitted (default all; the rest stay 0: misalignments the orientations cannot identify, bounded by a premise)."""
-    M, b, note = initial_map(raw, g) if start is None else start
+def fit(p, ext=None, start=None, weights=None, free=None):
+    """Iterate the norm relation of the problem `p` (norm_problem.NormProblem) to convergence: M, b, delta (12
+    params), residuals, iterations. With catalogue effects (`ext`, norm_effects.Extension) their parameters
+    ext.theta are fitted beside, the term evaluated at the direction p of M (raw - b) and taken out of the reading;
+    then p is in the result. `start`: (M, b, note) to start from (default `initial_map`); `weights`: each interval's
+    bound, the fit then minimax in their units (the question the premises ask: each interval within its own
+    bound); `free`: the corrections fitted (default all; the rest stay 0: misalignments the orientations cannot
+    identify, bounded by a premise)."""
+    params = p.params
+    M, b, note = initial_map(p.raw, p.g, p.si) if start is None else start
     delta = np.zeros(3)
     for it in range(1, MAX_ITER + 1):
-        s, n, p = _state(mod, raw, M, b, delta, g, ext)
-        A = mod.H(n)[:params] if ext is None else np.vstack([mod.H(n)[:params], ext.columns(n)])
+        s, n, _ = _state(p, M, b, delta, ext)
+        A = p.mod.H(n)[:params] if ext is None else np.vstack([p.mod.H(n)[:params], ext.columns(n)])
+        solve = chebyshev_fit if weights is None else lambda H, y: weighted_fit(H, y, weights)
         if free is not None:
             q = np.zeros(A.shape[0])
-            q[free] = chebyshev_fit(A[free], s)[0]
+            q[free] = solve(A[free], s)[0]
         else:
-            q, _ = chebyshev_fit(A, s) if weights is None else weighted_fit(A, s, weights)
+            q = solve(A, s)[0]
         if not np.all(np.isfinite(q)) or np.abs(q[:params]).max() > MAX_STEP:
             k = int(np.nanargmax(np.where(np.isfinite(q), np.abs(q), np.inf)))
             raise Diverged(f"the norm fit diverges at step {it} (a correction of {q[k]:+.3g} to "
                            f"{(PARAM_LABELS[:params] + tuple(ext.labels if ext else ()))[k]})")
         if ext is not None and weights is not None:     # halved while the worst residual grows
-            q = _damped(mod, raw, M, b, delta, g, ext, weights, q, float(np.max(np.abs(s) / weights)))
-        M, b, delta = fold(M, b, delta, q[:params], g)
+            q = _damped(p, M, b, delta, ext, weights, q, float(np.max(np.abs(s) / weights)))
+        M, b, delta = fold(M, b, delta, q[:params], p.g)
         if ext is not None:
             ext.theta = ext.theta + q[params:]
         if np.abs(q[:params]).max() < 1e-12 and np.all(np.abs(q[params:]) * np.abs(A[params:]).max(axis=1) < 1e-12):
             break
-    s, n, p = _state(mod, raw, M, b, delta, g, ext)
-    return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note, p=p)
+    s, n, d = _state(p, M, b, delta, ext)
+    return dict(M=M, b=b, delta=delta, sigma=s, n=n, iterations=it, note=note, p=d)
 
 
 #: Halvings of a step of the fit with effects at most (the last one is taken: 2^-40 of a step is no step).
 HALVINGS = 40
 
 
-def _damped(mod, raw, M, b, delta, g, ext, weights, q, worst):
+def _damped(p, M, b, delta, ext, weights, q, worst):
     """The step q of the fit with effects, halved until the worst residual in units of `weights` does not grow
     (a Chebyshev step on nearly dependent columns may overshoot far beyond where the linearisation holds)."""
     theta = ext.theta
     for _ in range(HALVINGS):
-        M2, b2, d2 = fold(M, b, delta, q[:9], g)
+        M2, b2, d2 = fold(M, b, delta, q[:9], p.g)
         ext.theta = theta + q[9:]
-        s2 = _state(mod, raw, M2, b2, d2, g, ext)[0]
+        s2 = _state(p, M2, b2, d2, ext)[0]
         ext.theta = theta
         if np.max(np.abs(s2) / weights) <= worst * (1 + 1e-12):
             return q
@@ -119,18 +122,18 @@ def _damped(mod, raw, M, b, delta, g, ext, weights, q, worst):
     return q
 
 
-def _state(mod, raw, M, b, delta, g, ext):
-    """sigma and n of (2.2) for the calibration M, b, delta and the effects' term, and the direction p the term is
-    evaluated at (fixed in `ext` with n): the fixed point p = n of the reading with the term taken out, so that
-    the truth's direction m, near n, is near p too (norm_effects.FIXED_POINT)."""
-    F = calibrated(mod, raw, M, b, delta, g)
-    p = F.T / np.linalg.norm(F, axis=1)
+def _state(p, M, b, delta, ext):
+    """sigma and n of (2.2) for the calibration M, b, delta and the effects' term, and the direction d the term is
+    evaluated at (fixed in `ext` with n): the fixed point d = n of the reading with the term taken out, so that
+    the truth's direction m, near n, is near d too (norm_effects.FIXED_POINT)."""
+    F = calibrated(p.mod, p.raw, M, b, delta, p.g)
+    d = F.T / np.linalg.norm(F, axis=1)
     if ext is not None:
-        F, p = ext.fixed_point(F)
+        F, d = ext.fixed_point(F)
     s, n = sigma_and_n(F)
     if ext is not None:
-        ext.at(p, n)
-    return s, n, p
+        ext.at(d, n)
+    return s, n, d
 
 
 class Diverged(DataError):
@@ -147,7 +150,7 @@ def orientations(n, within_deg=SAME_ORIENTATION_DEG):
     return np.array(reps)
 
 
-def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause="", premise=None):
+def _identifiable(p, n, within_deg=ON_AXIS_DEG, cause="", premise=None):
     """Before the fit: the parameters the orientations present identify, structurally: each direction
     within `within_deg` of a sensor axis taken as that axis (six faces, each axis up and down, are axes
     to within a degree), an exact rank test of (2.2) of 001 on them. The parameters they cannot identify
@@ -157,6 +160,7 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
     along the axes: the misalignments enter (2.2) of 001 only at second order there), the scale factors and
     biases are calibrated: returns the indices the premise bounds; a premise these orientations do not need is
     refused."""
+    mod, stills, params, path = p.mod, p.stills, p.params, p.path
     axes = np.vstack([np.eye(3), -np.eye(3)])
     snapped = np.array([axes[np.argmax(axes @ d)] if np.degrees(np.arccos(np.clip((axes @ d).max(), -1, 1)))
                         <= within_deg else d for d in n.T]).T
@@ -193,139 +197,225 @@ def _identifiable(mod, stills, n, params, path, within_deg=ON_AXIS_DEG, cause=""
                     + " (garant plan --model norm lists them all)", param="log")
 
 
-def run(mod, stills, g, params, path, delta_sigma=None, quantum=0.0, ext=None, premise=None):
-    """The whole calibration of a log's still intervals: the dictionary the CLI prints and writes.
+def run(p, diagnose=False):
+    """The whole calibration of the problem `p` (norm_problem.NormProblem): the dictionary the CLI prints and
+    writes; with `diagnose`, also the effect catalogue tested from the same verdict (diagnose_norm).
 
-    The noise bound delta_sigma_max is --delta-sigma when given, else the noise rule from the data
-    (never the fit's own residual). The verdict first: the data are consistent when the minimax
-    residual of the exact norm relation is within delta_sigma_max plus the proven remainder (2.3)
-    of the linearisation around the fit; if not, no bound is given. With catalogue effects (`ext`,
-    norm_effects.Extension) the relation carries their columns and each interval's remainder their rest
-    (norm_effects), and every bound is over the information set of that extended relation. `premise`
-    ({misalignment: bound, rad}, --bound): where the orientations cannot identify the misalignments (each along
-    an axis), the scale factors and biases are fitted and the misalignments held within it (`_identifiable`)."""
-    need = params + 3 + (len(ext.labels) if ext else 0)
-    if len(stills) < need:
-        raise DataError(f"{path}: found only {len(stills)} still interval(s); a {params}-parameter "
+    The noise bound delta_sigma_max is --delta-sigma when given, else the noise rule from the data (never the
+    fit's own residual). The verdict first, the question the premises ask: does some correction of the exact
+    relation, with its proven remainder (2.3), meet every interval's own bound? The fit is minimax in units of each
+    interval's bound and the verdict its worst interval over that bound (within 1: consistent); if not, no bound is
+    given. With catalogue effects (`p.ext`) the relation carries their columns and each interval's remainder their
+    rest (norm_effects), and every bound is over the information set of that extended relation. `p.premise`
+    ({misalignment: bound, rad}, --bound): where the orientations cannot identify the misalignments (each along an
+    axis), the scale factors and biases are fitted and the misalignments held within it (`_identifiable`)."""
+    _enough(p)
+    M0, b0, _ = initial_map(p.raw, p.g, p.si)
+    before, n0 = sigma_and_n(calibrated(p.mod, p.raw, M0, b0, np.zeros(3), p.g))
+    held = _held(p, n0)
+    res = _first_fit(p, n0, held)
+    v = verdict(p, res, held) if p.ext is None else _verdict_effects(p, res)
+    out = _output(p, v, before)
+    if v.consistent:
+        out.update(bounds(p, v))
+    else:
+        out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(v.res["sigma"]) > v.bnd)]
+    if diagnose:
+        out["diagnosis"] = _diagnosis(p, v if p.ext is None else verdict(p.base(), _first_fit(p.base(), n0, None),
+                                                                            None))
+    return out
+
+
+def _enough(p):
+    """Refuse a log with fewer still intervals than the calibration has parameters plus three."""
+    need = p.params + 3 + (len(p.ext.labels) if p.ext else 0)
+    if len(p.stills) < need:
+        raise DataError(f"{p.path}: found only {len(p.stills)} still interval(s); a {p.params}-parameter "
                         f"calibration needs at least {need} (record more orientations, each held still for at least "
                         f"{opt('min_still')} s)")
-    raw = np.array([s.mean for s in stills])
-    M0, b0, _ = initial_map(raw, g)
-    before, n0 = sigma_and_n(calibrated(mod, raw, M0, b0, np.zeros(3), g))
-    free = held = None
-    if premise:
-        if ext is not None:
-            raise DataError(f"{path}: --bound (the misalignments of six faces) and --effect are not taken together",
+
+
+def _off_axis(n):
+    """The largest angle (degrees) of the distinct orientations among directions n (3, K) from the nearest axis."""
+    return max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n))
+
+
+def _held(p, n0):
+    """Before the fit, from the directions n0 of the first map: the q the misalignment premise holds (or None), after
+    checking that the orientations identify the rest and the effects."""
+    if p.premise:
+        if p.ext is not None:
+            raise DataError(f"{p.path}: --bound (the misalignments of six faces) and --effect are not taken together",
                             param="bound")
-        off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
-        held = _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), premise=premise)
-        free = [k for k in range(params) if k not in held]
-    else:
-        _identifiable(mod, stills, n0, params, path)
-    if ext is not None:
-        ext.at(n0, n0)
-        missing = ext.identifiable(mod.H(n0)[:params])
+        return _identifiable(p, n0, max(_off_axis(n0) * 1.01, ON_AXIS_DEG), premise=p.premise)
+    _identifiable(p, n0)
+    if p.ext is not None:
+        p.ext.at(n0, n0)
+        missing = p.ext.identifiable(p.mod.H(n0)[:p.params])
         if missing:
-            raise DataError(f"{path}: beside scale, misalignment and bias these orientations cannot identify "
-                            f"{', '.join(missing)} of {ext.option} (--diagnose lists the effects "
+            raise DataError(f"{p.path}: beside scale, misalignment and bias these orientations cannot identify "
+                            f"{', '.join(missing)} of {p.ext.option} (--diagnose lists the effects "
                             "they cannot tell apart): add fewer effects, or orientations", param="log")
+    return None
+
+
+def _free(p, held):
+    """The corrections the fit moves: all but those a premise holds at 0."""
+    return None if held is None else [k for k in range(p.params) if k not in held]
+
+
+def _first_fit(p, n0, held):
+    """The fit of the base model (each interval weighted alike), or the one line of what the orientations, as they
+    lie, cannot hold apart when it runs away."""
     try:
-        res = fit(mod, raw, g, params, free=free)
-    except Diverged as e:                      # say what the orientations, as they lie, cannot hold apart
-        off = max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n0))
-        _identifiable(mod, stills, n0, params, path, max(off * 1.01, ON_AXIS_DEG), str(e))
-    if ext is not None:     # from the base model's fit, in units of each interval's noise bound
-        rule = noise_rule(stills, res["M"], res["n"], g, quantum)
-        worst = [weighted_fit(mod.H(res["n"])[:params], res["sigma"], rule)[1]]
-        res = fit(mod, raw, g, params, ext, (res["M"], res["b"], res["note"]),
-                  rule if delta_sigma is None else np.full(len(stills), delta_sigma))
-    fit_residual = float(np.abs(res["sigma"]).max())
-    rule = noise_rule(stills, res["M"], res["n"], g, quantum)
-    dsig = float(rule.max()) if delta_sigma is None else delta_sigma
-    source = "--delta-sigma" if delta_sigma is not None else noise_rule_name(stills, quantum)
-    si = raw_unit(raw, g) == "m/s^2"
-    if delta_sigma is None:
+        return fit(p, free=_free(p, held))
+    except Diverged as e:
+        _identifiable(p, n0, max(_off_axis(n0) * 1.01, ON_AXIS_DEG), str(e))
+
+
+def _noise(p, res):
+    """At the fit `res`: each interval's noise rule, its noise bound as the bound uses it (units of g), the bound of
+    its calibrated mean's error (nu, the remainder's), delta_sigma_max and its source."""
+    rule = noise_rule(p.stills, res["M"], res["n"], p.g, p.quantum)
+    dsig = float(rule.max()) if not p.stated else p.delta_sigma
+    source = "--delta-sigma" if p.stated else noise_rule_name(p.stills, p.quantum)
+    if not p.stated:
         noise = np.minimum(rule, dsig)
-    elif si:      # a raw error of norm D g moves the calibrated reading along n by at most |M^T n| D g
+    elif p.si:      # a raw error of norm D g moves the calibrated reading along n by at most |M^T n| D g
         noise = dsig * np.linalg.norm(res["M"].T @ res["n"], axis=0) * (1 + 1e-12)
     else:
-        noise = np.full(len(stills), dsig)
-    cap = None if held is None else misalignment_cap(res["M"], params, premise, held, si)
-    err, missing = guaranteed(mod, res["n"], params, noise, cap)
+        noise = np.full(len(p.stills), dsig)
+    nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(p.stills, p.quantum).T, axis=0) / p.g if not p.stated
+          else np.full(len(p.stills), np.linalg.norm(res["M"], 2) * dsig))
+    return rule, noise, nu, dsig, source
+
+
+def _linear_errors(p, res, noise, cap):
+    """The LP estimator's errors of q (noise only) on the fit's directions, or the one line of what the orientations
+    cannot identify."""
+    err, missing = guaranteed(p.mod, res["n"], p.params, noise, cap)
     if missing:
-        raise DataError(f"{path}: the {len(stills)} orientations cannot identify "
-                        f"{', '.join(mod.Q_NAMES[k] for k in missing)}; add orientations", param="log")
-    nu = (np.linalg.norm(np.abs(res["M"]) @ noise_axes(stills, quantum).T, axis=0) / g if delta_sigma is None
-          else np.full(len(stills), np.linalg.norm(res["M"], 2) * dsig))
-    info = box = exact = None
-    if ext is not None:
-        if params != 9 or not (delta_sigma is None or si):
-            raise DataError(f"{path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
-                            "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
-                            param="effects")
-        consistent, A, bnd, err = ext.verdict(res, noise, nu)
-        base = noise * np.sqrt(1.0 - 2.0 * res["sigma"])             # noise / |F|, the units of sigma
-        rb = float((bnd - base).max())
-        if consistent:
-            found = norm_information.exact_information(mod, res, noise, nu, ext, bnd)
-            if found is None:
-                raise DataError(f"{path}: consistent with {ext.option}, but the remainder of the "
-                                "extended relation cannot be proven from any box around the fit: no bound",
-                                param="effects")
-            info, rb_k, box, shift = found
-            rb, bnd = float(rb_k.max()), base + rb_k
-            exact = (A, bnd, shift, ext)
-            # each contraction's set holds the truth when the premise box does; their common part is empty when
-            # no correction within it meets every interval's bound: the data refute the extended relation there
-            consistent = weighted_fit(A, res["sigma"], bnd)[1] <= 1.0
-    else:
-        rb = linearisation_remainder(mod, err, params)
-        rb = linearisation_remainder(mod, guaranteed(mod, res["n"], params, noise + rb, cap)[0], params)
-        bnd = noise + rb
-        consistent = bool(np.all(np.abs(res["sigma"]) <= bnd)) if cap is None else held_fit(
-            mod.H(res["n"])[:params], res["sigma"], bnd, cap) <= 1.0
-    if ext is None and consistent and params == 9 and (delta_sigma is None or si):
-        found = norm_information.exact_information(mod, res, noise, nu, cap=cap)
+        raise DataError(f"{p.path}: the {len(p.stills)} orientations cannot identify "
+                        f"{', '.join(p.mod.Q_NAMES[k] for k in missing)}; add orientations", param="log")
+    return err
+
+
+def _at(p, res, held):
+    """The noise bounds, premise cap, linear errors and sphere-wide remainder (2.3) at the fit `res`: a NormVerdict
+    not yet judged."""
+    rule, noise, nu, dsig, source = _noise(p, res)
+    cap = None if held is None else misalignment_cap(res["M"], p.params, p.premise, held, p.si)
+    err = _linear_errors(p, res, noise, cap)
+    rb = linearisation_remainder(p.mod, err, p.params)
+    rb = linearisation_remainder(p.mod, guaranteed(p.mod, res["n"], p.params, noise + rb, cap)[0], p.params)
+    return NormVerdict(res, rule, noise, nu, dsig, source, err, rb, noise + rb, cap=cap, held=held)
+
+
+def verdict(p, res, held=None):
+    """The verdict of the base model (no effects) from its first fit `res`: the fit again, minimax in units of
+    each interval's own bound (noise plus the proven remainder), and its worst interval over that bound; for
+    consistent data the information set (with each interval's own remainder where it can be proven)."""
+    v = _at(p, res, held)
+    try:                                      # each interval in units of its own bound, as the premises ask
+        v = _at(p, fit(p, start=(res["M"], res["b"], res["note"]), weights=v.bnd, free=_free(p, held)), held)
+    except Diverged:                          # the first fit stays; the verdict below is the same question at it
+        pass
+    H = p.mod.H(v.res["n"])[:p.params]
+    v.worst = (weighted_fit(H, v.res["sigma"], v.bnd)[1] if v.cap is None
+               else held_fit(H, v.res["sigma"], v.bnd, v.cap))
+    if v.consistent and p.params == 9 and (not p.stated or p.si):
+        found = norm_information.exact_information(p.mod, v.res, v.noise, v.nu, cap=v.cap)
         if found is not None:
-            info, rb_k, box, _ = found
-            rb = float(rb_k.max())
-    if consistent and info is None:
-        info = information(mod, res, params, noise + rb, cap)
+            v.info, rb_k, v.box, _ = found
+            v.rb = float(rb_k.max())
+    if v.consistent and v.info is None:
+        v.info = information(p.mod, v.res, p.params, v.noise + v.rb, v.cap)
+    return v
+
+
+def _verdict_effects(p, res):
+    """The verdict with catalogue effects: from the base model's fit `res`, the extended fit in units of each
+    interval's noise bound, its remainder per interval proven from a premise box (norm_information), and whether
+    some correction within it meets every interval's bound."""
+    ext = p.ext
+    rule0 = noise_rule(p.stills, res["M"], res["n"], p.g, p.quantum)
+    worst0 = weighted_fit(p.mod.H(res["n"])[:p.params], res["sigma"], rule0)[1]
+    res = fit(p, ext, (res["M"], res["b"], res["note"]), rule0 if not p.stated else np.full(len(p.stills),
+                                                                                             p.delta_sigma))
+    rule, noise, nu, dsig, source = _noise(p, res)
+    _linear_errors(p, res, noise, None)
+    if p.params != 9 or not (not p.stated or p.si):
+        raise DataError(f"{p.path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
+                        "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
+                        param="effects")
+    worst, A, bnd, err = ext.verdict(res, noise, nu)
+    base = noise * np.sqrt(1.0 - 2.0 * res["sigma"])             # noise / |F|, the units of sigma
+    v = NormVerdict(res, rule, noise, nu, dsig, source, err, float((bnd - base).max()), bnd, worst)
+    if v.consistent:
+        found = norm_information.exact_information(p.mod, res, noise, nu, ext, bnd)
+        if found is None:
+            raise DataError(f"{p.path}: consistent with {ext.option}, but the remainder of the "
+                            "extended relation cannot be proven from any box around the fit: no bound",
+                            param="effects")
+        v.info, rb_k, v.box, shift = found
+        v.rb, v.bnd = float(rb_k.max()), base + rb_k
+        v.exact = (A, v.bnd, shift, ext)
+        # each contraction's set holds the truth when the premise box does; their common part is empty when
+        # no correction within it meets every interval's bound: the data refute the extended relation there
+        v.worst = weighted_fit(A, res["sigma"], v.bnd)[1]
+    v.discrepancy = [float(worst0), float(weighted_fit(np.vstack([p.mod.H(res["n"])[:p.params], ext.columns(res["n"])]),
+                                                       res["sigma"], rule)[1])]
+    return v
+
+
+def _output(p, v, before):
+    """The calibration's dictionary from the verdict `v` (the bounds are added by norm_bounds.bounds)."""
+    res, g = v.res, p.g
+    A = p.mod.H(res["n"])[:p.params] if v.exact is None else v.exact[0]
+    uniform = float(chebyshev_fit(A if v.cap is None else A[_free(p, v.held)], res["sigma"])[1])
     out = {
-        "log": path, "g": g, "params": params, "intervals": len(stills), "iterations": res["iterations"],
-        "start": res["note"], "raw_unit": raw_unit(raw, g), "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
-        "nonlinearity_delta_g": res["delta"].tolist() if params == 12 else None,
-        "consistent": bool(consistent), "minimax_residual": fit_residual, "delta_sigma_max": dsig,
-        "delta_sigma_source": source, "remainder_bound": rb,
-        "premises": {"statement": "the bounds hold if " + norm_noise.premise(dsig, source, delta_sigma is not None, si,
-                                                                             g)
+        "log": p.path, "g": g, "params": p.params, "intervals": len(p.stills), "iterations": res["iterations"],
+        "start": res["note"], "raw_unit": p.raw_unit, "matrix": res["M"].tolist(), "bias": res["b"].tolist(),
+        "nonlinearity_delta_g": res["delta"].tolist() if p.params == 12 else None,
+        "consistent": v.consistent, "worst_over_bound": float(v.worst), "minimax_residual": uniform,
+        "delta_sigma_max": v.dsig, "delta_sigma_source": v.source, "remainder_bound": v.rb,
+        "premises": {"statement": "the bounds hold if " + norm_noise.premise(v.dsig, v.source, p.stated, p.si, g)
                      + f"; the gravity is g = {g:g} m/s^2 "
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
-                     + ("takes g as exact" if box is not None else "of (2.3) takes g and delta_f as exact")
-                     + "); the orientations are still" + norm_information.premise_box(box)
-                     + _misalignment_premise(premise, held), "g": g, "noise_bound": dsig, "noise_source": source},
-        "sigma_min_supported": max(fit_residual - rb, 0.0),
+                     + ("takes g as exact" if v.box is not None else "of (2.3) takes g and delta_f as exact")
+                     + "); the orientations are still" + norm_information.premise_box(v.box)
+                     + _misalignment_premise(p.premise, v.held), "g": g, "noise_bound": v.dsig,
+                     "noise_source": v.source},
+        "sigma_min_supported": max(uniform - v.rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
                           "noise_rule": float(nr), "noise_bound": float(nb),
-                          "noise_source": "its noise rule" if delta_sigma is None else source,
-                          "residual_before_ms2": float(g * sb),
+                          "noise_source": "its noise rule" if not p.stated else v.source,
+                          "bound": float(b), "residual_before_ms2": float(g * sb),
                           "residual_after_ms2": float(g * sa), "direction": d.tolist()}
-                         for s, nr, nb, sb, sa, d in zip(stills, rule, np.broadcast_to(noise, rule.shape), before,
-                                                         res["sigma"], res["n"].T)],
+                         for s, nr, nb, b, sb, sa, d in zip(p.stills, v.rule, np.broadcast_to(v.noise, v.rule.shape),
+                                                            np.broadcast_to(v.bnd, v.rule.shape), before,
+                                                            res["sigma"], res["n"].T)],
     }
-    if held is not None:
-        out["misalignment_premise"] = {PARAM_LABELS[k]: float(premise[PARAM_LABELS[k]]) for k in held}
-    if ext is not None:
-        worst.append(weighted_fit(np.vstack([mod.H(res["n"])[:params], ext.columns(res["n"])]), res["sigma"], rule)[1])
-        out["model_discrepancy"] = {"max_residual_before": float(worst[0]), "max_residual_after": float(worst[1]),
+    if v.held is not None:
+        out["misalignment_premise"] = {PARAM_LABELS[k]: float(p.premise[PARAM_LABELS[k]]) for k in v.held}
+    if p.ext is not None:
+        out["model_discrepancy"] = {"max_residual_before": v.discrepancy[0], "max_residual_after": v.discrepancy[1],
                                     "units": "each interval's noise rule (first order of (2.2) of 001, no remainder)"}
-        out["effect_names"] = list(ext.names)
-        out["effect_reference"] = {"time_s": ext.t_ref, "temp_c": ext.temp_ref}
-    if not consistent:
-        out["disagreements"] = [int(k) + 1 for k in np.flatnonzero(np.abs(res["sigma"]) > bnd)]
-        return out
-    out.update(bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact, cap))
+        out["effect_names"] = list(p.ext.names)
+        out["effect_reference"] = {"time_s": p.ext.t_ref, "temp_c": p.ext.temp_ref}
     return out
+
+
+def _diagnosis(p, v):
+    """The effect catalogue tested on the base model's verdict `v` (its fit, each interval's bound and its worst
+    residual over it: the diagnosis's first line is the verdict), and the set to add checked by the whole
+    calibration."""
+    from . import diagnose_norm, norm_effects
+    d = diagnose_norm.diagnose(p.mod, p.stills, v.res, p.params, v.noise, v.worst, p.temps, p.rates,
+                               noise_bound=v.source)
+    d["add"], d["checked"] = diagnose_norm.to_add(d, p.mod, lambda names: run(p.with_effects(
+        norm_effects.Extension(p.mod, names, p.stills, p.temps, p.path, p.rates))))
+    return d
 
 
 def misalignment_cap(M_fit, params, premise, held, si):

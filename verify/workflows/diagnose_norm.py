@@ -15,8 +15,7 @@ from itertools import combinations
 
 import numpy as np
 
-from .calibrate_norm import weighted_fit
-from .norm_noise import noise_rule, noise_rule_name
+from ..solve import highs
 
 LARGEST_SET = 3          # effects named together at most
 #: Relative to the largest singular value of the unit-norm columns. Columns that differ by rounding and by the
@@ -87,25 +86,26 @@ def _first_of_kind(best, same, tried, order):
     return sorted(named, key=order.index)
 
 
-def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None, rates=None):
-    """The diagnosis of a log's norm calibration (res: calibrate_norm.fit of its still intervals): the worst
-    residual in units of each interval's noise bound before and after; `named`, the fewest effects that make the
-    data consistent (the smallest worst residual among the sets of that size); `equivalent`, per named effect
-    the effects these orientations cannot tell from it; `unseen`, the effects the base model absorbs here;
-    `scores`, each set tried with its worst residual, size by size. temps: each interval's mean temperature (C),
-    or None; rates: its temperature's rate (C/s), or None."""
+def diagnose(mod, stills, res, params, bounds, t0, temps=None, rates=None, noise_bound="the noise rule"):
+    """The diagnosis of a log's norm calibration from its verdict (calibrate_norm.verdict): its fit `res` and its
+    worst interval over its own bound `t0` (noise plus the proven remainder): the diagnosis's first line is the
+    verdict. The effects are screened to first order in units of each interval's noise bound alone, `bounds`
+    (stricter than the verdict's: a set that passes it leaves the remainder its room, and the whole calibration
+    checks it, `to_add`): `named`, the fewest effects that make the data consistent so (the smallest worst
+    residual among the sets of that size); `equivalent`, per named effect the effects these orientations cannot
+    tell from it; `unseen`, the effects the base model absorbs here; `scores`, each set tried with its worst
+    residual, size by size. temps: each interval's mean temperature (C), or None; rates: its temperature's rate
+    (C/s), or None; `noise_bound`: where the noise bound comes from, in words."""
     s, n = res["sigma"], res["n"]
-    bounds = noise_rule(stills, res["M"], n, g, quantum)
     t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
     base = mod.H(n)[:params]
-    _, t0 = weighted_fit(base, s, bounds)
     cols, skipped = columns(mod, n, t_mid, None if temps is None else np.asarray(temps, float),
                             None if rates is None else np.asarray(rates, float))
     same, unseen = equivalence(base, cols)
     usable = [e for e in cols if e not in unseen]
-    named, after, history = [], t0, []
+    named, after, history = [], highs.chebyshev_fit(base, s, weights=bounds)[1], []
     for size in range(1, min(LARGEST_SET, len(usable)) + 1 if t0 > 1 else 0):
-        tried = {names: weighted_fit(np.vstack([base] + [cols[c] for c in names]), s, bounds)[1]
+        tried = {names: highs.chebyshev_fit(np.vstack([base] + [cols[c] for c in names]), s, weights=bounds)[1]
                  for names in combinations(usable, size)}
         history.append(tried)
         best = min(tried, key=tried.get)
@@ -113,7 +113,7 @@ def diagnose(mod, stills, res, g, params, quantum=0.0, temps=None, rates=None):
         if tried[best] <= 1:
             named = _first_of_kind(best, same, tried, list(mod.EFFECTS))
             break
-    return {"noise_bound": "the " + noise_rule_name(stills, quantum) + (" plus half a count" if quantum else ""),
+    return {"noise_bound": noise_bound,
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0,
             "named": named, "equivalent": {e: _alike(named, e, same[e], history[-1] if history else {}) for e in named},
             "unseen": unseen,

@@ -229,12 +229,39 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     from ..io import calibration, recordings
     from . import calibrate_norm as cn
     from .premises import gravity_uncertainty
-    mod = models.load("norm")
     data = read_log(log, fmt, sensor, imu, rate)
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
-    from . import norm_effects, norm_thermal
+    p = _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, (window, k, min_still))
+    if isinstance(p, dict):                   # a still warm-up: one orientation, the still-only path's result
+        p["premises"] = _norm_premises(p["premises"], g_unc, g_src)
+        return results.NormCalibration(p)
+    res = cn.run(p, diagnose)
+    res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
+    res["premises"] = _norm_premises(res["premises"], g_unc, g_src, (
+        f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} m/s^2 (lambda* of "
+        "(2.2) of 001), the calibration's bounds include it"))
+    _log_figures(res, data, p, note, sensor)
+    if "thermal" in res:
+        res["thermal"].update(command="calibrate-norm", premise=res["premises"]["statement"])
+    if res["consistent"]:
+        res["calibration"] = calibration.from_norm(res, p.mod.AXES)
+        if p.ext is not None:
+            from . import norm_effects, norm_thermal
+            res["calibration"].update(norm_effects.file_entry(res, p.ext.names, None if p.temps is None else
+                                                              list(norm_thermal.sample_range(data, p.stills))))
+    return results.NormCalibration(res)
+
+
+def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, still):
+    """The norm_problem.NormProblem of a log's still intervals with the options asked for (the effects, or the
+    thermal degree's, built once), or, for a still warm-up (one orientation), the result of the still-only path.
+    `still`: (window, k, min_still) of the stillness detector, for the line that refuses too few intervals."""
+    from ..io import recordings
+    from . import norm_effects, norm_problem, norm_thermal
+    mod = models.load("norm")
+    thermal = None
     if temperature is not None:
         norm_thermal.check_degree(temperature)
         if data.temp is None:
@@ -243,56 +270,40 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
         if effects is not None:
             raise DataError("--thermal-degree and --effect are not taken together (--thermal-degree adds "
                             f"{', '.join(norm_thermal.names(temperature))} itself)", param="temperature")
-        stills = norm_thermal.split(data, stills, min_still)
+        stills = norm_thermal.split(data, stills, still[2])
         if stills and norm_thermal.one_orientation(stills):
-            res = norm_thermal.still_only(data, stills, note, g, recordings.quantum(data))
-            res["premises"] = _norm_premises(res["premises"], g_unc, g_src)
-            return results.NormCalibration(res)
+            return norm_thermal.still_only(data, stills, note, g, recordings.quantum(data))
         if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
             raise DataError(f"{data.path}: --thermal-degree takes a log in m/s^2 (the flight stacks' unit); this one "
                             "is in counts", param="log")
     if len(stills) < params + 3:
-        raise DataError(_too_few_stills(data, len(stills), params, window, k, min_still), param="log")
+        raise DataError(_too_few_stills(data, len(stills), params, *still), param="log")
+    if temperature is not None:
+        t_range = norm_thermal.sample_range(data, stills)
+        thermal = dict(names=norm_thermal.names(temperature), temp_ref=round(0.5 * sum(t_range), 1),
+                       option=f"--thermal-degree {temperature} ({', '.join(norm_thermal.names(temperature))})",
+                       thermal_range=t_range)
     temps, rates = (None, None) if data.temp is None else norm_thermal.of_intervals(data, stills)
     ext = None
     if effects is not None:
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path, rates)
-    if temperature is not None:
-        t_range = norm_thermal.sample_range(data, stills)
-        ext = norm_effects.Extension(mod, norm_thermal.names(temperature), stills, temps, data.path, rates,
-                                     round(0.5 * sum(t_range), 1))
-        ext.thermal_range = t_range
-        ext.option = f"--thermal-degree {temperature} ({', '.join(ext.names)})"
-    res = cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
-                 _misalignment_bounds(bound))
-    res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
-    res["premises"] = _norm_premises(res["premises"], g_unc, g_src, (
-        f"; |Delta_g/g| <= {g_unc:g} ({g_src}): the printed scale factors are relative to g = {g:g} m/s^2 (lambda* of "
-        "(2.2) of 001), the calibration's bounds include it"))
+    elif thermal is not None:
+        ext = norm_effects.Extension(mod, thermal.pop("names"), stills, temps, data.path, rates, **thermal)
+    return norm_problem.problem(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
+                                _misalignment_bounds(bound), temps, rates)
+
+
+def _log_figures(res, data, p, note, sensor):
+    """What the log itself says beside the calibration: its samples, duration, rate, noise density and random walk."""
+    from ..io import recordings
     dt = float(recordings.median(np.diff(data.t)))
-    per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in stills], axis=0)      # raw units
+    per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in p.stills], axis=0)      # raw units
     res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
                 "format": data.fmt, "sensor": (sensor or "adxl355") if data.fmt == "openaxes" else None,
                 "rate_hz": 1 / dt,
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
                                        / np.sqrt(3) * np.sqrt(dt))})
-    res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, stills, res["matrix"], res["bias"])
-    if "thermal" in res:
-        res["thermal"].update(command="calibrate-norm", premise=res["premises"]["statement"])
-    if res["consistent"]:
-        res["calibration"] = calibration.from_norm(res, mod.AXES)
-        if ext is not None:
-            res["calibration"].update(norm_effects.file_entry(res, ext.names, None if temps is None else
-                                                              list(norm_thermal.sample_range(data, stills))))
-    if diagnose:
-        raw = np.array([st.mean for st in stills])
-        from . import diagnose_norm
-        res["diagnosis"] = d = diagnose_norm.diagnose(mod, stills, cn.fit(mod, raw, g, params), g, params,
-                                                      recordings.quantum(data), temps, rates)
-        d["add"], d["checked"] = diagnose_norm.to_add(
-            d, mod, lambda names: cn.run(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data),
-                                         norm_effects.Extension(mod, names, stills, temps, data.path, rates)))
-    return results.NormCalibration(res)
+    res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, p.stills, res["matrix"], res["bias"])
 
 
 #: The stillness thresholds tried when a log yields too few still intervals (--still-factor, --min-still).

@@ -6,7 +6,7 @@ import functools
 import numpy as np
 
 from ..defaults import SIGMA_WIDER
-from ..io.recordings import median, raw_unit
+from ..io.recordings import median
 from ..solve import lp, taylor
 from . import norm_information
 
@@ -104,13 +104,16 @@ def plan_bounds(mod, params):
     return best
 
 
-def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None, cap=None):
-    """For data consistent with the noise bound: the estimate (the midpoint of the information set `info`,
-    (lo, hi) of q, folded into the fit `res`), its parameters with guaranteed errors over the same set (each a
-    linear function of q: an LP pair, proven), the a-priori ones of the LP estimator (noise + remainder rb per
-    interval; `err` the linear part), those of the optimal plan, and the orientations worth adding. With catalogue
-    effects, `exact` = (A, bound, shift, ext): the set is q = w + s, |s| <= shift, every w with |sigma - A^T w| <=
-    bound (norm_information.exact_information), and the effects' parameters are bounded over it too."""
+def bounds(p, v):
+    """For data consistent with the noise bound (the problem `p`, norm_problem.NormProblem, and its verdict `v`,
+    norm_problem.NormVerdict): the estimate (the midpoint of the information set v.info, (lo, hi) of q, folded into
+    the fit v.res), its parameters with guaranteed errors over the same set (each a linear function of q: an LP
+    pair, proven), the a-priori ones of the LP estimator (noise + remainder v.rb per interval; v.err the linear
+    part), those of the optimal plan, and the orientations worth adding. With catalogue effects, v.exact = (A,
+    bound, shift, ext): the set is q = w + s, |s| <= shift, every w with |sigma - A^T w| <= bound
+    (norm_information.exact_information), and the effects' parameters are bounded over it too."""
+    mod, res, g, params, si = p.mod, v.res, p.g, p.params, p.si
+    noise, rb, dsig, err, info, exact, cap = v.noise, v.rb, v.dsig, v.err, v.info, v.exact, v.cap
     from ..solve import hull
     best = plan_bounds(mod, params)
     s = res["sigma"]
@@ -127,11 +130,10 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None, cap
     lo, hi = info
     dq, half = taylor.midrad(lo, hi)
     M, b, delta = fold(res["M"], res["b"], res["delta"], dq[:params], g)
-    si = raw_unit(raw, g) == "m/s^2"
     # relative to the raw axes; a log in counts in counts per g (its sensitivities P g) and counts (biases): the
     # same parameters of M / g and b g, whose map from q is as exactly linear (fold)
     unit = 1.0 if si else 1.0 / g
-    p = parameters(M * unit, b / unit, g).tolist() + delta.tolist()[: params - 9]
+    pars = parameters(M * unit, b / unit, g).tolist() + delta.tolist()[: params - 9]
     extra = A.shape[0] - params                          # the effects' parameters: no printed parameter moves with them
     J = np.hstack([parameter_map(res["M"] * unit, params), np.zeros((params, extra))])
     p_lo, p_hi = hull.ranges(A.T, s - bnd, s + bnd, lo - shift, hi + shift, J)
@@ -139,25 +141,10 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None, cap
     p_lo, p_hi = p_lo - reach, p_hi + reach
     p_half = np.minimum(np.maximum(p_hi - J @ dq, J @ dq - p_lo) * (1 + taylor.SUM_ERROR),
                         parameter_bounds(res["M"] * unit, half[:params]))
-    # had each interval's noise bound been SIGMA_WIDER times larger (the remainder as proven): the ranges
-    # over that wider set, within the LP estimator's box for it
-    wider = SIGMA_WIDER * noise * scale + rest
-    centre, e_w = Phi.T @ s, (np.abs(Phi).T @ np.broadcast_to(wider, s.shape)) * (1 + 1e-9) + 1e-15
-    if cap is not None:                          # the held q's measurements of 0 within cap count too
-        Phi_w, e_w, _ = estimator(mod, res["n"], params, wider, cap)
-        centre, e_w = Phi_w.T @ s, e_w * (1 + 1e-9) + 1e-15
-    C = J if si else np.hstack([np.eye(params), np.zeros((params, extra))])
-    try:
-        w_lo, w_hi = hull.ranges(A.T, s - wider, s + wider, centre - e_w, centre + e_w, C)
-    except hull.Empty:                           # it holds the set the verdict found a fit in
-        w_lo, w_hi = C @ (centre - e_w), C @ (centre + e_w)
-    w_lo, w_hi = w_lo - np.abs(C) @ np.broadcast_to(shift, lo.shape), w_hi + np.abs(C) @ np.broadcast_to(shift,
-                                                                                                          lo.shape)
-    mid = C @ dq
-    p_wider = np.minimum(np.maximum(w_hi - mid, mid - w_lo) * (1 + taylor.SUM_ERROR),
-                         parameter_bounds(res["M"] * unit, e_w[:params]) if si else e_w[:params])
-    q = p if si else None
-    counts = None if si else {"sensitivity": dict(zip(COUNT_LABELS, (np.array(p[:9]) + [1, 1, 1, 0, 0, 0, 0, 0, 0])
+    p_wider = _wider(p, v, A, Phi, SIGMA_WIDER * noise * scale + rest, shift, J if si else np.hstack(
+        [np.eye(params), np.zeros((params, extra))]), dq, unit)
+    q = pars if si else None
+    counts = None if si else {"sensitivity": dict(zip(COUNT_LABELS, (np.array(pars[:9]) + [1, 1, 1, 0, 0, 0, 0, 0, 0])
                                                         .tolist())),
                               "error": dict(zip(COUNT_LABELS, p_half[:9].tolist()))}
     effects = {}
@@ -191,6 +178,26 @@ def bounds(mod, res, raw, g, params, noise, rb, dsig, err, info, exact=None, cap
         "raw_axes_counts": counts,
         **effects,
     }
+
+
+def _wider(p, v, A, Phi, wider, shift, C, dq, unit):
+    """The bounds of the printed parameters (C q: J on a log in m/s^2, q itself in counts) had each interval's noise
+    bound been SIGMA_WIDER times larger (`wider`, the remainder as proven): the ranges over that wider set, within
+    the LP estimator's box for it (`Phi`, or the premise's estimator with a cap), about the estimate's q `dq`."""
+    from ..solve import hull
+    s, lo_shape = v.res["sigma"], v.info[0].shape
+    centre, e_w = Phi.T @ s, (np.abs(Phi).T @ np.broadcast_to(wider, s.shape)) * (1 + 1e-9) + 1e-15
+    if v.cap is not None:                          # the held q's measurements of 0 within cap count too
+        Phi_w, e_w, _ = estimator(p.mod, v.res["n"], p.params, wider, v.cap)
+        centre, e_w = Phi_w.T @ s, e_w * (1 + 1e-9) + 1e-15
+    try:
+        w_lo, w_hi = hull.ranges(A.T, s - wider, s + wider, centre - e_w, centre + e_w, C)
+    except hull.Empty:                           # it holds the set the verdict found a fit in
+        w_lo, w_hi = C @ (centre - e_w), C @ (centre + e_w)
+    reach = np.abs(C) @ np.broadcast_to(shift, lo_shape)
+    w_lo, w_hi, mid = w_lo - reach, w_hi + reach, C @ dq
+    return np.minimum(np.maximum(w_hi - mid, mid - w_lo) * (1 + taylor.SUM_ERROR),
+                      parameter_bounds(v.res["M"] * unit, e_w[:p.params]) if p.si else e_w[:p.params])
 
 
 def parameter_map(M_fit, params):

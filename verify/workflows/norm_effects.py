@@ -83,7 +83,7 @@ class Extension:
     """The effects added to the norm relation on a log's still intervals: their parameters theta (over g, the
     units of EFFECT_UNITS), their basis at the fit's directions and what the remainder needs of them."""
 
-    def __init__(self, mod, names, stills, temps, path, rates=None, temp_ref=20.0):
+    def __init__(self, mod, names, stills, temps, path, rates=None, temp_ref=20.0, option=None, thermal_range=None):
         self.mod, self.names, self.path = mod, tuple(names), path
         t_mid = np.array([(st.start + st.stop) / 2 for st in stills])
         self.t_ref = float((t_mid.min() + t_mid.max()) / 2)
@@ -102,8 +102,8 @@ class Extension:
         self.units = [u for x in names for u in mod.EFFECT_UNITS[x]]
         self.theta = np.zeros(len(self.labels))
         self.phi = self.jac = self.p = self.n = None
-        self.thermal_range = None     # (lowest, highest) C of the still intervals, with --thermal-degree
-        self.option = f"--effect {','.join(self.names)}"          # how the user asked for it, in messages
+        self.thermal_range = thermal_range     # (lowest, highest) C of the still intervals, with --thermal-degree
+        self.option = option or f"--effect {','.join(self.names)}"          # how the user asked for it, in messages
 
     def basis(self, p):
         """phi_j at directions p (3, K), shape (P, 3, K)."""
@@ -191,13 +191,14 @@ class Extension:
 
 
 def verdict(mod, res, noise, nu, ext):
-    """Whether the data are consistent with the extended relation, and its design: (consistent, A (9 + P, K) of
+    """Whether the data are consistent with the extended relation, and its design: (the weighted minimax residual in
+    units of each interval's bound, within 1 when consistent; A (9 + P, K) of
     the information set (bias and effect columns over |F|), each interval's bound base + left, the a-priori errors
     of the LP estimator (noise only)). The remainder is bounded on the box of the LP estimator's errors (as the base
     model's verdict bounds (2.3) on it); consistent when some correction meets every interval's bound (a weighted
     minimax fit within 1)."""
     from ..solve import lp
-    from .calibrate_norm import weighted_fit
+    from ..solve import highs
     from .norm_information import design, lower, remainder_per_interval
     s, n = res["sigma"], res["n"]
     A, f = design(mod, res, ext)
@@ -210,8 +211,8 @@ def verdict(mod, res, noise, nu, ext):
                         f"large ({', '.join(f'{x}={v:+.2g}' for x, v in zip(ext.labels, ext.theta))}) for the "
                         "remainder of (2.2) to be bounded on the box the orientations guarantee: no verdict; "
                         "--diagnose names what the data need", param="effects")
-    t = weighted_fit(A, s, base + left)[1]
-    return bool(t <= 1), A, base + left, err
+    t = highs.chebyshev_fit(A, s, weights=base + left)[1]
+    return float(t), A, base + left, err
 
 
 def effects_out(ext, lo, hi, a_priori):

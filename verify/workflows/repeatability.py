@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import DataError, opt
 from . import calibrate_norm as cn, norm_bounds as nb, norm_noise
+from .norm_problem import problem
 from ..defaults import MAX_RUNS
 
 #: Candidate effects between runs: (name, physics, which of the 9 parameters move per run, within-run
@@ -38,7 +39,7 @@ def calibrate_runs(mod, runs, g, params):
     kept, results, refused = [], [], []
     for r in runs:
         try:
-            results.append(cn.run(mod, r.stills, g, params, r.name, quantum=r.quantum))
+            results.append(cn.run(problem(mod, r.stills, g, params, r.name, quantum=r.quantum)))
             kept.append(r)
         except DataError as e:
             refused.append({"log": r.name, "reason": str(e)})
@@ -167,7 +168,7 @@ def run(mod, runs, g, params=9, max_runs=MAX_RUNS):
     comps = compare(a, e, names)
     lo, hi, D = envelope(a, e)
     loo, pairs_env = judged(a, e, names)
-    ref = cn.fit(mod, np.array([st.mean for st in runs[0].stills]), g, params)
+    ref = cn.fit(problem(mod, runs[0].stills, g, params))
     effects = effect_test(mod, runs, ref, g, params)
     named = next((x for x in effects if x.get("consistent")), None)
     moved = set(named["parameters_per_run"]) | ({"eps1/g", "eps2/g", "eps3/g"} if named["effect"] == "bias_drift"
