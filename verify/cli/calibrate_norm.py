@@ -283,8 +283,8 @@ def _with_effect(args, names):
 
 def _print_diagnosis(d, params, args):
     print(f"\nmodel discrepancy (the noise bound from {d['noise_bound']}):")
-    print(f"  {params}-parameter model: worst {d['max_residual_before']:.2f} of its bound, the verdict's (noise plus the "
-          "proven remainder) -> " + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
+    print(f"  {params}-parameter model: worst {d['max_residual_before']:.2f} of its bound, the verdict's (noise plus "
+          "the proven remainder) -> " + ("consistent" if d["consistent_before"] else "INCONSISTENT"))
     if d["scores"]:
         print("  the effects screened to first order, the worst residual in units of each interval's noise bound alone "
               "(stricter than the verdict); each set named is then checked by its whole calibration:")

@@ -24,6 +24,12 @@ MAX_STEP = 0.5
 #: A still interval's direction within this angle (degrees) of a sensor axis is taken as the axis when
 #: asking what the orientations identify (six faces held by hand are axes to within it).
 ON_AXIS_DEG = 1.0
+#: The misalignment premise (--bound) is for six faces: every still interval's direction within this angle (degrees)
+#: of a sensor axis. The misalignments' first-order term at each interval's own direction is carried in the set (its
+#: column of (2.2) of 001, the premise holding it), so the angle is no soundness limit: beyond it the orientations are
+#: no longer faces, and whether they identify the misalignments is their own question (calibrate-norm without
+#: --bound answers it).
+FACE_TOLERANCE_DEG = 10.0
 #: Still intervals whose directions lie within this angle (degrees) hold one orientation.
 SAME_ORIENTATION_DEG = 5.0
 
@@ -236,8 +242,8 @@ def _enough(p):
 
 
 def _off_axis(n):
-    """The largest angle (degrees) of the distinct orientations among directions n (3, K) from the nearest axis."""
-    return max(np.degrees(np.arccos(np.clip(np.abs(d).max(), -1, 1))) for d in orientations(n))
+    """The largest angle (degrees) of the directions n (3, K) from their nearest sensor axis."""
+    return float(np.degrees(np.arccos(np.clip(np.abs(n).max(axis=0), -1, 1))).max())
 
 
 def _held(p, n0):
@@ -247,7 +253,13 @@ def _held(p, n0):
         if p.ext is not None:
             raise DataError(f"{p.path}: --bound (the misalignments of six faces) and --effect are not taken together",
                             param="bound")
-        return _identifiable(p, n0, max(_off_axis(n0) * 1.01, ON_AXIS_DEG), premise=p.premise)
+        off = _off_axis(n0)
+        if off > FACE_TOLERANCE_DEG:
+            raise DataError(f"{p.path}: --bound (the misalignments of six faces) takes orientations within "
+                            f"{FACE_TOLERANCE_DEG:g} degrees of the sensor axes; these lie up to {off:.1f} degrees "
+                            "off: drop --bound (calibrate-norm then says whether they identify the misalignments, and "
+                            "which orientations to add), or record each face flat", param="bound")
+        return _identifiable(p, n0, max(off * 1.01, ON_AXIS_DEG), premise=p.premise)
     _identifiable(p, n0)
     if p.ext is not None:
         p.ext.at(n0, n0)
@@ -325,9 +337,10 @@ def verdict(p, res, held=None):
                else held_fit(H, v.res["sigma"], v.bnd, v.cap))
     if v.consistent and p.params == 9 and (not p.stated or p.si):
         found = norm_information.exact_information(p.mod, v.res, v.noise, v.nu, cap=v.cap)
-        if found is not None:
-            v.info, rb_k, v.box, _ = found
-            v.rb = float(rb_k.max())
+        if found is not None:             # the set q = w + s, |s| <= shift: the remainder's part q absorbs
+            v.info, rb_k, v.box, shift = found
+            A, f = norm_information.design(p.mod, v.res)
+            v.rb, v.exact = float(rb_k.max()), (A, v.noise / f + rb_k, shift, None)
     if v.consistent and v.info is None:
         v.info = information(p.mod, v.res, p.params, v.noise + v.rb, v.cap)
     return v
@@ -384,7 +397,7 @@ def _output(p, v, before):
                      "(its error Delta_g/g enters lambda_i* = lambda_i - Delta_g/g, (2.2) of 001; the remainder "
                      + ("takes g as exact" if v.box is not None else "of (2.3) takes g and delta_f as exact")
                      + "); the orientations are still" + norm_information.premise_box(v.box)
-                     + _misalignment_premise(p.premise, v.held), "g": g, "noise_bound": v.dsig,
+                     + _misalignment_premise(p.premise, v.held, _off_axis(res["n"])), "g": g, "noise_bound": v.dsig,
                      "noise_source": v.source},
         "sigma_min_supported": max(uniform - v.rb, 0.0),
         "per_interval": [{"start_s": s.start, "stop_s": s.stop, "raw_mean": s.mean.tolist(),
@@ -440,14 +453,15 @@ def held_fit(H, s, bound, cap):
                         np.r_[bound, cap[held]])[1]
 
 
-def _misalignment_premise(premise, held):
-    """The misalignment premise in words, or empty."""
+def _misalignment_premise(premise, held, off):
+    """The misalignment premise in words, or empty; `off`: the orientations' largest angle from an axis (degrees)."""
     if held is None:
         return ""
     return ("; the misalignments are within " + ", ".join(f"|{PARAM_LABELS[k]}| <= {premise[PARAM_LABELS[k]]:g} rad"
                                                         for k in held)
-            + " (--bound, stated: each orientation lies along an axis, where they enter (2.2) of 001 only at second "
-              "order, so the data cannot bound them)")
+            + f" (--bound, stated: the orientations lie within {off:.2g} degrees of the axes, where the data bound the "
+              "misalignments weakly or not at all; their term at each orientation's own direction is carried in every "
+              "bound, to first order in the set and the rest in the remainder)")
 
 
 def linearisation_remainder(mod, e, params):

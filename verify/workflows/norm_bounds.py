@@ -30,16 +30,22 @@ def estimator(mod, n, params, noise, cap=None):
     residuals, the guaranteed errors, and the unidentifiable parameters (then Phi and errors are None). With
     `cap` (params, inf where none), the a-priori bounds of q: each a measurement of that q, 0 (the fit holds it
     there) within cap, beside the directions (its weight in Phi is left out: it multiplies a residual of 0)."""
-    A = mod.H(n)[:params]
+    return lp_estimator(mod.H(n)[:params], noise, cap)
+
+
+def lp_estimator(A, noise, cap=None):
+    """`estimator` on the columns A (parameters x intervals) of any design (H of (2.2), or the information set's
+    with the bias columns over |F| and the effects' beside)."""
     w = np.broadcast_to(noise, A.shape[1])
+    K = A.shape[1]
     if cap is not None:
         held = np.flatnonzero(np.isfinite(cap))
-        A, w = np.hstack([A, np.eye(params)[:, held]]), np.r_[w, cap[held]]
+        A, w = np.hstack([A, np.eye(A.shape[0])[:, held]]), np.r_[w, cap[held]]
     missing = lp.unidentifiable(A)
     if missing:
         return None, None, missing
     Phi, err = lp.primal(A / w)
-    return (Phi / w[:, None])[:len(n.T)], err, []
+    return (Phi / w[:, None])[:K], err, []
 
 
 GAIN = 1.25   # orientations are suggested only when they shrink some bound by at least this factor
@@ -119,12 +125,12 @@ def bounds(p, v):
     s = res["sigma"]
     if exact is None:
         A, bnd, shift, ext = mod.H(res["n"])[:params], noise + rb, 0.0, None
-        Phi, bound, _ = estimator(mod, res["n"], params, noise + rb, cap)
+        Phi, bound, _ = lp_estimator(A, bnd, cap)
         scale, rest = 1.0, rb
-    else:
+    else:                                                # q = w + s: each interval's own remainder, the shift s
         A, bnd, shift, ext = exact
-        Phi, bound = lp.primal(A / bnd)
-        Phi, bound = Phi / bnd[:, None], bound + shift       # the estimator's error of w, and q = w + s
+        Phi, bound, _ = lp_estimator(A, bnd, None if cap is None else np.r_[cap, np.full(len(A) - len(cap), np.inf)])
+        bound = bound + shift                              # the estimator's error of w, and q = w + s
         scale = np.sqrt(1.0 - 2.0 * s)                     # noise / |F|: the units of sigma
         rest = bnd - noise * scale
     lo, hi = info
@@ -188,7 +194,7 @@ def _wider(p, v, A, Phi, wider, shift, C, dq, unit):
     s, lo_shape = v.res["sigma"], v.info[0].shape
     centre, e_w = Phi.T @ s, (np.abs(Phi).T @ np.broadcast_to(wider, s.shape)) * (1 + 1e-9) + 1e-15
     if v.cap is not None:                          # the held q's measurements of 0 within cap count too
-        Phi_w, e_w, _ = estimator(p.mod, v.res["n"], p.params, wider, v.cap)
+        Phi_w, e_w, _ = lp_estimator(A, wider, np.r_[v.cap, np.full(len(A) - len(v.cap), np.inf)])
         centre, e_w = Phi_w.T @ s, e_w * (1 + 1e-9) + 1e-15
     try:
         w_lo, w_hi = hull.ranges(A.T, s - wider, s + wider, centre - e_w, centre + e_w, C)
