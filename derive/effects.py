@@ -97,7 +97,8 @@ LOG_EFFECTS = {e.name: e for e in (
              term=lambda w, s, k=k: sp.Matrix([s[f"S{k}_{i + 1}"] * (TEMP - 20) ** k * w[i] for i in range(3)]))
       for k in (2, 3)),
     *(Effect(f"misalignment_temperature{_degree(k)}",
-             f"f_2 += X{k}_21 (T - 20 C)^{k} w_1, f_3 += (X{k}_31 w_1 + X{k}_32 w_2) (T - 20 C)^{k} (the "
+             f"f_2 += X{_power(k)}_21 (T - 20 C)^{k} w_1, f_3 += (X{_power(k)}_31 w_1 + X{_power(k)}_32 w_2) "
+             f"(T - 20 C)^{k} (the "
              f"misalignments' term of degree {k} in T; T = column temp_c)",
              tuple(_p(f"X{_power(k)}_{i}{j}", f"X^{{({k})}}_{{{i}{j}}}", "1/degC" + _power(k, "^"),
                       f"misalignment temperature coefficient of degree {k}, axis {i} towards {j}")

@@ -288,7 +288,7 @@ EFFECT_PHYSICS = {
     "bias_temperature_3": "f_i += g T3_i (T - 20 C)^3 (the bias's term of degree 3 in T; T = column temp_c)",
     "scale_temperature_2": "f_i += S2_i (T - 20 C)^2 w_i (the scale factor's term of degree 2 in T; T = column temp_c)",
     "scale_temperature_3": "f_i += S3_i (T - 20 C)^3 w_i (the scale factor's term of degree 3 in T; T = column temp_c)",
-    "misalignment_temperature": "f_2 += X1_21 (T - 20 C)^1 w_1, f_3 += (X1_31 w_1 + X1_32 w_2) (T - 20 C)^1 (the misalignments' term of degree 1 in T; T = column temp_c)",
+    "misalignment_temperature": "f_2 += X_21 (T - 20 C)^1 w_1, f_3 += (X_31 w_1 + X_32 w_2) (T - 20 C)^1 (the misalignments' term of degree 1 in T; T = column temp_c)",
     "misalignment_temperature_2": "f_2 += X2_21 (T - 20 C)^2 w_1, f_3 += (X2_31 w_1 + X2_32 w_2) (T - 20 C)^2 (the misalignments' term of degree 2 in T; T = column temp_c)",
     "misalignment_temperature_3": "f_2 += X3_21 (T - 20 C)^3 w_1, f_3 += (X3_31 w_1 + X3_32 w_2) (T - 20 C)^3 (the misalignments' term of degree 3 in T; T = column temp_c)",
 }

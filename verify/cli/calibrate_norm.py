@@ -413,8 +413,10 @@ def _print_effects(res):
     """The effects added (--effect): each parameter with its estimate and guaranteed error over the same set."""
     from ..io import report
     ref = res["effect_reference"]
-    print(f"effects added to the reading (over g; time t from {ref['time_s']:g} s of the log, the middle of its still "
-          f"intervals, so the biases above are those at that time; temperature T in C, from {ref['temp_c']:g} C):")
+    from ..workflows.norm_effects import CONVENTION
+    print(f"effects ({CONVENTION}; over g; time t from {ref['time_s']:g} s of the log, the middle of its still "
+          f"intervals, so the biases above are those at that time; temperature T in C, (T - 20 C) read as T - "
+          f"{ref['temp_c']:g} C):")
     rows = [(name, p, f"{v['estimate']:+.4e}", f"{v['guaranteed_error']:.3e}", f"{v['guaranteed_error_a_priori']:.3e}",
              v["unit"]) for name, e in res["effects"].items() for p, v in e["parameters"].items()]
     report.table(("effect", "parameter", "estimate", "guaranteed error", "a priori", "unit"), rows)

@@ -65,6 +65,32 @@ def parse(text, mod):
     return tuple(sorted(names, key=list(mod.EFFECTS).index))
 
 
+#: The convention every norm effect's parameters are computed, printed, documented and saved in: the term is in the
+#: reading calibrated by M (after M, in the calibrated axes), not added to the raw reading; the two differ by the
+#: scale and misalignment acting on the term (|M P - E| of it, a few percent of it for a MEMS unit).
+CONVENTION = ("each effect's term is in the reading calibrated by M, f = M (raw - b), after M and in the calibrated "
+              "axes (w = g p, p the direction of f; the calibration takes it out: a = f - g sum_j theta_j phi_j(p, t, "
+              "T)); it is not an addition to the raw reading, which differs by the scale and misalignment acting on it")
+
+
+def physics(mod, name):
+    """An effect's definition in the convention of CONVENTION: the catalogue's `f_i += ...` with f the reading
+    calibrated by M."""
+    import re
+    return re.sub(r"\bf_([i1-3]) \+=", r"[M (raw - b)]_\1 +=", mod.EFFECT_PHYSICS[name])
+
+
+def catalogue_markdown(mod):
+    """The table of the effects calibrate-norm can add, each with its definition in the norm convention and its
+    parameters with their units: docs/diagnose.md and docs/norm_001.md hold it (a test compares them)."""
+    rows = ["| effect | its term in the reading calibrated by M, [M (raw - b)]_i (w = g p) | parameters (unit) |",
+            "|---|---|---|"]
+    for name in mod.EFFECTS:
+        pars = ", ".join(f"{p} ({u})" for p, u in zip(mod.EFFECTS[name], mod.EFFECT_UNITS[name]))
+        rows.append(f"| `{name}` | {physics(mod, name).replace('|', chr(92) + '|')} | {pars} |")
+    return "\n".join(rows) + "\n"
+
+
 def fixed_point(ext, f):
     """(F, p) for readings f (K, 3) over g: F = f - Phi(p) theta with p the direction of F, iterated FIXED_POINT
     times or until p stops moving."""
@@ -224,7 +250,7 @@ def effects_out(ext, lo, hi, a_priori):
     out, j = {}, 0
     for x in ext.names:
         names = ext.mod.EFFECTS[x]
-        out[x] = {"physics": ext.mod.EFFECT_PHYSICS[x], "parameters": {
+        out[x] = {"physics": physics(ext.mod, x), "parameters": {
             p: {"estimate": float(theta[j + i]), "guaranteed_error": float(half[j + i]),
                 "guaranteed_error_a_priori": float(a_priori[j + i]), "unit": ext.mod.EFFECT_UNITS[x][i]}
             for i, p in enumerate(names)}}
