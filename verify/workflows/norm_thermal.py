@@ -148,18 +148,31 @@ def block(ext, A, s, bnd, lo, hi, shift, M_fit, b_fit, g, dq, J):
         PAK = PA @ K_box
         second += x_max ** k * np.r_[PA @ box[k_T[k - 1]], [PAK[i, j] for i, j in cells]]
     bound = (half + 2 * second) * (1 + 1e-9)
-    Pm = P @ (np.eye(3) + lower(dq))             # the estimate: the exact polynomials at the set's midpoint
-    beta = [b_fit / g + P @ dq[6:9]] + [Pm @ (th[k_T[k - 1]] + dq[k_T[k - 1]]) for k in range(1, D + 1)]
+    beta, gam = _polynomials(P, dq, th, k_T, k_K, b_fit / g)
+    return _result(D, t0, (t_lo, t_hi), _about(beta, t0 - ref), _about(gam, t0 - ref), bound, cells)
+
+
+def _polynomials(P, dq, th, k_T, k_K, bias):
+    """The estimate: the exact polynomials in x = T - ref at the set's midpoint dq, the raw bias over g (`bias` at
+    x = 0, then P (E + A(dq)) T_k) and Gamma (P (E + A(dq)) - E, then P (E + A(dq)) K_k), coefficients by degree."""
+    from .norm_information import lower
+    Pm = P @ (np.eye(3) + lower(dq))
+    beta = [bias + P @ dq[6:9]] + [Pm @ (th[t] + dq[t]) for t in k_T]
     gam = [Pm - np.eye(3)]
-    for k in range(1, D + 1):
+    for cells in k_K:
         K = np.zeros((3, 3))
-        for (i, j), n in k_K[k - 1].items():
+        for (i, j), n in cells.items():
             K[i, j] = th[n] + dq[n]
         gam.append(Pm @ K)
-    beta, gam = _about(beta, t0 - ref), _about(gam, t0 - ref)
+    return beta, gam
+
+
+def _result(D, t0, t_range, beta, gam, bound, cells):
+    """The thermal block as estimate --thermal-degree gives it: each bias and Gamma cell's polynomial about t0 (C),
+    its one bound over the range and its units."""
     unit = ["1/degC" if k == 1 else f"1/degC^{k}" for k in range(1, D + 1)]
     names = [f"scale{i + 1}" for i in range(3)] + list(MISALIGNMENTS)
-    return {"degree": D, "t0_c": t0, "range_c": [float(t_lo), float(t_hi)],
+    return {"degree": D, "t0_c": t0, "range_c": [float(t_range[0]), float(t_range[1])],
             "q": {**{f"bias{i + 1}": [float(c[i]) for c in beta] for i in range(3)},
                   **{n: [float(c[i, j]) for c in gam] for n, (i, j) in zip(names, cells)}},
             "bound": {**{f"bias{i + 1}": float(bound[i]) for i in range(3)},
