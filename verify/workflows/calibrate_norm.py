@@ -325,8 +325,9 @@ def _at(p, res, held):
 
 def verdict(p, res, held=None):
     """The verdict of the base model (no effects) from its first fit `res`: the fit again, minimax in units of
-    each interval's own bound (noise plus the proven remainder), and its worst interval over that bound; for
-    consistent data the information set (with each interval's own remainder where it can be proven)."""
+    each interval's own bound (noise plus the proven remainder (2.3)), and its worst interval over that bound; for
+    consistent data the information set, with each interval's own remainder where it can be proven from a premise
+    box (norm_information.exact_information), the worst interval then over that sharper bound."""
     v = _at(p, res, held)
     try:                                      # each interval in units of its own bound, as the premises ask
         v = _at(p, fit(p, start=(res["M"], res["b"], res["note"]), weights=v.bnd, free=_free(p, held)), held)
@@ -338,9 +339,14 @@ def verdict(p, res, held=None):
     if v.consistent and p.params == 9 and (not p.stated or p.si):
         found = norm_information.exact_information(p.mod, v.res, v.noise, v.nu, cap=v.cap)
         if found is not None:             # the set q = w + s, |s| <= shift: the remainder's part q absorbs
-            v.info, rb_k, v.box, shift = found
+            info, rb_k, box, shift = found
             A, f = norm_information.design(p.mod, v.res)
-            v.rb, v.exact = float(rb_k.max()), (A, v.noise / f + rb_k, shift, None)
+            bnd = v.noise / f + rb_k      # each interval's own remainder: the verdict's number from the sharper set
+            worst = weighted_fit(A, v.res["sigma"], bnd)[1] if v.cap is None else held_fit(A, v.res["sigma"], bnd,
+                                                                                             v.cap)
+            if worst <= 1:                # else its premise box is refuted: the sphere-wide set (2.3) stands
+                v.info, v.box, v.rb, v.bnd, v.worst = info, box, float(rb_k.max()), bnd, worst
+                v.exact = (A, bnd, shift, None)
     if v.consistent and v.info is None:
         v.info = information(p.mod, v.res, p.params, v.noise + v.rb, v.cap)
     return v
