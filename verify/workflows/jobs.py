@@ -273,9 +273,6 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
         stills = norm_thermal.split(data, stills, still[2])
         if stills and norm_thermal.one_orientation(stills):
             return norm_thermal.still_only(data, stills, note, g, recordings.quantum(data))
-        if stills and recordings.raw_unit(np.array([st.mean for st in stills]), g) != "m/s^2":
-            raise DataError(f"{data.path}: --thermal-degree takes a log in m/s^2 (the flight stacks' unit); this one "
-                            "is in counts", param="log")
     if len(stills) < params + 3:
         raise DataError(_too_few_stills(data, len(stills), params, *still), param="log")
     if temperature is not None:
@@ -289,8 +286,12 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path, rates)
     elif thermal is not None:
         ext = norm_effects.Extension(mod, thermal.pop("names"), stills, temps, data.path, rates, **thermal)
-    return norm_problem.problem(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
-                                _misalignment_bounds(bound), temps, rates)
+    p = norm_problem.problem(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
+                             _misalignment_bounds(bound), temps, rates)
+    if thermal is not None and not p.si:
+        raise DataError(f"{data.path}: --thermal-degree takes a log in m/s^2 (the flight stacks' unit); this one "
+                        "is in counts", param="log")
+    return p
 
 
 def _log_figures(res, data, p, note, sensor):
