@@ -187,10 +187,13 @@ def test_no_command_prints_a_line_over_100_columns_into_a_pipe(tmp_path):
     run = [str(Path(sys.executable).with_name("garant"))]
     subprocess.run([*run, "simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data)],
                    check=True, capture_output=True)
-    for args in (["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--units", "human", "--mount",
-                  "+x+y+z"], ["plan", "--model", "two-axis"], ["identify", "--model", "two-axis"],
-                 ["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", "9.81744", "--units", "human"]):
-        out = subprocess.run([*run, *args], capture_output=True, text=True, check=True).stdout
+    # each file by a short name in its own folder, as a user types it: a path longer than the width is one word,
+    # never broken (a clone at a longer path would print it whole on a line of its own)
+    for args, where in ((["estimate", "--model", "two-axis", "d.csv", "--sigma", "1e-5", "--units", "human", "--mount",
+                          "+x+y+z"], tmp_path), (["plan", "--model", "two-axis"], tmp_path),
+                        (["identify", "--model", "two-axis"], tmp_path),
+                        (["calibrate-norm", "repeat_session2_acc.txt", "--g", "9.81744", "--units", "human"], REAL)):
+        out = subprocess.run([*run, *args], capture_output=True, text=True, check=True, cwd=where).stdout
         assert out and max(map(len, out.splitlines())) <= 100, args
 
 

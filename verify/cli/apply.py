@@ -21,6 +21,9 @@ def add(sub):
     p.add_argument("--frame", choices=("garant", "imu_tk"), default="garant",
                    help="the frame of the corrected output: garant's (default), or that of the imu_tk export "
                         "(--export-imu-tk; for a norm calibration turned into imu_tk's upper-triangular T)")
+    p.add_argument("--outside", choices=("drop", "refuse"), default="drop",
+                   help="samples outside a calibration's temperature range (a warm-up's first ones, before its first "
+                        "still interval): dropped and counted on the summary line (default), or the log refused")
     p.add_argument("-o", "--output", metavar="OUT.csv",
                    help="CSV: time_s (12 digits), ax, ay, az (m/s^2, 8 significant digits), bound_x, bound_y, "
                         "bound_z (m/s^2, worst case, 4 digits rounded up); - for standard output (the line that says "
@@ -99,15 +102,15 @@ def _apply(args, calibration, log, output):
     from ..io.text import csv_bytes
     from ..workflows import jobs
     pieces = jobs.apply(calibration, log, fmt=args.format, sensor=args.sensor, imu=args.imu,
-                        trust_units=args.trust_units, frame=args.frame, chunk=CHUNK)
-    worst, total, n, kind = np.zeros(3), 0.0, 0, ""
+                        trust_units=args.trust_units, frame=args.frame, chunk=CHUNK, outside=args.outside)
+    worst, total, n, kind, dropped = np.zeros(3), 0.0, 0, "", 0
 
     def rows():
-        nonlocal total, n, kind
+        nonlocal total, n, kind, dropped
         yield b"time_s,ax,ay,az,bound_x,bound_y,bound_z\n"
         for c in pieces:
             np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
-            total, n, kind = total + c.bound.sum(), n + len(c.t), c.kind
+            total, n, kind, dropped = total + c.bound.sum(), n + len(c.t), c.kind, dropped + c.outside
             yield csv_bytes([c.t, *c.a.T, *c.bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
     if output == "-":                            # a reader that stops (| head) ends the writing, not the command
         try:
@@ -119,7 +122,9 @@ def _apply(args, calibration, log, output):
     else:
         write_chunks(output, rows())
     return (f"wrote {'standard output' if output == '-' else output}: {n} samples corrected by {calibration} "
-            f"({kind} calibration); worst-case error per component up to {worst.max():.3e} m/s^2 (mean "
+            f"({kind} calibration)" + (f", {dropped} dropped as outside its temperature range (no bound holds there; "
+                                       "--outside refuse refuses such a log)" if dropped else "")
+            + f"; worst-case error per component up to {worst.max():.3e} m/s^2 (mean "
             f"{total / max(3 * n, 1):.3e}); frame: {_frame_said(args, calibration)}{_effects_said(calibration)}")
 
 

@@ -7,7 +7,7 @@ def add(sub):
     p = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
     options.model(p)
     p.add_argument("--plan", required=True, help="optimal10, quarter16, grid:AxB (steps per angle in degrees), or a "
-                   "plan file PLAN.csv (`garant plan -o`)")
+                   "plan file PLAN.csv (`garant plan -o`); --model norm: random:N, faces or optimal (001's 18)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
                    help="a catalogue effect and its parameter values (repeatable)")
     options.sigma(p, "noise bound, units of g")
@@ -23,8 +23,53 @@ def add(sub):
                    help="chamber temperatures (C): the plan at each, temp_c set to it; --truth may then name thermal "
                         "coefficients p_Tk of a block parameter p (e.g. bias1_T1, Gamma11_T2: per C^k about the middle "
                         "of the temperatures)")
+    p.add_argument("--temperature", metavar="PROFILE",
+                   help="--model norm: each sample's temperature, warmup:T0,T1,TAU (from T0 towards T1 C, time "
+                        "constant TAU s) or cycle:T0,T1,PERIOD (T0 to T1 and back, s); a temp_c column")
+    p.add_argument("--ordered", action="store_true",
+                   help="--model norm: visit the orientations in the plan's own order (a board turned face by face), "
+                        "not shuffled")
+    p.add_argument("--still", type=options.positive, default=8.0, metavar="S",
+                   help="--model norm: seconds each orientation is held still (default 8)")
+    p.add_argument("--move", type=options.positive, default=2.0, metavar="S",
+                   help="--model norm: seconds of each move between orientations (default 2)")
+    p.add_argument("--rate", type=options.rate, default=100.0, metavar="HZ",
+                   help="--model norm: samples per second (default 100)")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p
+
+
+def run_norm(args):
+    """`garant simulate --model norm`: the log of a unit turned by hand (workflows/simulate_log.py) and its truth."""
+    from .. import models
+    from ..errors import DataError
+    from ..io import report
+    from ..workflows import simulate_log
+    if args.truth or args.temperatures:
+        raise DataError("--model norm: a unit turned by hand draws its errors within --size and takes a temperature "
+                        "profile (--temperature warmup:T0,T1,TAU), not --truth or --temperatures", param="model")
+    try:
+        size = float(args.size or "1e-3")
+    except ValueError:
+        raise DataError(f"--size {args.size[:40]!r}: --model norm takes one bound for every error (scale, "
+                        "misalignment in rad, bias over g)", param="size") from None
+    if not 0 <= size <= 0.2:
+        raise DataError(f"--size {size:g}: a bound from 0 to 0.2", param="size")
+    effects = simulate_log.parse_effects(args.effect, models.load("norm"))
+    t, raw, T, truth = simulate_log.simulate(args.plan, effects, args.sigma, args.seed, args.g, size,
+                                             args.temperature, args.ordered, args.still, args.move, args.rate)
+    path = truth_path(args.output)
+    report.check_writable(path, "the truth file")
+    simulate_log.write(args.output, t, raw, T)
+    hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects.items()) or "none"
+    print(f"wrote {args.output}: {len(t)} samples (m/s^2) over {t[-1]:.1f} s, {truth['orientations']} still "
+          f"orientations of {args.still:g} s ({'in the plan order' if args.ordered else 'shuffled'}), noise within "
+          f"+-{args.sigma:g} g per sample, effects: {hidden}"
+          + ("" if T is None else f"; temperature {T.min():.1f} to {T.max():.1f} C (temp_c)"))
+    report.write_json(path, {"model": "norm", **truth})
+    print(f"wrote {path}: the hidden truth (the block's errors, M and b, the effects in the convention calibrate-norm "
+          "prints them in)")
+    return 0
 
 
 
@@ -38,6 +83,12 @@ def run(args):
     from ..errors import DataError
     from ..io import report
     from ..workflows import simulate
+    if models.kind(args.model) == "norm":
+        return run_norm(args)
+    for name in ("temperature", "ordered"):
+        if getattr(args, name):
+            raise DataError(f"--{name} is for a unit turned by hand (--model norm); a stand takes --temperatures",
+                            param=name)
     base = models.stand_model(args.model)
     mod = models.load(args.model)
     effects = [simulate.parse_effect(e, CATALOGUE, [a.name for a in base.stand.angles]) for e in args.effect]

@@ -182,7 +182,8 @@ class Correction(Result):
     """`garant.apply`: a corrected log. Unpacks as (t, a, bound) too."""
 
     FIELDS = {"t": "time, s", "a": "corrected specific force (N, 3), m/s^2",
-              "bound": "worst-case error of each component (N, 3), m/s^2"}
+              "bound": "worst-case error of each component (N, 3), m/s^2",
+              "outside": "samples of this piece dropped as outside the calibration's temperature range"}
 
     def __iter__(self):
         return iter((self["t"], self["a"], self["bound"]))

@@ -494,7 +494,8 @@ def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
 
 def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = None, sensor: Optional[str] = None,
           imu: Optional[int] = None, rate: Optional[float] = None, trust_units: bool = False, frame: str = "garant",
-          chunk: Optional[int] = None) -> Union[results.Correction, pandas.DataFrame, Iterator[results.Correction]]:
+          chunk: Optional[int] = None, outside: str = "drop"
+          ) -> Union[results.Correction, pandas.DataFrame, Iterator[results.Correction]]:
     """Correct a raw log with a calibration: `garant apply`.
 
     Parameters
@@ -516,12 +517,16 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
         upper-triangular T).
     chunk : int, optional
         Return an iterator of Corrections of at most `chunk` samples (a long log piece by piece).
+    outside : {"drop", "refuse"}
+        A calibration over temperature holds only within its calibrated range: the log's samples outside it (a
+        warm-up's first ones, before its first still interval) are dropped, each Correction saying how many of
+        its piece (`outside`), or the log is refused.
 
     Returns
     -------
     Correction
         t (s), a (N, 3) m/s^2 and bound (N, 3) m/s^2, the worst-case error of each component; it unpacks as
-        (t, a, bound).
+        (t, a, bound). `outside`: the samples of its piece dropped as outside the calibrated temperature range.
     """
     from ..io import calibration as cal_io, recordings
     if not isinstance(calibration, (dict, str, os.PathLike)):
@@ -541,18 +546,22 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
         if frame != "garant":
             raise DataError(f"{opt('frame')} imu_tk: the imu_tk form holds no temperature polynomial")
 
+    keep = _within_range(cal, data, outside)
+
     def piece(i, j):
+        k = slice(i, j) if keep is None else keep[i:j]
         if "thermal" in cal:
-            a, bound = cal_io.apply_thermal(cal, data.raw[i:j], data.temp[i:j], data.path)
+            a, bound = cal_io.apply_thermal(cal, data.raw[k], data.temp[k], data.path)
         elif cal.get("effects") and cal["effects"]["names"]:
             from . import norm_effects
-            a, bound = norm_effects.apply(cal, data.raw[i:j], frame, None if data.temp is None else data.temp[i:j],
+            a, bound = norm_effects.apply(cal, data.raw[k], frame, None if data.temp is None else data.temp[k],
                                           data.path)
         else:
-            a, bound = cal_io.apply(cal, data.raw[i:j], frame)
-        return results.Correction(t=data.t[i:j], a=a, bound=bound, kind=cal["kind"])
+            a, bound = cal_io.apply(cal, data.raw[k], frame)
+        return results.Correction(t=data.t[k], a=a, bound=bound, kind=cal["kind"],
+                                  outside=0 if keep is None else (j - i) - len(keep[i:j]))
     if chunk is None and hasattr(log, "columns"):       # a DataFrame in, a calibrated copy out (imucal's habit)
-        out, c = log.copy(), piece(0, len(data.t))
+        out, c = log.copy() if keep is None else log.iloc[keep].copy(), piece(0, len(data.t))
         low = {str(n).lower(): n for n in out.columns}
         names = next(n for n in recordings.ACCEL_COLUMNS if all(x in low for x in n))
         for k, n in enumerate(names):
@@ -562,3 +571,22 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
     if chunk is None:
         return piece(0, len(data.t))
     return (piece(i, i + chunk) for i in range(0, len(data.t), chunk))
+
+
+#: What `apply` does with samples outside a calibration's temperature range.
+OUTSIDE = ("drop", "refuse")
+
+
+def _within_range(cal, data, outside):
+    """The indices of the log's samples within the calibration's temperature range (None: every sample, or a
+    calibration with no range); "refuse" leaves the check to the calibration's own (a DataError naming the first)."""
+    from . import norm_effects
+    if outside not in OUTSIDE:
+        raise DataError(f"outside: {str(outside)[:40]!r}; give one of {', '.join(OUTSIDE)}", param="outside")
+    span = (cal["thermal"]["range_c"] if "thermal" in cal else
+            cal["effects"]["temp_range_c"] if norm_effects.needs_temperature(cal) else None)
+    if outside == "refuse" or span is None or data.temp is None:
+        return None
+    T = np.asarray(data.temp, float)
+    ok = np.isfinite(T) & (T >= span[0]) & (T <= span[1])
+    return None if ok.all() else np.flatnonzero(ok)

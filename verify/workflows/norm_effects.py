@@ -280,6 +280,14 @@ NOTE = ("; with effects, inside the brackets also g |Phi(p)| bound + |frame| g (
         "(|theta| + bound) |m - p| (L the effects' Lipschitz bound, |m - p| bounded from the sample's own bound)")
 
 
+def needs_temperature(cal):
+    """The calibration file's effects need each sample's temperature (and hold within its calibrated range)."""
+    from .. import models
+    eff = cal.get("effects") or {}
+    mod = models.load("norm")
+    return any("temp_c" in mod.EFFECT_VARIABLES.get(x, ()) for x in eff.get("names", ()))
+
+
 def apply_term(cal, a0, temp, g, path):
     """The effects of a calibration file at corrected samples a0 = M (raw - b) (3, N), m/s^2: the term g Phi(p)
     theta (3, N) to take out (p = a0 / |a0|), g |Phi(p)| h (3, N) (h the bound of theta) and c = g L (|theta| + h)
