@@ -1,0 +1,103 @@
+"""Warm-ups as users record them: `garant simulate --model norm` makes one, `calibrate-norm --thermal-degree D`
+calibrates it, `apply` corrects the very log it came from."""
+import json
+
+import numpy as np
+import pytest
+
+from garant.verify.cli import main
+from garant.verify.io import calibration
+from conftest import flat
+
+G = 9.81
+
+
+def _poly(c, x):
+    """sum_k c[k] x^k."""
+    return sum(ck * x ** k for k, ck in enumerate(c))
+
+
+def assert_thermal_truth(th, truth):
+    """Each axis's raw bias over g and Gamma cell of calibrate-norm's thermal block (polynomials about t0, one
+    bound over the range) against the simulator's truth at its 60 temperatures across the still intervals' range,
+    those within the calibrated range (its samples' range: the same here but for the moves' ends)."""
+    T = np.array(truth["temp_c"])
+    inside = (T >= th["range_c"][0]) & (T <= th["range_c"][1])
+    assert inside.sum() >= 50
+    x = T[inside] - th["t0_c"]
+    beta, gamma = np.array(truth["bias_over_g"])[inside], np.array(truth["gamma"])[inside]
+    cells = {"scale1": (0, 0), "scale2": (1, 1), "scale3": (2, 2), "alpha": (1, 0), "beta": (2, 0), "gamma": (2, 1)}
+    worst = 0.0
+    for i in range(3):
+        err = np.abs(_poly(th["q"][f"bias{i + 1}"], x) - beta[:, i]).max()
+        assert err <= th["bound"][f"bias{i + 1}"], (i, err, th["bound"][f"bias{i + 1}"])
+        worst = max(worst, err / th["bound"][f"bias{i + 1}"])
+    for name, (i, j) in cells.items():
+        err = np.abs(_poly(th["q"][name], x) - gamma[:, i, j]).max()
+        assert err <= th["bound"][name], (name, err, th["bound"][name])
+        worst = max(worst, err / th["bound"][name])
+    return worst
+
+
+def test_simulate_makes_a_warm_up_that_degree_1_calibrates_with_the_truth_inside(tmp_path, capsys):
+    # A user who wants to see the warm-up path work had to write a generator. `garant simulate --model norm` writes
+    # the log of a unit turned by hand through 36 orientations while it warms from 20 towards 45 C (csv with temp_c)
+    # and its truth; `calibrate-norm --thermal-degree 1` is consistent and every raw bias, scale factor and
+    # misalignment holds its truth within its one bound at 60 temperatures across the range. Red when the bias's slope
+    # comes out with its sign flipped (norm_thermal's polynomials).
+    log = tmp_path / "warm.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:36", "--temperature", "warmup:20,45,300",
+                 "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--effect", "scale_temperature=1e-4,-1e-4,5e-5",
+                 "--sigma", "2e-4", "--size", "1e-2", "--seed", "3", "-o", str(log)]) == 0
+    said = flat(capsys.readouterr().out)
+    assert "36 still orientations of 8 s (shuffled)" in said and "temperature 20.0 to" in said
+    truth = json.loads((tmp_path / "warm.truth.json").read_text())
+    assert truth["effects"]["scale_temperature"] == {"S_1": 1e-4, "S_2": -1e-4, "S_3": 5e-5}
+    assert len(truth["thermal"]["temp_c"]) == 60
+    out = tmp_path / "r.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1", "--json", str(out),
+                 "--save", str(tmp_path / "cal.json")]) == 0
+    res = json.loads(out.read_text())
+    assert res["consistent"]
+    assert_thermal_truth(res["thermal"], truth["thermal"])
+
+
+def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tmp_path, capsys):
+    # `apply CAL WARMUP.csv` refused the whole log: its first samples (before the first still interval) are below
+    # the calibrated range. Now they are dropped and counted on the summary line (exit 0); every sample written is
+    # within the range, and --outside refuse refuses the log as before.
+    log = tmp_path / "warm.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:30", "--temperature", "warmup:20,40,200",
+                 "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--sigma", "2e-4", "--size", "5e-3",
+                 "-o", str(log)]) == 0
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1", "--save", str(cal)]) == 0
+    capsys.readouterr()
+    lo, hi = calibration.read(cal)["effects"]["temp_range_c"]     # the samples of its still intervals
+    data = np.loadtxt(log, delimiter=",", skiprows=1)
+    outside = int(np.count_nonzero((data[:, 4] < lo) | (data[:, 4] > hi)))
+    assert outside > 0
+    out = tmp_path / "c.csv"
+    assert main(["apply", str(cal), str(log), "-o", str(out)]) == 0
+    said = flat(capsys.readouterr().out)
+    assert f"{len(data) - outside} samples corrected by" in said
+    assert f"{outside} dropped as outside its temperature range" in said
+    kept = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert len(kept) == len(data) - outside and np.isin(kept[:, 0], data[:, 0]).all()
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "x.csv"), "--outside", "refuse"]) == 2
+    assert "outside the calibrated range" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["--plan", "random:0"], "give 1 to 100000 orientations"),
+    (["--plan", "grid:10"], "a unit turned by hand takes random:N, faces or optimal"),
+    (["--plan", "faces", "--effect", "bias_temperature=1e-5,1e-5,1e-5"], "needs a temperature profile"),
+    (["--plan", "faces", "--temperature", "warmup:20,45"], "give warmup:T0,T1,TAU or cycle:T0,T1,PERIOD"),
+    (["--plan", "faces", "--effect", "bias_drift=1e-5,1e-5"], "give 3 finite numbers"),
+    (["--plan", "faces", "--effect", "alpha_encoder_harmonic=1e-5,1e-5"], "a unit turned by hand takes"),
+])
+def test_simulate_norm_refuses_bad_options_in_one_line(tmp_path, capsys, argv, said):
+    out = tmp_path / "x.csv"
+    assert main(["simulate", "--model", "norm", *argv, "--sigma", "1e-4", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err and not out.exists(), err
