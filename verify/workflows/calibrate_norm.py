@@ -373,9 +373,7 @@ def _verdict_effects(p, res):
     if v.consistent:
         found = norm_information.exact_information(p.mod, res, noise, nu, ext, bnd)
         if found is None:
-            raise DataError(f"{p.path}: consistent with {ext.option}, but the remainder of the "
-                            "extended relation cannot be proven from any box around the fit: no bound",
-                            param="effects")
+            raise DataError(_unproven(p, err), param="effects")
         v.info, rb_k, v.box, shift = found
         v.rb, v.bnd = float(rb_k.max()), base + rb_k
         v.exact = (A, v.bnd, shift, ext)
@@ -385,6 +383,29 @@ def _verdict_effects(p, res):
     v.discrepancy = [float(worst0), float(weighted_fit(np.vstack([p.mod.H(res["n"])[:p.params], ext.columns(res["n"])]),
                                                        res["sigma"], rule)[1])]
     return v
+
+
+#: Still intervals per parameter from which simulated warm-ups of realistic size calibrate (degree 2 on 60 intervals,
+#: 27 parameters; degree 3 on 100, 36: tests/workflows/test_warm_up.py): what a refusal asks for.
+INTERVALS_PER_PARAMETER = 2.5
+
+
+def _unproven(p, err):
+    """The line for data consistent with the extended relation whose remainder no premise box proves: which
+    correction the orientations bound too loosely for its second-order terms, and what recording would do."""
+    import math
+    ext, K, P = p.ext, len(p.stills), len(err)
+    labels = list(PARAM_LABELS[:9]) + list(ext.labels)
+    k = int(np.argmax(err[:6]))
+    need = math.ceil(INTERVALS_PER_PARAMETER * P)
+    fewer = (f"--thermal-degree {int(ext.option.split()[1]) - 1}" if ext.option.startswith("--thermal-degree")
+             and not ext.option.startswith("--thermal-degree 1") else "fewer effects")
+    return (f"{p.path}: consistent with {ext.option}, but the remainder of the extended relation cannot be proven "
+            f"from any box around the fit: on {K} still intervals its {P} parameters are bounded only to "
+            f"{err[k]:.1g} ({labels[k]}) and {err[9:].max():.1g} ({labels[9 + int(np.argmax(err[9:]))]}), where the "
+            f"second-order terms of (2.2) of 001 exceed the intervals' noise bounds. Record more orientations (about "
+            f"{need} still intervals for {P} parameters; each held still, in shuffled order while it warms), or take "
+            f"{fewer}: no bound")
 
 
 def _output(p, v, before):

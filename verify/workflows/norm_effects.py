@@ -150,7 +150,7 @@ class Extension:
         """The first-order columns n . phi_j(p) of (2.2), shape (P, K)."""
         return np.einsum("jik,ik->jk", self.phi, n)
 
-    def extra(self, th_box, A_box, e_box, nu):
+    def extra(self, th_box, A_box, e_box, nu, v_set=None):
         """(v, rho) per interval for a box of the correction theta' (|theta'| <= th_box) and of the base's (A_box,
         e_box): |v| <= |Phi(p)| th_box + r, r >= |(Phi(m) - Phi(p)) theta| <= L |m - p| with L = ||sum_j
         (|theta_j| + th_box_j) b_j||_2 (`lipschitz`). With F - m = A m + d, |d| <= |eps/g| + nu + |v|, the angle
@@ -158,9 +158,11 @@ class Extension:
         |m - n| + |n - p| =: D; so r <= L (K_DIR (a + e + nu + v_lin + r) + |n - p|), solved for r. rho bounds
         the part along n, |n^T (Phi(m) - Phi(p)) theta|, which enters (2.2) at first order: the smaller of r and
         D sum_k sum_j (|theta_j| + th_box_j) sum_i |n_i| s_j[i, k], s_j the Jacobian's bound within D of p
-        (generated `effect_slope_bound`: at p itself, not the ball's worst)."""
+        (generated `effect_slope_bound`: at p itself, not the ball's worst). `v_set` (3, K): a bound of |Phi(p)
+        theta'| componentwise over a set that holds the truth (norm_information.effect_reach), where smaller."""
         a, e = float(np.linalg.norm(A_box)), float(np.linalg.norm(e_box))
-        v_lin = np.linalg.norm(np.einsum("jik,j->ik", np.abs(self.phi), th_box), axis=0)
+        v_box = np.einsum("jik,j->ik", np.abs(self.phi), th_box)
+        v_lin = np.linalg.norm(v_box if v_set is None else np.minimum(v_box, v_set), axis=0)
         size = np.abs(self.theta) + th_box
         L = lipschitz(self.jac, size)
         dp = np.linalg.norm(self.n - self.p, axis=0)

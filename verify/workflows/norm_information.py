@@ -5,18 +5,23 @@ noise and (with catalogue effects, workflows/norm_effects.py) effect terms, and 
 from a box of the truth's correction to the fit (`remainder_per_interval`). The box is a premise, stated; the set
 contracts from it (`exact_information`).
 """
+from typing import NamedTuple, Optional
+
 import numpy as np
 
 from ..solve import hull
 
 
-def premise_box(X):
-    """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used)."""
-    if X is None:
+def premise_box(premise):
+    """The premise the remainder of each interval is proven from, in words (empty where (2.3) is used): its box X of
+    the truth's correction and, with effects, its bound V of their term (`Premise`)."""
+    if premise is None:
         return ""
+    X, V = premise.X, premise.V
     return ("; the truth's correction to this fit is within " + ", ".join(
         f"{x.max():.2g} ({name})" for name, x in (("scale", X[:3]), ("misalignment, rad", X[3:6]), ("bias over g",
                                                                                                     X[6:9])))
+        + ("" if V is None else f", its effects' term within {V.max():.2g} (units of g, per interval and axis)")
         + f" (the box each interval's remainder is proven from, at most {PREMISE_FACTORS[0]:g}x the information set's "
         "own box)")
 
@@ -104,59 +109,103 @@ def exact_information(mod, res, noise, nu, ext=None, start=None, cap=None):
     base = noise / f
     cap = np.full(A.shape[0], np.inf) if cap is None else np.r_[cap, np.full(A.shape[0] - len(cap), np.inf)]
 
-    def step(reach, X=None, proofs=None, within=False):
-        """(lo, hi) of q, the remainder left and the multipliers proving them, on the box |q| <= reach (and X),
-        or None; with `proofs` (multipliers of earlier sets), bounded from them alone, no LP. `within`: None as
-        soon as an LP proves some |q| past X (the premise box is then rejected whatever the other ends)."""
+    def step(reach, X=None, proofs=None, within=False, V=None):
+        """(lo, hi) of q, the remainder left, the multipliers proving them, the shift and the bound of the effects'
+        term over the set (None without effects), on the box |q| <= reach (and X), or None; with `proofs`
+        (multipliers of earlier sets), bounded from them alone, no LP. `within`: None as soon as an LP proves some
+        |q| past X, or the effects' term past V (the premise is then rejected whatever the other ends). `V` (3, K):
+        a bound of the effects' term |Phi(p) theta'| the truth meets (a premise's, or an earlier set's); with
+        effects each set is solved REFINE times, its term bounded over the last pass's set (`effect_reach`)."""
         A_box = lower(reach)
-        extra = None if ext is None else ext.extra(reach[9:], A_box, reach[6:9], nu)
-        left, shift = remainder_per_interval(F, A_box, reach[6:9], nu, extra)
-        shift = np.concatenate([shift, np.zeros(len(reach) - 9)])
-        if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
+        v_set, passes = V, REFINE if ext is not None and proofs is None else 1
+        for k in range(passes):
+            extra = None if ext is None else ext.extra(reach[9:], A_box, reach[6:9], nu, v_set)
+            left, shift = remainder_per_interval(F, A_box, reach[6:9], nu, extra)
+            shift = np.concatenate([shift, np.zeros(len(reach) - 9)])
+            if not (np.all(np.isfinite(left)) and np.all(np.isfinite(shift))):
+                return None
+            box = None if X is None and not np.isfinite(cap).any() else np.minimum(1.0 if X is None else X, cap) + shift
+            try:
+                lo, hi, lams = _hull(A, s, base + left, box, proofs,
+                                     (shift - X, X - shift) if within and k == passes - 1 else None)
+            except hull.Beyond:
+                return None
+            if ext is not None and proofs is None:       # the effects' term over this set: the next pass's bound
+                reach_v = effect_reach(A, s, base + left, box, ext)
+                v_set = reach_v if v_set is None or reach_v is None else np.minimum(v_set, reach_v)
+        if within and V is not None and v_set is not None and np.any(v_set > V):
             return None
-        box = None if X is None and not np.isfinite(cap).any() else np.minimum(1.0 if X is None else X, cap) + shift
-        try:
-            lo, hi, lams = _hull(A, s, base + left, box, proofs, (shift - X, X - shift) if within else None)
-        except hull.Beyond:
-            return None
-        return lo - shift, hi + shift, left, lams, shift
+        return lo - shift, hi + shift, left, lams, shift, v_set
 
-    lo, hi, lams = _hull(A, s, base if start is None else start, np.minimum(1.0, cap))    # the box's scale
+    start_bound = base if start is None else start
+    lo, hi, lams = _hull(A, s, start_bound, np.minimum(1.0, cap))    # the box's scale
     own, proofs = np.maximum(np.abs(lo), np.abs(hi)), [lams]
+    v_own = None if ext is None else effect_reach(A, s, start_bound, np.minimum(1.0, cap), ext)
     for _ in range(STEPS):                                   # the smallest self-consistent box, from the linear set up
         for by in (proofs, None):                            # by the multipliers solved, then by LPs
-            got = step(own, None, by)
+            got = step(own, None, by, V=v_own)
             if got is None:
                 return None
             grown = np.maximum(np.abs(got[0]), np.abs(got[1]))
+            v_grown = v_own if got[5] is None or v_own is None else np.maximum(v_own, got[5])
             if np.all(grown <= own * 1.1):                    # it only sets the premise's scale
                 break
         else:
-            own = grown
+            own, v_own = grown, v_grown
             proofs.append(got[3])
             continue
         break
     for factor in PREMISE_FACTORS:                           # each box tried by those multipliers, then by LPs
-        X = factor * own
-        got = next((got for by in (proofs, None) for got in [step(X, X, by, within=True)]
+        X, V = factor * own, None if v_own is None else factor * v_own
+        got = next((got for by in (proofs, None) for got in [step(X, X, by, within=True, V=V)]
                     if got is not None and np.all(np.maximum(np.abs(got[0]), np.abs(got[1])) <= X)), None)
         if got is not None:
             break
     else:
         return None
     lo, hi, left = np.maximum(got[0], -np.minimum(X, cap)), np.minimum(got[1], np.minimum(X, cap)), got[2]
+    v_now = V if got[5] is None else got[5]
     proofs += [got[3]] if got[3] is not None else []
     # from the premise down: each box proven, inside the last; first by the multipliers of the two sets solved
     # (no LP: the sets between differ in their bounds only), then by LPs until no bound moves by much
     for by in (proofs, None):
         for _ in range(STEPS):
-            got = step(np.maximum(np.abs(lo), np.abs(hi)), X, by)
+            got = step(np.maximum(np.abs(lo), np.abs(hi)), X, by, V=v_now)
             lo2, hi2 = np.maximum(lo, got[0]), np.minimum(hi, got[1])
             shrunk = np.all(hi2 - lo2 >= 0.95 * (hi - lo))
             lo, hi, left = lo2, hi2, np.minimum(left, got[2])
+            v_now = v_now if got[5] is None else got[5]
             if shrunk:                                       # a smaller box would move no bound by much
                 break
-    return (lo, hi), left, X, got[4]
+    return (lo, hi), left, Premise(X, V), got[4]
+
+
+class Premise(NamedTuple):
+    """The premise a per-interval remainder is proven from: X, the box of the truth's correction q to the fit, and
+    V (3, K), the bound of the effects' term |Phi(p) theta'| (None without effects)."""
+
+    X: np.ndarray
+    V: Optional[np.ndarray] = None
+
+
+#: Passes of a set with catalogue effects: the effect's term |Phi(p) theta'| bounded over the last pass's set (LPs)
+#: rather than from the box of theta' alone (which loses how the parameters of a polynomial in T move together).
+REFINE = 3
+
+
+def effect_reach(A, s, bound, X, ext):
+    """(3, K): the largest |Phi(p_k) theta'|_i over the set |s - A^T q| <= bound, |q| <= X (default 1), theta' =
+    q[9:], each component of each interval an LP pair proven by duality (solve/hull.py). Each set holds the truth
+    when its box does, so the bound holds for the truth's correction too."""
+    P, K = ext.phi.shape[0], len(s)
+    C = np.zeros((3 * K, A.shape[0]))
+    C[:, 9:9 + P] = np.moveaxis(ext.phi, 0, 2).reshape(3 * K, P)        # row 3k + i: Phi(p_k)[i, :]
+    box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
+    try:
+        lo, hi = hull.ranges(A.T, s - bound, s + bound, -box, box, C)
+    except hull.Empty:
+        return None
+    return np.maximum(np.abs(lo), np.abs(hi)).reshape(K, 3).T
 
 
 def _hull(A, s, bound, X=None, proofs=None, beyond=None):
