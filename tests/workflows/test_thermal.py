@@ -8,6 +8,7 @@ import pytest
 from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.workflows import thermal
+from conftest import flat
 
 SIGMA, G = 1e-4, 9.81
 TEMPS = (-20.0, 0.0, 20.0, 40.0, 60.0)
@@ -354,7 +355,11 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
     np.savetxt(log, np.column_stack([np.arange(n) * 0.01, f, T]), delimiter=",", header="time_s,ax,ay,az,temp_c",
                comments="", fmt="%.12g")
     capsys.readouterr()
-    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c2.csv")]) == 2
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c2.csv")]) == 0       # dropped and counted
+    assert f"{n - 1} samples corrected by" in flat(capsys.readouterr().out) and len(np.loadtxt(
+        tmp_path / "c2.csv", delimiter=",", skiprows=1)) == n - 1
+    (tmp_path / "c2.csv").unlink()
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c2.csv"), "--outside", "refuse"]) == 2
     assert "1 sample(s) at temperatures outside the calibrated range [-20, 60] C (the first, sample 8" in \
         capsys.readouterr().err
     np.savetxt(log, np.column_stack([np.arange(n) * 0.01, f]), delimiter=",", header="time_s,ax,ay,az",

@@ -46,7 +46,7 @@ def test_simulate_makes_a_warm_up_that_degree_1_calibrates_with_the_truth_inside
     # misalignment holds its truth within its one bound at 60 temperatures across the range. Red when the bias's slope
     # comes out with its sign flipped (norm_thermal's polynomials).
     log = tmp_path / "warm.csv"
-    assert main(["simulate", "--model", "norm", "--plan", "random:36", "--temperature", "warmup:20,45,300",
+    assert main(["simulate", "--model", "norm", "--plan", "random:36", "--temperature-profile", "warmup:20,45,300",
                  "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--effect", "scale_temperature=1e-4,-1e-4,5e-5",
                  "--sigma", "2e-4", "--size", "1e-2", "--seed", "3", "-o", str(log)]) == 0
     said = flat(capsys.readouterr().out)
@@ -67,7 +67,7 @@ def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tm
     # the calibrated range. Now they are dropped and counted on the summary line (exit 0); every sample written is
     # within the range, and --outside refuse refuses the log as before.
     log = tmp_path / "warm.csv"
-    assert main(["simulate", "--model", "norm", "--plan", "random:30", "--temperature", "warmup:20,40,200",
+    assert main(["simulate", "--model", "norm", "--plan", "random:30", "--temperature-profile", "warmup:20,40,200",
                  "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--sigma", "2e-4", "--size", "5e-3",
                  "-o", str(log)]) == 0
     cal = tmp_path / "cal.json"
@@ -92,7 +92,7 @@ def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tm
     (["--plan", "random:0"], "give 1 to 100000 orientations"),
     (["--plan", "grid:10"], "a unit turned by hand takes random:N, faces or optimal"),
     (["--plan", "faces", "--effect", "bias_temperature=1e-5,1e-5,1e-5"], "needs a temperature profile"),
-    (["--plan", "faces", "--temperature", "warmup:20,45"], "give warmup:T0,T1,TAU or cycle:T0,T1,PERIOD"),
+    (["--plan", "faces", "--temperature-profile", "warmup:20,45"], "give warmup:T0,T1,TAU or cycle:T0,T1,PERIOD"),
     (["--plan", "faces", "--effect", "bias_drift=1e-5,1e-5"], "give 3 finite numbers"),
     (["--plan", "faces", "--effect", "alpha_encoder_harmonic=1e-5,1e-5"], "a unit turned by hand takes"),
 ])
@@ -111,7 +111,7 @@ CURVED = ["--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--effect", "bias_te
 
 def _warm_up(tmp_path, K, effects, seed=0):
     log = tmp_path / "warm.csv"
-    assert main(["simulate", "--model", "norm", "--plan", f"random:{K}", "--temperature",
+    assert main(["simulate", "--model", "norm", "--plan", f"random:{K}", "--temperature-profile",
                  f"warmup:20,45,{K * 8 / 2.5:g}", *effects, "--sigma", "1e-3", "--size", "1e-2", "--seed", str(seed),
                  "--still", "6", "-o", str(log)]) == 0
     return log, json.loads((tmp_path / "warm.truth.json").read_text())
@@ -187,7 +187,8 @@ def test_effect_pairs_with_temperature_calibrate_with_the_truth_inside(tmp_path,
     # parameter and every effect parameter within its bound, in the convention printed.
     args = [x for name, v in effects.items() for x in ("--effect", f"{name}=" + ",".join(map(str, v)))]
     log = tmp_path / "p.csv"
-    assert main(["simulate", "--model", "norm", "--plan", "random:36", "--temperature", "warmup:20,45,150", *args,
+    assert main(["simulate", "--model", "norm", "--plan", "random:36", "--temperature-profile", "warmup:20,45,150",
+                 *args,
                  "--sigma", "1e-3", "--size", "3e-2", "--still", "6", "-o", str(log)]) == 0
     truth = json.loads((tmp_path / "p.truth.json").read_text())
     out = tmp_path / "r.json"

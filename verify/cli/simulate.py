@@ -23,12 +23,15 @@ def add(sub):
                    help="chamber temperatures (C): the plan at each, temp_c set to it; --truth may then name thermal "
                         "coefficients p_Tk of a block parameter p (e.g. bias1_T1, Gamma11_T2: per C^k about the middle "
                         "of the temperatures)")
-    p.add_argument("--temperature", metavar="PROFILE",
+    p.add_argument("--temperature-profile", metavar="PROFILE",
                    help="--model norm: each sample's temperature, warmup:T0,T1,TAU (from T0 towards T1 C, time "
                         "constant TAU s) or cycle:T0,T1,PERIOD (T0 to T1 and back, s); a temp_c column")
     p.add_argument("--ordered", action="store_true",
-                   help="--model norm: visit the orientations in the plan's own order (a board turned face by face), "
-                        "not shuffled")
+                   help="--model norm: visit the orientations in order, face up first and face down last (as a board "
+                        "is turned over by hand), not shuffled")
+    p.add_argument("--revisit", type=options.count, default=0, metavar="N",
+                   help="--model norm: at the end, turn back through the first N orientations in reverse order (hot, "
+                        "on a warm-up)")
     p.add_argument("--still", type=options.positive, default=8.0, metavar="S",
                    help="--model norm: seconds each orientation is held still (default 8)")
     p.add_argument("--move", type=options.positive, default=2.0, metavar="S",
@@ -47,7 +50,8 @@ def run_norm(args):
     from ..workflows import simulate_log
     if args.truth or args.temperatures:
         raise DataError("--model norm: a unit turned by hand draws its errors within --size and takes a temperature "
-                        "profile (--temperature warmup:T0,T1,TAU), not --truth or --temperatures", param="model")
+                        "profile (--temperature-profile warmup:T0,T1,TAU), not --truth or --temperatures",
+                        param="model")
     try:
         size = float(args.size or "1e-3")
     except ValueError:
@@ -57,13 +61,15 @@ def run_norm(args):
         raise DataError(f"--size {size:g}: a bound from 0 to 0.2", param="size")
     effects = simulate_log.parse_effects(args.effect, models.load("norm"))
     t, raw, T, truth = simulate_log.simulate(args.plan, effects, args.sigma, args.seed, args.g, size,
-                                             args.temperature, args.ordered, args.still, args.move, args.rate)
+                                             args.temperature_profile, args.ordered, args.still, args.move, args.rate,
+                                             args.revisit)
     path = truth_path(args.output)
     report.check_writable(path, "the truth file")
     simulate_log.write(args.output, t, raw, T)
     hidden = ", ".join(f"{n}={','.join(f'{v:g}' for v in vals)}" for n, vals in effects.items()) or "none"
     print(f"wrote {args.output}: {len(t)} samples (m/s^2) over {t[-1]:.1f} s, {truth['orientations']} still "
-          f"orientations of {args.still:g} s ({'in the plan order' if args.ordered else 'shuffled'}), noise within "
+          f"orientations of {args.still:g} s ({'in order, face up first' if args.ordered else 'shuffled'}), noise "
+          "within "
           f"+-{args.sigma:g} g per sample, effects: {hidden}"
           + ("" if T is None else f"; temperature {T.min():.1f} to {T.max():.1f} C (temp_c)"))
     report.write_json(path, {"model": "norm", **truth})
@@ -85,9 +91,10 @@ def run(args):
     from ..workflows import simulate
     if models.kind(args.model) == "norm":
         return run_norm(args)
-    for name in ("temperature", "ordered"):
+    for name in ("temperature_profile", "ordered", "revisit"):
         if getattr(args, name):
-            raise DataError(f"--{name} is for a unit turned by hand (--model norm); a stand takes --temperatures",
+            raise DataError(f"--{name.replace('_', '-')} is for a unit turned by hand (--model norm); a stand takes "
+                            "--temperatures",
                             param=name)
     base = models.stand_model(args.model)
     mod = models.load(args.model)

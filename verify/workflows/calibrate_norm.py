@@ -367,13 +367,16 @@ def _verdict_effects(p, res):
         raise DataError(f"{p.path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
                         "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
                         param="effects")
-    worst, A, bnd, err = ext.verdict(res, noise, nu)
+    try:
+        worst, A, bnd, err = ext.verdict(res, noise, nu)
+    except DataError as e:
+        raise DataError(str(e) + _confounded(p, res["n"]), param=e.param) from None
     base = noise * np.sqrt(1.0 - 2.0 * res["sigma"])             # noise / |F|, the units of sigma
     v = NormVerdict(res, rule, noise, nu, dsig, source, err, float((bnd - base).max()), bnd, worst)
     if v.consistent:
         found = norm_information.exact_information(p.mod, res, noise, nu, ext, bnd)
         if found is None:
-            raise DataError(_unproven(p, err), param="effects")
+            raise DataError(_unproven(p, err) + _confounded(p, res["n"]), param="effects")
         v.info, rb_k, v.box, shift = found
         v.rb, v.bnd = float(rb_k.max()), base + rb_k
         v.exact = (A, v.bnd, shift, ext)
@@ -398,14 +401,41 @@ def _unproven(p, err):
     labels = list(PARAM_LABELS[:9]) + list(ext.labels)
     k = int(np.argmax(err[:6]))
     need = math.ceil(INTERVALS_PER_PARAMETER * P)
-    fewer = (f"--thermal-degree {int(ext.option.split()[1]) - 1}" if ext.option.startswith("--thermal-degree")
-             and not ext.option.startswith("--thermal-degree 1") else "fewer effects")
+    thermal = ext.option.startswith("--thermal-degree")
+    degree = int(ext.option.split()[1]) if thermal else 0
+    fewer = (f"--thermal-degree {degree - 1}" if degree > 1 else "a constant calibration (no --thermal-degree)"
+             if thermal else "fewer effects")
     return (f"{p.path}: consistent with {ext.option}, but the remainder of the extended relation cannot be proven "
             f"from any box around the fit: on {K} still intervals its {P} parameters are bounded only to "
             f"{err[k]:.1g} ({labels[k]}) and {err[9:].max():.1g} ({labels[9 + int(np.argmax(err[9:]))]}), where the "
             f"second-order terms of (2.2) of 001 exceed the intervals' noise bounds. Record more orientations (about "
             f"{need} still intervals for {P} parameters; each held still, in shuffled order while it warms), or take "
             f"{fewer}: no bound")
+
+
+#: |correlation| of the intervals' temperature with an axis's share of g above which a refusal says they are
+#: confounded (an ordered warm-up: face up while cold, face down while hot).
+CONFOUNDED = 0.5
+
+
+def _confounded(p, n):
+    """A sentence for a warm-up whose orientation moved with its temperature (the correlation over the intervals of
+    T with n_i or n_i^2 beyond CONFOUNDED): a temperature term and a scale factor or bias are then told apart only
+    by how the two differ; the fix in recording. Empty otherwise."""
+    if p.temps is None or len(p.temps) < 3 or np.ptp(p.temps) == 0:
+        return ""
+    T = np.asarray(p.temps, float)
+    best = max(((abs(c), c, i, k) for i in range(3) for k, x in ((1, n[i]), (2, n[i] ** 2)) if np.ptp(x) > 0
+                for c in [float(np.corrcoef(T, x)[0, 1])]), default=(0.0,))
+    if best[0] <= CONFOUNDED:
+        return ""
+    _, c, i, k = best
+    share = f"n{i + 1}" if k == 1 else f"n{i + 1}^2"
+    return (f". Orientation and temperature moved together in this log (the intervals' temperature correlates "
+            f"{c:+.2f} with {share}, axis {i + 1}'s share of g{'' if k == 1 else ' squared'}): the warm-up cannot "
+            "tell a temperature term from a scale factor or bias. Record the orientations in shuffled order, or at "
+            "the end, hot, turn it back through the first two thirds of its orientations in reverse order (garant "
+            "simulate --model norm --ordered --revisit N makes such a log to try)")
 
 
 def _output(p, v, before):

@@ -44,12 +44,13 @@ def temperature(profile, t):
         return None
     m = re.fullmatch(r"(warmup|cycle):([-+0-9.eE]+),([-+0-9.eE]+),([-+0-9.eE]+)", str(profile))
     if not m:
-        raise DataError(f"--temperature {str(profile)[:40]!r}: give warmup:T0,T1,TAU or cycle:T0,T1,PERIOD (C, C, s)",
-                        param="temperature")
+        raise DataError(f"--temperature-profile {str(profile)[:40]!r}: give warmup:T0,T1,TAU or cycle:T0,T1,PERIOD "
+                        "(C, C, s)",
+                        param="temperature_profile")
     kind, a, b, tau = m.group(1), *(float(x) for x in m.group(2, 3, 4))
     if not (np.isfinite([a, b, tau]).all() and tau > 0 and -60 <= a <= 150 and -60 <= b <= 150):
-        raise DataError(f"--temperature {profile}: temperatures within -60..150 C and a time above 0 s",
-                        param="temperature")
+        raise DataError(f"--temperature-profile {profile}: temperatures within -60..150 C and a time above 0 s",
+                        param="temperature_profile")
     if kind == "warmup":
         return b - (b - a) * np.exp(-t / tau)
     return a + (b - a) * 0.5 * (1 - np.cos(2 * np.pi * t / tau))
@@ -78,15 +79,21 @@ def parse_effects(items, mod):
 
 
 def simulate(plan, effects, sigma, seed=0, g=9.81, size=1e-3, profile=None, ordered=False, still_s=STILL_S,
-             move_s=MOVE_S, rate=RATE_HZ):
-    """(t (N,), readings (N, 3) m/s^2, temperature (N,) or None, truth dict) of a unit turned by hand."""
+             move_s=MOVE_S, rate=RATE_HZ, revisit=0):
+    """(t (N,), readings (N, 3) m/s^2, temperature (N,) or None, truth dict) of a unit turned by hand; `revisit`:
+    the first orientations visited again at the end (hot, on a warm-up)."""
     from .. import models
     from .norm_effects import CONVENTION
     mod = models.load("norm")
     rng = np.random.default_rng(seed)
     dirs = orientations(plan, rng)
-    if not ordered:
+    if ordered:          # the way a person turns a unit: face up first, face down last (z from +1 to -1)
+        dirs = dirs[np.argsort(-dirs[:, 2], kind="stable")]
+    else:
         dirs = dirs[rng.permutation(len(dirs))]
+    if not 0 <= revisit <= len(dirs):
+        raise DataError(f"--revisit {revisit}: at most the {len(dirs)} orientations of the plan", param="revisit")
+    dirs = np.vstack([dirs, dirs[:revisit][::-1]])           # back the way it came
     errors = rng.uniform(-size, size, 9)                  # lambda, alpha, beta, gamma, eps/g of (1.3) of 001
     P = np.eye(3) + np.array([[errors[0], 0, 0], [errors[3], errors[1], 0], [errors[4], errors[5], errors[2]]])
     per = int(round(still_s * rate)), int(round(move_s * rate))
@@ -100,7 +107,8 @@ def simulate(plan, effects, sigma, seed=0, g=9.81, size=1e-3, profile=None, orde
     if need & {"temp_c", "temp_rate_c_s"} and T is None:
         raise DataError("--effect " + ", ".join(x for x in effects if {"temp_c", "temp_rate_c_s"}
                                                 & set(mod.EFFECT_VARIABLES[x]))
-                        + " needs a temperature profile (--temperature warmup:T0,T1,TAU)", param="temperature")
+                        + " needs a temperature profile (--temperature-profile warmup:T0,T1,TAU)",
+                        param="temperature_profile")
     still = np.zeros(n, bool)
     m = np.empty((n, 3))
     for k, d in enumerate(dirs):
@@ -123,7 +131,8 @@ def simulate(plan, effects, sigma, seed=0, g=9.81, size=1e-3, profile=None, orde
              "matrix": np.linalg.inv(P).tolist(), "bias": (g * errors[6:9]).tolist(),
              "effects": {x: dict(zip(mod.EFFECTS[x], v.tolist())) for x, v in effects.items()},
              "convention": CONVENTION, "time_ref_s": t_ref, "temp_ref_c": 20.0,
-             "orientations": len(dirs), "ordered": bool(ordered), "still_s": still_s, "move_s": move_s,
+             "orientations": len(dirs), "ordered": bool(ordered), "revisited": int(revisit), "still_s": still_s,
+             "move_s": move_s,
              "rate_hz": rate, "sigma": sigma, "g": g, "seed": seed, "plan": plan, "temperature_profile": profile}
     if T is not None:
         lo, hi = float(T[still].min()), float(T[still].max())
