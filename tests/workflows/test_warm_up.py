@@ -200,3 +200,23 @@ def test_effect_pairs_with_temperature_calibrate_with_the_truth_inside(tmp_path,
         for p, v in truth["effects"][name].items():
             got = res["effects"][name]["parameters"][p]
             assert abs(got["estimate"] - v) <= got["guaranteed_error"], (p, got, v)
+
+
+@pytest.mark.slow
+def test_an_ordered_warm_up_is_refused_naming_the_confounding_and_the_recording_that_calibrates(tmp_path, capsys):
+    # A warm-up whose orientations go face up first and face down last while it heats was refused with "the fit's
+    # effects are too large" and no word of why. Now the refusal says that orientation and temperature moved
+    # together (the intervals' temperature correlates with axis 3's share of g) and how to record instead; the same
+    # unit turned back through the first two thirds of its orientations in reverse order at the end calibrates.
+    def warm(*extra):
+        log = tmp_path / "o.csv"
+        assert main(["simulate", "--model", "norm", "--plan", "random:36", "--temperature-profile", "warmup:20,45,150",
+                     "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--sigma", "1e-3", "--size", "1e-2", "--still",
+                     "6", "--ordered", *extra, "-o", str(log)]) == 0
+        return log
+    capsys.readouterr()
+    assert main(["calibrate-norm", str(warm()), "--g", str(G), "--thermal-degree", "1"]) == 2
+    err = flat(capsys.readouterr().err)
+    assert "Orientation and temperature moved together in this log (the intervals' temperature correlates" in err
+    assert "with n3, axis 3's share of g" in err and "turn it back through the first two thirds" in err
+    assert main(["calibrate-norm", str(warm("--revisit", "24")), "--g", str(G), "--thermal-degree", "1"]) == 0
