@@ -220,3 +220,41 @@ def test_an_ordered_warm_up_is_refused_naming_the_confounding_and_the_recording_
     assert "Orientation and temperature moved together in this log (the intervals' temperature correlates" in err
     assert "with n3, axis 3's share of g" in err and "turn it back through the first two thirds" in err
     assert main(["calibrate-norm", str(warm("--revisit", "24")), "--g", str(G), "--thermal-degree", "1"]) == 0
+
+
+def _mems(tmp_path, K, seed):
+    log = tmp_path / "f.csv"
+    assert main(["simulate", "--model", "norm", "--plan", f"random:{K}", "--temperature-profile", "warmup:20,45,60",
+                 "--effect", "bias_temperature=8e-5,-8e-5,6e-5", "--sigma", "1e-3", "--size", "2e-2", "--still", "6",
+                 "--seed", str(seed), "-o", str(log)]) == 0
+    return log
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_few_intervals_name_the_true_effect_or_list_it_among_the_candidates(tmp_path, capsys, seed):
+    # A MEMS warm-up of 15 still intervals with a bias over temperature: --diagnose named scale_quadratic
+    # [cross_coupling] (15 parameters on 15 intervals fit anything) and never reported the true effect. Now a set
+    # whose parameters saturate the intervals is not tried (it proves nothing), the sets consistent to first order
+    # are listed with their scores, the answer is the fewest whose whole calibration is consistent, and the hidden
+    # bias_temperature is named or among the candidates. Red when saturating sets are scored like the others.
+    log = _mems(tmp_path, 15, seed)
+    out = tmp_path / "d.json"
+    capsys.readouterr()
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--diagnose", "--json", str(out)]) == 3
+    said = flat(capsys.readouterr().out)
+    d = json.loads(out.read_text())["diagnosis"]
+    assert d["add"] == d["named"] and "bias_temperature" in d["candidates"], d
+    assert "cross_coupling" in d["too_many_parameters"] and d["too_many_parameters"]["cross_coupling"] == 18
+    assert "candidates, each consistent to first order" in said and "add them: garant calibrate-norm" in said
+    assert "cross_coupling" not in d["named"]
+
+
+def test_too_few_intervals_for_any_effect_say_how_many_to_add(tmp_path, capsys):
+    # 13 intervals: no set of effects leaves room (each needs 15 or more); the output says so and how many to add,
+    # rather than "nothing in the catalogue makes the data consistent" (nothing was tried).
+    log = _mems(tmp_path, 13, 2)
+    capsys.readouterr()
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--diagnose"]) == 3
+    said = flat(capsys.readouterr().out)
+    assert "not tried for want of intervals" in said and "this log has 13" in said
+    assert "Record 2 or more orientations" in said and "nothing in the catalogue" not in said

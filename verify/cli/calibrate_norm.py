@@ -292,24 +292,46 @@ def _print_diagnosis(d, params, args):
         ranked = sorted(step.items(), key=lambda kv: kv[1])
         print("  try: " + "; ".join(f"{k} {v:.1f}" for k, v in ranked[:6])
               + (f"; and {len(ranked) - 6} more sets" if len(ranked) > 6 else ""))
-    if d["named"]:
-        print("  named: " + ", ".join(d["named"]) + f", the fewest effects that make the data consistent (worst now "
-              f"{d['max_residual_after']:.1f})")
+    cands = d.get("candidates", {})
+    if len(cands) > 1:
+        print("  candidates, each consistent to first order (worst residual over the noise bound): "
+              + "; ".join(f"{k} {v:.2f}" for k, v in cands.items())
+              + ": these data do not single one out by fit; each is checked by its whole calibration, fewest "
+                "parameters first. To tell them apart: temperature terms by a wider temperature range, or heating then "
+                "cooling; terms in time by a longer log; terms in the orientation by more orientations (garant plan "
+                "--model norm lists them)")
+    for names, said in d.get("checked", {}).items():
+        print(f"  --effect {names}: {said}")
+    if d.get("add"):
+        print("  named: " + ", ".join(d["named"]) + ", the fewest effects whose whole calibration is consistent"
+              + ("" if d["first_order"] == d["named"] else
+                 f" (to first order {', '.join(d['first_order'])} fit best, worst {d['max_residual_after']:.1f}; "
+                 "its calibration is said above)"))
         for e, others in d["equivalent"].items():
             if others:
                 print(f"  {e}: these orientations cannot tell it from {', '.join(others)} (beside the base model, "
                       "one's columns of (2.2) of 001 lie in the other's span); the data name the family, not the "
                       "member")
-    for names, said in d.get("checked", {}).items():
-        print(f"  --effect {names}: {said}")
-    if d.get("add"):
         print(f"  add them: {_with_effect(args, d['add'])}")
     elif d["named"]:
-        print("  no set named calibrates with a proven remainder: the first-order fit above is all the data say; "
-              "state the noise bound you can stand behind (--delta-sigma), or record more orientations")
-    elif not d["consistent_before"]:
+        print("  named to first order: " + ", ".join(d["named"]) + f" (worst {d['max_residual_after']:.1f}); no set "
+              "calibrates with a proven remainder: the first-order fit is all the data say; state the noise bound you "
+              "can stand behind (--delta-sigma), or record more orientations")
+    elif not d["consistent_before"] and d["scores"]:
         print("  named: nothing in the catalogue makes the data consistent (sets of up to three tried; best worst "
               f"{d['max_residual_after']:.1f}): an effect outside the catalogue, or a noise bound too tight")
+    many = d.get("too_many_parameters", {})
+    if many and not d.get("add"):
+        least = min(many.values())
+        by_need = {}
+        for k, v in many.items():
+            by_need.setdefault(v, []).append(k)
+        print(f"  not tried for want of intervals (a set of effects needs its parameters and the base's plus three "
+              f"still intervals, or it fits anything; this log has {d['intervals']}): "
+              + "; ".join(f"{len(ks)} set(s) need {v} ({ks[0]}{', ...' if len(ks) > 1 else ''})"
+                          for v, ks in sorted(by_need.items()))
+              + f". Record {least - d['intervals']} or more orientations (garant plan --model norm lists them; "
+                "shuffled, on a warm-up) to try the smallest")
     if d["unseen"]:
         print("  unseen here: " + ", ".join(d["unseen"]) + " (the base parameters absorb them on these orientations)")
     for e, why in d["skipped"].items():

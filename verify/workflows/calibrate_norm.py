@@ -483,9 +483,8 @@ def _diagnosis(p, v):
     from . import diagnose_norm, norm_effects
     d = diagnose_norm.diagnose(p.mod, p.stills, v.res, p.params, v.noise, v.worst, p.temps, p.rates,
                                noise_bound=v.source)
-    d["add"], d["checked"] = diagnose_norm.to_add(d, p.mod, lambda names: run(p.with_effects(
-        norm_effects.Extension(p.mod, names, p.stills, p.temps, p.path, p.rates))))
-    return d
+    return diagnose_norm.settle(d, *diagnose_norm.to_add(d, p.mod, lambda names: run(p.with_effects(
+        norm_effects.Extension(p.mod, names, p.stills, p.temps, p.path, p.rates)))))
 
 
 def misalignment_cap(M_fit, params, premise, held, si):

@@ -103,10 +103,17 @@ def diagnose(mod, stills, res, params, bounds, t0, temps=None, rates=None, noise
                             None if rates is None else np.asarray(rates, float))
     same, unseen = equivalence(base, cols)
     usable = [e for e in cols if e not in unseen]
-    named, after, history = [], highs.chebyshev_fit(base, s, weights=bounds)[1], []
+    named, after, history, too_many = [], highs.chebyshev_fit(base, s, weights=bounds)[1], [], {}
     for size in range(1, min(LARGEST_SET, len(usable)) + 1 if t0 > 1 else 0):
-        tried = {names: highs.chebyshev_fit(np.vstack([base] + [cols[c] for c in names]), s, weights=bounds)[1]
-                 for names in combinations(usable, size)}
+        tried = {}
+        for names in combinations(usable, size):
+            need = intervals_needed(mod, params, names)
+            if need > len(s):                         # it would saturate the intervals: it fits anything, proves nothing
+                too_many[", ".join(names)] = need
+                continue
+            tried[names] = highs.chebyshev_fit(np.vstack([base] + [cols[c] for c in names]), s, weights=bounds)[1]
+        if not tried:
+            break
         history.append(tried)
         best = min(tried, key=tried.get)
         after = min(after, tried[best])
@@ -115,10 +122,20 @@ def diagnose(mod, stills, res, params, bounds, t0, temps=None, rates=None, noise
             break
     return {"noise_bound": noise_bound,
             "consistent_before": bool(t0 <= 1), "max_residual_before": t0,
-            "named": named, "equivalent": {e: _alike(named, e, same[e], history[-1] if history else {}) for e in named},
+            "named": named, "first_order": list(named),
+            "equivalent": {e: _alike(named, e, same[e], history[-1] if history else {}) for e in named},
+            "candidates": {", ".join(k): float(v) for k, v in sorted(history[-1].items(), key=lambda kv: kv[1])
+                           if v <= 1} if named else {},
+            "too_many_parameters": too_many, "intervals": len(s),
             "unseen": unseen,
             "consistent_after": bool(after <= 1), "max_residual_after": after,
             "scores": [{", ".join(k): float(v) for k, v in h.items()} for h in history], "skipped": skipped}
+
+
+def intervals_needed(mod, params, names):
+    """The still intervals a calibration with the effects `names` needs: its parameters plus three (as
+    calibrate_norm's refusal asks)."""
+    return params + 3 + sum(len(mod.EFFECTS[x]) for x in names)
 
 
 def to_add(d, mod, calibrate):
@@ -150,3 +167,14 @@ def to_add(d, mod, calibrate):
         if out["consistent"]:
             return list(names), checked
     return None, checked
+
+
+def settle(d, add, checked):
+    """One answer: `named` becomes the set whose whole calibration is consistent (`add`), the first-order choice
+    kept as `first_order` (its calibration said why not in `checked`); with none that calibrates, named stays the
+    first-order one."""
+    d["add"], d["checked"] = add, checked
+    if add:
+        d["named"] = list(add)
+        d["equivalent"] = {e: d["equivalent"].get(e, []) for e in add}
+    return d
