@@ -108,7 +108,7 @@ def diagnose(mod, stills, res, params, bounds, t0, temps=None, rates=None, noise
         tried = {}
         for names in combinations(usable, size):
             need = intervals_needed(mod, params, names)
-            if need > len(s):                         # it would saturate the intervals: it fits anything, proves nothing
+            if need > len(s):                 # it would saturate the intervals: it fits anything, proves nothing
                 too_many[", ".join(names)] = need
                 continue
             tried[names] = highs.chebyshev_fit(np.vstack([base] + [cols[c] for c in names]), s, weights=bounds)[1]
