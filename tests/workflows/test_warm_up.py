@@ -258,3 +258,20 @@ def test_too_few_intervals_for_any_effect_say_how_many_to_add(tmp_path, capsys):
     said = flat(capsys.readouterr().out)
     assert "not tried for want of intervals" in said and "this log has 13" in said
     assert "Record 2 or more orientations" in said and "nothing in the catalogue" not in said
+
+
+@pytest.mark.slow
+def test_the_warm_up_example_of_the_docs_runs_as_written(tmp_path, monkeypatch, capsys):
+    # docs/thermal.md's worked example, each line run as written in a scratch folder: the simulated warm-up
+    # calibrates with degree 2, and apply corrects the log it came from, the samples outside the range dropped.
+    import shlex
+    from conftest import ROOT
+    text = (ROOT / "docs" / "thermal.md").read_text()
+    block = text.split("<!-- warm-up example -->\n```sh\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(tmp_path)
+    lines = [shlex.split(line) for line in block.strip().splitlines()]
+    assert [x[:2] for x in lines] == [["garant", "simulate"], ["garant", "calibrate-norm"], ["garant", "apply"]]
+    for argv in lines:
+        assert main(argv[1:]) == 0, argv
+    said = flat(capsys.readouterr().out)
+    assert "dropped as outside its temperature range" in said and (tmp_path / "warm.params").exists()
