@@ -275,3 +275,13 @@ def test_the_warm_up_example_of_the_docs_runs_as_written(tmp_path, monkeypatch, 
         assert main(argv[1:]) == 0, argv
     said = flat(capsys.readouterr().out)
     assert "dropped as outside its temperature range" in said and (tmp_path / "warm.params").exists()
+
+
+def test_an_effect_refused_for_want_of_intervals_says_how_many_to_add(tmp_path, capsys):
+    # "needs at least 15" said neither how many orientations to add nor where from.
+    log = _mems(tmp_path, 13, 2)
+    capsys.readouterr()
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--effect", "bias_temperature"]) == 2
+    err = flat(capsys.readouterr().err)
+    assert "found only 13 still interval(s); a 9-parameter calibration with --effect bias_temperature needs at " \
+           "least 15: record 2 more orientation(s) (garant plan --model norm lists them" in err

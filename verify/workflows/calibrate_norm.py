@@ -236,9 +236,11 @@ def _enough(p):
     """Refuse a log with fewer still intervals than the calibration has parameters plus three."""
     need = p.params + 3 + (len(p.ext.labels) if p.ext else 0)
     if len(p.stills) < need:
+        what = f" with {p.ext.option}" if p.ext else ""
         raise DataError(f"{p.path}: found only {len(p.stills)} still interval(s); a {p.params}-parameter "
-                        f"calibration needs at least {need} (record more orientations, each held still for at least "
-                        f"{opt('min_still')} s)")
+                        f"calibration{what} needs at least {need}: record {need - len(p.stills)} more orientation(s) "
+                        f"(garant plan --model norm lists them; shuffled on a warm-up), each held still for at least "
+                        f"{opt('min_still')} s")
 
 
 def _off_axis(n):
