@@ -85,21 +85,41 @@ def _gyro(text):
 
 def _ardupilot(path, res, args):
     from ..io import tcal
-    tcal.write(path, res, args.ardupilot_imu)
-    return f"wrote {path}"
+    log = res.get("flight") or {}
+    imu = args.ardupilot_imu or (log["instance"] + 1 if log.get("stack") == "ardupilot" else 1)
+    tcal.write(path, res, imu)
+    return f"wrote {path} (IMU {imu}" + (", the log's accelerometer)" if args.ardupilot_imu is None and log else ")")
 
 
 def _px4(path, res, args):
-    from ..io import tcal
-    tcal.write_px4(path, res, args.px4_instance, args.px4_device_id)
-    return f"wrote {path}"
+    """PX4's file for the device the user names or the ULog holds, in the slot the vehicle's parameters give it
+    (io/flight.px4_slot) unless --px4-instance says; another TC_A slot holding the same id is cleared."""
+    from ..io import flight, tcal
+    log = res.get("flight") if (res.get("flight") or {}).get("stack") == "px4" else None
+    device = args.px4_device_id if args.px4_device_id is not None else (log or {}).get("device_id")
+    slot, cal, clear = flight.px4_slot(log, device) if log else (0, 0, [])
+    if args.px4_instance is not None:
+        slot = cal = args.px4_instance
+        clear = [n for n in flight.holders(log, device) if n != slot]
+    tcal.write_px4(path, res, slot, device, cal, clear)
+    said = f"wrote {path} (TC_A{slot}, CAL_ACC{cal}, device id {device}"
+    if log and args.px4_instance is None:
+        said += ", the slots the log's parameters give it"
+    return said + (")" if not clear else f"; TC_A{', TC_A'.join(map(str, clear))}_ID cleared: it held the same id)")
 
 
 def _check_px4(args):
-    """--export-px4 needs the device id PX4 matches."""
+    """--export-px4 needs the device id PX4 matches: --px4-device-id, or a PX4 ULog that holds it."""
     if args.export_px4 and args.px4_device_id is None:
+        from ..io import recordings
         from ..io.tcal import PX4_NEEDS_ID
-        raise DataError(PX4_NEEDS_ID, param="px4_device_id")
+        logs = getattr(args, "logs", None) or [getattr(args, "data", None)]
+        try:
+            fmt = getattr(args, "format", None) or recordings.guess_format(logs[0])
+        except (OSError, TypeError):
+            fmt = None
+        if fmt != "ulog":
+            raise DataError(PX4_NEEDS_ID, param="px4_device_id")
 
 
 def _positive_int(text):
@@ -134,16 +154,19 @@ EXPORTS = (
     Export("--export-ardupilot", "FILE.parm", "the ArduPilot parameter file", "with --thermal-degree: ArduPilot's "
            "INS_TCALn_* parameters (TMIN, TMAX, the offset polynomial ACC1-3 about 35 C, x 1e6) and INS_ACCn_CALTEMP, "
            "INS_ACCOFFS, INS_ACCSCAL at T0", BOTH, "thermal",
-           options=((("--ardupilot-imu",), dict(type=int, choices=(1, 2, 3), default=1, metavar="N", help="the IMU "
-                     "the ArduPilot parameters are for (INS_TCALN_*; default 1)")),),
+           options=((("--ardupilot-imu",), dict(type=int, choices=(1, 2, 3), metavar="N", help="the IMU the "
+                     "ArduPilot parameters are for (INS_TCALN_*; default: a DataFlash log's own accelerometer, else "
+                     "1)")),),
            write=_ardupilot),
-    Export("--export-px4", "FILE.params", "the PX4 parameter file", "with --thermal-degree and --px4-device-id: PX4's "
+    Export("--export-px4", "FILE.params", "the PX4 parameter file", "with --thermal-degree and a device id: PX4's "
            "TC_A* parameters (QGroundControl's .params: ID, TREF, TMIN, TMAX, the offset polynomial X0-X3 relative to "
            "TREF) and CAL_ACCn_ID, xOFF, xSCALE at TREF", BOTH, "thermal",
-           options=((("--px4-instance",), dict(type=int, choices=(0, 1, 2, 3), default=0, metavar="N", help="the "
-                     "accelerometer slot the PX4 parameters are for (TC_AN_*, CAL_ACCN_*; default 0)")),
+           options=((("--px4-instance",), dict(type=int, choices=(0, 1, 2, 3), metavar="N", help="the "
+                     "accelerometer slot the PX4 parameters are for (TC_AN_*, CAL_ACCN_*; default: from a ULog's "
+                     "parameters the slot that holds the device or the first free one, else 0)")),
                     (("--px4-device-id",), dict(type=_positive_int, metavar="ID", help="the accelerometer's device id "
-                     "(CAL_ACCn_ID on the vehicle): PX4 applies TC_AN_* only to the sensor whose id is TC_AN_ID"))),
+                     "(CAL_ACCn_ID on the vehicle): PX4 applies TC_AN_* only to the sensor whose id is TC_AN_ID "
+                     "(default: a ULog's own sensor_accel device_id)"))),
            check=_check_px4, write=_px4),
 )
 

@@ -6,7 +6,7 @@ from typing import NamedTuple      # loaded with numpy anyway; dataclasses would
 import numpy as np
 
 from ..errors import DataError, opt
-from . import files, mimu
+from . import files, flight, mimu
 from ..defaults import FORMATS, SENSORS
 
 
@@ -22,6 +22,7 @@ class Log(NamedTuple):
     dt: float = None       # median sample interval, s (computed when None)
     fmt: str = ""          # the format it was read as (FORMATS), or "array"
     temp: np.ndarray = None   # C, each sample's temperature where the log has a column of it (TEMP_COLUMNS)
+    meta: dict = None      # a flight controller's log: its stack, the sensor's instance and device id, its parameters
 
 
 #: Time column names of a `csv` log, and the unit each one states (factor to seconds).
@@ -55,6 +56,8 @@ def guess_format(path):
     """The log's format from its first bytes: mimu (binary packets), openaxes, csv or imu_tk."""
     with open(path, "rb") as fh:
         start = fh.read(4096)
+    if flight.looks_like(start):
+        return flight.looks_like(start)
     if mimu.looks_like(start[: 4 * mimu.PACKET]):
         return "mimu"
     if start.startswith(b"\x93NUMPY"):
@@ -194,6 +197,7 @@ class Read(NamedTuple):
     step: float = None
     note: str = ""
     temp: np.ndarray = None
+    meta: dict = None
 
 
 #: Temperature column names of a `csv` log (degrees C).
@@ -255,8 +259,20 @@ def _read_imucal(path, sensor, imu, rate):
 
 
 #: Each log format and its reader (path, sensor, imu, rate) -> Read: one place to add a format.
+def _read_flight(reader):
+    """A reader of a flight controller's log (io/flight.py): one accelerometer instance (`imu`: its number or device
+    id), m/s^2, its temperature and the log's parameters."""
+    def read(path, sensor, imu, rate):
+        t, raw, temp, meta = reader(path, imu)
+        note = (f"{meta['stack']} accelerometer {meta['instance']} (device id {meta['device_id']}) of "
+                f"{len(meta['instances'])}")
+        return Read(t, raw, True, None, note, temp, meta)
+    return read
+
+
 READERS = {"imu_tk": _read_imu_tk, "csv": _read_csv, "openaxes": _read_openaxes, "mimu": _read_mimu,
-           "npy": _read_npy, "imucal": _read_imucal}
+           "npy": _read_npy, "imucal": _read_imucal, "ulog": _read_flight(flight.read_ulog),
+           "dataflash": _read_flight(flight.read_dataflash)}
 #: The formats a log may be read as (`--format`).
 assert tuple(READERS) == FORMATS, "defaults.FORMATS names READERS in order"
 
@@ -269,8 +285,9 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     files.regular(path, "the log", MAX_LOG_BYTES, param="log")
     try:
         fmt = fmt or guess_format(path)
-        if imu is not None and fmt != "mimu":
-            raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu), not to a {fmt} log")
+        if imu is not None and fmt not in ("mimu", "ulog", "dataflash"):
+            raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu) or a flight controller's "
+                            f"log (ulog, dataflash), not to a {fmt} log")
         if fmt not in READERS:
             raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}", param="fmt")
         got = READERS[fmt](path, sensor, imu, rate)
@@ -283,7 +300,8 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     dt, repeats = _check_time(path, t, unit)
     if repeats:
         note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))
-    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt, fmt, got.temp)   # t: the reader's own array
+    return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt, fmt, got.temp,     # t: the reader's own array
+               got.meta)
 
 
 def quantum(log):

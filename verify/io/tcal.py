@@ -112,7 +112,7 @@ def _celsius(x):
     return text + "0" if text.endswith(".") else text
 
 
-def px4_text(res, instance=0, device_id=None):
+def px4_text(res, instance=0, device_id=None, cal_instance=None, clear=()):
     """PX4's parameter file (QGroundControl's tab-separated .params: vehicle, component, name, value, type 9 for
     a float, 6 for an integer): TC_A_ENABLE, TC_An_ID (the device id PX4 matches, set_sensor_id), TREF/TMIN/TMAX,
     X0..X3 per axis (X0 = 0), and CAL_ACCn_ID, CAL_ACCn_xOFF, CAL_ACCn_xSCALE."""
@@ -124,20 +124,24 @@ def px4_text(res, instance=0, device_id=None):
     poly, bounds = offset_polynomials(res, th["t0_c"], "--export-px4")
     offs, scal = _at_t0(res, "--export-px4")
     lo, hi = th["range_c"]
-    a, c = f"TC_A{instance}", f"CAL_ACC{instance}"
+    cal_instance = instance if cal_instance is None else cal_instance
+    a, c = f"TC_A{instance}", f"CAL_ACC{cal_instance}"
     params = [("TC_A_ENABLE", 1, 6), (f"{a}_ID", int(device_id), 6), (f"{a}_TREF", float(th["t0_c"]), 9),
               (f"{a}_TMIN", float(lo), 9), (f"{a}_TMAX", float(hi), 9)]
     for n in range(ORDER + 1):
         for i in range(3):
             params.append((f"{a}_X{n}_{i}", poly[i][n] if 0 < n < len(poly[i]) else 0.0, 9))
+    params += [(f"TC_A{m}_ID", 0, 6) for m in clear]             # PX4 applies the first slot whose id matches
     params.append((f"{c}_ID", int(device_id), 6))
     params += [(f"{c}_{'XYZ'[i]}OFF", offs[i], 9) for i in range(3)]
     params += [(f"{c}_{'XYZ'[i]}SCALE", scal[i], 9) for i in range(3)]
     head = [f"# garant {th.get('command', 'estimate')} --thermal-degree {th['degree']}: accelerometer thermal "
             "compensation for PX4, instance "
-            f"{instance}, device id {device_id}; valid over [{lo:g}, {hi:g}] C of the IMU's own temperature",
+            f"{instance}, device id {device_id}; valid over [{lo:g}, {hi:g}] C of the IMU's own temperature"
+            + (f"; TC_A{', TC_A'.join(map(str, clear))}_ID set to 0: it held the same device id, and PX4 applies the "
+               "first slot that matches" if clear else ""),
             f"# the thermal offset is relative to TREF = {th['t0_c']:g} C (X0 = 0, as PX4's process_sensor_caldata.py "
-            f"writes it); CAL_ACC{instance}_*OFF and *SCALE are garant's calibration at TREF: loading them replaces "
+            f"writes it); CAL_ACC{cal_instance}_*OFF and *SCALE are garant's calibration at TREF: loading them replaces "
             "an earlier accelerometer calibration",
             "# guaranteed bound of each axis's bias over the range (m/s^2): "
             + ", ".join(f"{'XYZ'[i]} {bounds[i]:.3e}" for i in range(3)),
@@ -167,6 +171,6 @@ def write(path, res, imu=1):
     files.write(path, [text(res, imu)], "w")
 
 
-def write_px4(path, res, instance=0, device_id=None):
+def write_px4(path, res, instance=0, device_id=None, cal_instance=None, clear=()):
     """Write PX4's .params file."""
-    files.write(path, [px4_text(res, instance, device_id)], "w")
+    files.write(path, [px4_text(res, instance, device_id, cal_instance, clear)], "w")

@@ -305,6 +305,8 @@ def _log_figures(res, data, p, note, sensor):
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
                                        / np.sqrt(3) * np.sqrt(dt))})
     res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, p.stills, res["matrix"], res["bias"])
+    if data.meta:                             # a flight controller's log: the sensor, and the slots its vehicle holds
+        res["flight"] = {k: data.meta[k] for k in ("stack", "instance", "device_id", "parameters")}
 
 
 #: The stillness thresholds tried when a log yields too few still intervals (--still-factor, --min-still).
