@@ -141,8 +141,8 @@ def px4_text(res, instance=0, device_id=None, cal_instance=None, clear=()):
             + (f"; TC_A{', TC_A'.join(map(str, clear))}_ID set to 0: it held the same device id, and PX4 applies the "
                "first slot that matches" if clear else ""),
             f"# the thermal offset is relative to TREF = {th['t0_c']:g} C (X0 = 0, as PX4's process_sensor_caldata.py "
-            f"writes it); CAL_ACC{cal_instance}_*OFF and *SCALE are garant's calibration at TREF: loading them replaces "
-            "an earlier accelerometer calibration",
+            f"writes it); CAL_ACC{cal_instance}_*OFF and *SCALE are garant's calibration at TREF: loading them "
+            "replaces an earlier accelerometer calibration",
             "# guaranteed bound of each axis's bias over the range (m/s^2): "
             + ", ".join(f"{'XYZ'[i]} {bounds[i]:.3e}" for i in range(3)),
             f"# premise: {th['premise']}; the scale factors are those at TREF (PX4 holds them constant in T)",
