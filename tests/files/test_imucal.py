@@ -131,3 +131,18 @@ def test_a_dataframe_in_gives_a_calibrated_copy_out(calibrated):
     assert out["gyr_x"].equals(df["gyr_x"]) and (out["bound_x"] > 0).all()
     with pytest.raises(garant.DataError, match="needs rate=HZ"):
         garant.apply(str(calibrated / "g.json"), df)
+
+
+def test_apply_reads_imucals_session_with_the_options_apply_has(tmp_path, capsys):
+    # `apply --format imucal` asked for --rate, which apply did not have; --sensor took only lower case.
+    cal = tmp_path / "c.json"
+    premise = [x for name in ("alpha", "beta", "gamma") for x in ("--bound", f"{name}=1e-2")]
+    assert main(["calibrate-norm", str(SESSION), "--format", "imucal", "--rate", "102.4", *premise,
+                 "--save", str(cal)]) == 0
+    out = tmp_path / "o.csv"
+    assert main(["apply", str(cal), str(SESSION), "--format", "imucal", "-o", str(out)]) == 2
+    assert "give --rate HZ" in capsys.readouterr().err
+    assert main(["apply", str(cal), str(SESSION), "--format", "imucal", "--rate", "102.4", "--sensor", "ADXL355",
+                 "-o", str(out)]) == 0
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert data.shape[1] == 7 and len(data) == len(pd.read_csv(SESSION))

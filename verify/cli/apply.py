@@ -3,6 +3,7 @@ import os
 import sys
 
 from ..defaults import FORMATS, SENSORS
+from . import args as options
 
 
 def add(sub):
@@ -13,8 +14,11 @@ def add(sub):
                    "batch's folder (calibrate-norm LOG... --out DIR): each log takes DIR/<its name>.json")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): each corrected into --out DIR")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
-    p.add_argument("--sensor", choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
-    p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8)")
+    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
+    p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or the "
+                   "accelerometer of a flight controller's log (ulog, dataflash: its number or device id)")
+    p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "
+                   "(--format imucal: imucal's session)")
     p.add_argument("--trust-units", action="store_true",
                    help="apply even when the log's scale does not look like the calibration's raw unit (m/s^2 or "
                         "counts)")
@@ -101,7 +105,7 @@ def _apply(args, calibration, log, output):
     from ..io.report import write_chunks
     from ..io.text import csv_bytes
     from ..workflows import jobs
-    pieces = jobs.apply(calibration, log, fmt=args.format, sensor=args.sensor, imu=args.imu,
+    pieces = jobs.apply(calibration, log, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                         trust_units=args.trust_units, frame=args.frame, chunk=CHUNK, outside=args.outside)
     worst, total, n, kind, dropped = np.zeros(3), 0.0, 0, "", 0
 
