@@ -14,7 +14,8 @@ def add(sub):
                    "batch's folder (calibrate-norm LOG... --out DIR): each log takes DIR/<its name>.json")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): each corrected into --out DIR")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
-    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS), default="adxl355", help="accelerometer of an OpenAXES log")
+    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
+                   default="adxl355", help="accelerometer of an OpenAXES log")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or the "
                    "accelerometer of a flight controller's log (ulog, dataflash: its number or device id)")
     p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "

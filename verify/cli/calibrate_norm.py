@@ -12,7 +12,8 @@ def add(sub):
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): a batch, one process, every core")
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
-    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
+    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
+                   help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or all of them "
                    "in turn (then --json holds one result per IMU)")
     options.g(p, "local gravity, m/s^2 (default: 9.81 assumed, with |Delta_g/g| <= 5e-3 in the bounds)", default=None)

@@ -15,7 +15,8 @@ def add(sub):
                    "(exp or run) holding every run")
     p.add_argument("--format", choices=FORMATS + ("means",), help="log format (guessed when omitted); means: a "
                    "positions file of per-position means (docs/formats.md)")
-    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS), help="accelerometer of an OpenAXES log (default adxl355)")
+    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
+                   help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
     options.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9, help="9 or 12 parameters (as calibrate-norm)")
