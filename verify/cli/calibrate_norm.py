@@ -390,7 +390,11 @@ def _still_only(res, args):
     from ..io import report
     why = "a still-only warm-up gives each axis's drift in this orientation, no calibration: turn the unit through " \
           "orientations while it warms"
-    exports.refuse(args, "calibrate-norm", f"is refused: {why}")
+    for e in exports.asked(args, "calibrate-norm"):          # the flight stacks' offset polynomials alone
+        if e.takes != "thermal" or not res.get("thermal"):
+            raise DataError(f"{e.option} is refused: {why}" + ("; --export-ardupilot and --export-px4 write the "
+                            "offset polynomials under the scale-drift premise" if res.get("thermal") else ""),
+                            param=e.dest)
     for opt in ("plot", "report"):
         if getattr(args, opt):
             raise DataError(f"--{opt} is refused: {why}", param=opt)
@@ -409,6 +413,15 @@ def _still_only(res, args):
                  [(a, f"{d['at_t0']:+.6e}", f"{d['at_t0_bound']:.2e}", f"{d['slope']:+.4e}", f"{d['slope_bound']:.2e}",
                    f"{d['over_range']:+.4e}", f"{d['over_range_bound']:.2e}") for a, d in res["drift"].items()])
     print(f"not separated: {res['not_separated']}")
+    if res.get("thermal"):
+        th = res["thermal"]
+        sd = res["scale_drift"]
+        print("the flight stacks' offset polynomial of each axis, relative to t0, with one bound over the range "
+              "(m/s^2): " + ", ".join(f"{a} {res['g'] * th['bound'][f'bias{i + 1}']:.3e}" for i, a in enumerate("xyz"))
+              + f"; premise: each entry of Gamma drifts by at most {sd['bound_per_c']:g} per C ("
+              + ("--bound scale_drift" if sd["stated"] else "assumed, a typical MEMS datasheet figure: state the "
+                 "sensor's with --bound scale_drift=S") + "), which one orientation cannot tell from a bias drift")
+        exports.write(args, res, "calibrate-norm")
     if args.json:
         report.write_json(args.json, res)
     return 0

@@ -102,7 +102,8 @@ def _px4(path, res, args):
         slot = cal = args.px4_instance
         clear = [n for n in flight.holders(log, device) if n != slot]
     tcal.write_px4(path, res, slot, device, cal, clear)
-    said = f"wrote {path} (TC_A{slot}, CAL_ACC{cal}, device id {device}"
+    cal_rows = "" if res["thermal"].get("offsets_only") else f", CAL_ACC{cal}"
+    said = f"wrote {path} (TC_A{slot}{cal_rows}, device id {device}"
     if log and args.px4_instance is None:
         said += ", the slots the log's parameters give it"
     return said + (")" if not clear else f"; TC_A{', TC_A'.join(map(str, clear))}_ID cleared: it held the same id)")

@@ -73,16 +73,20 @@ def text(res, imu=1):
         raise DataError(f"--export-ardupilot: ArduPilot holds a polynomial of degree {ORDER}", param="export_ardupilot")
     poly, bounds = offset_polynomials(res, TEMP_REF)
     poly = {i: (d[1:] + [0.0] * ORDER)[:ORDER] for i, d in poly.items()}
-    offs, scal = _at_t0(res, "--export-ardupilot")
+    relative = th.get("offsets_only", False)          # a still warm-up: the drift, not the calibration at T0
+    offs, scal = (None, None) if relative else _at_t0(res, "--export-ardupilot")
     lo, hi = th["range_c"]
     n = "" if imu == 1 else str(imu)
     lines = [f"# garant {th.get('command', 'estimate')} --thermal-degree {th['degree']}: accelerometer thermal "
              "compensation for ArduPilot, "
              f"IMU {imu}, with the accelerometer calibration it is applied with",
              f"# valid over [{lo:g}, {hi:g}] C (TMIN, TMAX) of the IMU's own temperature; ArduPilot's reference 35 C",
-             f"# INS_ACC{imu}_CALTEMP, INS_ACC{n}OFFS_* and INS_ACC{n}SCAL_* are garant's calibration at T0 = "
-             f"{th['t0_c']:g} C: loading them replaces an earlier accelerometer calibration (a later one sets them "
-             "again, at its own temperature)",
+             (f"# INS_ACC{imu}_CALTEMP, INS_ACC{n}OFFS_* and INS_ACC{n}SCAL_* are left as the vehicle has them: a "
+              "still warm-up gives each axis's drift, not the calibration (ArduPilot's correction P(T) - P(CALTEMP) "
+              "is relative)" if relative else
+              f"# INS_ACC{imu}_CALTEMP, INS_ACC{n}OFFS_* and INS_ACC{n}SCAL_* are garant's calibration at T0 = "
+              f"{th['t0_c']:g} C: loading them replaces an earlier accelerometer calibration (a later one sets them "
+              "again, at its own temperature)"),
              "# axes: the IMU's, after its driver's fixed rotation and before the board's orientation "
              "(AHRS_ORIENTATION), as AP_InertialSensor_Backend corrects them",
              "# guaranteed bound of each axis's bias over the range (m/s^2): "
@@ -95,9 +99,10 @@ def text(res, imu=1):
     for p in range(ORDER):
         for i in range(3):
             lines.append(f"INS_TCAL{imu}_ACC{p + 1}_{'XYZ'[i]} {poly[i][p] * SCALE_FACTOR:.9f}")
-    lines.append(f"INS_ACC{imu}_CALTEMP {th['t0_c']:.2f}")
-    lines += [f"INS_ACC{n}OFFS_{'XYZ'[i]} {offs[i]:.9f}" for i in range(3)]
-    lines += [f"INS_ACC{n}SCAL_{'XYZ'[i]} {scal[i]:.9f}" for i in range(3)]
+    if not relative:
+        lines.append(f"INS_ACC{imu}_CALTEMP {th['t0_c']:.2f}")
+        lines += [f"INS_ACC{n}OFFS_{'XYZ'[i]} {offs[i]:.9f}" for i in range(3)]
+        lines += [f"INS_ACC{n}SCAL_{'XYZ'[i]} {scal[i]:.9f}" for i in range(3)]
     return "\n".join(lines) + "\n"
 
 
@@ -122,7 +127,8 @@ def px4_text(res, instance=0, device_id=None, cal_instance=None, clear=()):
     if device_id is None:
         raise DataError(PX4_NEEDS_ID, param="px4_device_id")
     poly, bounds = offset_polynomials(res, th["t0_c"], "--export-px4")
-    offs, scal = _at_t0(res, "--export-px4")
+    relative = th.get("offsets_only", False)          # a still warm-up: the drift, not the calibration at TREF
+    offs, scal = (None, None) if relative else _at_t0(res, "--export-px4")
     lo, hi = th["range_c"]
     cal_instance = instance if cal_instance is None else cal_instance
     a, c = f"TC_A{instance}", f"CAL_ACC{cal_instance}"
@@ -132,20 +138,24 @@ def px4_text(res, instance=0, device_id=None, cal_instance=None, clear=()):
         for i in range(3):
             params.append((f"{a}_X{n}_{i}", poly[i][n] if 0 < n < len(poly[i]) else 0.0, 9))
     params += [(f"TC_A{m}_ID", 0, 6) for m in clear]             # PX4 applies the first slot whose id matches
-    params.append((f"{c}_ID", int(device_id), 6))
-    params += [(f"{c}_{'XYZ'[i]}OFF", offs[i], 9) for i in range(3)]
-    params += [(f"{c}_{'XYZ'[i]}SCALE", scal[i], 9) for i in range(3)]
+    if not relative:
+        params.append((f"{c}_ID", int(device_id), 6))
+        params += [(f"{c}_{'XYZ'[i]}OFF", offs[i], 9) for i in range(3)]
+        params += [(f"{c}_{'XYZ'[i]}SCALE", scal[i], 9) for i in range(3)]
     head = [f"# garant {th.get('command', 'estimate')} --thermal-degree {th['degree']}: accelerometer thermal "
             "compensation for PX4, instance "
             f"{instance}, device id {device_id}; valid over [{lo:g}, {hi:g}] C of the IMU's own temperature"
             + (f"; TC_A{', TC_A'.join(map(str, clear))}_ID set to 0: it held the same device id, and PX4 applies the "
                "first slot that matches" if clear else ""),
             f"# the thermal offset is relative to TREF = {th['t0_c']:g} C (X0 = 0, as PX4's process_sensor_caldata.py "
-            f"writes it); CAL_ACC{cal_instance}_*OFF and *SCALE are garant's calibration at TREF: loading them "
-            "replaces an earlier accelerometer calibration",
+            + ("writes it); CAL_ACCn_* are left as the vehicle has them: a still warm-up gives each axis's drift, not "
+               "the calibration" if relative else
+               f"writes it); CAL_ACC{cal_instance}_*OFF and *SCALE are garant's calibration at TREF: loading them "
+               "replaces an earlier accelerometer calibration"),
             "# guaranteed bound of each axis's bias over the range (m/s^2): "
             + ", ".join(f"{'XYZ'[i]} {bounds[i]:.3e}" for i in range(3)),
-            f"# premise: {th['premise']}; the scale factors are those at TREF (PX4 holds them constant in T)",
+            f"# premise: {th['premise']}" + ("" if relative else "; the scale factors are those at TREF (PX4 holds "
+                                                                 "them constant in T)"),
             "# Vehicle-Id\tComponent-Id\tName\tValue\tType"]
     return "\n".join(head + [f"1\t1\t{n}\t{v:.9g}\t{t}" if t == 9 else f"1\t1\t{n}\t{v}\t{t}"
                               for n, v, t in params]) + "\n"

@@ -233,10 +233,18 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
-    p = _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, (window, k, min_still))
+    bound, scale_drift = _scale_drift(bound)
+    p = _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, (window, k, min_still),
+                      scale_drift)
     if isinstance(p, dict):                   # a still warm-up: one orientation, the still-only path's result
         p["premises"] = _norm_premises(p["premises"], g_unc, g_src)
+        if data.meta:
+            p["flight"] = {k: data.meta[k] for k in ("stack", "instance", "device_id", "parameters")}
         return results.NormCalibration(p)
+    if scale_drift is not None:
+        raise DataError(f"{data.path}: --bound scale_drift is the premise of a still warm-up (one orientation while it "
+                        "heats); turned through orientations, the warm-up calibrates the scale's drift itself",
+                        param="bound")
     res = cn.run(p, diagnose)
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
     res["premises"] = _norm_premises(res["premises"], g_unc, g_src, (
@@ -254,7 +262,19 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     return results.NormCalibration(res)
 
 
-def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, still):
+def _scale_drift(bound):
+    """(the misalignments' bounds, the scale drift's bound per C or None) of `bound` (--bound NAME=VALUE)."""
+    if not isinstance(bound, dict) or "scale_drift" not in bound:
+        return bound, None
+    rest = {k: v for k, v in bound.items() if k != "scale_drift"}
+    v = bound["scale_drift"]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 0.01:
+        raise DataError(f"--bound scale_drift={str(v)[:40]}: give the drift of the scale factors and misalignments "
+                        "per C, above 0 and at most 0.01 (the datasheet's, e.g. 1e-4 for 100 ppm/C)", param="bound")
+    return rest or None, float(v)
+
+
+def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, still, scale_drift=None):
     """The norm_problem.NormProblem of a log's still intervals with the options asked for (the effects, or the
     thermal degree's, built once), or, for a still warm-up (one orientation), the result of the still-only path.
     `still`: (window, k, min_still) of the stillness detector, for the line that refuses too few intervals."""
@@ -272,7 +292,8 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
                             f"{', '.join(norm_thermal.names(temperature))} itself)", param="temperature")
         stills = norm_thermal.split(data, stills, still[2])
         if stills and norm_thermal.one_orientation(stills):
-            return norm_thermal.still_only(data, stills, note, g, recordings.quantum(data))
+            from . import still_warm_up
+            return still_warm_up.fit(data, stills, note, g, recordings.quantum(data), temperature, scale_drift)
     if len(stills) < params + 3:
         raise DataError(_too_few_stills(data, len(stills), params, *still), param="log")
     if temperature is not None:
