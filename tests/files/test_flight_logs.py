@@ -238,3 +238,33 @@ def test_a_still_warm_up_in_a_ulog_writes_the_slot_px4_will_use(tmp_path, capsys
         capsys.readouterr().out)
     names = [x.split("\t")[2] for x in params.read_text().splitlines() if x and not x.startswith("#")]
     assert "TC_A0_ID" in names and not [n for n in names if n.startswith("CAL_ACC")]
+
+
+@needs_real
+def test_the_flight_controller_example_of_the_docs_runs_as_written(tmp_path, monkeypatch, capsys):
+    # docs/thermal.md's "From your flight controller" lines, run as written in a folder holding the logs they name.
+    import shlex
+    text = (ROOT / "docs" / "thermal.md").read_text()
+    block = text.split("<!-- flight example -->\n```sh\n", 1)[1].split("```", 1)[0]
+    _warm_ulog(tmp_path)                                    # warm.ulg
+    _still(tmp_path)                                        # still.csv
+    monkeypatch.chdir(tmp_path)
+    for line in block.strip().splitlines():
+        argv = shlex.split(line)
+        assert argv[0] == "garant" and main(argv[1:]) == 0, line
+    said = flat(capsys.readouterr().out)
+    assert "wrote tc.params (TC_A0, CAL_ACC0, device id 2424842, the slots the log's parameters give it)" in said
+    assert "wrote tc.parm (IMU 1)" in said and (tmp_path / "still.params").exists()
+
+
+@needs_real
+def test_imu_all_calibrates_each_accelerometer_of_a_ulog_and_says_which_cannot(tmp_path, capsys):
+    # --imu all on the warm-up ULog: instance 0 (the warm-up) calibrates; 1 and 2 (6 samples each, as logged) are
+    # each said in a line and the others go on, as a batch does; the exit status says some could not be calibrated.
+    path, _, _ = _warm_ulog(tmp_path)
+    out = tmp_path / "all.json"
+    assert main(["calibrate-norm", str(path), "--imu", "all", "--g", str(G), "--json", str(out)]) == 2
+    said = flat(capsys.readouterr().out)
+    assert "== IMU 0" in said and "IMU 1: not calibrated:" in said and "IMU 2: not calibrated:" in said
+    res = json.loads(out.read_text())
+    assert res["IMU 0"]["consistent"] and "only 6 samples" in res["IMU 1"]["error"]

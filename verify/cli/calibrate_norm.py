@@ -14,7 +14,8 @@ def add(sub):
     p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    help="accelerometer of an OpenAXES log (default adxl355)")
-    p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or all of them "
+    p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8; a flight "
+                   "controller's log: its number or device id), or all of them "
                    "in turn (then --json holds one result per IMU)")
     options.g(p, "local gravity, m/s^2 (default: 9.81 assumed, with |Delta_g/g| <= 5e-3 in the bounds)", default=None)
     p.add_argument("--g-uncertainty", type=options.small, metavar="REL",
@@ -81,17 +82,24 @@ def run(args):
         return _run(args)
     import copy
 
-    from ..io import mimu, report
+    from ..io import flight, mimu, recordings, report
     exports.refuse(args, "calibrate-norm", "writes one sensor's calibration: give one IMU with --imu K")
     for opt in ("plot", "report"):
         if getattr(args, opt):
             raise DataError(f"--{opt} is of one sensor: give one IMU with --imu K", param=opt)
+    fmt = args.format or recordings.guess_format(args.log)
+    each = list(flight.instances(args.log, fmt)) if fmt in ("ulog", "dataflash") else range(1, mimu.IMUS + 1)
     results, codes = {}, []
-    for k in range(1, mimu.IMUS + 1):
+    for k in each:
         print(f"\n== IMU {k}")
         one = copy.copy(args)
         one.imu, one.json = k, None
-        codes.append(_run(one, results.setdefault(f"IMU {k}", {})))
+        try:
+            codes.append(_run(one, results.setdefault(f"IMU {k}", {})))
+        except DataError as e:                   # one sensor's log unusable: said, the others go on (as a batch)
+            print(f"IMU {k}: not calibrated: {e}")
+            results[f"IMU {k}"] = {"error": str(e)}
+            codes.append(2)
     if args.json:
         report.write_json(args.json, results)
     return max(codes)

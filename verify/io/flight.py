@@ -52,25 +52,36 @@ def _pick(path, instances, imu, stack):
     raise DataError(f"{path}: no accelerometer {imu} in this {stack} log: {listed}", param="imu")
 
 
-def read_ulog(path, imu=None):
-    """(t s, raw (N, 3) m/s^2, temperature C or None, meta) of one `sensor_accel` instance of a PX4 ULog."""
+def instances(path, fmt):
+    """{number: device id} of the accelerometers of a ULog or DataFlash log (`--imu all` calibrates each)."""
+    return (_load_ulog(path) if fmt == "ulog" else _load_dataflash(path))[1]
+
+
+def _load_ulog(path):
+    """(sensor_accel data by instance number, {number: device id}, the vehicle's parameters at start)."""
     ulog = _need("pyulog", path)
     try:
         log = ulog.ULog(str(path), ["sensor_accel"])
     except Exception as e:                        # pyulog raises bare exceptions on a damaged file
         raise DataError(f"{path}: not a readable ULog ({str(e)[:80]})", param="log") from None
-    topics = {d.multi_id: d for d in log.data_list if d.name == "sensor_accel"}
-    instances = {k: int(d.data["device_id"][0]) if "device_id" in d.data and len(d.data["device_id"]) else 0
-                 for k, d in sorted(topics.items())}
-    k = _pick(path, instances, imu, "PX4")
-    d = topics[k].data
+    topics = {d.multi_id: d.data for d in log.data_list if d.name == "sensor_accel"}
+    ids = {k: int(d["device_id"][0]) if "device_id" in d and len(d["device_id"]) else 0
+           for k, d in sorted(topics.items())}
+    return topics, ids, dict(log.initial_parameters)
+
+
+def read_ulog(path, imu=None):
+    """(t s, raw (N, 3) m/s^2, temperature C or None, meta) of one `sensor_accel` instance of a PX4 ULog."""
+    topics, ids, parameters = _load_ulog(path)
+    k = _pick(path, ids, imu, "PX4")
+    d = topics[k]
     t = np.asarray(d.get("timestamp_sample", d["timestamp"]), float) * 1e-6
     raw = np.column_stack([np.asarray(d[a], float) for a in "xyz"])
     temp = np.asarray(d["temperature"], float) if "temperature" in d else None
     if temp is not None and not np.any(temp):             # a sensor without one logs 0
         temp = None
-    params = {n: v for n, v in log.initial_parameters.items() if n.startswith(("CAL_ACC", "TC_A"))}
-    meta = {"stack": "px4", "instance": k, "device_id": instances[k], "instances": instances, "parameters": params}
+    params = {n: v for n, v in parameters.items() if n.startswith(("CAL_ACC", "TC_A"))}
+    meta = {"stack": "px4", "instance": k, "device_id": ids[k], "instances": ids, "parameters": params}
     return t, raw, temp, meta
 
 
@@ -78,8 +89,8 @@ def read_ulog(path, imu=None):
 DATAFLASH_IMU = ("IMU", "IMU2", "IMU3")
 
 
-def read_dataflash(path, imu=None):
-    """(t s, raw (N, 3) m/s^2, temperature C or None, meta) of one accelerometer of an ArduPilot DataFlash log."""
+def _load_dataflash(path):
+    """(accelerometer rows by instance number, {number: device id}, the PARM values)."""
     dfreader = _need("pymavlink.DFReader", path)
     try:
         reader = dfreader.DFReader_binary(str(path), zero_time_base=True)
@@ -99,12 +110,17 @@ def read_dataflash(path, imu=None):
             continue
         k = int(getattr(m, "I", DATAFLASH_IMU.index(kind)))
         rows.setdefault(k, []).append((m.TimeUS, m.AccX, m.AccY, m.AccZ, getattr(m, "T", np.nan)))
-    ids = {0: "INS_ACC_ID", 1: "INS_ACC2_ID", 2: "INS_ACC3_ID"}
-    instances = {k: int(params.get(ids.get(k, ""), 0)) for k in sorted(rows)}
-    k = _pick(path, instances, imu, "ArduPilot")
+    names = {0: "INS_ACC_ID", 1: "INS_ACC2_ID", 2: "INS_ACC3_ID"}
+    return rows, {k: int(params.get(names.get(k, ""), 0)) for k in sorted(rows)}, params
+
+
+def read_dataflash(path, imu=None):
+    """(t s, raw (N, 3) m/s^2, temperature C or None, meta) of one accelerometer of an ArduPilot DataFlash log."""
+    rows, ids, params = _load_dataflash(path)
+    k = _pick(path, ids, imu, "ArduPilot")
     a = np.array(rows[k], float)
     temp = a[:, 4] if np.all(np.isfinite(a[:, 4])) else None
-    meta = {"stack": "ardupilot", "instance": k, "device_id": instances[k], "instances": instances,
+    meta = {"stack": "ardupilot", "instance": k, "device_id": ids[k], "instances": ids,
             "parameters": {n: v for n, v in params.items() if n.startswith(("INS_ACC", "INS_TCAL"))}}
     return a[:, 0] * 1e-6, a[:, 1:4], temp, meta
 
