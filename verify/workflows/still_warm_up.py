@@ -104,6 +104,8 @@ def offsets(coeffs, t0, t_range, degree, S, stated, w_sum, R, g, premise):
               "assumed: a typical MEMS datasheet figure; state the sensor's with --bound scale_drift=S")
     said = (f"each entry of Gamma (scale factors and misalignments) drifts by at most {S:g} per C from its value at "
             f"t0 = {t0:g} C ({source})")
+    units = ["1 (over g)"] + [f"1/degC{'' if k == 1 else f'^{k}'} (over g)" for k in range(1, degree + 1)]
     return {"degree": degree, "t0_c": t0, "range_c": list(t_range), "q": q, "bound": bound, "offsets_only": True,
+            "units": {f"bias{i + 1}": units for i in range(3)},
             "definitions": {f"bias{i + 1}": f"bias{i + 1}" for i in range(3)},
             "premise": premise + "; " + said, "command": "calibrate-norm"}
