@@ -30,6 +30,6 @@ COUNT_SECONDS = 120.0
 MAX_RUNS = 50
 
 #: The log formats calibrate-norm, apply and repeatability read (io/recordings.py READERS, in this order).
-FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy", "imucal", "ulog", "dataflash")
+FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy", "imucal", "ulog", "dataflash", "rosbag")
 #: The accelerometers of an OpenAXES log, by the prefix of their columns.
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}

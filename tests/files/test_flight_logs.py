@@ -149,8 +149,8 @@ def test_the_base_install_has_no_flight_reader_and_the_extra_has_them():
     import tomllib
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     names = lambda reqs: {r.split(">")[0].split("=")[0].split("[")[0] for r in reqs}      # noqa: E731
-    assert not names(project["dependencies"]) & {"pyulog", "pymavlink"}
-    assert names(project["optional-dependencies"]["flight"]) == {"pyulog", "pymavlink"}
+    assert not names(project["dependencies"]) & {"pyulog", "pymavlink", "rosbags"}
+    assert names(project["optional-dependencies"]["flight"]) == {"pyulog", "pymavlink", "rosbags"}
 
 
 def _still(tmp_path, S=2e-5):
@@ -268,3 +268,43 @@ def test_imu_all_calibrates_each_accelerometer_of_a_ulog_and_says_which_cannot(t
     assert "== IMU 0" in said and "IMU 1: not calibrated:" in said and "IMU 2: not calibrated:" in said
     res = json.loads(out.read_text())
     assert res["IMU 0"]["consistent"] and "only 6 samples" in res["IMU 1"]["error"]
+
+
+def test_a_ros_bag_calibrates_as_its_csv_twin(tmp_path, capsys):
+    # Kalibr's users record sensor_msgs/Imu in a bag: a hand-turned log written into a ROS 1 bag (rosbags' writer,
+    # the header stamps the times) and the same samples as a csv (times and readings written to round-trip exactly)
+    # give the same calibration file, every byte but its `source` (the log's own name).
+    from pathlib import Path
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+    from garant.verify.workflows import simulate_log
+    t, raw, _, _ = simulate_log.simulate("random:30", {}, 2e-4, seed=4, size=1e-2, still_s=4, move_s=1, rate=50)
+    store = get_typestore(Stores.ROS1_NOETIC)
+    ty = store.types
+    Imu, Header, Time = ty["sensor_msgs/msg/Imu"], ty["std_msgs/msg/Header"], ty["builtin_interfaces/msg/Time"]
+    Vec, Quat = ty["geometry_msgs/msg/Vector3"], ty["geometry_msgs/msg/Quaternion"]
+    ns = (np.round(t * 1e9).astype(np.int64) + 1_000_000_000)
+    bag = Path(tmp_path / "imu.bag")
+    with Writer(bag) as w:
+        other = w.add_connection("/cam0/imu", Imu.__msgtype__, typestore=store)
+        conn = w.add_connection("/imu0", Imu.__msgtype__, typestore=store)
+        for k, (n, a) in enumerate(zip(ns, raw)):
+            msg = Imu(header=Header(seq=k, stamp=Time(sec=int(n // 10**9), nanosec=int(n % 10**9)), frame_id="imu"),
+                      orientation=Quat(x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=np.zeros(9),
+                      angular_velocity=Vec(x=0.0, y=0.0, z=0.0), angular_velocity_covariance=np.zeros(9),
+                      linear_acceleration=Vec(x=a[0], y=a[1], z=a[2]), linear_acceleration_covariance=np.zeros(9))
+            w.write(conn, int(n), store.serialize_ros1(msg, Imu.__msgtype__))
+            if k < 5:
+                w.write(other, int(n), store.serialize_ros1(msg, Imu.__msgtype__))
+    stamps = (ns // 10**9) + (ns % 10**9) * 1e-9                 # as the reader forms them
+    csv = tmp_path / "imu.csv"
+    csv.write_text("time_s,ax,ay,az\n" + "".join(",".join(repr(float(v)) for v in row) + "\n"
+                                                 for row in np.column_stack([stamps, raw])))
+    assert main(["calibrate-norm", str(bag), "--g", str(G)]) == 2
+    err = capsys.readouterr().err
+    assert "2 accelerometers in this ROS bag log: 0 (topic /cam0/imu), 1 (topic /imu0)" in err
+    assert main(["calibrate-norm", str(bag), "--imu", "1", "--g", str(G), "--save", str(tmp_path / "b.json")]) == 0
+    assert main(["calibrate-norm", str(csv), "--g", str(G), "--save", str(tmp_path / "c.json")]) == 0
+    bag_cal, csv_cal = (json.loads((tmp_path / f).read_text()) for f in ("b.json", "c.json"))
+    assert bag_cal.pop("source") != csv_cal.pop("source") and bag_cal == csv_cal
+    assert (tmp_path / "b.json").read_text().replace(str(bag), str(csv)) == (tmp_path / "c.json").read_text()

@@ -88,7 +88,8 @@ def run(args):
         if getattr(args, opt):
             raise DataError(f"--{opt} is of one sensor: give one IMU with --imu K", param=opt)
     fmt = args.format or recordings.guess_format(args.log)
-    each = list(flight.instances(args.log, fmt)) if fmt in ("ulog", "dataflash") else range(1, mimu.IMUS + 1)
+    each = (list(flight.instances(args.log, fmt)) if fmt in ("ulog", "dataflash", "rosbag")
+            else range(1, mimu.IMUS + 1))
     results, codes = {}, []
     for k in each:
         print(f"\n== IMU {k}")

@@ -14,12 +14,15 @@ EXTRA = "pip install 'garant[flight]'"
 #: The first bytes of each format.
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 DATAFLASH_MAGIC = b"\xa3\x95"
+ROSBAG_MAGIC = b"#ROSBAG V2.0"
 
 
 def looks_like(start):
-    """"ulog", "dataflash" or None for a file's first bytes."""
+    """"ulog", "dataflash", "rosbag" or None for a file's first bytes."""
     if start.startswith(ULOG_MAGIC):
         return "ulog"
+    if start.startswith(ROSBAG_MAGIC):
+        return "rosbag"
     if start[:2] == DATAFLASH_MAGIC and b"FMT" in start[:64]:
         return "dataflash"
     return None
@@ -36,7 +39,7 @@ def _need(module, path):
 
 def _pick(path, instances, imu, stack):
     """The instance `imu` names (its number or its device id) among {number: device id}; the only one when None."""
-    listed = ", ".join(f"{k} (device id {d})" for k, d in instances.items())
+    listed = ", ".join(f"{k} ({'topic' if isinstance(d, str) else 'device id'} {d})" for k, d in instances.items())
     if not instances:
         raise DataError(f"{path}: no accelerometer readings in this {stack} log", param="log")
     if imu is None:
@@ -45,7 +48,7 @@ def _pick(path, instances, imu, stack):
         raise DataError(f"{path}: {len(instances)} accelerometers in this {stack} log: {listed}; choose one with "
                         f"{opt('imu')} K (its number or device id)", param="imu")
     for k, d in instances.items():
-        if imu == d and d:
+        if imu == d and d and not isinstance(d, str):
             return k
     if imu in instances:
         return imu
@@ -53,8 +56,9 @@ def _pick(path, instances, imu, stack):
 
 
 def instances(path, fmt):
-    """{number: device id} of the accelerometers of a ULog or DataFlash log (`--imu all` calibrates each)."""
-    return (_load_ulog(path) if fmt == "ulog" else _load_dataflash(path))[1]
+    """{number: device id (a bag: its topic)} of the accelerometers of a ULog, DataFlash log or ROS bag (`--imu all`
+    calibrates each)."""
+    return {"ulog": _load_ulog, "dataflash": _load_dataflash, "rosbag": _load_rosbag}[fmt](path)[1]
 
 
 def _load_ulog(path):
@@ -142,3 +146,37 @@ def holders(meta, device_id):
     """The TC_A slots whose TC_An_ID is `device_id` in the log's parameters at start."""
     p = (meta or {}).get("parameters", {})
     return [n for n in range(4) if int(p.get(f"TC_A{n}_ID", 0)) == device_id]
+
+
+#: The ROS message a bag's accelerometer topic carries (Kalibr's users record sensor_msgs/Imu).
+IMU_MSG = "sensor_msgs/msg/Imu"
+
+
+def _load_rosbag(path):
+    """(the Imu messages' (stamp s, ax, ay, az) by topic number, {number: topic}, None) of a ROS 1 bag."""
+    highlevel = _need("rosbags.highlevel", path)
+    from pathlib import Path
+    rows = {}
+    try:
+        with highlevel.AnyReader([Path(path)]) as reader:
+            conns = sorted((c for c in reader.connections if c.msgtype == IMU_MSG), key=lambda c: c.topic)
+            topics = {k: c.topic for k, c in enumerate(dict((c.topic, c) for c in conns).values())}
+            number = {t: k for k, t in topics.items()}
+            for conn, _, raw in reader.messages(connections=conns):
+                m = reader.deserialize(raw, conn.msgtype)
+                a, st = m.linear_acceleration, m.header.stamp
+                rows.setdefault(number[conn.topic], []).append((st.sec + st.nanosec * 1e-9, a.x, a.y, a.z))
+    except DataError:
+        raise
+    except Exception as e:                         # the reader's own errors on a damaged bag
+        raise DataError(f"{path}: not a readable ROS bag ({str(e)[:80]})", param="log") from None
+    return rows, topics, None
+
+
+def read_rosbag(path, imu=None):
+    """(t s, raw (N, 3) m/s^2, None, meta) of one sensor_msgs/Imu topic of a ROS 1 bag (its header stamps)."""
+    rows, topics, _ = _load_rosbag(path)
+    k = _pick(path, topics, imu, "ROS bag")
+    a = np.array(rows.get(k, []), float).reshape(-1, 4)
+    return a[:, 0], a[:, 1:4], None, {"stack": "ros", "instance": k, "device_id": 0, "topic": topics[k],
+                                      "instances": topics, "parameters": {}}

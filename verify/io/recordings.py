@@ -264,15 +264,15 @@ def _read_flight(reader):
     id), m/s^2, its temperature and the log's parameters."""
     def read(path, sensor, imu, rate):
         t, raw, temp, meta = reader(path, imu)
-        note = (f"{meta['stack']} accelerometer {meta['instance']} (device id {meta['device_id']}) of "
-                f"{len(meta['instances'])}")
+        which = f"topic {meta['topic']}" if "topic" in meta else f"device id {meta['device_id']}"
+        note = f"{meta['stack']} accelerometer {meta['instance']} ({which}) of {len(meta['instances'])}"
         return Read(t, raw, True, None, note, temp, meta)
     return read
 
 
 READERS = {"imu_tk": _read_imu_tk, "csv": _read_csv, "openaxes": _read_openaxes, "mimu": _read_mimu,
            "npy": _read_npy, "imucal": _read_imucal, "ulog": _read_flight(flight.read_ulog),
-           "dataflash": _read_flight(flight.read_dataflash)}
+           "dataflash": _read_flight(flight.read_dataflash), "rosbag": _read_flight(flight.read_rosbag)}
 #: The formats a log may be read as (`--format`).
 assert tuple(READERS) == FORMATS, "defaults.FORMATS names READERS in order"
 
@@ -285,9 +285,9 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     files.regular(path, "the log", MAX_LOG_BYTES, param="log")
     try:
         fmt = fmt or guess_format(path)
-        if imu is not None and fmt not in ("mimu", "ulog", "dataflash"):
+        if imu is not None and fmt not in ("mimu", "ulog", "dataflash", "rosbag"):
             raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu) or a flight controller's "
-                            f"log (ulog, dataflash), not to a {fmt} log")
+                            f"log or a ROS bag (ulog, dataflash, rosbag), not to a {fmt} log")
         if fmt not in READERS:
             raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}", param="fmt")
         got = READERS[fmt](path, sensor, imu, rate)
