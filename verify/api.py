@@ -26,7 +26,8 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
           "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
           "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate, "jobs": checks.positive_int,
-          "temperature": checks.degree, "outside": checks.one_of(*jobs.OUTSIDE)}
+          "temperature": checks.degree, "outside": checks.one_of(*jobs.OUTSIDE), "chunk": checks.positive_int,
+          "model": checks.model, "progress": checks.callback, "spec": checks.path}
 
 
 def _api(fn):

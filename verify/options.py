@@ -22,7 +22,10 @@ def _number(value):
             raise Bad(f"{value[:40]!r} is not a number") from None
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise Bad(f"must be a real number, not {type(value).__name__} {_shown(value)}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:                         # a Python int beyond any float (10**400)
+        raise Bad(f"{_shown(value)} is too large for a number") from None
 
 
 def _shown(value):
@@ -134,6 +137,40 @@ def text(value):
 text.takes_text = True
 
 
+def model(value):
+    """A model: a built-in name or a path (text or os.PathLike), not a list or a number."""
+    import os
+    if isinstance(value, os.PathLike):
+        return value
+    if not isinstance(value, str) or not value or len(value) > 4096:
+        raise Bad(f"{_shown(value)} must be a model's name (e.g. 'two-axis') or a STAND.toml path")
+    return value
+
+
+model.takes_text = True
+
+
+def path(value):
+    """A file's path: text or os.PathLike (a dictionary or a number is no file)."""
+    import os
+    if not isinstance(value, (str, os.PathLike)) or isinstance(value, str) and not value:
+        raise Bad(f"{_shown(value)} must be a file's path")
+    return value
+
+
+path.takes_text = True
+
+
+def callback(value):
+    """A function that hears a line of progress (or None)."""
+    if not callable(value):
+        raise Bad(f"{_shown(value)} must be a function taking one line of text")
+    return value
+
+
+callback.takes_text = True
+
+
 def flag(value):
     """True or False."""
     if not isinstance(value, bool):
@@ -145,19 +182,20 @@ def real_array(value, what):
     """An array of real numbers as floats (the API's data): complex numbers, text and objects refused,
     never converted with a part dropped."""
     import numpy as np
+    param = what.split(":")[0].strip()           # the argument's own name; the column stays in the message
     try:
         arr = np.asarray(value)
-    except (TypeError, ValueError):
-        raise DataError(f"{what}: expected an array of numbers", param=what) from None
+    except (TypeError, ValueError, OverflowError):
+        raise DataError(f"{what}: expected an array of numbers", param=param) from None
     if arr.dtype.kind == "c":
-        raise DataError(f"{what}: complex numbers are not readings; give real numbers", param=what)
+        raise DataError(f"{what}: complex numbers are not readings; give real numbers", param=param)
     if arr.dtype.kind not in "iuf":
         if arr.dtype.kind == "b" or any(isinstance(v, (str, bytes, bool, complex)) for v in arr.ravel()[:10 ** 6]):
-            raise DataError(f"{what}: every value must be a real number (a text or a truth value found)", param=what)
+            raise DataError(f"{what}: every value must be a real number (a text or a truth value found)", param=param)
         try:
             arr = arr.astype(float)
-        except (TypeError, ValueError):
-            raise DataError(f"{what}: every value must be a real number", param=what) from None
+        except (TypeError, ValueError, OverflowError):      # a Python int beyond any float (10**400)
+            raise DataError(f"{what}: every value must be a real number of double range", param=param) from None
     return arr.astype(float)
 
 

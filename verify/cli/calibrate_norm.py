@@ -31,10 +31,10 @@ def add(sub):
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
                    help="test the model against each interval's noise and try the effect catalogue")
-    p.add_argument("--effect", metavar="NAME[,NAME...]",
+    p.add_argument("--effect", metavar="NAME[,NAME...]", action="append",
                    help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
                         "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, "
-                        "temperature_lag; --diagnose names the ones the data need)")
+                        "temperature_lag, ...; repeatable, the names join; --diagnose names the ones the data need)")
     p.add_argument("--thermal-degree", dest="temperature", type=int, metavar="D",
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
@@ -173,11 +173,21 @@ def batch_status(rows, judged):
 
 
 def _csv_text(rows):
-    """CSV text by the csv module: a cell with a comma, a quote or a line break is quoted."""
+    """CSV text by the csv module: a cell with a comma, a quote or a line break is quoted; a text cell a spreadsheet
+    would run as a formula (=, +, -, @, a tab or a return first, and not a number) gets a leading quote, as OWASP
+    advises for CSV injection."""
     import csv
     import io
+
+    def cell(v):
+        if isinstance(v, str) and v[:1] in ("=", "+", "-", "@", "\t", "\r"):
+            try:
+                float(v)
+            except ValueError:
+                return "'" + v
+        return v
     buf = io.StringIO()
-    csv.writer(buf, lineterminator="\n").writerows(rows)
+    csv.writer(buf, lineterminator="\n").writerows([[cell(v) for v in row] for row in rows])
     return buf.getvalue()
 
 

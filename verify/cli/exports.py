@@ -72,6 +72,17 @@ def _kalibr(path, res, args):
                               else ": every field Kalibr's reader needs")
 
 
+def _topic(text):
+    """--kalibr-topic: a ROS graph name (letters, digits, _ and / separating them; at most 200 characters), so that
+    the YAML holds it as one plain scalar: no key, newline or flow syntax can ride in it."""
+    import argparse
+    import re
+    if not re.fullmatch(r"/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*", text) or len(text) > 200:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is no ROS topic name (letters, digits and _ between /, "
+                                         "e.g. /imu0)")
+    return text
+
+
 def _gyro(text):
     """--kalibr-gyro ND,RW: two finite numbers > 0."""
     import argparse
@@ -123,9 +134,18 @@ def _check_px4(args):
             raise DataError(PX4_NEEDS_ID, param="px4_device_id")
 
 
-def _positive_int(text):
-    from .args import positive_int
-    return positive_int(text)
+def _device_id(text):
+    """A PX4 device id: PX4 stores it in an INT32 parameter, so an id of 2^31 or more (a uint32 device_id) is the
+    negative number PX4 shows; ids beyond 32 bits are refused."""
+    import argparse
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a whole number") from None
+    if not -2 ** 31 <= v < 2 ** 32 or v == 0:
+        raise argparse.ArgumentTypeError(f"{text[:40]} is no 32-bit device id (PX4 holds -2147483648 to 2147483647, "
+                                         "or a uint32 device_id below 4294967296; not 0)")
+    return v
 
 
 BOTH = ("estimate", "calibrate-norm")
@@ -149,7 +169,7 @@ EXPORTS = (
            options=((("--kalibr-gyro",), dict(metavar="ND,RW", type=_gyro, help="the gyroscope's noise density "
                      "(rad/s/sqrt(Hz)) and random walk (rad/s^2/sqrt(Hz)) for --export-kalibr (an accelerometer log "
                      "does not measure them)")),
-                    (("--kalibr-topic",), dict(default="/imu0", metavar="TOPIC",
+                    (("--kalibr-topic",), dict(default="/imu0", metavar="TOPIC", type=_topic,
                                                help="the rostopic of --export-kalibr"))),
            write=_kalibr),
     Export("--export-ardupilot", "FILE.parm", "the ArduPilot parameter file", "with --thermal-degree: ArduPilot's "
@@ -165,7 +185,7 @@ EXPORTS = (
            options=((("--px4-instance",), dict(type=int, choices=(0, 1, 2, 3), metavar="N", help="the "
                      "accelerometer slot the PX4 parameters are for (TC_AN_*, CAL_ACCN_*; default: from a ULog's "
                      "parameters the slot that holds the device or the first free one, else 0)")),
-                    (("--px4-device-id",), dict(type=_positive_int, metavar="ID", help="the accelerometer's device id "
+                    (("--px4-device-id",), dict(type=_device_id, metavar="ID", help="the accelerometer's device id "
                      "(CAL_ACCn_ID on the vehicle): PX4 applies TC_AN_* only to the sensor whose id is TC_AN_ID "
                      "(default: a ULog's own sensor_accel device_id)"))),
            check=_check_px4, write=_px4),

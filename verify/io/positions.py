@@ -213,6 +213,10 @@ def from_columns(data, names, mounts):
     cols = [f"{a}_deg" for a in names] + ["f1", "f2", "f3"]
     multi = len(mounts) > 1
     if hasattr(data, "columns"):                       # a pandas DataFrame, read by column name
+        names_in = [str(c) for c in data.columns]
+        twice = sorted({c for c in names_in if names_in.count(c) > 1})
+        if twice:
+            raise DataError(f"data: the DataFrame has the column {twice[0][:40]} more than once", param="data")
         missing = [c for c in cols + (["mount"] * multi) if c not in data.columns]
         if missing:
             raise DataError(f"data: missing column(s) {', '.join(missing)}", param="data")

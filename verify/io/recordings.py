@@ -297,11 +297,29 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     if len(t) < MIN_SAMPLES:
         raise DataError(f"{path}: only {len(t)} sample{'s' if len(t) != 1 else ''}; a static calibration needs a long "
                         f"recording (at least {MIN_SAMPLES} samples)", param="log")
+    _check_temperature(path, got.temp)
     dt, repeats = _check_time(path, t, unit)
     if repeats:
         note = "; ".join(filter(None, (note, f"{repeats} time stamp(s) repeat the one before (kept)")))
     return Log(path, np.subtract(t, t[0], out=t), raw, step, note, dt, fmt, got.temp,     # t: the reader's own array
                got.meta)
+
+
+#: The temperatures an IMU's own reading may take (C): the parts are rated to -40..85 or so; a value far outside is
+#: no Celsius (a kelvin column, or a column switching to it) and is refused rather than calibrated "over" it.
+TEMP_RANGE_C = (-100.0, 200.0)
+
+
+def _check_temperature(path, temp):
+    """One line for a temperature column that is not finite Celsius within TEMP_RANGE_C."""
+    if temp is None:
+        return
+    lo, hi = TEMP_RANGE_C
+    bad = np.flatnonzero(~np.isfinite(temp) | (temp < lo) | (temp > hi))
+    if bad.size:
+        k = int(bad[0])
+        raise DataError(f"{path}: sample {k + 1}: temperature {temp[k]:g} is not in C within {lo:g} to {hi:g} (a "
+                        "kelvin column? give C)", param="log")
 
 
 def quantum(log):

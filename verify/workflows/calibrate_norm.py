@@ -233,7 +233,12 @@ def run(p, diagnose=False):
 
 
 def _enough(p):
-    """Refuse a log with fewer still intervals than the calibration has parameters plus three."""
+    """Refuse a log with fewer still intervals than the calibration has parameters plus three, and effects on a
+    model or noise bound they do not take."""
+    if p.ext is not None and (p.params != 9 or not (not p.stated or p.si)):
+        raise DataError(f"{p.path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
+                        "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
+                        param="effects")
     need = p.params + 3 + (len(p.ext.labels) if p.ext else 0)
     if len(p.stills) < need:
         what = f" with {p.ext.option}" if p.ext else ""
@@ -365,10 +370,6 @@ def _verdict_effects(p, res):
                                                                                              p.delta_sigma))
     rule, noise, nu, dsig, source = _noise(p, res)
     _linear_errors(p, res, noise, None)
-    if p.params != 9 or not (not p.stated or p.si):
-        raise DataError(f"{p.path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
-                        "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
-                        param="effects")
     try:
         worst, A, bnd, err = ext.verdict(res, noise, nu)
     except DataError as e:

@@ -1,0 +1,136 @@
+"""Hostile inputs, round five (the issue's numbered cases): the API as strict as the command, exports that cannot be
+injected; each case through the path it came from, one line (or a DataError naming the argument) and exit 2."""
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+import garant
+from garant.verify.cli import main
+from conftest import G_REAL, REAL, flat, needs_real
+
+DF = {"alpha_deg": [0.0, 90.0], "beta_deg": [0.0, 0.0], "f1": [0.0, 0.0], "f2": [0.0, 0.0], "f3": [9.8, 9.8]}
+
+
+@pytest.mark.parametrize("call, param", [
+    (lambda: garant.estimate("two-axis", "grid.csv", 10 ** 400), "sigma"),                          # case 2
+    (lambda: garant.estimate("two-axis", "grid.csv", 1e-5, g=10 ** 400), "g"),
+    (lambda: garant.calibrate_norm("log.txt", g=10 ** 400), "g"),
+    (lambda: garant.plan(["two-axis"]), "model"),                                                   # case 4
+    (lambda: garant.calibrate_many(["n.txt"], spec={"limits": {"scale": 0.01}}), "spec"),            # case 5
+    (lambda: list(garant.apply("n.json", "n.txt", chunk=0)), "chunk"),                              # case 6
+    (lambda: list(garant.apply("n.json", "n.txt", chunk=1.5)), "chunk"),
+    (lambda: list(garant.apply("n.json", "n.txt", chunk=-1)), "chunk"),                             # case 9
+    (lambda: list(garant.apply("n.json", "n.txt", chunk=True)), "chunk"),
+    (lambda: garant.estimate("two-axis", "grid.csv", 1e-5, progress=3), "progress"),                # case 10
+])
+def test_the_api_refuses_what_the_command_refuses_naming_the_argument(call, param):
+    with pytest.raises(garant.DataError) as e:
+        call()
+    assert e.value.param == param, (e.value.param, str(e.value))
+
+
+def test_dataframes_with_huge_cells_a_column_twice_or_text_name_the_argument():
+    # Cases 2, 3 and 20: a cell of 10**400, a column held twice, a column of text: DataError with param "data" (the
+    # column in the message), never an OverflowError or a broadcasting ValueError.
+    import pandas as pd
+    df = pd.DataFrame(DF)
+    huge = df.astype(object)
+    huge.loc[1, "alpha_deg"] = 10 ** 400
+    text = df.astype(object)
+    text["alpha_deg"] = ["a", "b"]
+    twice = pd.concat([df, df[["f1"]]], axis=1)
+    for data, said in ((huge, "column alpha_deg"), (twice, "has the column f1 more than once"),
+                       (text, "column alpha_deg")):
+        for job in (garant.estimate, garant.diagnose, garant.next_position):
+            with pytest.raises(garant.DataError, match=said) as e:
+                job("two-axis", data, 1e-5)
+            assert e.value.param == "data"
+
+
+def _warm(tmp_path, shift=0.0, kelvin_from=None):
+    """A turned warm-up (garant simulate --model norm), its temperatures shifted by `shift` C or, from sample
+    `kelvin_from` on, in kelvin."""
+    log = tmp_path / "w.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:30", "--temperature-profile", "warmup:20,40,200",
+                 "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5", "--sigma", "2e-4", "-o", str(log)]) == 0
+    data = np.loadtxt(log, delimiter=",", skiprows=1)
+    data[:, 4] += shift
+    if kelvin_from is not None:
+        data[kelvin_from:, 4] += 273.15
+    np.savetxt(log, data, delimiter=",", header="time_s,ax,ay,az,temp_c", comments="", fmt="%.10g")
+    return log
+
+
+@pytest.mark.parametrize("shift, kelvin_from", [(-320.0, None), (0.0, 5000)])
+def test_a_temperature_that_is_no_celsius_is_refused_in_one_line(tmp_path, capsys, shift, kelvin_from):
+    # Case 12: temp_c 320 C lower (below absolute zero), or switching to kelvin half way, was calibrated "valid over"
+    # that range.
+    log = _warm(tmp_path, shift, kelvin_from)
+    capsys.readouterr()
+    assert main(["calibrate-norm", str(log), "--g", "9.81", "--thermal-degree", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is not in C within -100 to 200 (a kelvin column? give C)" in err
+
+
+def test_effects_twice_join_and_effects_on_12_parameters_are_refused_in_one_line(tmp_path, capsys):
+    # Case 11: `--effect bias_drift --effect scale_quadratic` dropped the first; case 8: `--effect scale_quadratic
+    # --params 12` ended in a broadcasting ValueError, exit 1.
+    log = _warm(tmp_path)
+    out = tmp_path / "r.json"
+    capsys.readouterr()
+    assert main(["calibrate-norm", str(log), "--g", "9.81", "--effect", "bias_temperature", "--effect", "bias_drift",
+                 "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["effect_names"] == ["bias_drift", "bias_temperature"]
+    assert main(["calibrate-norm", str(log), "--g", "9.81", "--effect", "scale_quadratic", "--params", "12"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--effect takes the 9-parameter model" in err
+
+
+def test_px4_ids_are_written_as_px4_holds_them_and_kalibr_topics_cannot_inject(tmp_path, capsys):
+    # Case 13: --px4-device-id 2147483648 (a uint32 device_id) went into an INT32 parameter PX4 cannot hold, and a
+    # negative id (as PX4 shows such a sensor) was refused. Case 14: --kalibr-topic carried a newline and a YAML key.
+    log = _warm(tmp_path)
+    for given, written in (("2147483648", "-2147483648"), ("4294967295", "-1"), ("-5", "-5")):
+        params = tmp_path / "t.params"
+        assert main(["calibrate-norm", str(log), "--g", "9.81", "--thermal-degree", "1", "--export-px4", str(params),
+                     "--px4-device-id", given]) == 0
+        ids = {line.split("\t")[2]: line.split("\t")[3] for line in params.read_text().splitlines()
+               if line and not line.startswith("#")}
+        assert ids["TC_A0_ID"] == written and ids["CAL_ACC0_ID"] == written
+    capsys.readouterr()
+    for bad in ("1099511627776", "0", "x"):                     # argparse's own one line, exit 2
+        with pytest.raises(SystemExit) as e:
+            main(["calibrate-norm", str(log), "--thermal-degree", "1", "--export-px4", str(tmp_path / "u.params"),
+                  "--px4-device-id", bad])
+        assert e.value.code == 2 and "--px4-device-id" in capsys.readouterr().err
+    for topic in ("/imu0\nPWNKEY: 1", "/imu0: {a: b}", ""):
+        with pytest.raises(SystemExit) as e:
+            main(["calibrate-norm", str(log), "--export-kalibr", str(tmp_path / "k.yaml"), "--kalibr-topic", topic])
+        assert e.value.code == 2 and "is no ROS topic name" in capsys.readouterr().err
+        assert not (tmp_path / "k.yaml").exists()
+
+
+@needs_real
+def test_a_log_named_like_a_formula_is_not_a_formula_in_the_summary(tmp_path):
+    # Case 16: a log named =HYPERLINK(1).txt in a batch put a spreadsheet formula in summary.csv's first cell.
+    logs = []
+    for name in ("=HYPERLINK(1).txt", "plain.txt"):
+        shutil.copy(REAL / "repeat_session2_acc.txt", tmp_path / name)
+        logs.append(str(tmp_path / name))
+    out = tmp_path / "out"
+    assert main(["calibrate-norm", *logs, "--g", str(G_REAL), "--out", str(out)]) == 0
+    import csv
+    rows = list(csv.reader((out / "summary.csv").open()))
+    cells = [c for row in rows[1:] for c in row if c]
+    assert not [c for c in cells if c[:1] in "=+@" or c.startswith("-") and not _number(c)]
+    assert any(c.startswith("'=HYPERLINK") for c in cells), flat(str(rows))
+
+
+def _number(text):
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
