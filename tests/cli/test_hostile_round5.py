@@ -134,3 +134,57 @@ def _number(text):
         return True
     except ValueError:
         return False
+
+
+@needs_real
+def test_apply_to_a_closed_or_stopped_standard_output_says_what_happened(tmp_path):
+    # Case 1: `apply ... -o - >&-` died in an AttributeError traceback; case 15: `apply -o - | head -1` said "wrote
+    # standard output: 3950 samples", and into `| true` "0 samples ... ( calibration)".
+    import shlex
+    import subprocess
+    import sys
+    from pathlib import Path
+    garant_cmd = shlex.quote(str(Path(sys.executable).with_name("garant")))
+    log, cal = tmp_path / "n.txt", tmp_path / "n.json"
+    shutil.copy(REAL / "repeat_session2_acc.txt", log)
+    assert main(["calibrate-norm", str(log), "--g", str(G_REAL), "--save", str(cal)]) == 0
+    base = f"{garant_cmd} apply {shlex.quote(str(cal))} {shlex.quote(str(log))} -o -"
+    closed = subprocess.run(base + " >&-", shell=True, capture_output=True, text=True)
+    assert closed.returncode == 2 and "standard output is closed" in closed.stderr and "Traceback" not in closed.stderr
+    for reader in ("head -1", "true"):
+        run = subprocess.run(f"set -o pipefail; {base} | {reader}", shell=True, capture_output=True, text=True,
+                             executable="/bin/bash")
+        assert "the reader stopped after at most" in run.stderr and "(norm calibration)" in run.stderr, run.stderr
+        assert "wrote standard output" not in run.stderr
+
+
+@pytest.mark.parametrize("cell, said", [("abc", "'abc' is not a number"), ("", "'' is not a number"),
+                                        ("nan", "nan is not a finite number")])
+def test_a_bad_temperature_cell_on_a_stand_log_is_one_line_and_exit_2(tmp_path, capsys, cell, said):
+    # Case 7: a text, empty or NaN temp_c cell: estimate --thermal-degree 1 and diagnose exited 1 "internal error".
+    data = tmp_path / "ch.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "--temperatures", "0,40",
+                 "-o", str(data)]) == 0
+    lines = data.read_text().splitlines()
+    k = lines[0].split(",").index("temp_c")
+    row = lines[3].split(",")
+    row[k] = cell
+    data.write_text("\n".join(lines[:3] + [",".join(row)] + lines[4:]) + "\n")
+    capsys.readouterr()
+    for argv in (["estimate", "--model", "two-axis", str(data), "--sigma", "1e-5", "--thermal-degree", "1"],
+                 ["diagnose", "--model", "two-axis", str(data), "--sigma", "1e-5"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"line 4: column temp_c: {said}" in err, err
+
+
+def test_certificates_on_detents_off_15_degrees_are_bad_input_not_an_internal_error(tmp_path, capsys):
+    # Case 26: `plan --certificates` on detents that are not multiples of 15 degrees exited 1 "internal error:
+    # ValueError: H is not exact on these positions" (only the first candidate was checked before the search).
+    from conftest import STANDS
+    toml = tmp_path / "table100.toml"
+    toml.write_text((STANDS / "table120.toml").read_text().replace("[0, 120, 240]", "[0, 100, 250]")
+                    .replace('"table120"', '"table100"'))
+    assert main(["plan", "--model", str(toml), "--certificates", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--certificates: H is not exact on these positions (100 degrees" in err

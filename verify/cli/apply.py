@@ -71,6 +71,8 @@ def run(args):
     if os.path.isdir(args.calibration):
         raise DataError(f"{args.calibration} is a folder: a batch's calibrations apply to several logs with "
                         f"{opt('out')} DIR; for one log give its calibration file")
+    if args.output == "-" and getattr(sys.stdout, "stream", sys.stdout) is None:      # started with >&-
+        raise DataError(f"-o -: standard output is closed; give {opt('output')} OUT.csv", param="output")
     said = _apply(args, args.calibration, args.logs[0], args.output)
     print(said, file=sys.stderr if args.output == "-" else sys.stdout)
     return 0
@@ -106,9 +108,10 @@ def _apply(args, calibration, log, output):
     from ..io.report import write_chunks
     from ..io.text import csv_bytes
     from ..workflows import jobs
+    from ..io import calibration as cal_io
     pieces = jobs.apply(calibration, log, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                         trust_units=args.trust_units, frame=args.frame, chunk=CHUNK, outside=args.outside)
-    worst, total, n, kind, dropped = np.zeros(3), 0.0, 0, "", 0
+    worst, total, n, kind, dropped = np.zeros(3), 0.0, 0, cal_io.read(calibration)["kind"], 0
 
     def rows():
         nonlocal total, n, kind, dropped
@@ -117,13 +120,17 @@ def _apply(args, calibration, log, output):
             np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
             total, n, kind, dropped = total + c.bound.sum(), n + len(c.t), c.kind, dropped + c.outside
             yield csv_bytes([c.t, *c.a.T, *c.bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
-    if output == "-":                            # a reader that stops (| head) ends the writing, not the command
+    if output == "-":                            # a reader that stops (| head) ends the writing and the work
+        written = 0
         try:
             for chunk in rows():
                 sys.stdout.buffer.write(chunk)
+                written = n
             sys.stdout.buffer.flush()
         except BrokenPipeError:
             sys.stdout.stopped = True
+            return (f"standard output: the reader stopped after at most {written} corrected samples (the rest not "
+                    f"corrected; -o OUT.csv writes the whole log) by {calibration} ({kind} calibration)")
     else:
         write_chunks(output, rows())
     return (f"wrote {'standard output' if output == '-' else output}: {n} samples corrected by {calibration} "

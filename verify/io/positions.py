@@ -59,6 +59,10 @@ MAX_BYTES = 2_000_000_000
 MAX_ROWS = 2_000_000
 
 
+#: The columns of a model's variables (the time of a row, s; its temperature, C): numbers, checked cell by cell.
+VARIABLE_COLUMNS = ("time_s", "temp_c")
+
+
 def read_positions(path, angles=("alpha", "beta"), mountings=None, empty_ok=False):
     """Read a CSV with columns <angle>_deg for each angle, f1, f2, f3 (m/s^2), and `mount` (a name
     such as +y+z+x) when the stand uses several mountings; other columns are kept. More than MAX_ROWS
@@ -97,7 +101,7 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None, empty_ok=Fals
     missing = [c for c in required if c not in header]
     if missing:
         raise DataError(f"{path}: missing column(s) {', '.join(missing)}; header is {','.join(header)}", param="data")
-    numeric = [c for c in required if c != "mount"]
+    numeric = [c for c in required if c != "mount"] + [c for c in VARIABLE_COLUMNS if c in header]
     data = {c: [] for c in header}
     for line, row in enumerate(rows[1:], start=2):
         if not any(cell.strip() for cell in row):

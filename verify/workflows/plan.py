@@ -94,7 +94,7 @@ def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_
     if certify:
         from ..solve import exact
         try:
-            exact.exact_columns(mod, P[:1], M[:1])
+            exact.exact_columns(mod, P, M)                  # every candidate: a detent off 15 degrees is in P too
         except ValueError as e:
             raise DataError(f"{opt('certificates')}: {e}") from None
     from ..solve import highs
