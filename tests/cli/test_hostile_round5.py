@@ -188,3 +188,29 @@ def test_certificates_on_detents_off_15_degrees_are_bad_input_not_an_internal_er
     assert main(["plan", "--model", str(toml), "--certificates", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--certificates: H is not exact on these positions (100 degrees" in err
+
+
+@needs_real
+def test_a_batch_never_replaces_an_earlier_batch_nor_writes_through_a_link_planted_in_its_folder(tmp_path, capsys):
+    # Case 18: a batch into a folder holding an earlier batch replaced its unit files, summary.csv and index.html
+    # without a word. Case 19: a link planted inside --out (out/summary.csv -> an input) was found only after every
+    # log was calibrated. Both are refused now before any work, in one line, and the earlier files are unchanged.
+    import os
+    log = tmp_path / "a.txt"
+    shutil.copy(REAL / "repeat_session2_acc.txt", log)
+    shutil.copy(REAL / "repeat_session3_acc.txt", tmp_path / "b.txt")
+    logs = [str(log), str(tmp_path / "b.txt")]
+    out = tmp_path / "out"
+    assert main(["calibrate-norm", *logs, "--g", str(G_REAL), "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    capsys.readouterr()
+    assert main(["calibrate-norm", *logs, "--g", str(G_REAL), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "already holds summary.csv" in err and "nothing was calibrated" in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    planted = tmp_path / "planted"
+    planted.mkdir()
+    os.symlink(log, planted / "summary.csv")
+    assert main(["calibrate-norm", *logs, "--g", str(G_REAL), "--out", str(planted)]) == 2
+    assert "already holds summary.csv" in capsys.readouterr().err and os.path.islink(planted / "summary.csv")
+    assert (planted / "summary.csv").read_bytes() == log.read_bytes()

@@ -1,4 +1,5 @@
 """garant calibrate-norm: a real static log calibrated through the norm relation (2.2) of 001."""
+import os
 import sys
 
 from ..errors import FLAGS, DataError
@@ -124,6 +125,12 @@ def _batch(args):
     spec = batch.read_spec(args.spec) if args.spec else None
     imu = int(args.imu) if args.imu is not None else None
     folder = files.make_folder(args.out)             # before any work: a folder that cannot hold them stops here
+    earlier = [n for n in ["summary.csv", "index.html", *(f"{s}.json" for s in batch.stems(args.logs))]
+               if os.path.lexists(folder / n)]
+    if earlier:                                      # an earlier batch's results are kept, never replaced unseen
+        raise DataError(f"{folder} already holds {earlier[0]}" + (f" and {len(earlier) - 1} more of this batch's "
+                        "outputs" if len(earlier) > 1 else "") + " (an earlier batch?): give a new or empty --out "
+                        "folder; nothing was calibrated", param="out")
 
     live = sys.stderr.isatty()
 
