@@ -214,3 +214,19 @@ def test_a_batch_never_replaces_an_earlier_batch_nor_writes_through_a_link_plant
     assert main(["calibrate-norm", *logs, "--g", str(G_REAL), "--out", str(planted)]) == 2
     assert "already holds summary.csv" in capsys.readouterr().err and os.path.islink(planted / "summary.csv")
     assert (planted / "summary.csv").read_bytes() == log.read_bytes()
+
+
+def test_candidates_from_detents_are_held_to_max_candidates_before_any_work(tmp_path, capsys):
+    # Case 25: 72 detents on each of two angles gave 5,184 candidates per mounting whatever --max-candidates said
+    # (a --grid of that size was refused at once); three mountings, 15,552, ran out of time or memory.
+    from conftest import STANDS
+    d = "detents_deg = [" + ", ".join(str(5 * k) for k in range(72)) + "]"
+    text = (STANDS / "tilted_inner.toml").read_text()
+    text = text.replace('meaning = "outer angle as read, rad"\n', f'meaning = "outer angle as read, rad"\n{d}\n')
+    text = text.replace('meaning = "inner angle as read, rad"\nrange_deg = [0, 180]\n',
+                        f'meaning = "inner angle as read, rad"\n{d}\n').replace('"tilted_inner"', '"detents72"')
+    toml = tmp_path / "detents72.toml"
+    toml.write_text(text)
+    assert main(["plan", "--model", str(toml), "--max-candidates", "1000"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the stand's detents give 5,184 candidate positions (72 x 72)" in err

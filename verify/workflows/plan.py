@@ -156,6 +156,16 @@ def candidates(mod, step=None, limit=MAX_CANDIDATES):
     or quarter turns."""
     if step is None:
         from ..solve import plans
+        detents = mod.ANGLE_DETENTS_DEG
+        if all(len(d) for d in detents):              # every angle on detents: their product, sized before it is made
+            from ..models import layout
+            count = int(np.prod([len(d) for d in detents])) * len(layout(mod)[1])
+            if count > limit:
+                raise DataError(f"the stand's detents give {count:,} candidate positions (" + " x ".join(
+                                str(len(d)) for d in detents) + (f" in {len(layout(mod)[1])} mountings" if
+                                                                 len(layout(mod)[1]) > 1 else "")
+                                + f"), more than {opt('max_candidates')} {limit:,}: give a coarser {opt('grid')} "
+                                "STEP, or a larger --max-candidates", param="max_candidates")
         return plans.grid(mod)
     if 360 % step:
         raise DataError(f"{opt('grid')} {step:g}: give a step that divides 360 degrees")
