@@ -27,7 +27,12 @@ CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravit
           "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
           "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate, "jobs": checks.positive_int,
           "temperature": checks.degree, "outside": checks.one_of(*jobs.OUTSIDE), "chunk": checks.positive_int,
-          "model": checks.model, "progress": checks.callback, "spec": checks.path}
+          "model": checks.model, "progress": checks.callback, "spec": checks.path, "sections": checks.path}
+#: The arguments the job itself reads and refuses in one line (a file or data of many shapes, an IMU's number or
+#: "all", effect names): every argument of the API is here or in CHECKS (tests/cli/test_hostile_round5.py).
+CHECKED_BY_THE_JOB = {"data": "jobs.positions_of", "log": "jobs.read_log", "logs": "batch.calibrate_many",
+                      "calibration": "calibration.checked / read", "imu": "_api (a whole number >= 1, or all)",
+                      "effects": "norm_effects.parse"}
 
 
 def _api(fn):

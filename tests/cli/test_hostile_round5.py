@@ -230,3 +230,13 @@ def test_candidates_from_detents_are_held_to_max_candidates_before_any_work(tmp_
     assert main(["plan", "--model", str(toml), "--max-candidates", "1000"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "the stand's detents give 5,184 candidate positions (72 x 72)" in err
+
+
+def test_every_argument_of_the_api_has_its_check_declared():
+    # A new argument of an API function without a check passed unchecked with no test noticing: each is now in
+    # api.CHECKS (the command's own check) or in api.CHECKED_BY_THE_JOB (read and refused by the job in one line).
+    import inspect
+    from garant.verify import api
+    for name in ("plan", "estimate", "calibrate_norm", "calibrate_many", "next_position", "diagnose", "apply"):
+        for p in inspect.signature(getattr(api, name)).parameters:
+            assert p in api.CHECKS or p in api.CHECKED_BY_THE_JOB, (name, p)
