@@ -240,3 +240,20 @@ def test_every_argument_of_the_api_has_its_check_declared():
     for name in ("plan", "estimate", "calibrate_norm", "calibrate_many", "next_position", "diagnose", "apply"):
         for p in inspect.signature(getattr(api, name)).parameters:
             assert p in api.CHECKS or p in api.CHECKED_BY_THE_JOB, (name, p)
+
+
+def test_a_mimu_stream_whose_time_stamps_are_random_is_refused(tmp_path, capsys):
+    # Case 17: a MIMU stream whose uint32 time stamps are random calibrated (exit 0), its still intervals cut on a
+    # clock that jumps at random. A reset or two is said (the packet count gives the time); random stamps are no clock.
+    def packet(counter, stamp, acc):
+        body = bytearray([0xAA]) + counter.to_bytes(3, "big") + (stamp % (1 << 32)).to_bytes(4, "big")
+        for a in acc:
+            body += b"".join(int(v).to_bytes(2, "big", signed=True) for v in (*a, 0, 0, 0))
+        return bytes(body + (sum(body) % 65536).to_bytes(2, "big"))
+    rng = np.random.default_rng(0)
+    acc = np.tile([0, 0, 2048], (8, 1))
+    path = tmp_path / "data.bin"
+    path.write_bytes(b"".join(packet(k % (1 << 24), int(rng.integers(0, 1 << 32)), acc) for k in range(2000)))
+    assert main(["calibrate-norm", str(path), "--format", "mimu", "--imu", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "time stamps repeat, go back or jump: these are no MIMU stream's" in err

@@ -52,6 +52,11 @@ def packets(path):
     return b[kept[:, None] + np.arange(PACKET)], len(b) - len(kept) * PACKET
 
 
+#: Time stamps that may repeat, go back or jump before a stream is refused: a few resets (the packet count then
+#: gives the time), never a share of the stream.
+MAX_JUMPS, JUMP_SHARE = 10, 0.001
+
+
 def read(path, imu):
     """Time (s, from the unwrapped time stamps) and the accelerometer of IMU `imu` (1-8) in the array
     frame, m/s^2 (COUNTS_PER_G counts per G_DATASHEET); the quantisation step (one count, m/s^2); the
@@ -68,6 +73,9 @@ def read(path, imu):
         raise DataError(f"{path}: the time stamps do not advance", param="log")
     step = float(np.median(ticks[forward]))
     jumps = int(np.count_nonzero(~forward | (ticks > 100 * step)))
+    if jumps > max(MAX_JUMPS, JUMP_SHARE * len(ticks)):       # a reset or two is said; a clock at random is no clock
+        raise DataError(f"{path}: {jumps} of {len(ticks)} time stamps repeat, go back or jump: these are no MIMU "
+                        "stream's time stamps (or a damaged stream); record again", param="log")
     if jumps:
         t = np.arange(len(ts)) / RATE_HZ
     else:
