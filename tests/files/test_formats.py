@@ -21,7 +21,7 @@ def block(doc, tag):
 def test_positions_example(tmp_path):
     (tmp_path / "p.csv").write_text(block("formats.md", "csv positions"))
     pos = read_positions(str(tmp_path / "p.csv"))
-    assert pos.angles_deg.tolist() == [[0, 0], [0, 180]] and pos.extra["time_s"] == ["0", "60"]
+    assert pos.angles_deg.tolist() == [[0, 0], [0, 180]] and pos.extra["time_s"] == [0.0, 60.0]     # a number
 
 
 def test_log_example(tmp_path):

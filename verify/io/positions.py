@@ -20,7 +20,7 @@ class Positions:
     angles_deg: np.ndarray             # (N, n_angles)
     f: np.ndarray                      # (N, 3), m/s^2
     mounts: np.ndarray = None          # (N,) mounting index, or None for a single mounting
-    extra: dict = field(default_factory=dict)   # other columns, kept as text
+    extra: dict = field(default_factory=dict)   # other columns: time_s and temp_c as numbers, the rest as text
 
     @property
     def alpha_deg(self):
