@@ -584,16 +584,34 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
         return results.Correction(t=data.t[k], a=a, bound=bound, kind=cal["kind"],
                                   outside=0 if keep is None else (j - i) - len(keep[i:j]))
     if chunk is None and hasattr(log, "columns"):       # a DataFrame in, a calibrated copy out (imucal's habit)
-        out, c = log.copy() if keep is None else log.iloc[keep].copy(), piece(0, len(data.t))
-        low = {str(n).lower(): n for n in out.columns}
-        names = next(n for n in recordings.ACCEL_COLUMNS if all(x in low for x in n))
-        for k, n in enumerate(names):
-            out[low[n]] = c.a[:, k]
-            out[f"bound_{'xyz'[k]}"] = c.bound[:, k]
-        return out
+        return _corrected_frame(log, keep, piece, len(data.t))
     if chunk is None:
         return piece(0, len(data.t))
     return (piece(i, i + chunk) for i in range(0, len(data.t), chunk))
+
+
+#: Samples corrected at a time into a DataFrame's copy: the work's memory is this piece's, not the frame's.
+FRAME_CHUNK = 1 << 16
+
+
+def _corrected_frame(log, keep, piece, n):
+    """The DataFrame's calibrated copy (its rows within the calibrated range), filled piece by piece: its
+    accelerometer columns corrected (m/s^2) and bound_x, bound_y, bound_z added."""
+    from ..io import recordings
+    out = log.copy() if keep is None else log.iloc[keep].copy()
+    low = {str(c).lower(): c for c in out.columns}
+    names = next(x for x in recordings.ACCEL_COLUMNS if all(c in low for c in x))
+    cols = [np.asarray(out[low[c]], float).copy() for c in names] + [np.empty(len(out)) for _ in range(3)]
+    at = 0
+    for i in range(0, n, FRAME_CHUNK):
+        c = piece(i, i + FRAME_CHUNK)
+        for k in range(3):
+            cols[k][at:at + len(c.t)], cols[3 + k][at:at + len(c.t)] = c.a[:, k], c.bound[:, k]
+        at += len(c.t)
+    for k, c in enumerate(names):
+        out[low[c]] = cols[k]
+        out[f"bound_{'xyz'[k]}"] = cols[3 + k]
+    return out
 
 
 #: What `apply` does with samples outside a calibration's temperature range.
