@@ -44,8 +44,9 @@ def _frame_said(args, path):
     cal = calibration.read(path)
     turn = calibration.frame_turn_deg(calibration.imu_tk_form(cal)[2])
     if turn == 0:
-        return "garant's, which is also the imu_tk export's (a stand calibration)" if args.frame == "garant" else \
-            "the imu_tk export's, which is garant's (a stand calibration)"
+        why = "a stand calibration" if cal["kind"] != "norm" else "M holds no turn"
+        return f"garant's, which is also the imu_tk export's ({why})" if args.frame == "garant" else \
+            f"the imu_tk export's, which is garant's ({why})"
     other = "--frame imu_tk" if args.frame == "garant" else "--frame garant"
     return (f"{'garant' if args.frame == 'garant' else 'the imu_tk export'}'s; the "
             f"{'imu_tk export' if args.frame == 'garant' else 'garant'} frame is turned {turn:.3g} degrees from it "
