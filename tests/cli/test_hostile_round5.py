@@ -257,3 +257,16 @@ def test_a_mimu_stream_whose_time_stamps_are_random_is_refused(tmp_path, capsys)
     assert main(["calibrate-norm", str(path), "--format", "mimu", "--imu", "1"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "time stamps repeat, go back or jump: these are no MIMU stream's" in err
+
+
+def test_logs_that_prove_nothing_are_refused_before_they_are_read_whole(tmp_path, capsys):
+    # Case 24, in part: a large sparse .npy of zeros was loaded whole before "the time column is constant"; a text
+    # log on one line was parsed whole before "only 1 sample". Both are refused from their first rows or bytes now.
+    npy = tmp_path / "zeros.npy"
+    np.lib.format.open_memmap(npy, mode="w+", dtype=float, shape=(5_000_000, 4)).flush()      # 160 MB, sparse
+    assert main(["calibrate-norm", str(npy)]) == 2
+    assert "the time column does not move in its first 4,096 rows" in capsys.readouterr().err
+    one = tmp_path / "one.txt"
+    one.write_text(" ".join(["0.1"] * 400_000))                # 1.6 MB, no line break
+    assert main(["calibrate-norm", str(one), "--format", "imu_tk"]) == 2
+    assert "no line break in its first MiB" in capsys.readouterr().err

@@ -78,7 +78,12 @@ def _header(path, delimiter):
 
 def _load(path, delimiter, usecols, skip):
     """The numeric columns `usecols` of a delimited text file, read in C; one line naming the first bad
-    cell when a cell is not a finite number."""
+    cell when a cell is not a finite number; a file with no line break in its first MiB is no log of a sample per line
+    (refused before it is parsed whole)."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 20)
+    if len(head) == 1 << 20 and b"\n" not in head:
+        raise DataError(f"{path}: no line break in its first MiB: a log holds one sample per line", param="log")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)             # "input contained no data": said below
@@ -100,6 +105,10 @@ def _load(path, delimiter, usecols, skip):
     return data
 
 
+#: The rows of a binary log whose time is checked before the whole file is read.
+EARLY_ROWS = 4096
+
+
 def _load_npy(path):
     """A NumPy .npy array of shape (N, 4), float: t (s), x, y, z (binary: no text parsing, for large logs).
     Never unpickled: an object array is refused like any other file that is not numbers."""
@@ -117,6 +126,10 @@ def _load_npy(path):
     if data.ndim != 2 or data.shape[1] != 4 or data.dtype.kind not in "fiu":
         raise DataError(f"{path}: a .npy log must be an array of numbers of shape (N, 4): t (s), x, y, z; "
                         f"this one is {data.dtype} of shape {data.shape}", param="log")
+    head = np.asarray(data[:EARLY_ROWS, 0], dtype=float)
+    if len(data) > 1 and np.all(head == head[0]):       # before the whole file is read: a time that never moves
+        raise DataError(f"{path}: the time column does not move in its first {len(head):,} rows (all {head[0]:g}): "
+                        "no log of samples in time", param="log")
     data = np.asarray(data, dtype=float)
     if not np.isfinite(data.sum()):
         bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
