@@ -136,11 +136,6 @@ def _exact(value):
     return sp.Integer(value) if isinstance(value, int) else sp.Rational(repr(value))
 
 
-#: The largest whole number of a tilted axis's direction, reduced to coprime whole numbers ([0, 1, 1] is 1; a
-#: direction of 15-digit decimals or 6-digit primes makes SymPy's exact square roots run for minutes).
-AXIS_MAX = 10_000
-
-
 def _axis(path, where, value):
     """(axis, sign): a coordinate axis (1, 2, 3) and its sign, or an exact unit vector (a tilted axis,
     the vector written normalised exactly) and +1."""
@@ -153,15 +148,7 @@ def _axis(path, where, value):
         if len(nz) == 1:
             return nz[0] + 1, 1 if value[nz[0]] > 0 else -1
         import sympy as sp
-        exact = [_exact(x) for x in value]
-        from math import gcd
-        scale = sp.Rational(gcd(*(int(x.p) for x in exact)), 1) / sp.ilcm(*(int(x.q) for x in exact))
-        parts = [x / scale for x in exact]                # the same direction in coprime whole numbers
-        if max(abs(int(x)) for x in parts) > AXIS_MAX:
-            _fail(path, where, f"an axis vector's direction in coprime whole numbers must stay within {AXIS_MAX:,} "
-                  f"(here {', '.join(str(x) for x in parts)[:80]}): the exact normalisation grows with its digits; "
-                  "write a nearly parallel axis as that axis with an error parameter, or round the direction")
-        v = sp.Matrix(parts)
+        v = sp.Matrix([_exact(x) for x in value])
         return tuple(sp.nsimplify(x / sp.sqrt(v.dot(v))) for x in v), 1
     if not isinstance(value, str) or value.lstrip("+-") not in AXES or len(value) > 2:
         _fail(path, where, f"{value!r} is not an axis (x, y, z, -x, -y, -z)")

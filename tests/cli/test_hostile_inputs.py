@@ -704,8 +704,7 @@ def test_certificates_of_a_stand_outside_the_exact_field_are_refused_before_the_
                                                                     "0.964285714285714]"))
     refused(["plan", "--model", tmp_path / "t.toml", "--certificates", tmp_path / "c", "--json", tmp_path / "p.json"],
             capsys,
-            "direction in coprime whole numbers must stay within 10,000",        # refused as it is read now
-            outputs=[tmp_path / "c", tmp_path / "p.json"])
+            "--certificates: H is not exact in Q(sqrt2, sqrt3)", outputs=[tmp_path / "c", tmp_path / "p.json"])
 
 
 def test_more_runs_than_the_limit_are_refused_by_name(tmp_path, capsys):
