@@ -171,8 +171,9 @@ def _still(tmp_path, S=2e-5):
     return log, beta
 
 
-@pytest.mark.parametrize("S", [2e-5, None])
-def test_a_still_warm_up_writes_the_stacks_offset_polynomials_under_the_scale_drift_premise(tmp_path, capsys, S):
+@pytest.mark.parametrize("S, degree", [(2e-5, 1), (None, 1), (2e-5, 2)])
+def test_a_still_warm_up_writes_the_stacks_offset_polynomials_under_the_scale_drift_premise(tmp_path, capsys, S,
+                                                                                            degree):
     # PX4's and ArduPilot's own procedure (the board still while it heats) was refused any file. Now the offset
     # polynomial of each axis is written with its bound widened by a stated bound of the scale and misalignment
     # drift (--bound scale_drift, or the default 1e-4/C, printed as assumed), the vehicle's calibration at TREF left
@@ -185,8 +186,8 @@ def test_a_still_warm_up_writes_the_stacks_offset_polynomials_under_the_scale_dr
     log, beta = _still(tmp_path)
     out, parm, params = tmp_path / "r.json", tmp_path / "t.parm", tmp_path / "t.params"
     premise = ["--bound", f"scale_drift={S}"] if S else []
-    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1", *premise, "--json", str(out),
-                 "--export-ardupilot", str(parm), "--export-px4", str(params), "--px4-device-id", "7"]) == 0
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", str(degree), *premise, "--json",
+                 str(out), "--export-ardupilot", str(parm), "--export-px4", str(params), "--px4-device-id", "7"]) == 0
     said = flat(capsys.readouterr().out)
     assert ("(--bound scale_drift)" if S else "assumed, a typical MEMS datasheet figure") in said
     res = json.loads(out.read_text())

@@ -136,7 +136,7 @@ def px4_slot(meta, device_id):
     whose CAL_ACCn_ID matches (FindCurrentCalibrationIndex), so a lower slot holding the same id must be cleared."""
     p = (meta or {}).get("parameters", {})
     tc = holders(meta, device_id)
-    cal = [n for n in range(4) if _int32(p.get(f"CAL_ACC{n}_ID", 0)) == _int32(device_id)]
+    cal = [n for n in range(4) if int32(p.get(f"CAL_ACC{n}_ID", 0)) == int32(device_id)]
     free = [n for n in range(4) if not int(p.get(f"TC_A{n}_ID", 0))]
     slot = tc[0] if tc else cal[0] if cal and cal[0] in free else free[0] if free else 0
     return slot, cal[0] if cal else slot, [n for n in tc if n != slot]
@@ -145,12 +145,15 @@ def px4_slot(meta, device_id):
 def holders(meta, device_id):
     """The TC_A slots whose TC_An_ID is `device_id` in the log's parameters at start."""
     p = (meta or {}).get("parameters", {})
-    return [n for n in range(4) if _int32(p.get(f"TC_A{n}_ID", 0)) == _int32(device_id)]
+    return [n for n in range(4) if int32(p.get(f"TC_A{n}_ID", 0)) == int32(device_id)]
 
 
-def _int32(v):
-    """An id as PX4's INT32 parameters hold it (a uint32 device_id of 2^31 or more is negative there)."""
-    v = int(v)
+def int32(device_id):
+    """A device id as PX4's INT32 parameters hold it: a uint32 device_id of 2^31 or more is the negative number;
+    beyond 32 bits refused."""
+    v = int(device_id)
+    if not -2 ** 31 <= v < 2 ** 32:
+        raise DataError(f"--px4-device-id {v}: no 32-bit device id", param="px4_device_id")
     return v - 2 ** 32 if v >= 2 ** 31 else v
 
 

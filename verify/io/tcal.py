@@ -132,6 +132,7 @@ def px4_text(res, instance=0, device_id=None, cal_instance=None, clear=()):
     lo, hi = th["range_c"]
     cal_instance = instance if cal_instance is None else cal_instance
     a, c = f"TC_A{instance}", f"CAL_ACC{cal_instance}"
+    from .flight import int32
     device_id = int32(device_id)
     params = [("TC_A_ENABLE", 1, 6), (f"{a}_ID", device_id, 6), (f"{a}_TREF", float(th["t0_c"]), 9),
               (f"{a}_TMIN", float(lo), 9), (f"{a}_TMAX", float(hi), 9)]
@@ -160,14 +161,6 @@ def px4_text(res, instance=0, device_id=None, cal_instance=None, clear=()):
             "# Vehicle-Id\tComponent-Id\tName\tValue\tType"]
     return "\n".join(head + [f"1\t1\t{n}\t{v:.9g}\t{t}" if t == 9 else f"1\t1\t{n}\t{v}\t{t}"
                               for n, v, t in params]) + "\n"
-
-
-def int32(device_id):
-    """A device id as PX4's INT32 parameter holds it: a uint32 device_id of 2^31 or more is the negative number."""
-    v = int(device_id)
-    if not -2 ** 31 <= v < 2 ** 32:
-        raise DataError(f"--px4-device-id {v}: no 32-bit device id", param="px4_device_id")
-    return v - 2 ** 32 if v >= 2 ** 31 else v
 
 
 PX4_NEEDS_ID = ("--export-px4 needs --px4-device-id N: PX4 applies TC_An_* only to the accelerometer whose device "

@@ -51,7 +51,8 @@ def fit(data, stills, note, g, quantum, degree=1, scale_drift=None):
     r = np.array([st.mean for st in stills])
     B = np.vander(tau, degree + 1, increasing=True)
     span = np.array([[(t_hi - t0) ** k - (t_lo - t0) ** k for k in range(degree + 1)]])
-    C = np.vstack([np.eye(degree + 1), span])                   # the coefficients, then the drift over the range
+    ctl = _control_rows(degree, t_lo - t0, t_hi - t0)
+    C = np.vstack([np.eye(degree + 1), span, ctl])       # the coefficients, the drift over the range, its controls
     drift, coeffs, consistent = {}, {}, True
     for i in range(3):
         box = _box(tau, r[:, i], e[:, i], degree)
@@ -60,8 +61,11 @@ def fit(data, stills, note, g, quantum, degree=1, scale_drift=None):
         except hull.Empty:
             consistent = False
             break
-        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * (1 + 1e-9)
-        coeffs["xyz"[i]] = (mid[:-1], half[:-1])
+        n = degree + 2                                   # the coefficients and the drift over the range; controls after
+        mid, half = 0.5 * (lo[:n] + hi[:n]), 0.5 * (hi[:n] - lo[:n]) * (1 + 1e-9)
+        v = ctl @ mid[:-1]                               # the written polynomial's control points
+        worst = np.maximum(hi[n:] - v, v - lo[n:]).max() + 1e-12 * (np.abs(ctl) @ np.abs(mid[:-1])).max()
+        coeffs["xyz"[i]] = (mid[:-1], half[:-1], float(worst) * (1 + 1e-9))
         drift["xyz"[i]] = {"at_t0": float(mid[0]), "at_t0_bound": float(half[0]),
                            "slope": float(mid[1]), "slope_bound": float(half[1]),
                            "over_range": float(mid[-1]), "over_range_bound": float(half[-1])}
@@ -90,16 +94,27 @@ def fit(data, stills, note, g, quantum, degree=1, scale_drift=None):
     return out
 
 
+def _control_rows(degree, a, b):
+    """The Bernstein control points, on each of norm_thermal.PIECES pieces of [a, b], of the drift relative to t0,
+    psi(tau) = sum_{k >= 1} c_k tau^k, as rows over the coefficients c: psi on a piece is their convex combination,
+    so the largest |psi - psi^| over the set is the largest over them (each an LP pair, workflows/thermal.py)."""
+    from .norm_thermal import PIECES
+    from .thermal import bernstein
+    xs = [np.zeros(degree + 1)] + [np.eye(degree + 1)[k] for k in range(1, degree + 1)]
+    cuts = np.linspace(a, b, PIECES + 1)
+    return np.unique(np.vstack([bernstein(xs, lo, hi) for lo, hi in zip(cuts[:-1], cuts[1:])]), axis=0)
+
+
 def offsets(coeffs, t0, t_range, degree, S, stated, w_sum, R, g, premise):
     """The thermal block the exports write (io/tcal.py, offsets_only): each axis's offset polynomial relative to t0
     (over g, no constant: the stacks' offset is relative, X0 = 0 at TREF), and its one bound over the range: the
-    coefficients' (sum_k h_k R^k) plus the premise's S R sum_j |w_j|."""
+    largest error of the drift over the information set (its Bernstein control points, `_control_rows`) plus the
+    premise's S R sum_j |w_j|."""
     q, bound = {}, {}
     for i, a in enumerate("xyz"):
-        mid, half = coeffs[a]
+        mid, _, worst = coeffs[a]
         q[f"bias{i + 1}"] = [0.0] + (mid[1:] / g).tolist()
-        bound[f"bias{i + 1}"] = float((sum(half[k] * R ** k for k in range(1, degree + 1)) + S * R * w_sum) / g
-                                      * (1 + 1e-9))
+        bound[f"bias{i + 1}"] = float((worst + S * R * w_sum) / g * (1 + 1e-9))
     source = ("--bound scale_drift" if stated else
               "assumed: a typical MEMS datasheet figure; state the sensor's with --bound scale_drift=S")
     said = (f"each entry of Gamma (scale factors and misalignments) drifts by at most {S:g} per C from its value at "
