@@ -309,3 +309,11 @@ def test_a_ros_bag_calibrates_as_its_csv_twin(tmp_path, capsys):
     bag_cal, csv_cal = (json.loads((tmp_path / f).read_text()) for f in ("b.json", "c.json"))
     assert bag_cal.pop("source") != csv_cal.pop("source") and bag_cal == csv_cal
     assert (tmp_path / "b.json").read_text().replace(str(bag), str(csv)) == (tmp_path / "c.json").read_text()
+
+
+def test_a_flight_log_without_the_fields_it_needs_is_one_line(monkeypatch, tmp_path):
+    # A sensor_accel topic without x (a damaged or foreign layout) was a KeyError; one line names the field.
+    monkeypatch.setattr(flight, "_load_ulog", lambda path: ({0: {"timestamp": np.arange(3), "y": np.zeros(3),
+                                                                 "z": np.zeros(3)}}, {0: 7}, {}))
+    with pytest.raises(DataError, match="sensor_accel instance 0 has no field x"):
+        flight.read_ulog(tmp_path / "x.ulg")

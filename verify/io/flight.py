@@ -79,6 +79,9 @@ def read_ulog(path, imu=None):
     topics, ids, parameters = _load_ulog(path)
     k = _pick(path, ids, imu, "PX4")
     d = topics[k]
+    missing = [f for f in ("timestamp", "x", "y", "z") if f not in d]
+    if missing:
+        raise DataError(f"{path}: sensor_accel instance {k} has no field {missing[0]}", param="log")
     t = np.asarray(d.get("timestamp_sample", d["timestamp"]), float) * 1e-6
     raw = np.column_stack([np.asarray(d[a], float) for a in "xyz"])
     temp = np.asarray(d["temperature"], float) if "temperature" in d else None
@@ -112,8 +115,11 @@ def _load_dataflash(path):
         if kind == "PARM":
             params[m.Name] = float(m.Value)
             continue
+        fields = [getattr(m, f, None) for f in ("TimeUS", "AccX", "AccY", "AccZ")]
+        if any(f is None for f in fields):             # a message of another layout: not an accelerometer's
+            continue
         k = int(getattr(m, "I", DATAFLASH_IMU.index(kind)))
-        rows.setdefault(k, []).append((m.TimeUS, m.AccX, m.AccY, m.AccZ, getattr(m, "T", np.nan)))
+        rows.setdefault(k, []).append((*fields, getattr(m, "T", np.nan)))
     names = {0: "INS_ACC_ID", 1: "INS_ACC2_ID", 2: "INS_ACC3_ID"}
     return rows, {k: int(params.get(names.get(k, ""), 0)) for k in sorted(rows)}, params
 
