@@ -35,7 +35,7 @@ def trig_basis(expr, angles, others=()):
     out = {}
     for monom, coeff in rem.terms():
         term = sp.Mul(*[back.get(g, g)**k for g, k in zip(gens, monom)])
-        out[term] = coeff if coeff.is_Rational else sp.nsimplify(coeff)
+        out[term] = coeff if coeff.is_Rational else _radical(coeff)
     return out
 
 
@@ -85,6 +85,18 @@ def _radical(x):
     return sp.expand(sp.radsimp(x))
 
 
+def _rref(M):
+    """M.rref() in the number field of M's entries (QQ, or QQ adjoined the radicals of tilted axes and detents):
+    exact field arithmetic, not SymPy's zero test by minimal polynomials, which on an axis such as
+    [999983, 999979, 999961] beside another tilted one did not finish in 120 s."""
+    from sympy.polys.matrices import DomainMatrix
+    dM = DomainMatrix.from_list_sympy(M.rows, M.cols, M.tolist(), extension=True)
+    if not dM.domain.is_Field:
+        dM = dM.to_field()
+    rref, pivots = dM.rref()
+    return rref.to_Matrix().applyfunc(_radical), tuple(pivots)
+
+
 def identify(J, names, preferred, angles, others=(), positions=None):
     """Rank analysis of J (3 x n, trig entries): combinations q, linearised H, null space.
 
@@ -111,7 +123,7 @@ def identify(J, names, preferred, angles, others=(), positions=None):
                 rows.extend([d.get(t, 0) for d in parts]
                             for t in sorted({t for d in parts for t in d}, key=sp.default_sort_key))
     M = sp.Matrix(rows)
-    rref, pivots = M.rref()
+    rref, pivots = _rref(M)
     rank = len(pivots)
     R_pref = rref[:rank, :]
     if positions is not None:        # detents such as 120 degrees: radicals, denominators rationalised

@@ -178,9 +178,9 @@ def flag(value):
     return value
 
 
-def real_array(value, what):
+def real_array(value, what, copy=True):
     """An array of real numbers as floats (the API's data): complex numbers, text and objects refused,
-    never converted with a part dropped."""
+    never converted with a part dropped. copy=False: the caller's own float array where it is one (read only)."""
     import numpy as np
     param = what.split(":")[0].strip()           # the argument's own name; the column stays in the message
     try:
@@ -196,7 +196,7 @@ def real_array(value, what):
             arr = arr.astype(float)
         except (TypeError, ValueError, OverflowError):      # a Python int beyond any float (10**400)
             raise DataError(f"{what}: every value must be a real number of double range", param=param) from None
-    return arr.astype(float)
+    return arr.astype(float, copy=copy)
 
 
 def bounds(value):

@@ -2,6 +2,7 @@
 injected; each case through the path it came from, one line (or a DataError naming the argument) and exit 2."""
 import json
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -270,3 +271,115 @@ def test_logs_that_prove_nothing_are_refused_before_they_are_read_whole(tmp_path
     one.write_text(" ".join(["0.1"] * 400_000))                # 1.6 MB, no line break
     assert main(["calibrate-norm", str(one), "--format", "imu_tk"]) == 2
     assert "no line break in its first MiB" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("inner, outer", [
+    ("[999983, 999979, 999961]", "[3, 999979, 7]"),
+    ("[0.123456789012345, 0.98765432109876, 0.5555555555555]",
+     "[0.923456789012345, 0.18765432109876, 0.3555555555555]"),
+])
+def test_two_turning_axes_of_many_digits_derive(tmp_path, capsys, inner, outer):
+    # Case 21: with both axes tilted and given in many digits, derive did not finish in 120 s (SymPy's rref tested each
+    # pivot for zero through minimal polynomials; nsimplify ran PSLQ on exact coefficients). The rank analysis is now
+    # done in the number field of the entries (exact field arithmetic): each derives as an ordinary derivation.
+    text = (Path(__file__).resolve().parents[1] / "data" / "stands" / "tilted_inner.toml").read_text()
+    text = text.replace("axis = [0, 1, 1]", f"axis = {inner}").replace('axis = "x"', f"axis = {outer}")
+    (tmp_path / "t.toml").write_text(text)
+    assert main(["derive", str(tmp_path / "t.toml"), "--out", str(tmp_path / "out")]) == 0
+    assert "14 identifiable" in flat(capsys.readouterr().out)
+
+
+def test_a_mimu_stream_of_zeros_is_refused_from_its_first_chunk_in_bounded_memory(tmp_path, capsys):
+    # Case 24: 1 GB of zeros as a MIMU stream was read whole (1.06 GB), then "out of memory" without naming the file.
+    import tracemalloc
+    path = tmp_path / "zeros.bin"
+    with open(path, "wb") as fh:
+        fh.truncate(1 << 30)                                   # 1 GiB, sparse
+    tracemalloc.start()
+    try:
+        code = main(["calibrate-norm", str(path), "--format", "mimu", "--imu", "1"])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and str(path) in err, err
+    assert "no packet with a valid checksum in its first 4 MiB" in err
+    assert peak < 100 << 20, peak
+
+
+@needs_real
+def test_a_mimu_stream_read_in_chunks_is_the_stream_read_whole(monkeypatch):
+    # The chunked reader keeps a packet that straddles two chunks and resynchronises as the whole-file reader did:
+    # chunks of 997 bytes (no multiple of the 106-byte packet) give the same samples as the default chunk.
+    from garant.verify.io import mimu
+    path = str(REAL / "mimu4444bt" / "raw" / "exp_1" / "data.bin")
+    whole = mimu.read(path, 3)
+    monkeypatch.setattr(mimu, "CHUNK", 997)
+    small = mimu.read(path, 3)
+    assert np.array_equal(whole[0], small[0]) and np.array_equal(whole[1], small[1]) and whole[2:] == small[2:]
+
+
+@needs_real
+def test_apply_to_a_dataframe_costs_its_new_columns_not_copies_of_the_frame(tmp_path):
+    # Case 22: garant.apply(cal, df) on a 1e7-row frame took 1.69 GB above the frame (5.3 frames of 4 columns): a
+    # float copy of every column read, a copy of the frame, the new columns made twice. Now the frame's other columns
+    # are shared, the log read once: the 6 new columns (1.5 frames) and one float copy of the columns read (1 frame).
+    import tracemalloc
+    import pandas as pd
+    cal = tmp_path / "n.json"
+    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G_REAL), "--save", str(cal)]) == 0
+    n = 1_000_000
+    rng = np.random.default_rng(0)
+    df = pd.DataFrame({"time_s": np.arange(n) / 100.0, "acc_x": rng.normal(0, 0.1, n),
+                       "acc_y": rng.normal(0, 0.1, n), "acc_z": -9.8 + rng.normal(0, 0.01, n)})
+    tracemalloc.start()
+    try:
+        out = garant.apply(str(cal), df)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(out) == n and list(out.columns[-3:]) == ["bound_x", "bound_y", "bound_z"]
+    assert peak < 3.2 * df.memory_usage().sum(), peak / df.memory_usage().sum()
+    assert np.shares_memory(out["time_s"].to_numpy(), df["time_s"].to_numpy())
+
+
+def _positions(path, rows):
+    """A positions CSV of the two-axis stand with nominal readings (g = 9.81 along the unit's z at zero)."""
+    import math
+    lines = ["alpha_deg,beta_deg,f1,f2,f3"]
+    for a, b in rows:
+        ra, rb = math.radians(a), math.radians(b)
+        lines.append(f"{a},{b},{9.81 * math.sin(ra) * math.sin(rb):.9f},{9.81 * math.sin(ra) * math.cos(rb):.9f},"
+                     f"{9.81 * math.cos(ra):.9f}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_next_sizes_its_search_with_the_measured_positions_before_any_work(tmp_path, capsys, monkeypatch):
+    # Case 23: `next` on 20,000 distinct positions ran over 21 s of CPU (here 110 s): each measured position off the
+    # grid is a candidate of the search, and no budget counted them. They count against --max-candidates now,
+    # refused in one line before the readings are estimated.
+    from garant.verify.workflows import jobs
+    monkeypatch.setattr(jobs, "estimate", lambda *a, **k: pytest.fail("estimated before the search was sized"))
+    _positions(tmp_path / "s.csv", [(0.5 * k, 0.25 * k) for k in range(200)])
+    assert main(["next", "--model", "two-axis", str(tmp_path / "s.csv"), "--sigma", "1e-5",
+                 "--max-candidates", "150"]) == 2
+    err = flat(capsys.readouterr().err)
+    assert err.startswith("garant: error:") and "200 distinct measured positions" in err, err
+    assert "--max-candidates 150" in err and "Traceback" not in err
+
+
+def test_next_on_many_rows_at_few_positions_costs_the_positions_not_the_rows(tmp_path):
+    # Case 23: 2,000,000 rows at 9 positions took 1.53 GB (here 2.2 GB and 44 s): the file read twice, cell by cell
+    # in Python, and the measurement matrix made of every row (rows x 3 x 15). Now the file is read once in C and
+    # the matrix is the distinct positions'.
+    import tracemalloc
+    nine = [(0, 0), (90, 0), (180, 0), (270, 0), (90, 90), (90, 180), (90, 270), (45, 45), (135, 300)]
+    _positions(tmp_path / "s.csv", nine * 22_222)
+    tracemalloc.start()
+    try:
+        out = garant.next_position("two-axis", str(tmp_path / "s.csv"), 1e-5)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert out["measured"] and len(out["measured"]) == 9
+    assert peak < 60e6, peak          # 200,000 rows: the matrix of every row alone is 72 MB

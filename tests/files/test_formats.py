@@ -21,7 +21,7 @@ def block(doc, tag):
 def test_positions_example(tmp_path):
     (tmp_path / "p.csv").write_text(block("formats.md", "csv positions"))
     pos = read_positions(str(tmp_path / "p.csv"))
-    assert pos.angles_deg.tolist() == [[0, 0], [0, 180]] and pos.extra["time_s"] == [0.0, 60.0]     # a number
+    assert pos.angles_deg.tolist() == [[0, 0], [0, 180]] and list(pos.extra["time_s"]) == [0.0, 60.0]  # a number
 
 
 def test_log_example(tmp_path):
@@ -75,6 +75,16 @@ def test_a_large_numeric_positions_file_is_read_in_c_exactly_as_cell_by_cell(tmp
     slow = positions.read_positions(str(path))
     assert np.array_equal(fast.angles_deg, slow.angles_deg) and np.array_equal(fast.f, slow.f)
     monkeypatch.undo()
+    timed = tmp_path / "t.csv"                            # the model's variables read in C too, as numbers
+    timed.write_text("alpha_deg,beta_deg,f1,f2,f3,time_s,temp_c\n"
+                     + "\n".join(",".join(repr(float(x)) for x in r) + f",{60 * k},{20 + k / 10}"
+                                 for k, r in enumerate(rows)) + "\n")
+    fast = positions.read_positions(str(timed))
+    monkeypatch.setattr(positions, "_numeric", lambda *a: None)
+    slow = positions.read_positions(str(timed))
+    monkeypatch.undo()
+    assert all(np.array_equal(np.asarray(fast.extra[c]), slow.extra[c]) for c in ("time_s", "temp_c"))
+    assert isinstance(fast.extra["time_s"], np.ndarray)
     path.write_text(path.read_text().replace(repr(float(rows[7, 3])), "nan", 1))
     with pytest.raises(DataError, match="line 9: column f2"):
         positions.read_positions(str(path))
@@ -89,7 +99,7 @@ def test_a_plan_file_with_other_numeric_columns_is_read_in_c_and_a_text_column_f
     path = tmp_path / "p.csv"
     path.write_text("f1,alpha_deg,f2,beta_deg,f3\n" + "\n".join(
         ",".join(repr(float(x)) for x in (r[2], r[0], r[3], r[1], r[4])) for r in rows) + "\n")
-    assert positions._numeric(str(path), ["alpha_deg", "beta_deg"], others=True) is not None
+    assert positions._numeric(str(path), ["alpha_deg", "beta_deg"]) is not None
     fast, _ = positions.read_plan(str(path), ("alpha", "beta"))
     assert np.array_equal(fast, rows[:, :2])
     monkeypatch.setattr(positions, "_numeric", lambda *a, **k: None)
@@ -99,5 +109,5 @@ def test_a_plan_file_with_other_numeric_columns_is_read_in_c_and_a_text_column_f
     text = path.read_text().splitlines()
     quoted = tmp_path / "q.csv"
     quoted.write_text("\n".join([text[0] + ",note"] + [t + ',"a, b"' for t in text[1:]]) + "\n")
-    assert positions._numeric(str(quoted), ["alpha_deg", "beta_deg"], others=True) is None
+    assert positions._numeric(str(quoted), ["alpha_deg", "beta_deg"]) is None
     assert np.array_equal(positions.read_plan(str(quoted), ("alpha", "beta"))[0], rows[:, :2])

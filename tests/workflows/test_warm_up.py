@@ -62,7 +62,7 @@ def test_simulate_makes_a_warm_up_that_degree_1_calibrates_with_the_truth_inside
     assert_thermal_truth(res["thermal"], truth["thermal"])
 
 
-def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tmp_path, capsys):
+def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tmp_path, capsys, monkeypatch):
     # `apply CAL WARMUP.csv` refused the whole log: its first samples (before the first still interval) are below
     # the calibrated range. Now they are dropped and counted on the summary line (exit 0); every sample written is
     # within the range, and --outside refuse refuses the log as before.
@@ -81,9 +81,16 @@ def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tm
     assert main(["apply", str(cal), str(log), "-o", str(out)]) == 0
     said = flat(capsys.readouterr().out)
     assert f"{len(data) - outside} samples corrected by" in said
-    assert f"{outside} dropped as outside its temperature range" in said
+    assert f"; {outside} dropped as outside its temperature range" in said.replace(",", ";"), said
     kept = np.loadtxt(out, delimiter=",", skiprows=1)
     assert len(kept) == len(data) - outside and np.isin(kept[:, 0], data[:, 0]).all()
+    # In pieces (997 samples, no divisor of the log): the same file and count. The count once added each piece's
+    # length past the log's end (970,298 dropped said of 298), and the pieces took kept samples by position.
+    from garant.verify.cli import apply as apply_cli
+    monkeypatch.setattr(apply_cli, "CHUNK", 997)
+    assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "c997.csv")]) == 0
+    assert f"; {outside} dropped as outside" in flat(capsys.readouterr().out).replace(",", ";")
+    assert (tmp_path / "c997.csv").read_bytes() == out.read_bytes()
     assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "x.csv"), "--outside", "refuse"]) == 2
     assert "outside the calibrated range" in capsys.readouterr().err
 

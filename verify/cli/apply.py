@@ -54,7 +54,7 @@ def _frame_said(args, path):
 
 
 #: Samples corrected and written per piece: the output is never whole in memory.
-CHUNK = 1_000_000
+CHUNK = 1 << 17
 
 
 def run(args):

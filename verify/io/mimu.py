@@ -28,28 +28,57 @@ def looks_like(head):
     return False
 
 
-def packets(path):
-    """The packets that pass their checksum, in stream order, as a (P, 106) uint8 array, and the number
-    of bytes outside them (a cut first packet, packets that failed their checksum)."""
-    try:
-        b = np.fromfile(path, dtype=np.uint8)
-    except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})", param="log") from None
-    if len(b) < PACKET:
-        raise DataError(f"{path}: {len(b)} bytes, shorter than one {PACKET}-byte MIMU packet", param="log")
-    starts = np.flatnonzero(b[: len(b) - PACKET + 1] == 0xAA)
+#: Bytes read at a time: memory is bounded by this and by the bytes kept per packet (10), never by the
+#: file; a file with no valid packet in its first chunk is refused there.
+CHUNK = 1 << 22
+
+
+def _valid(b):
+    """Starts of the packets in byte array b that pass their checksum (overlapping candidates included)."""
+    starts = np.flatnonzero(b[: max(len(b) - PACKET + 1, 0)] == 0xAA)
     c = np.concatenate([[0], np.cumsum(b, dtype=np.int64)])          # byte sums without a copy per packet
     stated = b[starts + PACKET - 2].astype(np.int64) * 256 + b[starts + PACKET - 1]
-    ok = (c[starts + PACKET - 2] - c[starts]) % 65536 == stated
-    kept, end = [], -1
-    for s in starts[ok].tolist():           # resynchronise: a valid packet never overlaps the previous one
-        if s >= end:
-            kept.append(s)
-            end = s + PACKET
+    return starts[(c[starts + PACKET - 2] - c[starts]) % 65536 == stated]
+
+
+def packets(path, imu):
+    """The time stamp bytes (P, 4) and IMU `imu`'s accelerometer bytes (P, 6: three big-endian int16) of
+    the packets that pass their checksum, in stream order, and the number of bytes outside them (a cut first
+    packet, packets that failed their checksum). Read CHUNK bytes at a time."""
+    off = 8 + (imu - 1) * 12
+    stamps, imus, kept, end, size = [], [], 0, 0, 0      # end: the first byte a next packet may start at
+    try:
+        with open(path, "rb") as fh:
+            carry, base = np.zeros(0, np.uint8), 0         # carry: the tail a packet may straddle
+            while True:
+                chunk = np.frombuffer(fh.read(CHUNK), dtype=np.uint8)
+                size += len(chunk)
+                b = np.concatenate([carry, chunk]) if len(carry) else chunk
+                last = not len(chunk)
+                pick = []
+                for s in _valid(b).tolist():   # resynchronise: a valid packet never overlaps the previous one
+                    if base + s >= end:
+                        pick.append(s)
+                        end = base + s + PACKET
+                if pick:
+                    at = np.array(pick)[:, None]
+                    stamps.append(b[at + np.arange(4, 8)])
+                    imus.append(b[at + np.arange(off, off + 6)])
+                    kept += len(pick)
+                if not kept and size >= CHUNK:
+                    raise DataError(f"{path}: no packet with a valid checksum in its first {CHUNK >> 20} MiB; "
+                                    "not a MIMU4444BT stream", param="log")
+                if last:
+                    break
+                keep = min(PACKET - 1, len(b))
+                carry, base = b[len(b) - keep:].copy(), base + len(b) - keep
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})", param="log") from None
+    if size < PACKET:
+        raise DataError(f"{path}: {size} bytes, shorter than one {PACKET}-byte MIMU packet", param="log")
     if not kept:
         raise DataError(f"{path}: no packet with a valid checksum; not a MIMU4444BT stream", param="log")
-    kept = np.array(kept)
-    return b[kept[:, None] + np.arange(PACKET)], len(b) - len(kept) * PACKET
+    return np.concatenate(stamps), np.concatenate(imus), size - kept * PACKET
 
 
 #: Time stamps that may repeat, go back or jump before a stream is refused: a few resets (the packet count then
@@ -65,8 +94,8 @@ def read(path, imu):
     packet count at the median step, and the caller says so."""
     if not 1 <= imu <= IMUS:
         raise DataError(f"{opt('imu')} {imu}: the MIMU4444BT stream holds IMUs 1 to {IMUS}")
-    pk, skipped = packets(path)
-    ts = pk[:, 4:8].astype(np.int64) @ np.array([1 << 24, 1 << 16, 1 << 8, 1])
+    stamp, own, skipped = packets(path, imu)
+    ts = stamp.astype(np.int64) @ np.array([1 << 24, 1 << 16, 1 << 8, 1])
     ticks = np.diff(ts) % (1 << 32)                                  # the 32-bit stamp wraps
     forward = (ticks > 0) & (ticks < 1 << 31)                        # back: over half the range modulo 2^32
     if not forward.any():
@@ -80,8 +109,7 @@ def read(path, imu):
         t = np.arange(len(ts)) / RATE_HZ
     else:
         t = np.concatenate([[0.0], np.cumsum(ticks)]) / (step * RATE_HZ)
-    off = 8 + (imu - 1) * 12
-    raw = pk[:, off: off + 6].astype(np.int64)
+    raw = own.astype(np.int64)
     counts = raw[:, 0::2] * 256 + raw[:, 1::2]
     counts = np.where(counts >= 32768, counts - 65536, counts)       # big-endian int16
     if imu % 2 == 0:

@@ -75,10 +75,11 @@ def read_positions(path, angles=("alpha", "beta"), mountings=None, empty_ok=Fals
     angle_cols = [f"{a}_deg" for a in angles]
     required = angle_cols + ["f1", "f2", "f3"] + (["mount"] if mountings and len(mountings) > 1 else [])
     fast = _numeric(path, required)
-    if fast is not None:
+    if fast is not None and set(fast[0]) <= {*required, *VARIABLE_COLUMNS}:     # other columns stay text: below
         header, data = fast
         pos = Positions(path, data[:, [header.index(c) for c in angle_cols]],
-                        data[:, [header.index(c) for c in ("f1", "f2", "f3")]])
+                        data[:, [header.index(c) for c in ("f1", "f2", "f3")]], None,
+                        {c: data[:, header.index(c)] for c in VARIABLE_COLUMNS if c in header})
         _check_degrees(path, angle_cols, pos)
         return pos
     try:
@@ -149,15 +150,14 @@ def _check_degrees(path, angle_cols, pos):
                             "these look like radians; the column is in degrees", param="data")
 
 
-def _numeric(path, required, others=False):
+def _numeric(path, required):
     """(header, data) when every cell of the file is a finite number, every row has every column, and
-    the columns are exactly the required ones (or, with `others`, include them): read in C (a large
-    file). None otherwise: the cell-by-cell reader then finds and names any problem."""
+    the columns, each named once, include the required ones: read in C (a large file). None otherwise:
+    the cell-by-cell reader then finds and names any problem."""
     try:
         with open(path, encoding="utf-8-sig") as fh:
             header = [h.strip() for h in files.header_line(fh, path, param="data").split(",")]
-            if "mount" in header or any(c not in header for c in required) or (
-                    not others and len(header) != len(required)):
+            if "mount" in header or any(c not in header for c in required) or len(set(header)) != len(header):
                 return None
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)        # no data rows: said by the reader below
@@ -175,7 +175,7 @@ def read_plan(path, angles, mountings=None):
     files.regular(path, "the plan file", MAX_BYTES, param="plan")
     multi = mountings is not None and len(mountings) > 1
     cols = [f"{a}_deg" for a in angles] + (["mount"] if multi else [])
-    fast = None if multi else _numeric(path, cols, others=True)
+    fast = None if multi else _numeric(path, cols)
     if fast is not None:
         header, data = fast
         return data[:, [header.index(c) for c in cols]], None

@@ -85,10 +85,7 @@ def _load(path, delimiter, usecols, skip):
     if len(head) == 1 << 20 and b"\n" not in head:
         raise DataError(f"{path}: no line break in its first MiB: a log holds one sample per line", param="log")
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)             # "input contained no data": said below
-            data = np.loadtxt(path, delimiter=delimiter, usecols=usecols, skiprows=skip, ndmin=2, dtype=float,
-                              encoding="utf-8-sig", comments=None)
+        data = _blocks(path, delimiter, usecols, skip)
     except (ValueError, UnicodeDecodeError) as e:
         raise DataError(f"{path}: {_first_bad_cell(path, delimiter, usecols, skip) or e}", param="log") from None
     if data.shape[0] == 0:
@@ -97,12 +94,38 @@ def _load(path, delimiter, usecols, skip):
         bad = np.flatnonzero(~np.isfinite(data).all(axis=1))             # an overflow: then no row is bad)
         if bad.size:
             raise DataError(f"{path} line {int(bad[0]) + skip + 1}: NaN or infinite value", param="log")
-    big = np.abs(data) > MAX_VALUE
-    if big.any():
-        row, col = (int(v[0]) for v in np.nonzero(big))
+    if len(data) and max(data.max(), -data.min()) > MAX_VALUE:       # (no temporary of the file's size unless so)
+        row, col = (int(v[0]) for v in np.nonzero(np.abs(data) > MAX_VALUE))
         raise DataError(f"{path} line {row + skip + 1}: {data[row, col]:g} is beyond any reading or time stamp "
                         f"(|value| > {MAX_VALUE:g})", param="log")
     return data
+
+
+#: Rows parsed at a time into a text log's array: the array is made once at its final size (its lines counted
+#: first), so reading costs the numbers and one block, not a growing parser's copies.
+BLOCK_ROWS = 1 << 18
+
+
+def _blocks(path, delimiter, usecols, skip):
+    """np.loadtxt of the file, BLOCK_ROWS rows at a time into one array of the file's line count (trimmed)."""
+    with open(path, "rb") as fh:
+        lines, last = 0, b""
+        while block := fh.read(1 << 24):
+            lines, last = lines + block.count(b"\n"), block[-1:]
+    out = np.empty((max(lines + (last not in (b"\n", b"")) - skip, 0), len(usecols)))
+    n = 0
+    with open(path, encoding="utf-8-sig") as fh, warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)                  # "input contained no data": said by the caller
+        for _ in range(skip):
+            fh.readline()
+        while n < len(out):
+            part = np.loadtxt(fh, delimiter=delimiter, usecols=usecols, ndmin=2, dtype=float, comments=None,
+                              max_rows=BLOCK_ROWS)
+            if not len(part):
+                break
+            out[n:n + len(part)] = part
+            n += len(part)
+    return out[:n]
 
 
 #: The rows of a binary log whose time is checked before the whole file is read.

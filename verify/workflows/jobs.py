@@ -98,7 +98,8 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
                         f"+y+z+x; got {mount!r}")
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
-    res = est.estimate(mod, positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections), sigma, prem.g,
+    res = est.estimate(mod, base if thermal else positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections),
+                       sigma, prem.g,
                        remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress, thermal=thermal)
     section = res.pop("thermal_file", None)
@@ -123,6 +124,8 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
     from ..io.positions import Positions, from_columns, read_positions
     from .directions import angles_for
     names, mounts = models.layout(mod)
+    if isinstance(data, Positions):                  # read already (next reads them once for its sizing)
+        return data
     if fmt == "imucal":
         from ..io import imucal
         U, F, _ = imucal.means(data, sections)
@@ -366,18 +369,23 @@ def read_log(log, fmt=None, sensor=None, imu=None, rate=None):
     if isinstance(log, (str, bytes)) or hasattr(log, "__fspath__"):
         return recordings.read_log(log, fmt, sensor or "adxl355", imu, rate)
     if hasattr(log, "columns"):
-        log = _frame(log, rate)
-    arr = real_array(log, "log")
-    if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) < recordings.MIN_SAMPLES:
-        raise DataError(f"log: expected an array of shape (N, 4), N >= {recordings.MIN_SAMPLES}: time in s, x, y, z; "
-                        f"got shape {arr.shape}", param="log")
-    if not np.all(np.isfinite(arr)) or np.any(np.diff(arr[:, 0]) <= 0):
+        t, raw = _frame(log, rate)
+    else:
+        arr = real_array(log, "log")
+        if arr.ndim != 2 or arr.shape[1] != 4:
+            raise DataError(f"log: expected an array of shape (N, 4), N >= {recordings.MIN_SAMPLES}: time in s, x, y, "
+                            f"z; got shape {arr.shape}", param="log")
+        t, raw = arr[:, 0], arr[:, 1:]
+    if len(t) < recordings.MIN_SAMPLES:
+        raise DataError(f"log: expected at least {recordings.MIN_SAMPLES} samples: time in s, x, y, z; got {len(t)}",
+                        param="log")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(raw))) or np.any(np.diff(t) <= 0):
         raise DataError("log: every value must be finite and the times increasing", param="log")
-    return recordings.Log("array", arr[:, 0] - arr[0, 0], arr[:, 1:], fmt="array")
+    return recordings.Log("array", np.subtract(t, t[0], out=t), raw, fmt="array")       # t: our own copy
 
 
 def _frame(df, rate=None):
-    """(N, 4) time (s), x, y, z of a pandas DataFrame log: the accelerometer columns by the names a csv
+    """Time (s, N) and x, y, z (N, 3) of a pandas DataFrame log: the accelerometer columns by the names a csv
     log may have (acc_x, acc_y, acc_z, as imucal's, among them), time from a time column (its suffix the
     unit) or, with none, from the index over `rate` (imucal's sample index)."""
     from ..io import recordings
@@ -401,7 +409,7 @@ def _frame(df, rate=None):
     else:
         raise DataError("log: a DataFrame without a time column (time_s, time_ms, ...) needs rate=HZ: its index "
                         "counts samples", param="log")
-    return np.column_stack([t, *(real_array(df[low[n]], f"log: column {n}") for n in acc)])
+    return t, np.column_stack([real_array(df[low[n]], f"log: column {n}", copy=False) for n in acc])
 
 
 def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
@@ -439,14 +447,18 @@ def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] =
         the verdict of `estimate` on the data (`consistent`; `disagreements` when the data refute sigma).
     """
     from ..solve import lp
-    from .next import next_position as suggest, printed_bounds, target_names
+    from .estimate import distinct_positions, repeated_disagree
+    from .next import next_position as suggest, printed_bounds, sized, target_names
     mod = models.load(model)
     pos = positions_of(mod, data, empty_ok=True)
     mounts = pos.mounts if pos.mounts is not None else np.zeros(len(pos.angles_deg), int)
+    sized(mod, pos.angles_deg, mounts, grid, max_candidates)          # the search's size, before any work
     verdict, printed = None, None
-    if len(pos.angles_deg) and (_repeats_refute(pos, sigma, g) or not lp.unidentifiable(
-            lp.measurement_matrix(mod, np.deg2rad(pos.angles_deg), pos.mounts))):    # a verdict is possible
-        verdict = estimate(model, data, sigma, g=g, g_uncertainty=g_uncertainty, prior=prior, bound=bound,
+    distinct, spread, _ = distinct_positions(pos)
+    if len(pos.angles_deg) and (len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g))
+                                or not lp.unidentifiable(lp.measurement_matrix(
+                                    mod, np.deg2rad(distinct.angles_deg), distinct.mounts))):  # a verdict is possible
+        verdict = estimate(model, pos, sigma, g=g, g_uncertainty=g_uncertainty, prior=prior, bound=bound,
                            mount=mount, gamma=gamma)
     floor = None
     if verdict is not None and verdict["consistent"] and not verdict.get("premises_refuted"):
@@ -462,13 +474,6 @@ def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] =
     if verdict is not None and verdict.get("premises_refuted"):
         out["premises_refuted"], out["next"] = verdict["premises_refuted"], None
     return out
-
-
-def _repeats_refute(pos, sigma, g):
-    """Whether readings repeated at one position already refute sigma (no estimator needed for that)."""
-    from .estimate import distinct_positions, repeated_disagree
-    distinct, spread, _ = distinct_positions(pos)
-    return len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g)) > 0
 
 
 def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
@@ -571,8 +576,11 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
 
     keep = _within_range(cal, data, outside)
 
-    def piece(i, j):
-        k = slice(i, j) if keep is None else keep[i:j]
+    n = len(data.t)
+
+    def piece(i, j):                                  # the log's samples i..j-1 (those within range)
+        j = min(j, n)
+        k = slice(i, j) if keep is None else keep[slice(*np.searchsorted(keep, [i, j]))]
         if "thermal" in cal:
             a, bound = cal_io.apply_thermal(cal, data.raw[k], data.temp[k], data.path)
         elif cal.get("effects") and cal["effects"]["names"]:
@@ -582,12 +590,12 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
         else:
             a, bound = cal_io.apply(cal, data.raw[k], frame)
         return results.Correction(t=data.t[k], a=a, bound=bound, kind=cal["kind"],
-                                  outside=0 if keep is None else (j - i) - len(keep[i:j]))
+                                  outside=0 if keep is None else (j - i) - len(k))
     if chunk is None and hasattr(log, "columns"):       # a DataFrame in, a calibrated copy out (imucal's habit)
-        return _corrected_frame(log, keep, piece, len(data.t))
+        return _corrected_frame(log, keep, piece, n)
     if chunk is None:
-        return piece(0, len(data.t))
-    return (piece(i, i + chunk) for i in range(0, len(data.t), chunk))
+        return piece(0, n)
+    return (piece(i, i + chunk) for i in range(0, n, chunk))
 
 
 #: Samples corrected at a time into a DataFrame's copy: the work's memory is this piece's, not the frame's.
@@ -596,22 +604,25 @@ FRAME_CHUNK = 1 << 16
 
 def _corrected_frame(log, keep, piece, n):
     """The DataFrame's calibrated copy (its rows within the calibrated range), filled piece by piece: its
-    accelerometer columns corrected (m/s^2) and bound_x, bound_y, bound_z added."""
+    accelerometer columns corrected (m/s^2) and bound_x, bound_y, bound_z added. Its other columns are the
+    frame's own (shared, not copied, when every row is kept); new memory is the new columns and one piece."""
+    import pandas as pd
     from ..io import recordings
-    out = log.copy() if keep is None else log.iloc[keep].copy()
-    low = {str(c).lower(): c for c in out.columns}
+    low = {str(c).lower(): c for c in log.columns}
     names = next(x for x in recordings.ACCEL_COLUMNS if all(c in low for c in x))
-    cols = [np.asarray(out[low[c]], float).copy() for c in names] + [np.empty(len(out)) for _ in range(3)]
+    rows = n if keep is None else len(keep)
+    new = [np.empty(rows) for _ in range(6)]
     at = 0
     for i in range(0, n, FRAME_CHUNK):
         c = piece(i, i + FRAME_CHUNK)
         for k in range(3):
-            cols[k][at:at + len(c.t)], cols[3 + k][at:at + len(c.t)] = c.a[:, k], c.bound[:, k]
+            new[k][at:at + len(c.t)], new[3 + k][at:at + len(c.t)] = c.a[:, k], c.bound[:, k]
         at += len(c.t)
-    for k, c in enumerate(names):
-        out[low[c]] = cols[k]
-        out[f"bound_{'xyz'[k]}"] = cols[3 + k]
-    return out
+    acc = {low[x]: k for k, x in enumerate(names)}
+    cols = {c: new[acc[c]] if c in acc else (log[c] if keep is None else log[c].iloc[keep]) for c in log.columns}
+    cols.update({f"bound_{'xyz'[k]}": new[3 + k] for k in range(3)})
+    index = log.index if keep is None else log.index[keep]
+    return pd.DataFrame(cols, index=index, copy=False)
 
 
 #: What `apply` does with samples outside a calibration's temperature range.

@@ -148,11 +148,10 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     default target then holds TARGET_SLACK for that and `floor`, what the premises alone set."""
     from ..models import layout
     from ..solve import plans
-    from .plan import MAX_CANDIDATES, SEARCH_SECONDS, candidates, refuse_variables
+    from .plan import SEARCH_SECONDS, refuse_variables
     refuse_variables(mod, model)
     names, mount_names = layout(mod)
-    P, M, fixed = _with_measured(*candidates(mod, grid, max_candidates or MAX_CANDIDATES),
-                                 np.asarray(angles_deg, float).reshape(-1, len(names)), np.asarray(mounts, int))
+    P, M, fixed = sized(mod, angles_deg, mounts, grid, max_candidates)
     m = len(mod.Q_NAMES)
     if mount is None:
         C, labels, of = None, list(mod.Q_NAMES), "the combinations q of (4) of 000"
@@ -209,16 +208,37 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     return Next(**common, position=position(best), after=after, still_needed=needed, still_needed_proven=proven)
 
 
+def sized(mod, angles_deg, mounts, grid=None, max_candidates=None):
+    """The candidates (P, M) with the distinct measured positions among them and the indices of those
+    (`_with_measured`), refused in one line when they are more than `max_candidates`: measured positions off
+    the grid are candidates too, and the search grows with them. Cheap: called before any estimate."""
+    from ..models import layout
+    from .plan import MAX_CANDIDATES, candidates
+    limit = max_candidates or MAX_CANDIDATES
+    measured = np.asarray(angles_deg, float).reshape(-1, len(layout(mod)[0]))
+    P, M, fixed = _with_measured(*candidates(mod, grid, limit), measured, np.asarray(mounts, int))
+    if len(P) > limit:
+        raise DataError(f"{len(fixed):,} distinct measured positions and the {len(P) - len(fixed):,} other candidates "
+                        f"make {len(P):,} candidate positions, more than {opt('max_candidates')} {limit:,}: the "
+                        "search for the next one grows with them; give a larger --max-candidates, or ask "
+                        "`garant estimate` (the bounds on these readings)", param="max_candidates")
+    return P, M, fixed
+
+
 def _with_measured(P, M, measured, mounts):
     """The candidates with the measured positions among them (appended where the grid lacks one), and
-    the indices of the measured ones (a position matches a candidate to 1e-7 degree: one look-up each)."""
+    the indices of the measured ones (a position matches a candidate to 1e-7 degree: one look-up per distinct
+    position, repeats joined first)."""
     def key(x, k):
         return (*np.round(np.asarray(x, float), 7).tolist(), int(k))
     index = {}
     for i, (x, k) in enumerate(zip(P, M)):
         index.setdefault(key(x, k), i)
+    rows = np.column_stack([np.round(np.asarray(measured, float), 7), np.asarray(mounts, float)])
+    order = np.lexsort(rows.T[::-1])                                    # stable: a group's first row leads it
+    first = np.sort(order[np.r_[True, np.any(rows[order[1:]] != rows[order[:-1]], axis=1)]]) if len(rows) else order
     fixed, seen, extra = [], set(), []
-    for x, k in zip(measured, mounts):
+    for x, k in zip(measured[first], np.asarray(mounts)[first]):       # each distinct position once, in order
         hit = index.get(key(x, k))
         if hit is None:
             hit = index[key(x, k)] = len(P) + len(extra)
