@@ -383,3 +383,27 @@ def test_next_on_many_rows_at_few_positions_costs_the_positions_not_the_rows(tmp
         tracemalloc.stop()
     assert out["measured"] and len(out["measured"]) == 9
     assert peak < 60e6, peak          # 200,000 rows: the matrix of every row alone is 72 MB
+
+
+@pytest.mark.slow
+@needs_real
+def test_apply_from_the_command_line_costs_the_logs_numbers_not_its_text(tmp_path):
+    # Case 22: `garant apply` on a 1e7-sample log took 832 MB (855 here): the log's 4 columns once (320 MB) and again
+    # as |values| for a range check, the median step's copy, a million samples of CSV text at a time (twice). Now:
+    # the numbers once, a block of text, 131,072 samples of output text: at 1e6 samples (the numbers: 32 MB) the peak
+    # was 376 MB and is about 100 MB.
+    import tracemalloc
+    cal = tmp_path / "n.json"
+    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G_REAL), "--save", str(cal)]) == 0
+    n = 1_000_000
+    rng = np.random.default_rng(0)
+    log = tmp_path / "big.txt"
+    np.savetxt(log, np.column_stack([np.arange(n) / 100.0, rng.normal(0, 0.1, (n, 2)), -9.8 + rng.normal(0, 0.01, n)]),
+               fmt="%.7e", delimiter="\t")
+    tracemalloc.start()
+    try:
+        assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "out.csv")]) == 0
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 4.5 * 32e6, peak / 32e6
