@@ -8,7 +8,7 @@ import pytest
 
 from conftest import REAL, needs_real, simulate, write_csv, flat, command_line
 from garant.verify import models
-from garant.verify.cli import main
+from garant.verify.cli import COMMANDS, main
 
 SIGMA = 1e-5
 PLAN10 = [(0, 0), (0, 180), (180, 90), (180, 270), (90, 90), (270, 90), (90, 270), (90, 180), (270, 180), (90, 0)]
@@ -255,3 +255,28 @@ def test_every_command_lists_its_options_in_one_order():
     assert at == sorted(at)
     plan = cli.parser("plan")._subparsers._group_actions[0].choices["plan"].format_help()
     assert plan.index("\n  --grid ") < plan.index("\n  --json ") < plan.index("\n  -o PLAN.csv, --output")
+
+
+@pytest.mark.parametrize("command", ["", *COMMANDS])
+def test_every_help_is_at_most_100_columns_on_a_wide_terminal(command, capsys, monkeypatch):
+    # `garant --help` was 128 columns (the list of commands as one word), repeatability's 104 (--format's choices);
+    # argparse takes any terminal's width. Now every --help is at most 100 columns, the commands one a line.
+    monkeypatch.setenv("COLUMNS", "200")
+    with pytest.raises(SystemExit):
+        main([command, "--help"] if command else ["--help"])
+    out = capsys.readouterr().out
+    assert out and max(map(len, out.splitlines())) <= 100, max(out.splitlines(), key=len)
+
+
+@pytest.mark.parametrize("argv, meant", [
+    (["estimat"], "did you mean estimate?"),
+    (["calibrate-norn", "x.txt"], "did you mean calibrate-norm?"),
+    (["estimate", "--model", "two-axis", "d.csv", "--sigma", "1e-5", "--sgima", "3"], "did you mean --sigma?"),
+    (["calibrate-norm", "x.txt", "--thermal-degreee", "1"], "did you mean --thermal-degree?"),
+])
+def test_a_mistyped_command_or_option_is_told_the_close_name(argv, meant, capsys):
+    # A mistyped command or option got "invalid choice" or "unrecognized arguments" and nothing more.
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1 and meant in err, err

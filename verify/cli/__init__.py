@@ -37,8 +37,37 @@ class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: `garant: error: ...` and exit status 2."""
 
     def error(self, message):
-        """One line on stderr naming the problem and --help; exit status 2."""
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        """One line on stderr naming the problem, the close name meant where there is one, and --help; exit 2."""
+        self.exit(2, f"{self.prog}: error: {message}{_did_you_mean(self, message)} (see {self.prog} --help)\n")
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+
+class _Formatter(argparse.HelpFormatter):
+    """--help at most WIDTH columns wide, or a narrower terminal's width (argparse alone takes any terminal's)."""
+
+    def __init__(self, prog, **kwargs):
+        import shutil
+        kwargs.setdefault("width", min(WIDTH, shutil.get_terminal_size((WIDTH, 24)).columns) - 2)
+        super().__init__(prog, **kwargs)
+
+
+def _did_you_mean(p, message):
+    """"; did you mean X?" for a mistyped command or option: the closest of the parser's own names."""
+    import difflib
+    m = re.match(r"argument \S+: invalid choice: '([^']*)'", message) or re.match(
+        r"unrecognized arguments: (--?[\w-]+)", message)
+    if not m:
+        return ""
+    names = [name for a in p._actions for name in a.option_strings]
+    for a in p._actions:
+        for sub in (a.choices or {}).values() if isinstance(a, argparse._SubParsersAction) else ():
+            names += [name for b in sub._actions for name in b.option_strings]
+        names += list(a.choices) if isinstance(a, argparse._SubParsersAction) else []
+    close = difflib.get_close_matches(m.group(1).split("=")[0], names, n=1, cutoff=0.6)
+    return f"; did you mean {close[0]}?" if close else ""
 
 
 def parser(only=None):
@@ -46,7 +75,7 @@ def parser(only=None):
     from garant import __version__
     ap = _Parser(prog="garant", description="Guaranteed calibration of accelerometer blocks.")
     ap.add_argument("--version", action="version", version=f"garant {__version__}")
-    sub = ap.add_subparsers(dest="command", required=True)
+    sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in ([only] if only in COMMANDS else COMMANDS):
         command = importlib.import_module(f".{COMMANDS[name]}", __name__)
         p = command.add(sub)
@@ -124,8 +153,7 @@ def main(argv=None):
         files.check_inputs([])                         # the API after a command protects nothing stale
 
 
-#: The widest line printed (narrower terminals wrap at their own width); the tables' width too.
-WIDTH = 100
+from ..io.report import WIDTH  # noqa: E402  (the widest line printed; narrower terminals wrap at their own width)
 
 
 #: A line that ends in a command to run (`add them: garant calibrate-norm ...`): wrapped with the shell's " \\"

@@ -2,7 +2,7 @@
 import os
 import sys
 
-from ..defaults import FORMATS, SENSORS
+from ..defaults import SENSORS
 from . import args as options
 
 
@@ -13,7 +13,7 @@ def add(sub):
     p.add_argument("calibration", metavar="CAL", help="a garant-calibration-1 file (calibrate-norm --save), or a "
                    "batch's folder (calibrate-norm LOG... --out DIR): each log takes DIR/<its name>.json")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): each corrected into --out DIR")
-    p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
+    options.log_format(p)
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    default="adxl355", help="accelerometer of an OpenAXES log")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or the "

@@ -27,6 +27,13 @@ def temperatures(text):
     return values
 
 
+def log_format(p, extra=(), more=""):
+    """--format of a command that reads logs: one of defaults.FORMATS (and `extra`), listed in the help."""
+    from ..defaults import FORMATS
+    p.add_argument("--format", choices=FORMATS + tuple(extra), metavar="FORMAT",
+                   help=f"log format, one of {', '.join(FORMATS + tuple(extra))} (guessed when omitted){more}")
+
+
 def model(p):
     """--model: a built-in stand or a STAND.toml (every command that takes a model spells it so)."""
     p.add_argument("--model", required=True, help=f"a built-in stand ({', '.join(STANDS)}) or a STAND.toml")

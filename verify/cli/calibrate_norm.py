@@ -3,7 +3,7 @@ import os
 import sys
 
 from ..errors import FLAGS, DataError
-from ..defaults import FORMATS, SENSORS
+from ..defaults import SENSORS
 from . import args as options
 from . import exports
 
@@ -12,7 +12,7 @@ def add(sub):
     """The `garant calibrate-norm` subcommand and its options."""
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): a batch, one process, every core")
-    p.add_argument("--format", choices=FORMATS, help="log format (guessed when omitted)")
+    options.log_format(p)
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8; a flight "

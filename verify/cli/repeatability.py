@@ -2,7 +2,7 @@
 effect named when they disagree, and the between-run envelope to expect of the next run."""
 import sys
 
-from ..defaults import FORMATS, SENSORS
+from ..defaults import SENSORS
 from . import args as options
 
 
@@ -13,8 +13,7 @@ def add(sub):
                        "name the effect when they disagree; the between-run envelope")
     p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "
                    "(exp or run) holding every run")
-    p.add_argument("--format", choices=FORMATS + ("means",), help="log format (guessed when omitted); means: a "
-                   "positions file of per-position means (docs/formats.md)")
+    options.log_format(p, ("means",), "; means: a positions file of per-position means (docs/formats.md)")
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
