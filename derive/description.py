@@ -42,6 +42,14 @@ class DescriptionError(ValueError):
     """A problem in a stand description: the message names the file and the place in it."""
 
 
+class Unobservable(DescriptionError):
+    """Parameters the stand cannot observe to first order: `names`, and `why` in a clause (the message says more)."""
+
+    def __init__(self, message, names, why):
+        super().__init__(message)
+        self.names, self.why = tuple(names), why
+
+
 def _fail(path, where, msg):
     raise DescriptionError(f"{path}: {where}: {msg}")
 
@@ -377,15 +385,16 @@ def check_observable(model, J):
         axes = sorted({int(b[-1]) for b in blind if all(f"Gamma{i}{b[-1]}" in blind for i in (1, 2, 3))})
         why = (f"no position turns gravity onto block axis {', '.join(map(str, axes))}" if axes
                else "the positions do not vary gravity enough")
-        raise DescriptionError(f"{model.source_file}: the stand cannot observe the block's {', '.join(blind)}: {why}; "
-                               "add a mounting that turns that axis (block.mountings, e.g. [\"+x+y+z\", \"+z+x+y\"]) "
-                               "or a link that tilts it (a wedge angle other than 90 degrees, an axis not parallel)")
+        raise Unobservable(f"{model.source_file}: the stand cannot observe the block's {', '.join(blind)}: {why}; "
+                           "add a mounting that turns that axis (block.mountings, e.g. [\"+x+y+z\", \"+z+x+y\"]) "
+                           "or a link that tilts it (a wedge angle other than 90 degrees, an axis not parallel)",
+                           blind, why)
     for k, p in enumerate(model.parameters):
         if all(v == 0 for v in J.col(k)):
             where = next((f"link[{n - i}].{'offset' if ln.angle and ln.error == p.name else 'error'}"
                           if p.name == ln.error else f"link[{n - i}].harmonic"
                           for i, ln in enumerate(model.stand.chain) if p.name in (ln.error, *(ln.harmonic or ()))),
                          "block")
-            raise DescriptionError(f"{model.source_file}: {where}: parameter {p.name!r} cannot be observed: "
-                                   "the readings do not depend on it to first order (e.g. a turn about "
-                                   "the vertical); remove it from the description")
+            why = (f"parameter {p.name!r} cannot be observed: the readings do not depend on it to first order (e.g. a "
+                   "turn about the vertical)")
+            raise Unobservable(f"{model.source_file}: {where}: {why}; remove it from the description", [p.name], why)

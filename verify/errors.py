@@ -30,5 +30,15 @@ class DataError(ValueError):
         return "".join(parts)
 
 
+class NotExact(ValueError):
+    """H is not exact where an exact computation needs it (a detent off 15 degrees, an axis outside Q(sqrt2,
+    sqrt3)): the caller falls back to floating point, or says so in one line."""
+
+
 class LPFailed(RuntimeError):
-    """The solver did not reach an optimum (infeasible plan or numerical failure)."""
+    """The solver did not reach an optimum (infeasible plan or numerical failure). `status`: the solver's own
+    word for it (HiGHS's model status, lower case: "infeasible", "unbounded", "time limit reached", ...)."""
+
+    def __init__(self, message, status=""):
+        super().__init__(message)
+        self.status = str(status).lower()

@@ -157,9 +157,11 @@ def test_an_error_names_the_option_as_the_caller_spells_it(tmp_path, capsys):
 def test_every_result_has_a_status_and_its_message(tmp_path):
     # Like scipy's OptimizeResult, every result says what came out in a word and a line.
     from garant.verify.io import results
+    from garant.verify.outcomes import Status
     for cls in (results.Plan, results.Estimate, results.NormCalibration, results.Diagnosis, results.Correction,
                 results.NextPosition):
         assert cls.STATUSES and all(isinstance(v, str) and v for v in cls.STATUSES.values())
+        assert all(isinstance(k, Status) for k in cls.STATUSES), cls        # declared once: outcomes.Status
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
     from garant.generated import two_axis as mod
     f = mod.readings(*np.deg2rad(P).T, np.zeros(len(mod.PARAMETER_NAMES)), 9.81).T
@@ -168,6 +170,7 @@ def test_every_result_has_a_status_and_its_message(tmp_path):
     spike[3, 0] += 0.01                                  # one reading 100 sigma off: no unit fits it
     bad = garant.estimate("two-axis", np.column_stack([P, spike]), 1e-5)
     assert (good.status, bad.status) == ("consistent", "refuted") and "no bound" in bad.message
+    assert (good.status, bad.status) == (Status.CONSISTENT, Status.REFUTED) and str(bad.status) == "refuted"
     assert garant.plan("two-axis").status == "done"
 
 

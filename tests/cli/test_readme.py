@@ -66,3 +66,12 @@ def test_the_first_calibration_states_only_a_gravity_that_holds_for_its_log():
     for argv in _commands((ROOT / "README.md").read_text()):
         if argv[1] == "calibrate-norm":
             assert float(argv[argv.index("--g") + 1]) == stated, argv
+
+
+def test_the_exit_statuses_are_said_as_outcomes_declares_them():
+    # The README's and docs/premises.md's sentences on exit statuses had drifted from the code (apply's batch
+    # returned the count of failures, 2 and 3 meaning other things; 130 unsaid). Both are now outcomes.exit_sentence(),
+    # made from the Exit enum every command returns.
+    from garant.verify.outcomes import exit_sentence
+    for doc in (ROOT / "README.md", ROOT / "docs" / "premises.md"):
+        assert exit_sentence() in " ".join(doc.read_text().split()), doc

@@ -77,8 +77,10 @@ def test_apply_corrects_each_log_by_its_own_calibration_from_the_batch_folder(tm
     (tmp_path / "stranger.txt").write_text((REAL / "repeat_session3_acc.txt").read_text())
     code = main(["apply", str(tmp_path / "cal"), *logs, str(tmp_path / "stranger.txt"), "--out", str(tmp_path / "out")])
     out = flat(capsys.readouterr().out)
-    assert code == 1 and "stranger.txt: not corrected: no calibration " in out
-    assert "3 logs: 2 corrected into " in out
+    # one status, the count printed: the count as the exit status was 1 here (1 means "a check failed"), and would
+    # have been 2 or 3 (bad input, refuted) with more failures
+    assert code == 2 and "stranger.txt: not corrected: no calibration " in out
+    assert "3 logs: 2 corrected into " in out and ", 1 failed" in out
     for log in logs:
         stem = log.rsplit("/", 1)[1][:-4]
         assert main(["apply", str(tmp_path / "cal" / f"{stem}.json"), log, "-o", str(tmp_path / f"{stem}.csv")]) == 0

@@ -20,6 +20,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 from ..errors import DataError, LPFailed
+from ..outcomes import Exit
 from . import exports
 
 #: The subcommands, in the order of `garant --help`: command name -> its module.
@@ -128,27 +129,27 @@ def main(argv=None):
             return args.run(args)
     except LPFailed as e:
         print(f"garant: error: {_plain(e)}", file=sys.stderr)
-        return 2
+        return Exit.BAD_INPUT
     except DataError as e:
         print(f"garant: error: {e}", file=sys.stderr)
-        return 2
+        return Exit.BAD_INPUT
     except (ValueError, ArithmeticError, IndexError, KeyError, TypeError) as e:   # not the input: garant's own
         print(f"garant: internal error: {type(e).__name__}: {str(e)[:300]} (not a problem with the input; please "
               "report it with the command line)", file=sys.stderr)
-        return 1
+        return Exit.FAILED
     except MemoryError:
         print("garant: error: out of memory: the inputs are too large for this machine (see the size limits in "
               "docs/formats.md)", file=sys.stderr)
-        return 2
+        return Exit.BAD_INPUT
     except KeyboardInterrupt:                          # Ctrl-C: outputs are written atomically, none half
         print("garant: interrupted; no output was written after the interruption", file=sys.stderr)
-        return 130
+        return Exit.INTERRUPTED
     except BrokenPipeError:                            # (flushing at exit, after the command)
         sys.stderr.close()
-        return 0
+        return Exit.OK
     except OSError as e:
         print(f"garant: error: {(e.filename or 'a file') if e.strerror else ''}: {e.strerror or e}", file=sys.stderr)
-        return 2
+        return Exit.BAD_INPUT
     finally:
         files.check_inputs([])                         # the API after a command protects nothing stale
 
@@ -235,8 +236,7 @@ def _plain(e):
     """A solver failure said in the user's terms: what it means for the stand or the plan."""
     text = str(e)
     what = text.split(":", 1)[0]
-    low = text.lower()
-    if "unbounded" in low or "infeasible" in low:
+    if "unbounded" in e.status or "infeasible" in e.status:
         return (f"{what}: the positions cannot estimate every combination q (no unbiased estimator exists on "
                 "them); add positions (garant identify --model STAND --plan PLAN.csv says which q are missing)")
     return f"{what}: the linear program did not reach an optimum ({text.split(':', 1)[-1].strip()}); " \

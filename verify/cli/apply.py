@@ -2,6 +2,7 @@
 import os
 import sys
 
+from ..outcomes import Exit
 from ..defaults import SENSORS
 from . import args as options
 
@@ -34,7 +35,7 @@ def add(sub):
                         "bound_z (m/s^2, worst case, 4 digits rounded up); - for standard output (the line that says "
                         "what was written then goes to standard error)")
     p.add_argument("--out", metavar="DIR", help="several logs: DIR/<log name>.csv each (as --output), a bad log "
-                   "said on its line while the others go on; the exit status counts the logs that failed")
+                   "said on its line while the others go on; exit status 2 when any failed (the count printed)")
     return p
 
 
@@ -76,7 +77,7 @@ def run(args):
         raise DataError(f"-o -: standard output is closed; give {opt('output')} OUT.csv", param="output")
     said = _apply(args, args.calibration, args.logs[0], args.output)
     print(said, file=sys.stderr if args.output == "-" else sys.stdout)
-    return 0
+    return Exit.OK
 
 
 def _batch(args):
@@ -99,7 +100,7 @@ def _batch(args):
             failed += 1
             print(f"[{k}/{len(args.logs)}] {log}: not corrected: {e}")
     print(f"{len(args.logs)} logs: {len(args.logs) - failed} corrected into {folder}, {failed} failed")
-    return min(failed, 125)
+    return Exit.BAD_INPUT if failed else Exit.OK
 
 
 def _apply(args, calibration, log, output):

@@ -4,7 +4,6 @@ from ..models import STANDS
 from ..defaults import G_DEFAULT
 
 #: Exit status when the data refute the noise bound (docs: README, "Exit status").
-EXIT_INCONSISTENT = 3
 
 
 #: The argparse types of the shared checks (verify/options.py: the API checks its arguments with the same).

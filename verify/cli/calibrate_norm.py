@@ -2,6 +2,7 @@
 import os
 import sys
 
+from ..outcomes import Exit
 from ..errors import FLAGS, DataError
 from ..defaults import SENSORS
 from . import args as options
@@ -101,7 +102,7 @@ def run(args):
         except DataError as e:                   # one sensor's log unusable: said, the others go on (as a batch)
             print(f"IMU {k}: not calibrated: {e}")
             results[f"IMU {k}"] = {"error": str(e)}
-            codes.append(2)
+            codes.append(Exit.BAD_INPUT)
     if args.json:
         report.write_json(args.json, results)
     return max(codes)
@@ -166,7 +167,7 @@ def _batch(args):
 
 
 #: A batch's exit statuses, apart from 1 (a check failed), 2 (bad input) and 3 (refuted) of one log.
-BATCH_JUDGED, BATCH_FAILED, BATCH_UNJUDGED = 0, 4, 5
+BATCH_JUDGED, BATCH_FAILED, BATCH_UNJUDGED = Exit.OK, Exit.SPEC_FAILED, Exit.RETEST
 
 
 def batch_status(rows, judged):
@@ -221,7 +222,7 @@ def _run(args, into=None):
         print(f"wrote {pages.norm(res, args.report, args.log, _log_of(args), command)}")
     if into is not None:
         into.update(res)
-    return 0 if res["consistent"] else options.EXIT_INCONSISTENT
+    return Exit.OK if res["consistent"] else Exit.REFUTED
 
 
 def _print(res, args):
@@ -433,7 +434,7 @@ def _still_only(res, args):
         print("INCONSISTENT: no drift linear in T meets every piece within its noise rule")
         if args.json:
             report.write_json(args.json, res)
-        return options.EXIT_INCONSISTENT
+        return Exit.REFUTED
     print(f"each axis's raw reading r(T) = r(t0) + slope (T - {res['t0_c']:g} C), bounds over the information set:")
     report.table(("axis", f"r(t0) ({u})", "bound", f"slope ({u}/C)", "bound", f"over the range ({u})", "bound"),
                  [(a, f"{d['at_t0']:+.6e}", f"{d['at_t0_bound']:.2e}", f"{d['slope']:+.4e}", f"{d['slope_bound']:.2e}",
@@ -450,7 +451,7 @@ def _still_only(res, args):
         exports.write(args, res, "calibrate-norm")
     if args.json:
         report.write_json(args.json, res)
-    return 0
+    return Exit.OK
 
 
 def _print_thermal(res):

@@ -1,4 +1,5 @@
 """garant check-certificate: re-check an optimality certificate without any solver."""
+from ..outcomes import Exit
 from pathlib import Path
 
 from ..errors import DataError
@@ -38,4 +39,4 @@ def run(args):
         print("certificate holds" if ok else "certificate REJECTED")
     if len(args.files) > 1:
         print(f"{held} of {len(args.files)} certificates hold")
-    return 0 if held == len(args.files) else 1
+    return Exit.OK if held == len(args.files) else Exit.FAILED

@@ -1,6 +1,7 @@
 """garant derive: a stand description to its generated module and derivation report."""
 import time
 
+from ..outcomes import Exit
 from ..errors import DataError
 
 
@@ -32,4 +33,4 @@ def run(args):
           f"(derived in {time.perf_counter() - t0:.1f} s)")
     for q, d in zip(mod.Q_NAMES, mod.Q_DEFINITIONS):
         print(f"  {q} = {d}")
-    return 0
+    return Exit.OK

@@ -2,6 +2,7 @@
 import sys
 import time
 
+from ..outcomes import Exit
 from . import args as options
 
 
@@ -79,7 +80,7 @@ def run(args):
         plots.diagnosis(res, args.plot, f"{args.data}: residuals before and after")
     if args.json:
         report.write_json(args.json, res)
-    return 0
+    return Exit.OK
 
 
 def _report(res, args, names):

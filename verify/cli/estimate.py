@@ -1,11 +1,11 @@
 """garant estimate: q with guaranteed error bounds from readings at any positions ((6)-(8) of 000)."""
 import sys
 
+from ..outcomes import Exit
 from ..errors import DataError
 from . import args as options
 from . import exports
 
-EXIT_INCONSISTENT = options.EXIT_INCONSISTENT
 
 
 def add(sub):
@@ -88,7 +88,7 @@ def print_verdict(res, mod, path):
                   f"position {x['position']} (" + ", ".join(f"{x[a + '_deg']:g}" for a in names)
                   + f") f{x['component']} spread {x['spread']:.3g}" for x in d[:5]))
         print(f"premises: {res['premises']['statement']}")
-        return EXIT_INCONSISTENT
+        return Exit.REFUTED
     print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): no q fits every reading within sigma plus the "
           f"proven remainder left after absorption into q ({res['remainder_left_bound']:.2e}); the data support "
           f"sigma >= {res['sigma_min_supported']:.3g} (to {res['sigma_min_tolerance']:.0%}). "
@@ -98,7 +98,7 @@ def print_verdict(res, mod, path):
     print(f"{len(d)} residual components disagree, e.g. " + "; ".join(
         f"position {x['position']} (" + ", ".join(f"{x[a + '_deg']:g}" for a in names) + f") f{x['component']}"
         for x in d[:5]))
-    return EXIT_INCONSISTENT
+    return Exit.REFUTED
 
 
 BOUNDS_LEGEND = (
@@ -145,7 +145,7 @@ def print_estimate(res, mod, args):
           f"sigma = {args.sigma:g} (dimensionless, units of g)")
     if res.get("premises_refuted"):
         print_refuted(res["premises_refuted"], "estimate")
-        return options.EXIT_INCONSISTENT
+        return Exit.REFUTED
     if args.mount:
         print_physical(res)
     elif "block" in res:
@@ -155,7 +155,7 @@ def print_estimate(res, mod, args):
     if "thermal" in res:
         print_thermal(res, args)
     exports.write(args, res, "estimate")
-    return 0
+    return Exit.OK
 
 
 def print_thermal(res, args):

@@ -1,4 +1,5 @@
 """garant identify: what a model can estimate, what it confounds, and what a plan cannot separate."""
+from ..outcomes import Exit
 from ..models import STANDS
 from . import args as options
 
@@ -22,7 +23,7 @@ def run(args):
     _print(res)
     if args.json:
         report.write_json(args.json, res)
-    return 0
+    return Exit.OK
 
 
 def _print(res):

@@ -1,4 +1,5 @@
 """garant next: the position to measure next at the stand, how many are still needed, and when to stop."""
+from ..outcomes import Exit
 from . import args as options
 
 
@@ -54,8 +55,8 @@ def run(args):
                                   + state)
         print(f"wrote {args.plot}")
     if res["consistent"] is False or res.get("premises_refuted"):
-        return options.EXIT_INCONSISTENT
-    return 0
+        return Exit.REFUTED
+    return Exit.OK
 
 
 def _print(res, args):

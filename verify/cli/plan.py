@@ -1,6 +1,7 @@
 """garant plan: optimal guaranteed errors and a minimal optimal plan of a stand."""
 import sys
 
+from ..outcomes import Exit
 from ..errors import DataError
 from ..models import STANDS, kind
 from ..defaults import COUNT_NODES, COUNT_SECONDS, MAX_CANDIDATES, SEARCH_NODES, SEARCH_SECONDS
@@ -99,7 +100,7 @@ def run(args):
         report.write_text(args.output, "\n".join([",".join(header)] + [",".join(
             f"{v:g}" if not isinstance(v, str) else v for v in row) for row in rows]) + "\n")
         print(f"wrote {args.output}")
-    return 0
+    return Exit.OK
 
 
 def _print(mod, res, d, grid, names, counted=True):
@@ -216,7 +217,7 @@ def run_norm(args):
         plots.plan_directions(U, args.plot, f"garant plan --model norm: the {len(U)} orientations optimal for all 12 "
                                             "parameters (-gravity in sensor axes)")
         print(f"wrote {args.plot}")
-    return 0
+    return Exit.OK
 
 
 def _plot(mod, d, args):
@@ -269,4 +270,4 @@ def run_thermal(args):
         header = [f"{a}_deg" for a in names] + (["mount"] if multi else []) + ["temp_c"]
         report.write_text(args.output, "\n".join(",".join(str(c) for c in r) for r in [header, *rows]) + "\n")
         print(f"wrote {args.output}")
-    return 0
+    return Exit.OK

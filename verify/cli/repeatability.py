@@ -2,6 +2,7 @@
 effect named when they disagree, and the between-run envelope to expect of the next run."""
 import sys
 
+from ..outcomes import Exit
 from ..defaults import SENSORS
 from . import args as options
 
@@ -107,7 +108,7 @@ def run(args):
         page = sections(results) + [("Each parameter per run with its bound; dashed: the envelope",
                                      report.Image("runs.png"))]
         print(f"wrote {report.write_page(args.report, _title(args), command, page, args.logs)}", file=sys.stderr)
-    return 0 if all("envelope" in r for r in results.values()) else 3
+    return Exit.OK if all("envelope" in r for r in results.values()) else Exit.REFUTED
 
 
 def _fmt(v, e=None):

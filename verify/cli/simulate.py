@@ -1,4 +1,5 @@
 """garant simulate: readings from the exact nonlinear model, with hidden effects, for testing."""
+from ..outcomes import Exit
 from . import args as options
 
 
@@ -75,7 +76,7 @@ def run_norm(args):
     report.write_json(path, {"model": "norm", **truth})
     print(f"wrote {path}: the hidden truth (the block's errors, M and b, the effects in the convention calibrate-norm "
           "prints them in)")
-    return 0
+    return Exit.OK
 
 
 
@@ -127,7 +128,7 @@ def run(args):
                               "q_absorbs": list(mod.ABSORBED),
                               "temperatures_c": args.temperatures})
     print(f"wrote {truth}: the hidden truth (parameters, q, effects)")
-    return 0
+    return Exit.OK
 
 
 def truth_path(output):

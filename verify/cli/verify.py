@@ -2,6 +2,7 @@
 import sys
 import time
 
+from ..outcomes import Exit
 from . import args as options
 
 
@@ -48,4 +49,4 @@ def run(args):
         report.write_json(args.json, {"checks": [
             {"name": r.name, "source": r.source, "expected": r.expected, "got": r.got,
              "passed": bool(r.passed)} for r in rows]})
-    return 1 if failed else 0
+    return Exit.FAILED if failed else Exit.OK

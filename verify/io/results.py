@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 
+from ..outcomes import Status
 from . import files, schemas
 from .report import json_value, write_text
 
@@ -42,7 +43,7 @@ class Result(dict):
 
     FIELDS = {}
     #: status -> message: what each status means, in a line (every result has a status; scipy's habit).
-    STATUSES = {"done": "the job ran"}
+    STATUSES = {Status.DONE: "the job ran"}
     #: The input files the result was computed from (set by the API): `to_json` never writes over one.
     _inputs = ()
 
@@ -54,9 +55,9 @@ class Result(dict):
                                  f"it has {', '.join(self.keys())}") from None
 
     @property
-    def status(self) -> str:
-        """What came out, in a word (a key of STATUSES): consistent, refuted, premise refuted, done, ..."""
-        return "done"
+    def status(self) -> Status:
+        """What came out, in a word (a key of STATUSES; outcomes.Status): consistent, refuted, done, ..."""
+        return Status.DONE
 
     @property
     def message(self) -> str:
@@ -121,17 +122,18 @@ class Estimate(Result):
 
     FIELDS = _Schema("estimate")
 
-    STATUSES = {"consistent": "the readings fit sigma within the premises: q, the bounds and the calibration hold",
-                "refuted": "the readings refute sigma (or a premise): no bound is given",
-                "premise refuted": "the readings put some q beyond what its parameters' stated bounds allow: no "
+    STATUSES = {Status.CONSISTENT: "the readings fit sigma within the premises: q, the bounds and the calibration "
+                                   "hold",
+                Status.REFUTED: "the readings refute sigma (or a premise): no bound is given",
+                Status.PREMISE_REFUTED: "the readings put some q beyond what its parameters' stated bounds allow: no "
                                    "bound is guaranteed (premises_refuted names them)"}
 
     @property
     def status(self):
         """consistent, refuted or premise refuted."""
         if not self["consistent"]:
-            return "refuted"
-        return "premise refuted" if self.get("premises_refuted") else "consistent"
+            return Status.REFUTED
+        return Status.PREMISE_REFUTED if self.get("premises_refuted") else Status.CONSISTENT
 
     @property
     def names(self):
@@ -150,22 +152,22 @@ class NormCalibration(Result):
     """`garant.calibrate_norm`: a log calibrated through the norm relation (2.2) of 001."""
 
     FIELDS = _Schema("calibrate-norm")
-    STATUSES = {"consistent": "the still intervals fit the noise bound: M, b and their bounds hold",
-                "refuted": "the still intervals refute the noise bound: no bound is given"}
+    STATUSES = {Status.CONSISTENT: "the still intervals fit the noise bound: M, b and their bounds hold",
+                Status.REFUTED: "the still intervals refute the noise bound: no bound is given"}
 
     @property
     def status(self):
         """consistent or refuted."""
-        return "consistent" if self["consistent"] else "refuted"
+        return Status.CONSISTENT if self["consistent"] else Status.REFUTED
 
 
 class Diagnosis(Result):
     """`garant.diagnose`: where the model and the data disagree, and the effect that closes the gap."""
 
     FIELDS = _Schema("diagnose")
-    STATUSES = {"consistent": "the model fits the data within sigma as it is",
-                "explained": "the effects named close the gap",
-                "unexplained": "no effect of the catalogue closes the gap"}
+    STATUSES = {Status.CONSISTENT: "the model fits the data within sigma as it is",
+                Status.EXPLAINED: "the effects named close the gap",
+                Status.UNEXPLAINED: "no effect of the catalogue closes the gap"}
     #: Not a field (not in the JSON): the extended models of the study, what `diagnose.write_module` needs to
     #: write the module of the effects named (`garant diagnose --report`).
     study = None
@@ -174,8 +176,8 @@ class Diagnosis(Result):
     def status(self):
         """consistent (as it is), explained (by the effects named) or unexplained."""
         if self["consistent_before"]:
-            return "consistent"
-        return "explained" if self.get("consistent_after") else "unexplained"
+            return Status.CONSISTENT
+        return Status.EXPLAINED if self.get("consistent_after") else Status.UNEXPLAINED
 
 
 class Correction(Result):
@@ -193,13 +195,13 @@ class NextPosition(Result):
     """`garant next --json`: where a calibration session stands and the position to measure next."""
 
     FIELDS = _Schema("next")
-    STATUSES = {"done": "every guaranteed error is at or below its target",
-                "measure": "measure the position `next`",
-                "refuted": "the readings so far refute sigma or a premise: find the cause before measuring more"}
+    STATUSES = {Status.DONE: "every guaranteed error is at or below its target",
+                Status.MEASURE: "measure the position `next`",
+                Status.REFUTED: "the readings so far refute sigma or a premise: find the cause before measuring more"}
 
     @property
     def status(self):
         """done, measure or refuted."""
         if self.get("consistent") is False or self.get("premises_refuted"):
-            return "refuted"
-        return "done" if self["done"] else "measure"
+            return Status.REFUTED
+        return Status.DONE if self["done"] else Status.MEASURE

@@ -12,6 +12,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from ..errors import NotExact
 from ..models import H_at
 
 
@@ -34,7 +35,7 @@ def exact_columns(mod, angles_deg, mounts=None):
             try:
                 vals = f(key)
             except ValueError as e:
-                raise ValueError(f"H is not exact on these positions ({e}); exact plan search takes grids of "
+                raise NotExact(f"H is not exact on these positions ({e}); exact plan search takes grids of "
                                  "multiples of 15 degrees and wedges of multiples of 15 degrees") from None
             cache[key] = vals, np.array([float(v) for v in vals])
         vals, approx = cache[key]
@@ -61,7 +62,7 @@ def _evaluator(mod):
         try:
             f = evaluator(list(H), symbols)
         except ValueError as e:
-            raise ValueError(f"H is not exact in Q(sqrt2, sqrt3) ({e}); exact plan search takes axes and wedges "
+            raise NotExact(f"H is not exact in Q(sqrt2, sqrt3) ({e}); exact plan search takes axes and wedges "
                              "whose components lie there, e.g. [0, 1, 1]") from None
         _EVALUATORS[mod] = (f, H.cols, {})
     return _EVALUATORS[mod]

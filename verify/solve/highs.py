@@ -87,7 +87,7 @@ def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
     run(h)
     status = h.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
-        raise LPFailed(f"{what}: {h.modelStatusToString(status)}")
+        raise LPFailed(f"{what}: {h.modelStatusToString(status)}", h.modelStatusToString(status))
     sol = h.getSolution()
     return np.array(sol.col_value), np.array(sol.row_dual), h.getInfo().objective_function_value
 
@@ -125,7 +125,7 @@ def _generate(K, solve_on, violation, what, start=None):
         if len(new) > keep:
             new = new[np.argpartition(-v[new], keep)[:keep]]
         S = np.union1d(S, new)
-    raise LPFailed(f"{what}: no convergence adding measurements")
+    raise LPFailed(f"{what}: no convergence adding measurements", "no convergence")
 
 
 def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
@@ -209,7 +209,8 @@ def _l1(A, T):
             h.setOptionValue("presolve", "off")
             status = h.getModelStatus()
         if status != highspy.HighsModelStatus.kOptimal:
-            raise LPFailed(f"primal (7)-(8), target {k + 1}: {h.modelStatusToString(status)}")
+            raise LPFailed(f"primal (7)-(8), target {k + 1}: {h.modelStatusToString(status)}",
+                           h.modelStatusToString(status))
         sol = h.getSolution()
         x = np.array(sol.col_value)
         Phi[:, k] = x[:K] - x[K:]
@@ -316,7 +317,8 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
         if status != highspy.HighsModelStatus.kOptimal:
             if found:
                 return size, tuple(found), True, None, False
-            raise LPFailed(f"the plan search (mixed-integer program): {h.modelStatusToString(h.getModelStatus())}")
+            raise LPFailed(f"the plan search (mixed-integer program): {h.modelStatusToString(h.getModelStatus())}",
+                           h.modelStatusToString(h.getModelStatus()))
         x = np.array(h.getSolution().col_value[:S])
         plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
         if size is None:

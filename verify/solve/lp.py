@@ -20,7 +20,7 @@ def optimal(problem, what):
     highs.new()                                   # the first HiGHS of the process prints a banner: not here
     problem.solve(solver=cp.HIGHS)
     if problem.status != cp.OPTIMAL:
-        raise LPFailed(f"{what}: solver status {problem.status}")
+        raise LPFailed(f"{what}: solver status {problem.status}", problem.status)
 
 
 def primal(A, targets=None):

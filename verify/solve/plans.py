@@ -22,6 +22,7 @@ from math import comb
 import numpy as np
 
 
+from ..errors import NotExact
 from ..models import H_at, layout
 from . import field
 from .exact import dual_lower_bound, exact_columns
@@ -406,7 +407,7 @@ def columns(mod, angles_deg, mounts):
     point (e.g. exchange positions at 22.5 degrees)."""
     try:
         return exact_columns(mod, angles_deg, mounts)
-    except ValueError:
+    except NotExact:
         return np.moveaxis(H_at(mod, np.deg2rad(np.asarray(angles_deg, float)), mounts), -1, 0)
 
 

@@ -13,6 +13,7 @@ import tomllib
 
 import numpy as np
 
+from ..outcomes import Status
 from ..errors import DataError
 
 #: What a specification may limit: the parameters of (1.3) of 001 it covers, and their unit.
@@ -25,7 +26,7 @@ SPEC_KEYS = {"scale": (("lambda1", "lambda2", "lambda3"), "1"),
 #: or retest, a recording's (not calibrated, or refuting its noise bound), not the unit's.
 PASS, FAIL, UNDECIDED, RETEST = VERDICTS = ("pass", "fail", "undecided", "retest")
 #: A log's status in a batch: calibrated and consistent, refuting its noise bound, or not calibrated at all.
-CONSISTENT, REFUTED, ERROR = STATUSES = ("consistent", "refuted", "error")
+CONSISTENT, REFUTED, ERROR = STATUSES = (Status.CONSISTENT, Status.REFUTED, Status.ERROR)
 
 
 def read_spec(path):

@@ -54,11 +54,12 @@ class Study:
             if missing:
                 skipped[name] = f"needs column {', '.join(sorted(missing))}"
                 continue
+            from garant.derive.derivation import derive
+            from garant.derive.description import Unobservable
             try:                                     # the stand may not see some of its parameters at all
-                from garant.derive.derivation import derive
                 derive(self.model([name]))
-            except ValueError as e:
-                skipped[name] = "this stand cannot observe it (" + str(e).split(": ", 2)[-1].split(";")[0] + ")"
+            except Unobservable as e:
+                skipped[name] = f"this stand cannot observe it ({e.why})"
                 continue
             ok.append(name)
         return ok, skipped

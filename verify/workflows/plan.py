@@ -4,7 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError, opt
+from ..errors import DataError, NotExact, opt
 from ..defaults import COUNT_SECONDS, MAX_CANDIDATES, SEARCH_SECONDS
 
 
@@ -95,7 +95,7 @@ def plan(mod, model, grid=None, count_seconds=COUNT_SECONDS, max_candidates=MAX_
         from ..solve import exact
         try:
             exact.exact_columns(mod, P, M)                  # every candidate: a detent off 15 degrees is in P too
-        except ValueError as e:
+        except NotExact as e:
             raise DataError(f"{opt('certificates')}: {e}") from None
     from ..solve import highs
     work = dict(count_seconds=count_seconds, search_seconds=search_seconds, search_nodes=search_nodes,
