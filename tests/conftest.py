@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 
 #: Where things are, for every test: the repository, the tests' data and stands, and the real recordings of
-#: ../shared beside the clone.
+#: ../shared beside the clone (GARANT_SHARED names another place: tests/cli/test_any_checkout.py runs a slice of
+#: the suite with it at a long path).
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
 DATA = TESTS / "data"
 STANDS = DATA / "stands"
-REAL = ROOT.parent / "shared" / "data" / "real"
+REAL = Path(os.environ.get("GARANT_SHARED") or ROOT.parent / "shared") / "data" / "real"
 G_REAL = 9.81744                 # the g the recordings' authors used (shared/data/real/README.md), m/s^2
 # Skipped on a machine without shared/, never in CI (CI=true): there the data must be present.
 needs_real = pytest.mark.skipif(not REAL.is_dir() and not os.environ.get("CI"),

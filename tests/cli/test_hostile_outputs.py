@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REAL
 from test_hostile_inputs import _calibration, _log_file, _plan_rows, _positions, refused, run
 
 import garant
@@ -328,7 +329,7 @@ def test_the_thermal_outputs_never_replace_an_input(tmp_path, capsys):
 
 # ---------------------------------------------------------------- round four (issue 57)
 
-REAL_LOG = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "repeat_session2_acc.txt"
+REAL_LOG = REAL / "repeat_session2_acc.txt"
 IMUCAL_DIR = Path(__file__).resolve().parents[1] / "data" / "imucal"
 
 

@@ -8,9 +8,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from conftest import ROOT, flat
+from conftest import REAL, ROOT, flat
 
-SHARED = ROOT.parent / "shared"
+SHARED = REAL.parents[1]
 
 
 def _commands(text):
