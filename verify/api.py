@@ -16,41 +16,30 @@ from .io.recordings import FORMATS, SENSORS
 from .workflows import jobs
 
 
-#: The check of each argument (verify/options.py: the same function as the command's option type).
-CHECKS = {"sigma": checks.noise, "delta_sigma": checks.noise, "g": checks.gravity, "g_uncertainty": checks.small,
-          "prior": checks.small, "grid": checks.positive, "target": checks.positive,
-          "count_seconds": checks.positive, "search_seconds": checks.positive, "max_candidates": checks.positive_int,
-          "search_nodes": checks.positive_int, "count_nodes": checks.count,
-          "window": checks.positive, "k": checks.positive, "min_still": checks.positive,
-          "params": checks.one_of(9, 12), "fmt": checks.one_of(*FORMATS), "sensor": checks.one_of(*sorted(SENSORS)),
-          "gamma": checks.one_of("lower", "symmetric"), "mount": checks.text, "which_run": checks.text,
-          "trust_units": checks.flag, "diagnose": checks.flag, "bound": checks.bounds,
-          "frame": checks.one_of("garant", "imu_tk"), "rate": checks.rate, "jobs": checks.positive_int,
-          "temperature": checks.degree, "outside": checks.one_of(*jobs.OUTSIDE), "chunk": checks.positive_int,
-          "model": checks.model, "progress": checks.callback, "spec": checks.path, "sections": checks.path}
-#: The arguments the job itself reads and refuses in one line (a file or data of many shapes, an IMU's number or
-#: "all", effect names): every argument of the API is here or in CHECKS (tests/cli/test_hostile_round5.py).
-CHECKED_BY_THE_JOB = {"data": "jobs.positions_of", "log": "jobs.read_log", "logs": "batch.calibrate_many",
-                      "calibration": "calibration.checked / read", "imu": "_api (a whole number >= 1, or all)",
-                      "effects": "norm_effects.parse"}
+#: The API's arguments renamed (old name -> new): the old one is taken for a release, with a DeprecationWarning.
+RENAMED = {"temperature": "thermal_degree"}
 
 
 def _api(fn):
-    """The API's form of a job: each argument checked as the command checks its option (CHECKS), a
-    DataError's options named as the API's arguments (`imu=`: errors.opt), and the input files the result
-    came from remembered, so that `result.to_json(path)` never writes over one of them."""
+    """The API's form of a job: each argument checked by the rule the job declares beside it (`fn.constraints`,
+    options.constraints: the same checks as the command's option types), a DataError's options named as the API's
+    arguments (`imu=`: errors.opt), and the input files the result came from remembered, so that
+    `result.to_json(path)` never writes over one of them."""
     import functools
     import inspect
-    signature = inspect.signature(fn)
+    import warnings
+    signature, rules = inspect.signature(fn), fn.constraints
 
     @functools.wraps(fn)
     def call(*args, **kwargs):
+        for old, new in RENAMED.items():
+            if old in kwargs and new in rules:
+                warnings.warn(f"{fn.__name__}: {old}= is now {new}= (the old name goes in a later release)",
+                              DeprecationWarning, stacklevel=2)
+                kwargs.setdefault(new, kwargs.pop(old))
         bound = signature.bind(*args, **kwargs)
         for name, value in bound.arguments.items():
-            if name in CHECKS:
-                bound.arguments[name] = checks.check(name, value, CHECKS[name])
-            elif name == "imu" and value != "all":
-                bound.arguments[name] = checks.check(name, value, checks.positive_int)
+            bound.arguments[name] = checks.check(name, value, rules[name])
         from threadpoolctl import threadpool_limits
         try:
             with threadpool_limits(limits=1):        # one BLAS thread, as the command: the same bounds on any machine
@@ -65,6 +54,9 @@ def _api(fn):
 
 
 @_api
+@checks.constraints(model=checks.model, grid=checks.positive, count_seconds=checks.positive,
+                    max_candidates=checks.positive_int, search_seconds=checks.positive,
+                    search_nodes=checks.positive_int, count_nodes=checks.count)
 def plan(model: str, *, grid: Optional[float] = None, count_seconds: Optional[float] = None,
          max_candidates: Optional[int] = None, search_seconds: Optional[float] = None,
          search_nodes: Optional[int] = None, count_nodes: Optional[int] = None) -> results.Plan:
@@ -83,6 +75,10 @@ def plan(model: str, *, grid: Optional[float] = None, count_seconds: Optional[fl
 
 
 @_api
+@checks.constraints(logs=checks.by_the_job("batch.calibrate_many"), g=checks.gravity, g_uncertainty=checks.small,
+                    delta_sigma=checks.noise, params=checks.one_of(9, 12), fmt=checks.one_of(*FORMATS),
+                    sensor=checks.one_of(*sorted(SENSORS)), imu=checks.imu, rate=checks.rate, window=checks.positive,
+                    k=checks.positive, min_still=checks.positive, jobs=checks.positive_int, spec=checks.path)
 def calibrate_many(logs: Sequence, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
                    delta_sigma: Optional[float] = None, params: int = 9, fmt: Optional[str] = None,
                    sensor: Optional[str] = None, imu: Optional[int] = None, rate: Optional[float] = None,

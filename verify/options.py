@@ -209,6 +209,40 @@ def bounds(value):
         raise Bad(f"a bound {e}") from None
 
 
+def by_the_job(where):
+    """The rule of a parameter the job reads and refuses in one line itself (a file or data of many shapes, effect
+    names): `where` says which function does. The value passes the API's check unchanged."""
+    def rule(value):
+        return value
+    rule.takes_text, rule.where = True, where
+    return rule
+
+
+def imu(value):
+    """An IMU's number (a whole number >= 1), or "all" (every IMU of a stream)."""
+    return value if value == "all" else positive_int(value)
+
+
+imu.takes_text = True
+
+
+def constraints(**rules):
+    """Each parameter's check declared beside the function (as scikit-learn's `validate_params`): {name: a check
+    above, or by_the_job(where)}. A function with a parameter left undeclared is refused as it is defined, so a
+    new argument cannot go unchecked; the API (verify/api.py) applies the rules."""
+    import inspect
+
+    def mark(fn):
+        names = list(inspect.signature(fn).parameters)
+        missing, extra = [n for n in names if n not in rules], [n for n in rules if n not in names]
+        if missing or extra:
+            raise TypeError(f"{fn.__name__}: no constraint declared for {', '.join(missing) or '-'}; "
+                            f"constraints of no parameter: {', '.join(extra) or '-'}")
+        fn.constraints = dict(rules)
+        return fn
+    return mark
+
+
 def check(name, value, kind):
     """The API's check of argument `name`: `kind` (one of the checks above) or DataError naming it; None
     passes (the default)."""

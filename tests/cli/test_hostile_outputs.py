@@ -422,7 +422,7 @@ def test_the_api_takes_what_its_docstrings_offer_and_raises_only_data_errors():
     levels.columns = pd.MultiIndex.from_tuples([("a", "t"), ("a", "acc_x"), ("b", "acc_y"), ("b", "acc_z")])
     for call, param, said in (
             (lambda: garant.apply([1, 2, 3], str(REAL_LOG)), "calibration", "not list"),
-            (lambda: garant.estimate("norm", str(REAL_LOG), 1e-3, temperature=1), "model", "calibrate_norm"),
+            (lambda: garant.estimate("norm", str(REAL_LOG), 1e-3, thermal_degree=1), "model", "calibrate_norm"),
             (lambda: garant.calibrate_norm(twice), "log", "the column acc_x more than once"),
             (lambda: garant.calibrate_norm(levels), "log", "several levels"),
             (lambda: garant.diagnose("two-axis", np.zeros((0, 5)), 1e-4), "data", "no positions"),
@@ -439,7 +439,8 @@ def test_the_api_answers_the_same_with_any_blas_thread_count():
     from threadpoolctl import threadpool_info, threadpool_limits
 
     from garant.verify import api
-    seen = api._api(lambda: [x["num_threads"] for x in threadpool_info()])
+    from garant.verify.options import constraints
+    seen = api._api(constraints()(lambda: [x["num_threads"] for x in threadpool_info()]))
     with threadpool_limits(limits=4):
         inside = seen()
     assert inside and set(inside) == {1}, inside

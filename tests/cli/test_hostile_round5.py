@@ -233,14 +233,22 @@ def test_candidates_from_detents_are_held_to_max_candidates_before_any_work(tmp_
     assert err.count("\n") == 1 and "the stand's detents give 5,184 candidate positions (72 x 72)" in err
 
 
-def test_every_argument_of_the_api_has_its_check_declared():
-    # A new argument of an API function without a check passed unchecked with no test noticing: each is now in
-    # api.CHECKS (the command's own check) or in api.CHECKED_BY_THE_JOB (read and refused by the job in one line).
+def test_every_argument_of_the_api_has_its_check_declared_beside_its_function():
+    # A new argument of an API function without a check passed unchecked with no test noticing. Each job now declares
+    # its parameters' rules beside it (options.constraints, as scikit-learn's validate_params), the API applies them,
+    # and a function with an undeclared parameter is refused as it is defined.
     import inspect
-    from garant.verify import api
+    from garant.verify import api, options
     for name in ("plan", "estimate", "calibrate_norm", "calibrate_many", "next_position", "diagnose", "apply"):
-        for p in inspect.signature(getattr(api, name)).parameters:
-            assert p in api.CHECKS or p in api.CHECKED_BY_THE_JOB, (name, p)
+        fn = getattr(api, name).__wrapped__
+        assert set(inspect.signature(fn).parameters) == set(fn.constraints), name
+    with pytest.raises(TypeError, match="no constraint declared for sigma"):
+        @options.constraints(model=options.model)
+        def job(model, sigma):
+            """A job with an argument nobody declared."""
+    with pytest.raises(garant.DataError) as e:          # a rule declared beside the job is the one applied
+        garant.next_position("two-axis", "s.csv", 1e-5, max_candidates=0)
+    assert e.value.param == "max_candidates"
 
 
 def test_a_mimu_stream_whose_time_stamps_are_random_is_refused(tmp_path, capsys):

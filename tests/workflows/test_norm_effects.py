@@ -414,8 +414,9 @@ def test_every_key_of_calibrate_norms_json_is_in_its_schema(tmp_path):
                header="time_s,ax,ay,az,temp_c", comments="", fmt="%.9g")
     faces = str(ROOT / "tests" / "data" / "imucal" / "example_ferraris_session.csv")
     runs = [jobs.calibrate_norm(log), jobs.calibrate_norm(log, diagnose=True),
-            jobs.calibrate_norm(warm, g=G, effects="bias_temperature"), jobs.calibrate_norm(warm, g=G, temperature=1),
-            jobs.calibrate_norm(str(still), g=G, temperature=1),
+            jobs.calibrate_norm(warm, g=G, effects="bias_temperature"),
+            jobs.calibrate_norm(warm, g=G, thermal_degree=1),
+            jobs.calibrate_norm(str(still), g=G, thermal_degree=1),
             jobs.calibrate_norm(faces, fmt="imucal", rate=102.4, bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2})]
     keys = set().union(*(r.to_dict() for r in runs))
     assert keys - set(schema["properties"]) == set()

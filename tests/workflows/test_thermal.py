@@ -310,7 +310,7 @@ def test_a_chamber_session_that_refutes_a_constant_model_is_told_the_degree_it_n
     positions = jobs.positions_of(models.load("two-axis"), str(data))
     levels = thermal.chamber_levels(positions)
     assert levels == list(TEMPS)
-    found = thermal.degree_needed(levels, lambda d: jobs.estimate("two-axis", str(data), SIGMA, g=G, temperature=d))
+    found = thermal.degree_needed(levels, lambda d: jobs.estimate("two-axis", str(data), SIGMA, g=G, thermal_degree=d))
     assert found["needed"] == degree
     assert [t["consistent"] for t in found["tried"]] == [False] * (degree - 1) + [True]
 
@@ -443,13 +443,18 @@ def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mou
 
 @pytest.mark.slow
 def test_the_api_takes_a_temperature_degree_as_the_command_does(mems):
-    """garant.estimate(..., temperature=2) gives the command's `thermal` (the same job); a degree that is not a
-    whole number 1 to 3 (True, 4, "2") is refused naming the argument (verify/options.py `degree`)."""
+    """garant.estimate(..., thermal_degree=2) gives the command's `thermal` (the same job); a degree that is not a
+    whole number 1 to 3 (True, 4, "2") is refused naming the argument (verify/options.py `degree`). The old name
+    `temperature=` (the degree, not a temperature) is taken for a release, with a DeprecationWarning."""
     import garant
     from garant.verify.errors import DataError
     _, _, data, command = mems
-    res = garant.estimate("two-axis", str(data), SIGMA, g=G, temperature=2)
+    res = garant.estimate("two-axis", str(data), SIGMA, g=G, thermal_degree=2)
     assert res.to_dict()["thermal"] == command["thermal"]
+    with pytest.warns(DeprecationWarning, match="thermal_degree"):
+        old = garant.estimate("two-axis", str(data), SIGMA, g=G, temperature=2)
+    assert old.to_dict()["thermal"] == command["thermal"]
     for bad in (True, 4, "2"):
-        with pytest.raises(DataError, match="temperature"):
-            garant.estimate("two-axis", str(data), SIGMA, temperature=bad)
+        with pytest.raises(DataError, match="thermal_degree") as e:
+            garant.estimate("two-axis", str(data), SIGMA, thermal_degree=bad)
+        assert e.value.param == "thermal_degree"

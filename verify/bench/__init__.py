@@ -231,7 +231,7 @@ def bench_hull():
         def run(strategy):
             hull.SIMPLEX, kept = strategy, hull.SIMPLEX
             try:
-                return jobs.estimate("two-axis", str(path), 1e-4, g=9.81, temperature=2)
+                return jobs.estimate("two-axis", str(path), 1e-4, g=9.81, thermal_degree=2)
             finally:
                 hull.SIMPLEX = kept
         t, res = timed(lambda: run(4))

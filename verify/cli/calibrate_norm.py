@@ -37,7 +37,7 @@ def add(sub):
                    help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
                         "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, "
                         "temperature_lag, ...; repeatable, the names join; --diagnose names the ones the data need)")
-    p.add_argument("--thermal-degree", dest="temperature", type=int, metavar="D",
+    p.add_argument("--thermal-degree", type=int, metavar="D",
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
                         "bound over the logged range; with --export-ardupilot / --export-px4")
@@ -66,9 +66,9 @@ def add(sub):
 
 def run(args):
     """`garant calibrate-norm`: parse, call the job, print; the exit status."""
-    if args.temperature is not None:
+    if args.thermal_degree is not None:
         from ..workflows.norm_thermal import check_degree
-        check_degree(args.temperature)
+        check_degree(args.thermal_degree)
     exports.check(args, "calibrate-norm")
     if len(args.logs) > 1 or args.out:
         return _batch(args)
@@ -115,7 +115,7 @@ def _batch(args):
     from ..workflows import batch
     from ..workflows.norm_bounds import PARAM_LABELS
     exports.refuse(args, "calibrate-norm", "concerns one log: a batch writes each unit's calibration to --out DIR")
-    single = [o for o in ("plot", "report", "json", "effect", "temperature") if getattr(args, o)]
+    single = [o for o in ("plot", "report", "json", "effect", "thermal_degree") if getattr(args, o)]
     if single or args.imu == "all" or args.diagnose:
         first = (single or ["imu all" if args.imu == "all" else "diagnose"])[0]
         flag = FLAGS.get(first, "--" + first.replace("_", "-"))
@@ -205,7 +205,7 @@ def _run(args, into=None):
     res = jobs.calibrate_norm(args.log, g=args.g, g_uncertainty=args.g_uncertainty, delta_sigma=args.delta_sigma,
                               params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                               window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose,
-                              effects=args.effect, bound=dict(args.bound), temperature=args.temperature)
+                              effects=args.effect, bound=dict(args.bound), thermal_degree=args.thermal_degree)
     if res.get("still_only"):
         return _still_only(res, args)
     _print(res, args)

@@ -32,7 +32,7 @@ def add(sub):
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
                                                    "tables, plots, the command, inputs SHA-256) and DIR/report.md")
-    p.add_argument("--thermal-degree", dest="temperature", type=int, choices=(1, 2, 3), metavar="D",
+    p.add_argument("--thermal-degree", type=int, choices=(1, 2, 3), metavar="D",
                    help="each block parameter a polynomial of degree D (1-3) in T, the temp_c column (C): each q's "
                         "coefficients and one guaranteed "
                    "bound over the whole temperature range")
@@ -47,15 +47,15 @@ def run(args):
     from .. import models
     from ..io import report
     from ..workflows import jobs
-    if args.thermal_plot and args.temperature is None:
+    if args.thermal_plot and args.thermal_degree is None:
         raise DataError("--thermal-plot needs --thermal-degree D", param="thermal_plot")
     exports.check(args, "estimate")
     res = jobs.estimate(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty, prior=args.prior,
                         bound=dict(args.bound), mount=args.mount, gamma=args.gamma, imu=args.imu,
                         which_run=args.which_run, fmt=args.format, sections=args.sections,
-                        temperature=args.temperature,
+                        thermal_degree=args.thermal_degree,
                         progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
-    mod = (models.thermal(args.model, args.temperature, res["thermal"]["t0_c"]) if "thermal" in res
+    mod = (models.thermal(args.model, args.thermal_degree, res["thermal"]["t0_c"]) if "thermal" in res
            else models.load(args.model))
     wanted = exports.asked(args, "estimate", "calibration")
     if wanted and res["consistent"] and "calibration" not in res and not res.get("premises_refuted"):

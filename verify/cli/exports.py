@@ -218,9 +218,9 @@ def asked(args, command, takes=None):
 def check(args, command):
     """Before any work: each export asked for can be written with the options given."""
     for e in asked(args, command):
-        if e.takes == "thermal" and args.temperature is None:
+        if e.takes == "thermal" and args.thermal_degree is None:
             raise DataError(f"{e.option} needs --thermal-degree D (the file holds the drift in T)", param=e.dest)
-        if not e.temperature and args.temperature is not None:
+        if not e.temperature and args.thermal_degree is not None:
             could = ", ".join(x.option for x in of(command) if x.temperature)
             raise DataError(f"{e.option}: that file holds no polynomial in T; with --thermal-degree give {could}",
                             param=e.dest)

@@ -13,7 +13,9 @@ import numpy as np
 
 from .. import models
 from ..errors import DataError, opt
-from ..options import real_array
+from .. import options as checks
+from ..defaults import FORMATS, SENSORS
+from ..options import by_the_job, constraints, real_array
 from ..io import results
 from .premises import G_DEFAULT, premises as make_premises
 
@@ -28,11 +30,15 @@ if TYPE_CHECKING:                          # the types of the seams, for readers
     Log = Union[Path, np.ndarray, pandas.DataFrame]
 
 
+@constraints(model=checks.model, data=by_the_job("jobs.positions_of"), sigma=checks.noise,
+             g=checks.gravity, g_uncertainty=checks.small, prior=checks.small, bound=checks.bounds,
+             mount=checks.text, gamma=checks.one_of("lower", "symmetric"), imu=checks.imu, which_run=checks.text,
+             fmt=checks.one_of(*FORMATS), sections=checks.path, thermal_degree=checks.degree, progress=checks.callback)
 def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
              g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
              bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
              imu: Optional[int] = None, which_run: Optional[str] = None, fmt: Optional[str] = None,
-             sections: Optional[Path] = None, temperature: Optional[int] = None,
+             sections: Optional[Path] = None, thermal_degree: Optional[int] = None,
              progress: Optional[Callable[[str], None]] = None) -> results.Estimate:
     """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors, from
     positions: `garant estimate --json`.
@@ -61,7 +67,7 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
         The form of Gamma in (29).
     imu, which_run, fmt, sections
         Which IMU and run of a means file; the data's format and imucal's section list.
-    temperature : int, optional
+    thermal_degree : int, optional
         D (1-3): each block parameter a polynomial of degree D in T (the temp_c column), each q with one bound
         over the range ("thermal", docs/thermal.md); the calibration holds the block at T0 and its polynomial.
     progress : callable, optional
@@ -84,11 +90,11 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     thermal = None
-    if temperature is not None:
+    if thermal_degree is not None:
         from . import thermal as th
         base = positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections)
         T = th.temperatures(base, base.path)
-        thermal = (temperature, th.reference(T, temperature, base.path))
+        thermal = (thermal_degree, th.reference(T, thermal_degree, base.path))
         base_q = mod.Q_DEFINITIONS
         mod = models.thermal(model, *thermal)
         if tuple(mod.Q_DEFINITIONS[:len(base_q)]) != tuple(base_q):     # the remount formulas index the base's q
@@ -183,12 +189,17 @@ def _norm_premises(premises, g_uncertainty, g_source, statement=""):
             "g_source": g_source}
 
 
+@constraints(log=by_the_job("jobs.read_log"), g=checks.gravity, g_uncertainty=checks.small, bound=checks.bounds,
+             delta_sigma=checks.noise, params=checks.one_of(9, 12), fmt=checks.one_of(*FORMATS),
+             sensor=checks.one_of(*sorted(SENSORS)), imu=checks.imu, rate=checks.rate, window=checks.positive,
+             k=checks.positive, min_still=checks.positive, diagnose=checks.flag,
+             effects=by_the_job("norm_effects.parse"), thermal_degree=checks.degree)
 def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
                    bound: Optional[Mapping[str, float]] = None, delta_sigma: Optional[float] = None, params: int = 9,
                    fmt: Optional[str] = None, sensor: Optional[str] = None, imu: Optional[int] = None,
                    rate: Optional[float] = None, window: float = 1.0, k: float = 10.0, min_still: float = 2.0,
                    diagnose: bool = False, effects: Union[str, Sequence[str], None] = None,
-                   temperature: Optional[int] = None) -> results.NormCalibration:
+                   thermal_degree: Optional[int] = None) -> results.NormCalibration:
     """Calibrate a static log through the norm relation (2.2) of 001: `garant calibrate-norm --json`.
 
     Parameters
@@ -219,7 +230,7 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     effects : str or sequence of str, optional
         Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
         scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, temperature_lag).
-    temperature : int, optional
+    thermal_degree : int, optional
         D (`--thermal-degree D`, 1-3): on a log with a temperature column, each still interval (cut where the
         temperature moves) at its own mean temperature, the biases and scale factors polynomials of degree D in
         T with one guaranteed bound over the logged range (`thermal`), for --export-ardupilot / --export-px4.
@@ -237,7 +248,8 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
     bound, scale_drift = _scale_drift(bound)
-    p = _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, temperature, (window, k, min_still),
+    p = _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, thermal_degree,
+                      (window, k, min_still),
                       scale_drift)
     if isinstance(p, dict):                   # a still warm-up: one orientation, the still-only path's result
         p["premises"] = _norm_premises(p["premises"], g_unc, g_src)
@@ -289,10 +301,10 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
         norm_thermal.check_degree(temperature)
         if data.temp is None:
             raise DataError(f"{data.path}: --thermal-degree needs each sample's temperature, the IMU's own: a column "
-                            f"{' or '.join(recordings.TEMP_COLUMNS)} (C)", param="temperature")
+                            f"{' or '.join(recordings.TEMP_COLUMNS)} (C)", param="thermal_degree")
         if effects is not None:
             raise DataError("--thermal-degree and --effect are not taken together (--thermal-degree adds "
-                            f"{', '.join(norm_thermal.names(temperature))} itself)", param="temperature")
+                            f"{', '.join(norm_thermal.names(temperature))} itself)", param="thermal_degree")
         stills = norm_thermal.split(data, stills, still[2])
         if stills and norm_thermal.one_orientation(stills):
             from . import still_warm_up
@@ -412,6 +424,10 @@ def _frame(df, rate=None):
     return t, np.column_stack([real_array(df[low[n]], f"log: column {n}", copy=False) for n in acc])
 
 
+@constraints(model=checks.model, data=by_the_job("jobs.positions_of"), sigma=checks.noise,
+             g=checks.gravity, g_uncertainty=checks.small, prior=checks.small, bound=checks.bounds,
+             mount=checks.text, gamma=checks.one_of("lower", "symmetric"), target=checks.positive, grid=checks.positive,
+             search_seconds=checks.positive, max_candidates=checks.positive_int)
 def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
                   g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
                   bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
@@ -476,6 +492,8 @@ def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] =
     return out
 
 
+@constraints(model=checks.model, data=by_the_job("jobs.positions_of"), sigma=checks.noise,
+             g=checks.gravity, g_uncertainty=checks.small, prior=checks.small, bound=checks.bounds)
 def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
              g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
              bound: Optional[Mapping[str, float]] = None) -> results.Diagnosis:
@@ -514,12 +532,20 @@ def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
         if len(levels) >= 2:                       # a chamber session: the degree in T its data need
             res["thermal_degree"] = thermal.degree_needed(
                 levels, lambda d: estimate(model, data, sigma, g=g, g_uncertainty=g_uncertainty, prior=prior,
-                                           bound=bound, temperature=d))
+                                           bound=bound, thermal_degree=d))
     out = results.Diagnosis(res)
     out.study = study
     return out
 
 
+#: What `apply` does with samples outside a calibration's temperature range.
+OUTSIDE = ("drop", "refuse")
+
+
+@constraints(calibration=by_the_job("calibration.checked / read"), log=by_the_job("jobs.read_log"),
+             fmt=checks.one_of(*FORMATS), sensor=checks.one_of(*sorted(SENSORS)), imu=checks.imu, rate=checks.rate,
+             trust_units=checks.flag, frame=checks.one_of("garant", "imu_tk"), chunk=checks.positive_int,
+             outside=checks.one_of(*OUTSIDE))
 def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = None, sensor: Optional[str] = None,
           imu: Optional[int] = None, rate: Optional[float] = None, trust_units: bool = False, frame: str = "garant",
           chunk: Optional[int] = None, outside: str = "drop"
@@ -623,10 +649,6 @@ def _corrected_frame(log, keep, piece, n):
     cols.update({f"bound_{'xyz'[k]}": new[3 + k] for k in range(3)})
     index = log.index if keep is None else log.index[keep]
     return pd.DataFrame(cols, index=index, copy=False)
-
-
-#: What `apply` does with samples outside a calibration's temperature range.
-OUTSIDE = ("drop", "refuse")
 
 
 def _within_range(cal, data, outside):

@@ -55,7 +55,7 @@ def check_degree(degree):
     """The degree of --thermal-degree D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
         raise DataError(f"--thermal-degree {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3",
-                        param="temperature")
+                        param="thermal_degree")
     return degree
 
 
