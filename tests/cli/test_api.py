@@ -235,3 +235,16 @@ def test_calibrate_norm_returns_what_docs_api_says_for_a_path_an_array_and_a_dat
     got = [garant.calibrate_norm(x, g=G_REAL) for x in (str(log), np.column_stack([raw.t, raw.raw]), df)]
     assert all(isinstance(r, NormCalibration) for r in got)
     assert all(np.allclose(r.matrix, got[0].matrix) for r in got)
+
+
+@needs_real
+@pytest.mark.parametrize("kwargs, name", [
+    ({"effects": "nope"}, "effects="), ({"effects": "bias_drift,bias_drift"}, "effects="),
+    ({"bound": {"foo": 0.1}}, "bound="), ({"thermal_degree": 1, "effects": "bias_drift"}, "thermal_degree="),
+])
+def test_api_errors_speak_python_argument_names_not_the_commands_flags(kwargs, name):
+    # 28 errors the API could raise spelt the command's flags (--effect, --bound, --thermal-degree) to a Python
+    # caller; they name the argument as the caller wrote it now (the command still prints its flag).
+    with pytest.raises(garant.DataError) as e:
+        garant.calibrate_norm(str(REAL / "repeat_session2_acc.txt"), g=9.81744, **kwargs)
+    assert name in str(e.value) and "--" not in str(e.value), str(e.value)

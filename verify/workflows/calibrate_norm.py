@@ -173,7 +173,8 @@ def _identifiable(p, n, within_deg=ON_AXIS_DEG, cause="", premise=None):
     unseen = lp.unidentifiable(mod.H(snapped)[:params])
     if premise and not cause:
         if not unseen:
-            raise DataError(f"{path}: --bound {', '.join(premise)}: these orientations identify the misalignments; "
+            raise DataError(f"{path}: {opt('bound')} {', '.join(premise)}: these orientations identify the "
+                            f"misalignments; "
                             "a bound on them is taken only where they cannot (each orientation along an axis)",
                             param="bound")
         if set(unseen) <= {3, 4, 5} and all(PARAM_LABELS[k] in premise for k in unseen):
@@ -236,7 +237,8 @@ def _enough(p):
     """Refuse a log with fewer still intervals than the calibration has parameters plus three, and effects on a
     model or noise bound they do not take."""
     if p.ext is not None and (p.params != 9 or not (not p.stated or p.si)):
-        raise DataError(f"{p.path}: --effect takes the 9-parameter model (cross_coupling holds the nonlinearity of "
+        raise DataError(f"{p.path}: {opt('effects')} takes the 9-parameter model (cross_coupling holds the "
+                        f"nonlinearity of "
                         "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
                         param="effects")
     need = p.params + 3 + (len(p.ext.labels) if p.ext else 0)
@@ -258,13 +260,15 @@ def _held(p, n0):
     checking that the orientations identify the rest and the effects."""
     if p.premise:
         if p.ext is not None:
-            raise DataError(f"{p.path}: --bound (the misalignments of six faces) and --effect are not taken together",
+            raise DataError(f"{p.path}: {opt('bound')} (the misalignments of six faces) and {opt('effects')} are "
+                            f"not taken together",
                             param="bound")
         off = _off_axis(n0)
         if off > FACE_TOLERANCE_DEG:
-            raise DataError(f"{p.path}: --bound (the misalignments of six faces) takes orientations within "
+            raise DataError(f"{p.path}: {opt('bound')} (the misalignments of six faces) takes orientations within "
                             f"{FACE_TOLERANCE_DEG:g} degrees of the sensor axes; these lie up to {off:.1f} degrees "
-                            "off: drop --bound (calibrate-norm then says whether they identify the misalignments, and "
+                            f"off: drop {opt('bound')} (calibrate-norm then says whether they identify the "
+                            f"misalignments, and "
                             "which orientations to add), or record each face flat", param="bound")
         return _identifiable(p, n0, max(off * 1.01, ON_AXIS_DEG), premise=p.premise)
     _identifiable(p, n0)

@@ -85,7 +85,7 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
         raise DataError("model norm: the norm relation (2.2) of 001 has no stand positions to estimate from; "
                         "calibrate a static log with calibrate_norm (garant calibrate-norm)", param="model")
     if fmt == "imucal" and model != "six-face":
-        raise DataError(f"--format imucal: imucal's Ferraris session holds the unit on the faces of a cube, the "
+        raise DataError(f"{opt('fmt')} imucal: imucal's Ferraris session holds the unit on the faces of a cube, the "
                         f"six-face model; {str(model)[:60]!r} is another stand's: give --model six-face", param="fmt")
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
@@ -173,10 +173,11 @@ def _misalignment_bounds(bound):
     out = {}
     for name, value in bound.items():
         if name not in ("alpha", "beta", "gamma"):
-            raise DataError(f"--bound {str(name)[:40]}: calibrate-norm takes bounds of the misalignments alpha, beta, "
+            raise DataError(f"{opt('bound')} {str(name)[:40]}: calibrate-norm takes bounds of the misalignments "
+                            f"alpha, beta, "
                             "gamma (rad)", param="bound")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 0.5:
-            raise DataError(f"--bound {name}={str(value)[:40]}: give a bound in rad, above 0 and below 0.5",
+            raise DataError(f"{opt('bound')} {name}={str(value)[:40]}: give a bound in rad, above 0 and below 0.5",
                             param="bound")
         out[name] = float(value)
     return out
@@ -257,7 +258,8 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
             p["flight"] = {k: data.meta[k] for k in ("stack", "instance", "device_id", "parameters")}
         return results.NormCalibration(p)
     if scale_drift is not None:
-        raise DataError(f"{data.path}: --bound scale_drift is the premise of a still warm-up (one orientation while it "
+        raise DataError(f"{data.path}: {opt('bound')} scale_drift is the premise of a still warm-up (one "
+                        f"orientation while it "
                         "heats); turned through orientations, the warm-up calibrates the scale's drift itself",
                         param="bound")
     res = cn.run(p, diagnose)
@@ -284,7 +286,8 @@ def _scale_drift(bound):
     rest = {k: v for k, v in bound.items() if k != "scale_drift"}
     v = bound["scale_drift"]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 0.01:
-        raise DataError(f"--bound scale_drift={str(v)[:40]}: give the drift of the scale factors and misalignments "
+        raise DataError(f"{opt('bound')} scale_drift={str(v)[:40]}: give the drift of the scale factors and "
+                        f"misalignments "
                         "per C, above 0 and at most 0.01 (the datasheet's, e.g. 1e-4 for 100 ppm/C)", param="bound")
     return rest or None, float(v)
 
@@ -300,10 +303,12 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
     if temperature is not None:
         norm_thermal.check_degree(temperature)
         if data.temp is None:
-            raise DataError(f"{data.path}: --thermal-degree needs each sample's temperature, the IMU's own: a column "
+            raise DataError(f"{data.path}: {opt('thermal_degree')} needs each sample's temperature, the IMU's "
+                            f"own: a column "
                             f"{' or '.join(recordings.TEMP_COLUMNS)} (C)", param="thermal_degree")
         if effects is not None:
-            raise DataError("--thermal-degree and --effect are not taken together (--thermal-degree adds "
+            raise DataError(f"{opt('thermal_degree')} and {opt('effects')} are not taken together "
+                            f"({opt('thermal_degree')} adds "
                             f"{', '.join(norm_thermal.names(temperature))} itself)", param="thermal_degree")
         stills = norm_thermal.split(data, stills, still[2])
         if stills and norm_thermal.one_orientation(stills):
@@ -325,7 +330,8 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
     p = norm_problem.problem(mod, stills, g, params, data.path, delta_sigma, recordings.quantum(data), ext,
                              _misalignment_bounds(bound), temps, rates)
     if thermal is not None and not p.si:
-        raise DataError(f"{data.path}: --thermal-degree takes a log in m/s^2 (the flight stacks' unit); this one "
+        raise DataError(f"{data.path}: {opt('thermal_degree')} takes a log in m/s^2 (the flight stacks' unit); "
+                        f"this one "
                         "is in counts", param="log")
     return p
 

@@ -14,7 +14,7 @@ information set of that extended relation. A calibration file takes the term out
 """
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 
 #: Iterations of the direction the term is evaluated at, p <- direction of (f - Phi(p) theta): a contraction by
 #: about L |theta| (1e-2 for effects of 1e-3); what is left, |n - p|, enters the remainder as computed.
@@ -51,17 +51,18 @@ def parse(text, mod):
                         f"{type(text).__name__}", param="effects")
     names = [x.strip() for x in text.split(",") if x.strip()]
     if not names:
-        raise DataError("--effect: give one or more effect names, e.g. --effect bias_drift,cross_coupling",
+        raise DataError(f"{opt('effects')}: give one or more effect names, e.g. {opt('effects')} "
+                        f"bias_drift,cross_coupling",
                         param="effects")
     for x in names:
         if x in mod.STAND_EFFECTS:
-            raise DataError(f"--effect {x}: it needs a stand's angles; calibrate-norm can add "
+            raise DataError(f"{opt('effects')} {x}: it needs a stand's angles; calibrate-norm can add "
                             f"{', '.join(mod.EFFECTS)}", param="effects")
         if x not in mod.EFFECTS:
-            raise DataError(f"--effect {x[:40]!r}: not an effect of the catalogue; calibrate-norm can add "
+            raise DataError(f"{opt('effects')} {x[:40]!r}: not an effect of the catalogue; calibrate-norm can add "
                             f"{', '.join(mod.EFFECTS)}", param="effects")
     if len(set(names)) < len(names):
-        raise DataError("--effect: an effect is named twice", param="effects")
+        raise DataError(f"{opt('effects')}: an effect is named twice", param="effects")
     return tuple(sorted(names, key=list(mod.EFFECTS).index))
 
 
@@ -116,7 +117,7 @@ class Extension:
         self.t = t_mid - self.t_ref
         need = {v for x in names for v in mod.EFFECT_VARIABLES[x]}
         if need & {"temp_c", "temp_rate_c_s"} and temps is None:
-            raise DataError(f"{path}: --effect "
+            raise DataError(f"{path}: {opt('effects')} "
                             + ", ".join(x for x in names if {"temp_c", "temp_rate_c_s"} & set(mod.EFFECT_VARIABLES[x]))
                             + " needs each sample's temperature: the log has no temperature column (temp_c, C)",
                             param="effects")

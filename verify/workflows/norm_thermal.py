@@ -14,7 +14,7 @@ P (E + sum_k x^k K_k) - E: per axis the polynomials the flight stacks hold (bias
 """
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, opt
 
 #: The degrees of --thermal-degree D calibrate-norm fits.
 DEGREES = (1, 2, 3)
@@ -54,7 +54,8 @@ def sample_range(data, stills):
 def check_degree(degree):
     """The degree of --thermal-degree D, or a one-line refusal."""
     if isinstance(degree, bool) or degree not in DEGREES:
-        raise DataError(f"--thermal-degree {str(degree)[:20]}: give the degree of the polynomials in T, 1, 2 or 3",
+        raise DataError(f"{opt('thermal_degree')} {str(degree)[:20]}: give the degree of the polynomials in T, "
+                        f"1, 2 or 3",
                         param="thermal_degree")
     return degree
 
