@@ -11,6 +11,7 @@ from garant.generated import norm as N
 from garant.verify.cli import main
 from garant.verify.errors import DataError
 from garant.verify.io import calibration, recordings
+from garant.verify.workflows.stills import still_intervals
 from garant.verify.workflows import calibrate_norm
 from garant.verify.workflows.norm_problem import problem
 
@@ -22,7 +23,7 @@ from conftest import G_REAL as G, REAL, ROOT, needs_real, flat
                                   "imu_tk_xsens_acc.txt"])
 def test_round_trip_norm_calibration(tmp_path, name):
     log = recordings.read_log(str(REAL / name))
-    stills, _ = recordings.still_intervals(log)
+    stills, _ = still_intervals(log)
     res = calibrate_norm.run(problem(N, stills, G, 9, log.path, quantum=recordings.quantum(log)))
     assert res["consistent"]
     cal = calibration.from_norm(res, N.AXES)

@@ -6,6 +6,7 @@ import pytest
 
 from garant.generated import norm as N
 from garant.verify.io import recordings
+from garant.verify.workflows.stills import _segment, still_intervals
 from garant.verify.workflows import calibrate_norm, norm_bounds, norm_information
 from garant.verify.cli import main
 from garant.verify.workflows.norm_problem import problem
@@ -37,7 +38,7 @@ def test_synthetic_log_recovers_errors_within_bounds(tmp_path):
     dirs = list(N.PLAN[:18]) + list(rng.normal(size=(6, 3)))
     path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
     log = recordings.read_log(str(path), "imu_tk")
-    stills, _ = recordings.still_intervals(log)
+    stills, _ = still_intervals(log)
     assert len(stills) == len(dirs) + 1
     box = dict(k_max=2e-3, v_max=2e-3, eps_max=2e-3, delta_max=0.0, df_max=1e-5,
                dg_max=0.0)   # hard bound of the mean noise
@@ -117,7 +118,7 @@ def test_repeat_sessions_agree_within_bounds():
     res = {}
     for s in (2, 3, 4):
         log = recordings.read_log(str(REAL / f"repeat_session{s}_acc.txt"))
-        stills, _ = recordings.still_intervals(log)
+        stills, _ = still_intervals(log)
         res[s] = calibrate_norm.run(problem(N, stills, G, 9, log.path))
     for a, b in ((2, 3), (2, 4), (3, 4)):
         for k in res[a]["parameters"]:
@@ -171,13 +172,13 @@ def split_half_exceedances(rule):
     for name, fmt, imu in SPLIT_LOGS:
         log = recordings.read_log(str(REAL / name), fmt, imu=imu)
         q = recordings.quantum(log)
-        stills, _ = recordings.still_intervals(log)
+        stills, _ = still_intervals(log)
         bad = 0
         for st in stills:
             a = np.searchsorted(log.t, st.start)
             x = log.raw[a:a + st.samples]
             h = len(x) // 2
-            (m1, *se1), (m2, *se2) = recordings._segment(x[:h]), recordings._segment(x[h:2 * h])
+            (m1, *se1), (m2, *se2) = _segment(x[:h]), _segment(x[h:2 * h])
             b1, b2 = rule(*se1) + q / 2, rule(*se2) + q / 2
             bad += int(np.count_nonzero(np.abs(m1 - m2) > np.hypot(b1, b2)))
         out[f"{name} {imu or ''}"] = (bad, 3 * len(stills))
@@ -223,7 +224,7 @@ def test_orientations_are_suggested_only_when_they_shrink_a_bound(tmp_path):
     rng = np.random.default_rng(3)
     for dirs, expect in ((list(N.PLAN[:18]), False), (list(N.PLAN[:12]) + list(rng.normal(size=(3, 3))), True)):
         path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
-        stills, _ = recordings.still_intervals(recordings.read_log(str(path), "imu_tk"))
+        stills, _ = still_intervals(recordings.read_log(str(path), "imu_tk"))
         res = calibrate_norm.run(problem(N, stills, G, 9, str(path), delta_sigma=1e-4))
         gain = res["directions_gain"]
         assert bool(res["directions_to_add"]) is expect and (gain["factor"] >= 1.25) is expect, gain
@@ -252,7 +253,7 @@ def test_a_12_parameter_calibration_file_takes_out_its_nonlinearity(tmp_path):
     truth[[1, 2, 5]] = 0.0
     dirs = list(N.PLAN) + list(rng.normal(size=(10, 3)))
     path = synthetic_log(tmp_path / "log.txt", truth, [np.array([0, 0, 1.0])] + dirs, noise=1e-5)
-    stills, _ = recordings.still_intervals(recordings.read_log(str(path), "imu_tk"))
+    stills, _ = still_intervals(recordings.read_log(str(path), "imu_tk"))
     res = calibrate_norm.run(problem(N, stills, G, 12, str(path), delta_sigma=5e-5))
     assert res["consistent"] and abs(res["nonlinearity_delta_g"][0] - 2e-3) < 1e-5
     cal = calibration.checked(calibration.from_norm(res, N.AXES))
@@ -353,7 +354,7 @@ def test_the_norm_bounds_sit_at_the_limit_the_readings_prove(tmp_path, n, seed):
     path = synthetic_log(tmp_path / "log.txt", truth, list(rng.normal(size=(n, 3))), noise=1e-4, seed=seed,
                          move_s=1.0)
     log = recordings.read_log(str(path), "imu_tk")
-    stills, _ = recordings.still_intervals(log)
+    stills, _ = still_intervals(log)
     res = calibrate_norm.run(problem(N, stills, G, 9, str(path), quantum=recordings.quantum(log)))
     assert res["consistent"] and len(stills) == n
     assert np.median(np.array(list(res["guaranteed_error_q"].values())) / _independent_hull(res)) <= 1.01
@@ -370,7 +371,7 @@ def test_real_log_bounds_are_the_information_sets(name):
     # the printed bounds were 1.8x (session 2), 14x (3), 5.7x (4) and 25x (Xsens) that LP, the remainder up to
     # 3.6x delta_sigma_max (session 3).
     log = recordings.read_log(str(REAL / name), "imu_tk")
-    stills, _ = recordings.still_intervals(log)
+    stills, _ = still_intervals(log)
     res = calibrate_norm.run(problem(N, stills, G, 9, log.path, quantum=recordings.quantum(log)))
     assert res["consistent"] and res["remainder_bound"] <= 0.1 * res["delta_sigma_max"]
     half = _independent_hull(res)

@@ -404,6 +404,7 @@ def bench_calibrate_norm(samples=1_000_000):
     import tempfile
 
     from ..io import recordings
+    from ..workflows.stills import still_intervals
     from ..workflows import calibrate_norm, norm_problem
     mod = load("norm")
     rng = np.random.default_rng(0)
@@ -422,7 +423,7 @@ def bench_calibrate_norm(samples=1_000_000):
 
         def garant():
             log = recordings.read_log(path, "imu_tk")
-            stills, _ = recordings.still_intervals(log)
+            stills, _ = still_intervals(log)
             return calibrate_norm.run(norm_problem.problem(mod, stills, 9.81, 9, path, quantum=recordings.quantum(log)))
         t_run, res = timed(garant)
         base, _ = timed(lambda: _imu_tk_style(path))

@@ -56,6 +56,7 @@ def _imus(args, fmt):
 def _runs(args, fmt, imu):
     from ..errors import DataError
     from ..io import means, recordings
+    from ..workflows.stills import still_intervals
     if fmt == "means":
         return [r for path in args.logs for r in means.read(path, imu, args.rate, args.count or 0.0)]
     if args.count or args.rate:
@@ -64,7 +65,7 @@ def _runs(args, fmt, imu):
     for path in args.logs:
         try:
             log = recordings.read_log(path, fmt, args.sensor or "adxl355", imu)
-            stills, _ = recordings.still_intervals(log)
+            stills, _ = still_intervals(log)
         except DataError as e:                   # one unusable log is left out, said in one line
             out.append(means.Run(path, [], refused=str(e)))
             continue

@@ -241,13 +241,14 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     NormCalibration
         When consistent, its "calibration" is the dictionary `apply` takes.
     """
-    from ..io import calibration, recordings
+    from ..io import calibration
     from . import calibrate_norm as cn
+    from .stills import still_intervals
     from .premises import gravity_uncertainty
     data = read_log(log, fmt, sensor, imu, rate)
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
-    stills, note = recordings.still_intervals(data, window=window, k=k, min_still=min_still)
+    stills, note = still_intervals(data, window=window, k=k, min_still=min_still)
     bound, scale_drift = _scale_drift(bound)
     p = _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, thermal_degree,
                       (window, k, min_still),
@@ -339,6 +340,7 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
 def _log_figures(res, data, p, note, sensor):
     """What the log itself says beside the calibration: its samples, duration, rate, noise density and random walk."""
     from ..io import recordings
+    from . import stills
     dt = float(recordings.median(np.diff(data.t)))
     per_sample = recordings.median([st.std_error * np.sqrt(st.samples) for st in p.stills], axis=0)      # raw units
     res.update({"samples": len(data.t), "duration_s": float(data.t[-1]), "still_note": note, "log_note": data.note,
@@ -346,7 +348,7 @@ def _log_figures(res, data, p, note, sensor):
                 "rate_hz": 1 / dt,
                 "noise_density": float(np.linalg.norm(np.abs(np.array(res["matrix"])) @ per_sample)
                                        / np.sqrt(3) * np.sqrt(dt))})
-    res["random_walk"], res["random_walk_note"] = recordings.random_walk(data, p.stills, res["matrix"], res["bias"])
+    res["random_walk"], res["random_walk_note"] = stills.random_walk(data, p.stills, res["matrix"], res["bias"])
     if data.meta:                             # a flight controller's log: the sensor, and the slots its vehicle holds
         res["flight"] = {k: data.meta[k] for k in ("stack", "instance", "device_id", "parameters")}
 
@@ -359,14 +361,14 @@ def _too_few_stills(data, found, params, window, k, min_still):
     """The one line for a log with too few still intervals: what was found with the thresholds used and, where
     other thresholds find enough, the options to add (a higher --still-factor merges more samples into stillness
     and may join two orientations; a lower one splits or drops them: the count says which helps here)."""
-    from ..io import recordings
+    from . import stills
     need = params + 3
     for k2, ms in STILL_TRIES:
         ms = min_still if ms is None else ms
         if (k2, ms) == (k, min_still):
             continue
         try:
-            count = len(recordings.still_intervals(data, window=window, k=k2, min_still=ms)[0])
+            count = len(stills.still_intervals(data, window=window, k=k2, min_still=ms)[0])
         except DataError:
             continue
         if count >= need:

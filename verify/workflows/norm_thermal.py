@@ -64,7 +64,7 @@ def split(data, stills, min_still):
     """Each still interval cut into pieces over which the temperature moves by at most SPLIT_C (each at least
     min_still s, the last piece joined to the one before when shorter): a warm-up's long still interval becomes
     one interval per temperature step, each at its own mean temperature."""
-    from ..io import recordings
+    from .stills import still_of
     out = []
     for st in stills:
         idx = np.flatnonzero((data.t >= st.start) & (data.t <= st.stop))
@@ -77,7 +77,7 @@ def split(data, stills, min_still):
         if len(cuts) > 1 and data.t[idx[-1]] - data.t[idx[cuts[-1]]] < min_still:
             cuts.pop()
         cuts.append(len(idx))
-        out += [recordings.still_of(data, idx[i], idx[j - 1] + 1) for i, j in zip(cuts[:-1], cuts[1:])]
+        out += [still_of(data, idx[i], idx[j - 1] + 1) for i, j in zip(cuts[:-1], cuts[1:])]
     return out
 
 
