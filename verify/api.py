@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 from typing import Optional, Sequence
 
-from . import models, options as checks
+from . import models, options
 from .errors import DataError
 from .io import results
 from .io.recordings import FORMATS, SENSORS
@@ -39,7 +39,7 @@ def _api(fn):
                 kwargs.setdefault(new, kwargs.pop(old))
         bound = signature.bind(*args, **kwargs)
         for name, value in bound.arguments.items():
-            bound.arguments[name] = checks.check(name, value, rules[name])
+            bound.arguments[name] = options.check(name, value, rules[name])
         from threadpoolctl import threadpool_limits
         try:
             with threadpool_limits(limits=1):        # one BLAS thread, as the command: the same bounds on any machine
@@ -54,9 +54,9 @@ def _api(fn):
 
 
 @_api
-@checks.constraints(model=checks.model, grid=checks.positive, count_seconds=checks.positive,
-                    max_candidates=checks.positive_int, search_seconds=checks.positive,
-                    search_nodes=checks.positive_int, count_nodes=checks.count)
+@options.constraints(model=options.model, grid=options.positive, count_seconds=options.positive,
+                    max_candidates=options.positive_int, search_seconds=options.positive,
+                    search_nodes=options.positive_int, count_nodes=options.count)
 def plan(model: str, *, grid: Optional[float] = None, count_seconds: Optional[float] = None,
          max_candidates: Optional[int] = None, search_seconds: Optional[float] = None,
          search_nodes: Optional[int] = None, count_nodes: Optional[int] = None) -> results.Plan:
@@ -75,10 +75,11 @@ def plan(model: str, *, grid: Optional[float] = None, count_seconds: Optional[fl
 
 
 @_api
-@checks.constraints(logs=checks.by_the_job("batch.calibrate_many"), g=checks.gravity, g_uncertainty=checks.small,
-                    delta_sigma=checks.noise, params=checks.one_of(9, 12), fmt=checks.one_of(*FORMATS),
-                    sensor=checks.one_of(*sorted(SENSORS)), imu=checks.imu, rate=checks.rate, window=checks.positive,
-                    k=checks.positive, min_still=checks.positive, jobs=checks.positive_int, spec=checks.path)
+@options.constraints(logs=options.by_the_job("batch.calibrate_many"), g=options.gravity, g_uncertainty=options.small,
+                    delta_sigma=options.noise, params=options.one_of(9, 12), fmt=options.one_of(*FORMATS),
+                    sensor=options.one_of(*sorted(SENSORS)), imu=options.imu, rate=options.rate,
+                    window=options.positive,
+                    k=options.positive, min_still=options.positive, jobs=options.positive_int, spec=options.path)
 def calibrate_many(logs: Sequence, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
                    delta_sigma: Optional[float] = None, params: int = 9, fmt: Optional[str] = None,
                    sensor: Optional[str] = None, imu: Optional[int] = None, rate: Optional[float] = None,

@@ -4,22 +4,22 @@ import sys
 
 from ..outcomes import Exit
 from ..defaults import SENSORS
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant apply` subcommand and its options."""
+    """The `garant apply` subcommand and its flags."""
     p = sub.add_parser("apply", help="correct a raw log with a calibration (garant JSON): specific force in "
                                      "m/s^2 and its worst-case error per sample")
     p.add_argument("calibration", metavar="CAL", help="a garant-calibration-1 file (calibrate-norm --save), or a "
                    "batch's folder (calibrate-norm LOG... --out DIR): each log takes DIR/<its name>.json")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): each corrected into --out DIR")
-    options.log_format(p)
+    flags.log_format(p)
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    default="adxl355", help="accelerometer of an OpenAXES log")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or the "
                    "accelerometer of a flight controller's log (ulog, dataflash: its number or device id)")
-    p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "
+    p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a log of sample indices "
                    "(--format imucal: imucal's session)")
     p.add_argument("--trust-units", action="store_true",
                    help="apply even when the log's scale does not look like the calibration's raw unit (m/s^2 or "

@@ -5,30 +5,30 @@ import sys
 from ..outcomes import Exit
 from ..errors import FLAGS, DataError
 from ..defaults import SENSORS
-from . import args as options
+from . import flags
 from . import exports
 
 
 def add(sub):
-    """The `garant calibrate-norm` subcommand and its options."""
+    """The `garant calibrate-norm` subcommand and its flags."""
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): a batch, one process, every core")
-    options.log_format(p)
+    flags.log_format(p)
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8; a flight "
                    "controller's log: its number or device id), or all of them "
                    "in turn (then --json holds one result per IMU)")
-    options.g(p, "local gravity, m/s^2 (default: 9.81 assumed, with |Delta_g/g| <= 5e-3 in the bounds)", default=None)
-    p.add_argument("--g-uncertainty", type=options.small, metavar="REL",
+    flags.g(p, "local gravity, m/s^2 (default: 9.81 assumed, with |Delta_g/g| <= 5e-3 in the bounds)", default=None)
+    p.add_argument("--g-uncertainty", type=flags.small, metavar="REL",
                    help="the bound on |Delta_g/g| (default 1e-5 with a local --g, 5e-3 without)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9,
                    help="9: scale, misalignment, bias; 12: also the nonlinearity (pendulosity) of 001")
-    p.add_argument("--window", type=options.positive, default=1.0, help="moving-variance window, s")
-    p.add_argument("--still-factor", "--k", dest="k", type=options.positive, default=10.0,
+    p.add_argument("--window", type=flags.positive, default=1.0, help="moving-variance window, s")
+    p.add_argument("--still-factor", "--k", dest="k", type=flags.positive, default=10.0,
                    help="still when the moving variance is below this factor times that of the first 5 s")
-    p.add_argument("--min-still", type=options.positive, default=2.0, help="shortest still interval kept, s")
-    p.add_argument("--delta-sigma", type=options.noise, metavar="D",
+    p.add_argument("--min-still", type=flags.positive, default=2.0, help="shortest still interval kept, s")
+    p.add_argument("--delta-sigma", type=flags.noise, metavar="D",
                    help="bound on |delta_sigma| of (2.2) (units of g) for the guaranteed errors; default: the "
                    "noise rule from the data (3 standard errors of each interval's mean plus half a count)")
     p.add_argument("--diagnose", action="store_true",
@@ -41,21 +41,21 @@ def add(sub):
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
                         "bound over the logged range; with --export-ardupilot / --export-px4")
-    p.add_argument("--bound", action="append", type=options.named_bound, metavar="NAME=RAD", default=[],
+    p.add_argument("--bound", action="append", type=flags.named_bound, metavar="NAME=RAD", default=[],
                    help="a misalignment's a-priori bound (alpha, beta, gamma; rad), repeatable: where every "
                         "orientation lies along an axis (six faces) the scale factors and biases are calibrated with "
                         "the misalignments held within it, a premise printed with the bounds")
-    options.units(p)
-    options.json(p)
+    flags.units(p)
+    flags.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
                                                    "tables, plots, the command, inputs SHA-256) and DIR/report.md")
     exports.add(p, "calibrate-norm")
-    p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a log of sample indices "
+    p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a log of sample indices "
                    "(--format imucal: imucal's session)")
     p.add_argument("--out", metavar="DIR", help="a batch's folder: DIR/<log>.json (each unit's calibration), "
                    "DIR/summary.csv and DIR/index.html (each unit's parameters, bounds, verdict)")
-    p.add_argument("--jobs", type=options.positive_int, metavar="N",
+    p.add_argument("--jobs", type=flags.positive_int, metavar="N",
                    help="processes for a batch (default: every core); the files are the same whatever N")
     p.add_argument("--spec", metavar="SPEC.toml", help="the unit's specification ([limits], [bound_limits] of "
                    "scale, misalignment, bias; [nominal] sensitivity, counts per g, for logs in raw counts): each "
@@ -259,7 +259,7 @@ def _print(res, args):
     print(f"noise bound delta_sigma_max = {dsig:.3e} (x g = {dsig * res['g']:.3e} m/s^2), from {source}; proven "
           f"remainder {res['remainder_bound']:.1e}")
     print(f"premises: {res['premises']['statement']}")
-    options.say_gravity(res["g_given"], res)
+    flags.say_gravity(res["g_given"], res)
     print(f"verdict: the worst still interval's residual is {res['worst_over_bound']:.3f} of its own bound (its noise "
           "bound plus the proven remainder) at the fit minimax in those units -> "
           + ("consistent" if res["consistent"] else

@@ -3,18 +3,18 @@ import sys
 import time
 
 from ..outcomes import Exit
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant diagnose` subcommand and its options."""
+    """The `garant diagnose` subcommand and its flags."""
     p = sub.add_parser("diagnose", help="find the effect missing from the model, add it, show the gap shrink")
     p.add_argument("data", metavar="DATA.csv", help="as for estimate; optional columns time_s, temp_c")
-    options.model(p)
-    options.sigma(p, "noise bound, units of g")
-    options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
-    options.premises(p)
-    options.json(p)
+    flags.model(p)
+    flags.sigma(p, "noise bound, units of g")
+    flags.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
+    flags.premises(p)
+    flags.json(p)
     p.add_argument("--plot", metavar="FILE.png")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdicts, premises, "
                    "selection steps, estimates, plot, the command, inputs SHA-256), DIR/report.md, and the extended "

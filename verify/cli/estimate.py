@@ -3,19 +3,19 @@ import sys
 
 from ..outcomes import Exit
 from ..errors import DataError
-from . import args as options
+from . import flags
 from . import exports
 
 
 
 def add(sub):
-    """The `garant estimate` subcommand and its options."""
+    """The `garant estimate` subcommand and its flags."""
     p = sub.add_parser("estimate", help="estimate q with guaranteed bounds from readings at positions")
     p.add_argument("data", metavar="DATA.csv", help="CSV: <angle>_deg for each angle (alpha_deg,beta_deg on the "
                    "two-axis stand), f1,f2,f3 in m/s^2, and mount when the stand uses several mountings")
-    options.model(p)
-    options.sigma(p)
-    options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
+    flags.model(p)
+    flags.sigma(p)
+    flags.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
     p.add_argument("--format", choices=("imucal",), help="imucal: a Ferraris session (acc_x, acc_y, acc_z in m/s^2) "
                                                          "with "
                    "--sections or a part column, for --model six-face")
@@ -26,9 +26,9 @@ def add(sub):
                    "table +y, ...): also report the block's physical errors, (28)-(29) of 000")
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
                    help="convention that splits Gamma + hat(theta_k) (default lower-triangular Gamma)")
-    options.premises(p)
-    options.units(p)
-    options.json(p)
+    flags.premises(p)
+    flags.units(p)
+    flags.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
                                                    "tables, plots, the command, inputs SHA-256) and DIR/report.md")
@@ -72,7 +72,7 @@ def run(args):
         if page:
             print(f"wrote {page}")
     code = print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)
-    options.say_gravity(args.g is not None, res["premises"])
+    flags.say_gravity(args.g is not None, res["premises"])
     return code
 
 

@@ -87,7 +87,7 @@ def _gyro(text):
     """--kalibr-gyro ND,RW: two finite numbers > 0."""
     import argparse
 
-    from .args import positive
+    from .flags import positive
     parts = text.split(",")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"{text[:40]!r}: give ND,RW, e.g. 1.7e-4,1.9e-5")

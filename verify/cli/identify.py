@@ -1,17 +1,17 @@
 """garant identify: what a model can estimate, what it confounds, and what a plan cannot separate."""
 from ..outcomes import Exit
 from ..models import STANDS
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant identify` subcommand and its options."""
+    """The `garant identify` subcommand and its flags."""
     p = sub.add_parser("identify", help="estimable combinations, confounded parameters, a plan's blind spots")
     p.add_argument("--model", required=True,
                    help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or 003-example1 / 003-example2")
     p.add_argument("--plan", metavar="FILE", help="CSV with <angle>_deg columns (and mount): what this plan "
                    "cannot separate")
-    options.json(p)
+    flags.json(p)
     return p
 
 

@@ -1,33 +1,33 @@
 """garant next: the position to measure next at the stand, how many are still needed, and when to stop."""
 from ..outcomes import Exit
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant next` subcommand and its options."""
+    """The `garant next` subcommand and its flags."""
     p = sub.add_parser("next", help="the reachable position to measure next, the bounds before and after it, "
                        "and how many positions are still needed")
     p.add_argument("data", metavar="DATA.csv", help="the positions measured so far, as for estimate (a header "
                    "line alone at the start of a session)")
-    options.model(p)
-    options.sigma(p)
-    p.add_argument("--target", type=options.positive, metavar="T",
+    flags.model(p)
+    flags.sigma(p)
+    p.add_argument("--target", type=flags.positive, metavar="T",
                    help="the guaranteed error wanted for every q (units of q); default: sigma times the stand's "
                         "optimal errors, reached by a plan of the fewest positions")
-    p.add_argument("--grid", type=options.positive, metavar="STEP", help="candidate positions every STEP degrees "
+    p.add_argument("--grid", type=flags.positive, metavar="STEP", help="candidate positions every STEP degrees "
                    "(detents and ranges honoured); default: detents or quarter turns")
-    p.add_argument("--max-candidates", type=options.positive_int, metavar="N",
+    p.add_argument("--max-candidates", type=flags.positive_int, metavar="N",
                    help="refuse a --grid of more than N candidate positions (times mountings; default as for plan)")
-    p.add_argument("--search-seconds", type=options.positive, metavar="S",
+    p.add_argument("--search-seconds", type=flags.positive, metavar="S",
                    help="safety stop of the search for the fewest positions still needed (default as for plan; "
                         "the search itself is budgeted by nodes, the same on every machine)")
-    options.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
-    options.premises(p)
+    flags.g(p, "local gravity, m/s^2 (default 9.81, with an uncertainty of 5e-3 relative)", default=None)
+    flags.premises(p)
     p.add_argument("--mount", metavar="Q", help="target the block's parameters in mounting Q (e.g. +y+z+x; "
                    "(28)-(29) of 000, two-axis stand) instead of the q's")
     p.add_argument("--gamma", choices=("lower", "symmetric"), default="lower",
                    help="with --mount: how Gamma + hat(theta_k) is split (as estimate)")
-    options.json(p)
+    flags.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each q's guaranteed error over its target, now and after "
                    "the next position")
     return p

@@ -5,30 +5,30 @@ from ..outcomes import Exit
 from ..errors import DataError
 from ..models import STANDS, kind
 from ..defaults import COUNT_NODES, COUNT_SECONDS, MAX_CANDIDATES, SEARCH_NODES, SEARCH_SECONDS
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant plan` subcommand and its options."""
+    """The `garant plan` subcommand and its flags."""
     p = sub.add_parser("plan", help="optimal guaranteed errors and optimal plans of a model")
     p.add_argument("--model", required=True, help=f"a built-in stand ({', '.join(STANDS)}), a STAND.toml, or norm "
                    "(the coarse stand of 001: which orientations to hold the IMU in)")
-    options.json(p)
-    p.add_argument("--grid", type=options.positive, metavar="STEP", help="search positions every STEP degrees (detents "
+    flags.json(p)
+    p.add_argument("--grid", type=flags.positive, metavar="STEP", help="search positions every STEP degrees (detents "
                    "and ranges honoured; exact on multiples of 15); default: detents or quarter turns")
-    p.add_argument("--search-nodes", type=options.positive_int, default=SEARCH_NODES, metavar="N",
+    p.add_argument("--search-nodes", type=flags.positive_int, default=SEARCH_NODES, metavar="N",
                    help=f"work allowed for proving the fewest positions: branch-and-bound nodes (default "
                         f"{SEARCH_NODES:,}; the same plan on every machine); when they run out, the plan found is "
                         "printed with a proven lower bound on the fewest")
-    p.add_argument("--count-nodes", type=options.count, default=COUNT_NODES, metavar="N",
+    p.add_argument("--count-nodes", type=flags.count, default=COUNT_NODES, metavar="N",
                    help=f"work allowed for counting the optimal plans on a large grid, in nodes (default "
                         f"{COUNT_NODES:,}; 0: the plan alone, not counted)")
-    p.add_argument("--search-seconds", type=options.positive, default=SEARCH_SECONDS, metavar="S",
+    p.add_argument("--search-seconds", type=flags.positive, default=SEARCH_SECONDS, metavar="S",
                    help=f"safety stop of the search (default {SEARCH_SECONDS:g} s; a stop it causes is said, for it "
                         "depends on the machine)")
-    p.add_argument("--count-seconds", type=options.positive, default=COUNT_SECONDS, metavar="S",
+    p.add_argument("--count-seconds", type=flags.positive, default=COUNT_SECONDS, metavar="S",
                    help=f"safety stop of the count (default {COUNT_SECONDS:g} s)")
-    p.add_argument("--max-candidates", type=options.positive_int, default=MAX_CANDIDATES, metavar="N",
+    p.add_argument("--max-candidates", type=flags.positive_int, default=MAX_CANDIDATES, metavar="N",
                    help=f"refuse a --grid of more than N candidate positions (times mountings; default "
                         f"{MAX_CANDIDATES:,}: "
                         "a 3-degree grid on the two-axis stand takes about 30 s)")
@@ -41,7 +41,7 @@ def add(sub):
                    "(in the route's order with --route): arrows on the unit sphere, the faces that point up")
     p.add_argument("-o", "--output", metavar="PLAN.csv", help="write the plan: <angle>_deg columns (and mount), for "
                    "`garant simulate --plan PLAN.csv` and for the stand operator")
-    p.add_argument("--temperatures", type=options.temperatures, metavar="T1,T2,...",
+    p.add_argument("--temperatures", type=flags.temperatures, metavar="T1,T2,...",
                    help="chamber temperatures (C; write --temperatures=-20,...): which positions at which temperature "
                         "identify every coefficient of the thermal model (--thermal-degree D), the fewest per "
                         "temperature")

@@ -4,31 +4,31 @@ import sys
 
 from ..outcomes import Exit
 from ..defaults import SENSORS
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant repeatability` subcommand and its options."""
+    """The `garant repeatability` subcommand and its flags."""
     from ..defaults import MAX_RUNS
     p = sub.add_parser("repeatability", help="compare runs of one sensor against their guaranteed bounds; "
                        "name the effect when they disagree; the between-run envelope")
     p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "
                    "(exp or run) holding every run")
-    options.log_format(p, ("means",), "; means: a positions file of per-position means (docs/formats.md)")
+    flags.log_format(p, ("means",), "; means: a positions file of per-position means (docs/formats.md)")
     p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
                    help="accelerometer of an OpenAXES log (default adxl355)")
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
-    options.g(p, "local gravity, m/s^2 (default 9.81)")
+    flags.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9, help="9 or 12 parameters (as calibrate-norm)")
-    p.add_argument("--count", type=options.small, metavar="STEP",
+    p.add_argument("--count", type=flags.small, metavar="STEP",
                    help="quantisation step of the readings a means file averaged, m/s^2, below 1 (the noise rule adds "
                    "half of it; a raw log states its own)")
-    p.add_argument("--rate", type=options.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
+    p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a means file's start_sample and "
                    "stop_sample columns (gives the runs a time, for the bias_drift effect)")
-    p.add_argument("--max-runs", type=options.positive_int, default=MAX_RUNS, metavar="N",
+    p.add_argument("--max-runs", type=flags.positive_int, default=MAX_RUNS, metavar="N",
                    help=f"refuse more than N runs (default {MAX_RUNS}; the effect test grows with the square of the "
                         f"runs)")
-    options.json(p)
+    flags.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="each parameter per run with its bound and the envelope")
     p.add_argument("--markdown", metavar="FILE.md", help="the tables and coverage figures as Markdown")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: the tables, the "

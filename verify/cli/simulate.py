@@ -1,26 +1,26 @@
 """garant simulate: readings from the exact nonlinear model, with hidden effects, for testing."""
 from ..outcomes import Exit
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant simulate` subcommand and its options."""
+    """The `garant simulate` subcommand and its flags."""
     p = sub.add_parser("simulate", help="readings from the exact model with hidden effects (for testing)")
-    options.model(p)
+    flags.model(p)
     p.add_argument("--plan", required=True, help="optimal10, quarter16, grid:AxB (steps per angle in degrees), or a "
                    "plan file PLAN.csv (`garant plan -o`); --model norm: random:N, faces or optimal (001's 18)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=v1,v2,...",
                    help="a catalogue effect and its parameter values (repeatable)")
-    options.sigma(p, "noise bound, units of g")
-    p.add_argument("--seed", type=options.seed, default=0, help="random seed, a whole number >= 0 (default 0)")
-    options.g(p)
+    flags.sigma(p, "noise bound, units of g")
+    p.add_argument("--seed", type=flags.seed, default=0, help="random seed, a whole number >= 0 (default 0)")
+    flags.g(p)
     p.add_argument("--size", metavar="B|KIND=B,...",
                    help="bound of the random errors: one for all (default 1e-4), or per kind, e.g. "
                         "stand=1e-4,mounting=3e-3,block=1e-2,bias=0.05 (kinds not named: 0; a bias over g)")
     p.add_argument("--truth", metavar="FILE.json",
                    help='the stand\'s errors by name instead of random ones, e.g. {"kappa": 5e-5, "Gamma11": 1.2e-2, '
                         '"bias1": 0.05} (rad, dimensionless, a bias over g); the others 0')
-    p.add_argument("--temperatures", type=options.temperatures, metavar="T1,T2,...",
+    p.add_argument("--temperatures", type=flags.temperatures, metavar="T1,T2,...",
                    help="chamber temperatures (C): the plan at each, temp_c set to it; --truth may then name thermal "
                         "coefficients p_Tk of a block parameter p (e.g. bias1_T1, Gamma11_T2: per C^k about the middle "
                         "of the temperatures)")
@@ -30,14 +30,14 @@ def add(sub):
     p.add_argument("--ordered", action="store_true",
                    help="--model norm: visit the orientations in order, face up first and face down last (as a board "
                         "is turned over by hand), not shuffled")
-    p.add_argument("--revisit", type=options.count, default=0, metavar="N",
+    p.add_argument("--revisit", type=flags.count, default=0, metavar="N",
                    help="--model norm: at the end, turn back through the first N orientations in reverse order (hot, "
                         "on a warm-up)")
-    p.add_argument("--still", type=options.positive, default=8.0, metavar="S",
+    p.add_argument("--still", type=flags.positive, default=8.0, metavar="S",
                    help="--model norm: seconds each orientation is held still (default 8)")
-    p.add_argument("--move", type=options.positive, default=2.0, metavar="S",
+    p.add_argument("--move", type=flags.positive, default=2.0, metavar="S",
                    help="--model norm: seconds of each move between orientations (default 2)")
-    p.add_argument("--rate", type=options.rate, default=100.0, metavar="HZ",
+    p.add_argument("--rate", type=flags.rate, default=100.0, metavar="HZ",
                    help="--model norm: samples per second (default 100)")
     p.add_argument("-o", "--output", required=True, metavar="DATA.csv")
     return p

@@ -3,13 +3,13 @@ import sys
 import time
 
 from ..outcomes import Exit
-from . import args as options
+from . import flags
 
 
 def add(sub):
-    """The `garant verify` subcommand and its options."""
+    """The `garant verify` subcommand and its flags."""
     p = sub.add_parser("verify", help="run every check of the built-in models against the papers")
-    options.json(p)
+    flags.json(p)
     p.add_argument("--certificates", metavar="DIR", help="write every optimality certificate (JSON) here")
     p.add_argument("--verbose", action="store_true",
                    help="print every check's row (check, source, expected, got); by default each group's count and "

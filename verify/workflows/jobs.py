@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import models
 from ..errors import DataError, opt
-from .. import options as checks
+from .. import options
 from ..defaults import FORMATS, SENSORS
 from ..options import by_the_job, constraints, real_array
 from ..io import results
@@ -30,10 +30,11 @@ if TYPE_CHECKING:                          # the types of the seams, for readers
     Log = Union[Path, np.ndarray, pandas.DataFrame]
 
 
-@constraints(model=checks.model, data=by_the_job("jobs.positions_of"), sigma=checks.noise,
-             g=checks.gravity, g_uncertainty=checks.small, prior=checks.small, bound=checks.bounds,
-             mount=checks.text, gamma=checks.one_of("lower", "symmetric"), imu=checks.imu, which_run=checks.text,
-             fmt=checks.one_of(*FORMATS), sections=checks.path, thermal_degree=checks.degree, progress=checks.callback)
+@constraints(model=options.model, data=by_the_job("jobs.positions_of"), sigma=options.noise,
+             g=options.gravity, g_uncertainty=options.small, prior=options.small, bound=options.bounds,
+             mount=options.text, gamma=options.one_of("lower", "symmetric"), imu=options.imu, which_run=options.text,
+             fmt=options.one_of(*FORMATS), sections=options.path, thermal_degree=options.degree,
+             progress=options.callback)
 def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
              g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
              bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
@@ -190,11 +191,11 @@ def _norm_premises(premises, g_uncertainty, g_source, statement=""):
             "g_source": g_source}
 
 
-@constraints(log=by_the_job("jobs.read_log"), g=checks.gravity, g_uncertainty=checks.small, bound=checks.bounds,
-             delta_sigma=checks.noise, params=checks.one_of(9, 12), fmt=checks.one_of(*FORMATS),
-             sensor=checks.one_of(*sorted(SENSORS)), imu=checks.imu, rate=checks.rate, window=checks.positive,
-             k=checks.positive, min_still=checks.positive, diagnose=checks.flag,
-             effects=by_the_job("norm_effects.parse"), thermal_degree=checks.degree)
+@constraints(log=by_the_job("jobs.read_log"), g=options.gravity, g_uncertainty=options.small, bound=options.bounds,
+             delta_sigma=options.noise, params=options.one_of(9, 12), fmt=options.one_of(*FORMATS),
+             sensor=options.one_of(*sorted(SENSORS)), imu=options.imu, rate=options.rate, window=options.positive,
+             k=options.positive, min_still=options.positive, diagnose=options.flag,
+             effects=by_the_job("norm_effects.parse"), thermal_degree=options.degree)
 def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
                    bound: Optional[Mapping[str, float]] = None, delta_sigma: Optional[float] = None, params: int = 9,
                    fmt: Optional[str] = None, sensor: Optional[str] = None, imu: Optional[int] = None,
@@ -432,10 +433,10 @@ def _frame(df, rate=None):
     return t, np.column_stack([real_array(df[low[n]], f"log: column {n}", copy=False) for n in acc])
 
 
-@constraints(model=checks.model, data=by_the_job("jobs.positions_of"), sigma=checks.noise,
-             g=checks.gravity, g_uncertainty=checks.small, prior=checks.small, bound=checks.bounds,
-             mount=checks.text, gamma=checks.one_of("lower", "symmetric"), target=checks.positive, grid=checks.positive,
-             search_seconds=checks.positive, max_candidates=checks.positive_int)
+@constraints(model=options.model, data=by_the_job("jobs.positions_of"), sigma=options.noise,
+             g=options.gravity, g_uncertainty=options.small, prior=options.small, bound=options.bounds,
+             mount=options.text, gamma=options.one_of("lower", "symmetric"), target=options.positive,
+             grid=options.positive, search_seconds=options.positive, max_candidates=options.positive_int)
 def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
                   g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
                   bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
@@ -500,8 +501,8 @@ def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] =
     return out
 
 
-@constraints(model=checks.model, data=by_the_job("jobs.positions_of"), sigma=checks.noise,
-             g=checks.gravity, g_uncertainty=checks.small, prior=checks.small, bound=checks.bounds)
+@constraints(model=options.model, data=by_the_job("jobs.positions_of"), sigma=options.noise,
+             g=options.gravity, g_uncertainty=options.small, prior=options.small, bound=options.bounds)
 def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
              g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
              bound: Optional[Mapping[str, float]] = None) -> results.Diagnosis:
@@ -551,9 +552,9 @@ OUTSIDE = ("drop", "refuse")
 
 
 @constraints(calibration=by_the_job("calibration.checked / read"), log=by_the_job("jobs.read_log"),
-             fmt=checks.one_of(*FORMATS), sensor=checks.one_of(*sorted(SENSORS)), imu=checks.imu, rate=checks.rate,
-             trust_units=checks.flag, frame=checks.one_of("garant", "imu_tk"), chunk=checks.positive_int,
-             outside=checks.one_of(*OUTSIDE))
+             fmt=options.one_of(*FORMATS), sensor=options.one_of(*sorted(SENSORS)), imu=options.imu, rate=options.rate,
+             trust_units=options.flag, frame=options.one_of("garant", "imu_tk"), chunk=options.positive_int,
+             outside=options.one_of(*OUTSIDE))
 def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = None, sensor: Optional[str] = None,
           imu: Optional[int] = None, rate: Optional[float] = None, trust_units: bool = False, frame: str = "garant",
           chunk: Optional[int] = None, outside: str = "drop"

@@ -1,5 +1,5 @@
 """Arguments several commands share, stated once with their units."""
-from .. import options as checks
+from .. import options
 from ..models import STANDS
 from ..defaults import G_DEFAULT
 
@@ -8,8 +8,8 @@ from ..defaults import G_DEFAULT
 
 #: The argparse types of the shared checks (verify/options.py: the API checks its arguments with the same).
 positive, small, noise, positive_int, count, seed, gravity, rate = (
-    checks.argtype(k) for k in (checks.positive, checks.small, checks.noise, checks.positive_int, checks.count,
-                                checks.seed, checks.gravity, checks.rate))
+    options.argtype(k) for k in (options.positive, options.small, options.noise, options.positive_int, options.count,
+                                options.seed, options.gravity, options.rate))
 
 
 def temperatures(text):
