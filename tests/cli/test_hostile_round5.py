@@ -299,16 +299,10 @@ def test_two_turning_axes_of_many_digits_derive(tmp_path, capsys, inner, outer):
 
 def test_a_mimu_stream_of_zeros_is_refused_from_its_first_chunk_in_bounded_memory(tmp_path, capsys):
     # Case 24: 1 GB of zeros as a MIMU stream was read whole (1.06 GB), then "out of memory" without naming the file.
-    import tracemalloc
     path = tmp_path / "zeros.bin"
     with open(path, "wb") as fh:
         fh.truncate(1 << 30)                                   # 1 GiB, sparse
-    tracemalloc.start()
-    try:
-        code = main(["calibrate-norm", str(path), "--format", "mimu", "--imu", "1"])
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    code, peak = _peak(lambda: main(["calibrate-norm", str(path), "--format", "mimu", "--imu", "1"]))
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and str(path) in err, err
     assert "no packet with a valid checksum in its first 4 MiB" in err
@@ -332,23 +326,33 @@ def test_apply_to_a_dataframe_costs_its_new_columns_not_copies_of_the_frame(tmp_
     # Case 22: garant.apply(cal, df) on a 1e7-row frame took 1.69 GB above the frame (5.3 frames of 4 columns): a
     # float copy of every column read, a copy of the frame, the new columns made twice. Now the frame's other columns
     # are shared, the log read once: the 6 new columns (1.5 frames) and one float copy of the columns read (1 frame).
-    import tracemalloc
     import pandas as pd
-    cal = tmp_path / "n.json"
-    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G_REAL), "--save", str(cal)]) == 0
+    cal = _real_calibration(tmp_path)
     n = 1_000_000
     rng = np.random.default_rng(0)
     df = pd.DataFrame({"time_s": np.arange(n) / 100.0, "acc_x": rng.normal(0, 0.1, n),
                        "acc_y": rng.normal(0, 0.1, n), "acc_z": -9.8 + rng.normal(0, 0.01, n)})
-    tracemalloc.start()
-    try:
-        out = garant.apply(str(cal), df)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    out, peak = _peak(lambda: garant.apply(str(cal), df))
     assert len(out) == n and list(out.columns[-3:]) == ["bound_x", "bound_y", "bound_z"]
     assert peak < 3.2 * df.memory_usage().sum(), peak / df.memory_usage().sum()
     assert np.shares_memory(out["time_s"].to_numpy(), df["time_s"].to_numpy())
+
+
+def _peak(call):
+    """(what call() returns, the peak of memory traced while it ran, bytes)."""
+    import tracemalloc
+    tracemalloc.start()
+    try:
+        return call(), tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def _real_calibration(tmp_path):
+    """A norm calibration file of a real repeat session (the calibration the apply cases correct with)."""
+    cal = tmp_path / "n.json"
+    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G_REAL), "--save", str(cal)]) == 0
+    return cal
 
 
 def _positions(path, rows):
@@ -380,15 +384,9 @@ def test_next_on_many_rows_at_few_positions_costs_the_positions_not_the_rows(tmp
     # Case 23: 2,000,000 rows at 9 positions took 1.53 GB (here 2.2 GB and 44 s): the file read twice, cell by cell
     # in Python, and the measurement matrix made of every row (rows x 3 x 15). Now the file is read once in C and
     # the matrix is the distinct positions'.
-    import tracemalloc
     nine = [(0, 0), (90, 0), (180, 0), (270, 0), (90, 90), (90, 180), (90, 270), (45, 45), (135, 300)]
     _positions(tmp_path / "s.csv", nine * 22_222)
-    tracemalloc.start()
-    try:
-        out = garant.next_position("two-axis", str(tmp_path / "s.csv"), 1e-5)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    out, peak = _peak(lambda: garant.next_position("two-axis", str(tmp_path / "s.csv"), 1e-5))
     assert out["measured"] and len(out["measured"]) == 9
     assert peak < 60e6, peak          # 200,000 rows: the matrix of every row alone is 72 MB
 
@@ -400,18 +398,12 @@ def test_apply_from_the_command_line_costs_the_logs_numbers_not_its_text(tmp_pat
     # as |values| for a range check, the median step's copy, a million samples of CSV text at a time (twice). Now:
     # the numbers once, a block of text, 131,072 samples of output text: at 1e6 samples (the numbers: 32 MB) the peak
     # was 376 MB and is about 100 MB.
-    import tracemalloc
-    cal = tmp_path / "n.json"
-    assert main(["calibrate-norm", str(REAL / "repeat_session2_acc.txt"), "--g", str(G_REAL), "--save", str(cal)]) == 0
+    cal = _real_calibration(tmp_path)
     n = 1_000_000
     rng = np.random.default_rng(0)
     log = tmp_path / "big.txt"
     np.savetxt(log, np.column_stack([np.arange(n) / 100.0, rng.normal(0, 0.1, (n, 2)), -9.8 + rng.normal(0, 0.01, n)]),
                fmt="%.7e", delimiter="\t")
-    tracemalloc.start()
-    try:
-        assert main(["apply", str(cal), str(log), "-o", str(tmp_path / "out.csv")]) == 0
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    code, peak = _peak(lambda: main(["apply", str(cal), str(log), "-o", str(tmp_path / "out.csv")]))
+    assert code == 0
     assert peak < 4.5 * 32e6, peak / 32e6
