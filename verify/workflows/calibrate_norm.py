@@ -174,9 +174,8 @@ def _identifiable(p, n, within_deg=ON_AXIS_DEG, cause="", premise=None):
     if premise and not cause:
         if not unseen:
             raise DataError(f"{path}: {opt('bound')} {', '.join(premise)}: these orientations identify the "
-                            f"misalignments; "
-                            "a bound on them is taken only where they cannot (each orientation along an axis)",
-                            param="bound")
+                            "misalignments; a bound on them is taken only where they cannot (each orientation along "
+                            "an axis)", param="bound")
         if set(unseen) <= {3, 4, 5} and all(PARAM_LABELS[k] in premise for k in unseen):
             return list(unseen)
     if not unseen:
@@ -238,9 +237,8 @@ def _enough(p):
     model or noise bound they do not take."""
     if p.ext is not None and (p.params != 9 or not (not p.stated or p.si)):
         raise DataError(f"{p.path}: {opt('effects')} takes the 9-parameter model (cross_coupling holds the "
-                        f"nonlinearity of "
-                        "--params 12 as a case) and, on a log in counts, the noise rule (no --delta-sigma)",
-                        param="effects")
+                        f"nonlinearity of {opt('params')} 12 as a case) and, on a log in counts, the noise rule (no "
+                        f"{opt('delta_sigma')})", param="effects")
     need = p.params + 3 + (len(p.ext.labels) if p.ext else 0)
     if len(p.stills) < need:
         what = f" with {p.ext.option}" if p.ext else ""
@@ -268,8 +266,7 @@ def _held(p, n0):
             raise DataError(f"{p.path}: {opt('bound')} (the misalignments of six faces) takes orientations within "
                             f"{FACE_TOLERANCE_DEG:g} degrees of the sensor axes; these lie up to {off:.1f} degrees "
                             f"off: drop {opt('bound')} (calibrate-norm then says whether they identify the "
-                            f"misalignments, and "
-                            "which orientations to add), or record each face flat", param="bound")
+                            "misalignments, and which orientations to add), or record each face flat", param="bound")
         return _identifiable(p, n0, max(off * 1.01, ON_AXIS_DEG), premise=p.premise)
     _identifiable(p, n0)
     if p.ext is not None:

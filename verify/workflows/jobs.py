@@ -175,8 +175,7 @@ def _misalignment_bounds(bound):
     for name, value in bound.items():
         if name not in ("alpha", "beta", "gamma"):
             raise DataError(f"{opt('bound')} {str(name)[:40]}: calibrate-norm takes bounds of the misalignments "
-                            f"alpha, beta, "
-                            "gamma (rad)", param="bound")
+                            "alpha, beta, gamma (rad)", param="bound")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 0.5:
             raise DataError(f"{opt('bound')} {name}={str(value)[:40]}: give a bound in rad, above 0 and below 0.5",
                             param="bound")
@@ -261,9 +260,8 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
         return results.NormCalibration(p)
     if scale_drift is not None:
         raise DataError(f"{data.path}: {opt('bound')} scale_drift is the premise of a still warm-up (one "
-                        f"orientation while it "
-                        "heats); turned through orientations, the warm-up calibrates the scale's drift itself",
-                        param="bound")
+                        "orientation while it heats); turned through orientations, the warm-up calibrates the "
+                        "scale's drift itself", param="bound")
     res = cn.run(p, diagnose)
     res.update({"g_given": g_given, "g_uncertainty": g_unc, "g_source": g_src})
     res["premises"] = _norm_premises(res["premises"], g_unc, g_src, (
@@ -289,8 +287,8 @@ def _scale_drift(bound):
     v = bound["scale_drift"]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 0.01:
         raise DataError(f"{opt('bound')} scale_drift={str(v)[:40]}: give the drift of the scale factors and "
-                        f"misalignments "
-                        "per C, above 0 and at most 0.01 (the datasheet's, e.g. 1e-4 for 100 ppm/C)", param="bound")
+                        "misalignments per C, above 0 and at most 0.01 (the datasheet's, e.g. 1e-4 for 100 ppm/C)",
+                        param="bound")
     return rest or None, float(v)
 
 
@@ -306,12 +304,11 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
         norm_thermal.check_degree(temperature)
         if data.temp is None:
             raise DataError(f"{data.path}: {opt('thermal_degree')} needs each sample's temperature, the IMU's "
-                            f"own: a column "
-                            f"{' or '.join(recordings.TEMP_COLUMNS)} (C)", param="thermal_degree")
+                            f"own: a column {' or '.join(recordings.TEMP_COLUMNS)} (C)", param="thermal_degree")
         if effects is not None:
             raise DataError(f"{opt('thermal_degree')} and {opt('effects')} are not taken together "
-                            f"({opt('thermal_degree')} adds "
-                            f"{', '.join(norm_thermal.names(temperature))} itself)", param="thermal_degree")
+                            f"({opt('thermal_degree')} adds {', '.join(norm_thermal.names(temperature))} itself)",
+                            param="thermal_degree")
         stills = norm_thermal.split(data, stills, still[2])
         if stills and norm_thermal.one_orientation(stills):
             from . import still_warm_up
@@ -333,8 +330,7 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
                              _misalignment_bounds(bound), temps, rates)
     if thermal is not None and not p.si:
         raise DataError(f"{data.path}: {opt('thermal_degree')} takes a log in m/s^2 (the flight stacks' unit); "
-                        f"this one "
-                        "is in counts", param="log")
+                        "this one is in counts", param="log")
     return p
 
 
