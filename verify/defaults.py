@@ -31,5 +31,11 @@ MAX_RUNS = 50
 
 #: The log formats calibrate-norm, apply and repeatability read (io/recordings.py READERS, in this order).
 FORMATS = ("imu_tk", "csv", "openaxes", "mimu", "npy", "imucal", "ulog", "dataflash", "rosbag")
+#: The effects calibrate-norm can add (generated/norm.py EFFECTS, in its order; named here so that --help needs no
+#: numpy: tests/cli/test_cli.py fails when the two differ).
+NORM_EFFECTS = ("scale_quadratic", "scale_asymmetry", "cross_coupling", "bias_drift", "bias_temperature",
+                "scale_temperature", "temperature_lag", "bias_temperature_2", "bias_temperature_3",
+                "scale_temperature_2", "scale_temperature_3", "misalignment_temperature", "misalignment_temperature_2",
+                "misalignment_temperature_3")
 #: The accelerometers of an OpenAXES log, by the prefix of their columns.
 SENSORS = {"adxl355": "ACCEL_ADXL355_{}", "bmi160": "ACCEL_BMI160_{}"}

@@ -280,3 +280,15 @@ def test_a_mistyped_command_or_option_is_told_the_close_name(argv, meant, capsys
         main(argv)
     err = capsys.readouterr().err
     assert e.value.code == 2 and err.count("\n") == 1 and meant in err, err
+
+
+def test_effect_help_names_every_effect_of_the_catalogue(capsys):
+    # `--effect`'s help listed 7 of the 14 effects calibrate-norm can add (a hand-kept list that drifted). It lists
+    # defaults.NORM_EFFECTS now, which must be the generated catalogue's names in its order.
+    from garant.generated import norm
+    from garant.verify.defaults import NORM_EFFECTS
+    assert NORM_EFFECTS == tuple(norm.EFFECTS)
+    with pytest.raises(SystemExit):
+        main(["calibrate-norm", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert all(name in text for name in norm.EFFECTS)

@@ -4,7 +4,7 @@ import sys
 
 from ..outcomes import Exit
 from ..errors import FLAGS, DataError
-from ..defaults import SENSORS
+from ..defaults import NORM_EFFECTS, SENSORS
 from . import flags
 from . import exports
 
@@ -34,9 +34,9 @@ def add(sub):
     p.add_argument("--diagnose", action="store_true",
                    help="test the model against each interval's noise and try the effect catalogue")
     p.add_argument("--effect", metavar="NAME[,NAME...]", action="append",
-                   help="add catalogue effects to the norm relation and calibrate them with it (bias_drift, "
-                        "scale_quadratic, scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, "
-                        "temperature_lag, ...; repeatable, the names join; --diagnose names the ones the data need)")
+                   help="add catalogue effects to the norm relation and calibrate them with it ("
+                        + ", ".join(NORM_EFFECTS) + "; repeatable, the names join; --diagnose names the ones the data "
+                        "need)")
     p.add_argument("--thermal-degree", type=int, metavar="D",
                    help="on a warm-up log with the IMU's own temperature (temp_c, C): the biases and scale factors "
                         "polynomials of degree D (1-3) in T, each still interval cut where T moves, one guaranteed "
