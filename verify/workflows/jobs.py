@@ -473,7 +473,7 @@ def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] =
     mod = models.load(model)
     pos = positions_of(mod, data, empty_ok=True)
     mounts = pos.mounts if pos.mounts is not None else np.zeros(len(pos.angles_deg), int)
-    sized(mod, pos.angles_deg, mounts, grid, max_candidates)          # the search's size, before any work
+    found = sized(mod, pos.angles_deg, mounts, grid, max_candidates)          # the search's size, before any work
     verdict, printed = None, None
     distinct, spread, _ = distinct_positions(pos)
     if len(pos.angles_deg) and (len(repeated_disagree(distinct, spread, sigma, G_DEFAULT if g is None else g))
@@ -485,7 +485,8 @@ def next_position(model: Path, data: Data, sigma: float, *, g: Optional[float] =
     if verdict is not None and verdict["consistent"] and not verdict.get("premises_refuted"):
         printed, floor = printed_bounds(verdict, target_names(mod, model, mount, gamma))
     out = results.NextPosition(suggest(mod, model, pos.angles_deg, mounts, sigma, target, grid, search_seconds,
-                                       max_candidates, mount, gamma, printed=printed, floor=floor).to_dict())
+                                       max_candidates, mount, gamma, printed=printed, floor=floor,
+                                       candidates=found).to_dict())
     out["consistent"] = None if verdict is None else verdict["consistent"]
     out["bounds_from"] = ("estimate on the readings so far (what `garant estimate` prints)" if printed is not None
                           else "the plan's optimal estimators at nominal H (no estimate yet)")

@@ -137,7 +137,7 @@ TARGET_SLACK = 0.05
 
 
 def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None, search_seconds=None,
-                  max_candidates=None, mount=None, gamma="lower", printed=None, floor=None):
+                  max_candidates=None, mount=None, gamma="lower", printed=None, floor=None, candidates=None):
     """The Next of a session whose distinct measured positions are `angles_deg` (N, angles; degrees)
     in mountings `mounts` (N,): target None is sigma times the stand's optimal errors on its reachable
     positions (then, for the q's, the suggestion completes a plan of the fewest positions, which the
@@ -145,13 +145,14 @@ def next_position(mod, model, angles_deg, mounts, sigma, target=None, grid=None,
     bound the block's parameters in that mounting ((28)-(29) of 000) instead of the q's. `printed`: the
     bounds `estimate` prints on the readings so far (`printed_bounds`), where it gives them: "done" is
     decided on them (remainder included, linearised where the unit is), not on the plan's nominal H; the
-    default target then holds TARGET_SLACK for that and `floor`, what the premises alone set."""
+    default target then holds TARGET_SLACK for that and `floor`, what the premises alone set. `candidates`: what
+    `sized` gave the caller for these positions (else it is made here)."""
     from ..models import layout
     from ..solve import plans
     from .plan import SEARCH_SECONDS, refuse_variables
     refuse_variables(mod, model)
     names, mount_names = layout(mod)
-    P, M, fixed = sized(mod, angles_deg, mounts, grid, max_candidates)
+    P, M, fixed = candidates or sized(mod, angles_deg, mounts, grid, max_candidates)   # (sized by the caller)
     m = len(mod.Q_NAMES)
     if mount is None:
         C, labels, of = None, list(mod.Q_NAMES), "the combinations q of (4) of 000"
