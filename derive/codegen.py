@@ -64,9 +64,8 @@ API = {
     "norm": ("AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
              "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
              "ESTIMATOR_TERMS", "PSI", "estimate_on_plan", "EFFECTS", "EFFECT_UNITS", "EFFECT_PHYSICS",
-             "EFFECT_VARIABLES", "STAND_EFFECTS",
-             "effect_basis",
-             "effect_jacobian_bound"),
+             "EFFECT_VARIABLES", "STAND_EFFECTS", "EFFECT_TERMS", "EFFECT_T0_C", "effect_basis",
+             "effect_jacobian_bound", "effect_slope_bound"),
 }
 
 
@@ -341,7 +340,7 @@ def norm_context(model):
         plan_exact=[", ".join(str(v) for v in d) for d in norm.plan(model)],
         duals=[[pycode(v) for v in lam] for lam in norm.duals(model)],
         estimator_terms=[[(k, w.p, w.q) for k, w in sorted(psi.items())] for psi in est],
-        effects=effects,
+        effects=effects, t0=VARIABLE_DEFAULTS["temp_c"],
         stand_effects=[n for n in _catalogue() if n not in {e[0] for e in effects}],
     )
 
@@ -352,22 +351,18 @@ def _catalogue():
 
 
 def _effects_context():
-    """The catalogue effects the norm relation can carry (derive/norm.py `effect_basis`, `effect_lipschitz`):
-    (name, function name, parameter names, basis code (P x 3), Jacobian bound code over the ball and over a box of
-    radius r about w (each P x 3 x 3), the variables it reads, the parameters' units, its physics in one line)."""
+    """The catalogue effects the norm relation can carry (derive/norm.py `effect_terms`): (name, parameter names,
+    terms, the variables it reads, the parameters' units, its physics in one line)."""
     from . import norm
     from .effects import CATALOGUE, LOG_EFFECTS
     out = []
     for name, e in {**CATALOGUE, **LOG_EFFECTS}.items():
-        basis = norm.effect_basis(name)
-        if basis is None:
+        table = norm.effect_terms(name)
+        if table is None:
             continue
-        names, phi = basis
-        variables = sorted({x.name for row in phi for v in row for x in v.free_symbols} - {x.name for x in norm.n_sym})
-        out.append((name, name.replace("-", "_"), names, [[pycode(v) for v in row] for row in phi],
-                    [[[pycode(v) for v in row] for row in b] for b in norm.effect_jacobian_bound(name)[1]],
-                    [[[pycode(v) for v in row] for row in b] for b in norm.effect_slope_bound(name)[1]], variables,
-                    [p.unit for p in e.params], e.physics))
+        names, terms = table
+        variables = [v for k, v in enumerate(norm.EFFECT_VARIABLES) if any(t[6][k] for t in terms)]
+        out.append((name, names, terms, variables, [p.unit for p in e.params], e.physics))
     return out
 
 

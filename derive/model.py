@@ -335,11 +335,6 @@ def _turn(model):
     return Turn(tuple(n), link.error, c, sn, A, (M[2, 0], M[0, 1], M[1, 1]))
 
 
-def up_true(model):
-    """True up-vector in table axes, exact rotations for every stand error."""
-    return _product(_force_factors(model)[2:])
-
-
 def block_matrices(model):
     """(E + Gamma) and the biases over g, from the block parameters."""
     s = model.symbols

@@ -269,52 +269,34 @@ def effect_basis(name):
     return [p.name for p in e.params], [[sp.expand(v) for v in term.diff(p.symbol)] for p in e.params]
 
 
-def _unit_ball_bound(expr):
-    """A bound of |expr| over the unit ball |w| <= 1, expr a polynomial in n1, n2, n3 and sign(n_i) (the
-    derivative of |n_i|) with coefficients in time_s and temp_c: the sum of the coefficients' absolute values
-    (each monomial and each sign is at most 1 in size there)."""
-    signs = {sp.sign(v): sp.Symbol(f"s_{v.name}", real=True) for v in n_sym}
-    poly = sp.Poly(sp.expand(expr.xreplace(signs)), *n_sym, *signs.values())
-    return sum((sp.Abs(c) for c in poly.coeffs()), sp.Integer(0))
+#: The variables beside w an effect's term reads, in the order of EFFECT_TERMS' exponents: the row's time (s), its
+#: temperature above the reference (C) and the temperature's rate (C/s).
+EFFECT_VARIABLES = ("time_s", "temp_c", "temp_rate_c_s")
 
 
-def effect_jacobian_bound(name):
-    """Per parameter j, the 3 x 3 matrix b_j(time_s, temp_c) >= 0 that bounds |d phi_j / d w| entrywise over the
-    unit ball (`_unit_ball_bound`). For w1, w2 in the ball (the segment between them stays in it) the mean-value
-    theorem gives |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= B |w1 - w2| entrywise, B = sum_j |theta_j| b_j, so in
-    norm at most ||B||_2 |w1 - w2|: the effect at the truth's direction m and at the reading's differ by that."""
-    return _jacobian_entries(name, _unit_ball_bound)
-
-
-def _jacobian_entries(name, bound):
-    """(parameter names, per parameter the 3 x 3 matrix of `bound` of each entry of d phi_j / d w), or None for
-    an effect that needs a stand."""
+def effect_terms(name):
+    """A catalogue effect's basis as data: (parameter names, terms), each term (j, i, numerator, denominator,
+    w exponents, |w| exponents, variable exponents) one monomial c w^a |w|^b v^e of phi_j's entry i, with
+    v = (time_s, temp_c - T0, temp_rate_c_s) (EFFECT_VARIABLES, T0 the reference temperature of derive/effects.py)
+    and c rational; their sum is `effect_basis` exactly (anything else stops generation). None for an effect that
+    needs a stand."""
+    from .effects import VARIABLE_DEFAULTS
     out = effect_basis(name)
     if out is None:
         return None
     names, basis = out
-    w = sp.Matrix(n_sym)
-    return names, [[[bound(v) for v in row] for row in sp.Matrix(phi).jacobian(w).tolist()] for phi in basis]
-
-
-#: The radius of the box around w that `effect_slope_bound` bounds the Jacobian over.
-r_sym = sp.Symbol("r", nonnegative=True)
-
-
-def _local_bound(expr):
-    """A bound of |expr(z)| over the box |z_i - w_i| <= r, expr a polynomial in w = (n1, n2, n3) (or with a
-    sign(n_i), the derivative of |n_i|: then `_unit_ball_bound`, over the whole ball): expanded about w,
-    expr(w + y) = sum_alpha c_alpha(w) y^alpha, at most sum_alpha |c_alpha(w)| r^|alpha|, exactly."""
-    if expr.has(sp.sign):
-        return _unit_ball_bound(expr)
-    y = sp.symbols("y1:4", real=True)
-    poly = sp.Poly(sp.expand(expr.xreplace(dict(zip(n_sym, [v + d for v, d in zip(n_sym, y)])))), *y)
-    return sum((sp.Abs(c) * r_sym ** sum(m) for m, c in poly.terms()), sp.Integer(0))
-
-
-def effect_slope_bound(name):
-    """Per parameter j, the 3 x 3 matrix s_j(w, r, time_s, temp_c) >= 0 that bounds |d phi_j / d w| entrywise over
-    the box |z - w| <= r (`_local_bound`): for a segment from w to m with |m - w| <= r, the mean-value theorem
-    gives |c^T sum_j theta_j (phi_j(m) - phi_j(w))| <= sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k],
-    the part of the effect's change along one direction c (the reading's, in (2.2) of 001)."""
-    return _jacobian_entries(name, _local_bound)
+    absolute = [sp.Symbol(f"abs_{v.name}", real=True) for v in n_sym]
+    variables = [sp.Symbol(v, real=True) for v in EFFECT_VARIABLES]
+    shift = {variables[1]: variables[1] + sp.Rational(VARIABLE_DEFAULTS["temp_c"])}
+    terms = []
+    for j, phi in enumerate(basis):
+        for i, entry in enumerate(phi):
+            expr = sp.expand(entry.xreplace({sp.Abs(v): a for v, a in zip(n_sym, absolute)}).xreplace(shift))
+            gens = (*n_sym, *absolute, *variables)
+            poly = sp.Poly(expr, *gens)
+            if expr.free_symbols - set(gens) or not all(c.is_Rational for c in poly.coeffs()):
+                raise ValueError(f"effect {name}: entry {entry} is not a polynomial in w, |w| and "
+                                 f"{', '.join(EFFECT_VARIABLES)} with rational coefficients")
+            terms += [(j, i, int(c.p), int(c.q), monom[:3], monom[3:6], monom[6:])
+                      for monom, c in sorted(poly.terms()) if c != 0]
+    return names, terms

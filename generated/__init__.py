@@ -31,5 +31,6 @@ API = {
     "norm": ("AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
               "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
               "ESTIMATOR_TERMS", "PSI", "estimate_on_plan", "EFFECTS", "EFFECT_UNITS", "EFFECT_PHYSICS",
-              "EFFECT_VARIABLES", "STAND_EFFECTS", "effect_basis", "effect_jacobian_bound"),
+              "EFFECT_VARIABLES", "STAND_EFFECTS", "EFFECT_TERMS", "EFFECT_T0_C", "effect_basis",
+              "effect_jacobian_bound", "effect_slope_bound"),
 }

@@ -12,7 +12,7 @@ from typing import Callable, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["broadcast", "by_mount", "turn_angle", "plan_weights", "on_plan", "StandModel", "NormModel"]
+__all__ = ["broadcast", "by_mount", "turn_angle", "plan_weights", "on_plan", "effect_sum", "effect_slope", "StandModel", "NormModel"]
 
 
 def broadcast(*angles):
@@ -57,6 +57,46 @@ def on_plan(psi, z, shape, source):
     if z.shape != shape:
         raise ValueError(f"z must have shape {shape} as {source} returns it, not {z.shape}")
     return psi.reshape(len(psi), -1) @ np.moveaxis(z, 0, -1).reshape(-1)
+
+
+def _monomial(factors, exponents, shape):
+    """The product of factors[k] ** exponents[k] over the nonzero exponents, broadcast to `shape`."""
+    out = np.ones(shape)
+    for x, k in zip(factors, exponents):
+        if k:
+            out = out * x**k
+    return out
+
+
+def effect_sum(terms, count, w, variables):
+    """phi_j, shape (count, 3, ...), of an effect given as terms (j, i, numerator, denominator, a, b, e): entry i of
+    phi_j is the sum of its terms numerator/denominator w^a |w|^b v^e, at w, shape (3, ...), and the variables v (each
+    broadcast with w's trailing shape)."""
+    w = np.asarray(w, dtype=float)
+    shape = np.broadcast_shapes(w.shape[1:], *(np.shape(v) for v in variables))
+    factors = (*w, *np.abs(w), *variables)
+    out = np.zeros((count, 3) + shape)
+    for j, i, num, den, a, b, e in terms:
+        out[j, i] += num / den * _monomial(factors, (*a, *b, *e), shape)
+    return out
+
+
+def effect_slope(terms, count, size, variables):
+    """s_j >= 0, shape (count, 3, 3, ...), with |d phi_j[i] / d w_k| <= s_j[i, k] wherever |w_l| <= size[l] for each
+    l (size, shape (3, ...)), phi_j of `effect_sum`'s terms. Proof: d/dw_k of w_k^a |w_k|^b is a w_k^(a-1) |w_k|^b +
+    b w_k^a |w_k|^(b-1) sign(w_k), at most (a + b) |w_k|^(a+b-1) in size; so a term's derivative in w_k is at most
+    |c| (a_k + b_k) size_k^(a_k+b_k-1) prod_{l != k} size_l^(a_l+b_l) |v|^e, and an entry's at most the sum over its
+    terms (the triangle inequality)."""
+    size = np.asarray(size, dtype=float)
+    shape = np.broadcast_shapes(size.shape[1:], *(np.shape(v) for v in variables))
+    factors = (*size, *(np.abs(v) for v in variables))
+    out = np.zeros((count, 3, 3) + shape)
+    for j, i, num, den, a, b, e in terms:
+        for k in range(3):
+            power = [x + y - (m == k) for m, (x, y) in enumerate(zip(a, b))]
+            if power[k] >= 0:
+                out[j, i, k] += abs(num / den) * (power[k] + 1) * _monomial(factors, (*power, *e), shape)
+    return out
 
 
 @runtime_checkable
@@ -122,5 +162,8 @@ class NormModel(Protocol):
     EFFECT_PHYSICS: dict
     EFFECT_VARIABLES: dict
     STAND_EFFECTS: tuple
+    EFFECT_TERMS: dict             # effect name -> its basis as terms (effect_sum)
+    EFFECT_T0_C: float             # the reference temperature of the terms, C
     effect_basis: Callable
     effect_jacobian_bound: Callable
+    effect_slope_bound: Callable

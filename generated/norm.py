@@ -10,12 +10,14 @@ sigma(n) = H(n)^T q + delta_sigma(n), n = f/|f|, and |delta_sigma| <= delta_sigm
 """
 import numpy as np
 
-from garant.generated._runtime import on_plan as _on_plan, plan_weights as _plan_weights
+from garant.generated._runtime import effect_slope as _effect_slope, effect_sum as _effect_sum, on_plan as _on_plan, \
+    plan_weights as _plan_weights
 
 __all__ = ["AXES", "Q_NAMES", "Q_UNITS", "PARAMETERS", "H", "H_EXPONENTS", "readings", "residual", "q_of",
            "remainder", "a_max_norm", "remainder_bound", "published_bound", "PLAN", "PLAN_EXACT", "DUALS",
            "ESTIMATOR_TERMS", "PSI", "estimate_on_plan", "EFFECTS", "EFFECT_UNITS", "EFFECT_PHYSICS",
-           "EFFECT_VARIABLES", "STAND_EFFECTS", "effect_basis", "effect_jacobian_bound"]
+           "EFFECT_VARIABLES", "STAND_EFFECTS", "EFFECT_TERMS", "EFFECT_T0_C", "effect_basis",
+           "effect_jacobian_bound", "effect_slope_bound"]
 
 #: Pendulosity axes (i, j, k) of B(w) in (1.3) this module was derived for.
 AXES = (2, 3, 1)
@@ -313,429 +315,109 @@ EFFECT_VARIABLES = {
     "misalignment_temperature_3": ("temp_c",),
 }
 
-
-def _stack(rows, *like):
-    """Rows of numbers and arrays, each broadcast to the shape of `like` together: (len(rows), len(rows[0]), ...)."""
-    shape = np.broadcast_shapes(*(np.shape(x) for x in like))
-    return np.array([[np.broadcast_to(np.asarray(v, dtype=float), shape) for v in row] for row in rows])
+#: Each effect's basis as data (derive/norm.py `effect_terms`): terms (j, i, numerator, denominator, a, b, e), each
+#: adding numerator/denominator w^a |w|^b v^e to entry i of phi_j, v = (time_s, temp_c - EFFECT_T0_C, temp_rate_c_s).
+EFFECT_TERMS = {
+    "scale_quadratic": (
+        (0, 0, 1, 1, (2, 0, 0), (0, 0, 0), (0, 0, 0)),
+        (1, 1, 1, 1, (0, 2, 0), (0, 0, 0), (0, 0, 0)),
+        (2, 2, 1, 1, (0, 0, 2), (0, 0, 0), (0, 0, 0)),
+    ),
+    "scale_asymmetry": (
+        (0, 0, 1, 1, (0, 0, 0), (1, 0, 0), (0, 0, 0)),
+        (1, 1, 1, 1, (0, 0, 0), (0, 1, 0), (0, 0, 0)),
+        (2, 2, 1, 1, (0, 0, 0), (0, 0, 1), (0, 0, 0)),
+    ),
+    "cross_coupling": (
+        (0, 0, 1, 1, (1, 1, 0), (0, 0, 0), (0, 0, 0)),
+        (1, 0, 1, 1, (1, 0, 1), (0, 0, 0), (0, 0, 0)),
+        (2, 1, 1, 1, (1, 1, 0), (0, 0, 0), (0, 0, 0)),
+        (3, 1, 1, 1, (0, 1, 1), (0, 0, 0), (0, 0, 0)),
+        (4, 2, 1, 1, (1, 0, 1), (0, 0, 0), (0, 0, 0)),
+        (5, 2, 1, 1, (0, 1, 1), (0, 0, 0), (0, 0, 0)),
+    ),
+    "bias_drift": (
+        (0, 0, 1, 1, (0, 0, 0), (0, 0, 0), (1, 0, 0)),
+        (1, 1, 1, 1, (0, 0, 0), (0, 0, 0), (1, 0, 0)),
+        (2, 2, 1, 1, (0, 0, 0), (0, 0, 0), (1, 0, 0)),
+    ),
+    "bias_temperature": (
+        (0, 0, 1, 1, (0, 0, 0), (0, 0, 0), (0, 1, 0)),
+        (1, 1, 1, 1, (0, 0, 0), (0, 0, 0), (0, 1, 0)),
+        (2, 2, 1, 1, (0, 0, 0), (0, 0, 0), (0, 1, 0)),
+    ),
+    "scale_temperature": (
+        (0, 0, 1, 1, (1, 0, 0), (0, 0, 0), (0, 1, 0)),
+        (1, 1, 1, 1, (0, 1, 0), (0, 0, 0), (0, 1, 0)),
+        (2, 2, 1, 1, (0, 0, 1), (0, 0, 0), (0, 1, 0)),
+    ),
+    "temperature_lag": (
+        (0, 0, 1, 1, (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+        (1, 1, 1, 1, (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+        (2, 2, 1, 1, (0, 0, 0), (0, 0, 0), (0, 0, 1)),
+    ),
+    "bias_temperature_2": (
+        (0, 0, 1, 1, (0, 0, 0), (0, 0, 0), (0, 2, 0)),
+        (1, 1, 1, 1, (0, 0, 0), (0, 0, 0), (0, 2, 0)),
+        (2, 2, 1, 1, (0, 0, 0), (0, 0, 0), (0, 2, 0)),
+    ),
+    "bias_temperature_3": (
+        (0, 0, 1, 1, (0, 0, 0), (0, 0, 0), (0, 3, 0)),
+        (1, 1, 1, 1, (0, 0, 0), (0, 0, 0), (0, 3, 0)),
+        (2, 2, 1, 1, (0, 0, 0), (0, 0, 0), (0, 3, 0)),
+    ),
+    "scale_temperature_2": (
+        (0, 0, 1, 1, (1, 0, 0), (0, 0, 0), (0, 2, 0)),
+        (1, 1, 1, 1, (0, 1, 0), (0, 0, 0), (0, 2, 0)),
+        (2, 2, 1, 1, (0, 0, 1), (0, 0, 0), (0, 2, 0)),
+    ),
+    "scale_temperature_3": (
+        (0, 0, 1, 1, (1, 0, 0), (0, 0, 0), (0, 3, 0)),
+        (1, 1, 1, 1, (0, 1, 0), (0, 0, 0), (0, 3, 0)),
+        (2, 2, 1, 1, (0, 0, 1), (0, 0, 0), (0, 3, 0)),
+    ),
+    "misalignment_temperature": (
+        (0, 1, 1, 1, (1, 0, 0), (0, 0, 0), (0, 1, 0)),
+        (1, 2, 1, 1, (1, 0, 0), (0, 0, 0), (0, 1, 0)),
+        (2, 2, 1, 1, (0, 1, 0), (0, 0, 0), (0, 1, 0)),
+    ),
+    "misalignment_temperature_2": (
+        (0, 1, 1, 1, (1, 0, 0), (0, 0, 0), (0, 2, 0)),
+        (1, 2, 1, 1, (1, 0, 0), (0, 0, 0), (0, 2, 0)),
+        (2, 2, 1, 1, (0, 1, 0), (0, 0, 0), (0, 2, 0)),
+    ),
+    "misalignment_temperature_3": (
+        (0, 1, 1, 1, (1, 0, 0), (0, 0, 0), (0, 3, 0)),
+        (1, 2, 1, 1, (1, 0, 0), (0, 0, 0), (0, 3, 0)),
+        (2, 2, 1, 1, (0, 1, 0), (0, 0, 0), (0, 3, 0)),
+    ),
+}
+#: The reference temperature of the effects' terms, C.
+EFFECT_T0_C = 20.0
 
 
 def _variables(time_s, temp_c, temp_rate_c_s):
-    """The variables an effect reads, as arrays: time (s), temperature (C), the temperature's rate (C/s)."""
-    return (np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float), np.asarray(temp_rate_c_s, dtype=float))
+    """The variables v of EFFECT_TERMS as arrays: time (s), temperature above EFFECT_T0_C (C), its rate (C/s)."""
+    return (np.asarray(time_s, dtype=float), np.asarray(temp_c, dtype=float) - EFFECT_T0_C,
+            np.asarray(temp_rate_c_s, dtype=float))
 
 
 def effect_basis(name, w, time_s=0.0, temp_c=20.0, temp_rate_c_s=0.0):
-    """phi_j of the effect `name` (EFFECTS), shape (P, 3, ...), at w, shape (3, ...), and time_s, temp_c
-    (numbers or arrays broadcast with w's trailing shape)."""
-    n1, n2, n3 = np.asarray(w, dtype=float)
-    return _BASIS[name](n1, n2, n3, *_variables(time_s, temp_c, temp_rate_c_s))
+    """phi_j of the effect `name` (EFFECTS), shape (P, 3, ...), at w, shape (3, ...), and time_s, temp_c,
+    temp_rate_c_s (numbers or arrays broadcast with w's trailing shape)."""
+    return _effect_sum(EFFECT_TERMS[name], len(EFFECTS[name]), w, _variables(time_s, temp_c, temp_rate_c_s))
 
 
 def effect_jacobian_bound(name, time_s=0.0, temp_c=20.0, temp_rate_c_s=0.0):
-    """b_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= b_j entrywise over the unit ball (derive/norm.py
-    `effect_jacobian_bound`), so |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= ||sum_j |theta_j| b_j||_2 |w1 - w2|."""
-    return _JACOBIAN[name](*_variables(time_s, temp_c, temp_rate_c_s))
+    """b_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= b_j entrywise over the unit ball (each |w_k| <= 1;
+    _runtime.effect_slope), so |sum_j theta_j (phi_j(w1) - phi_j(w2))| <= ||sum_j |theta_j| b_j||_2 |w1 - w2|
+    for w1, w2 in the ball (the mean-value theorem on the segment between them)."""
+    return _effect_slope(EFFECT_TERMS[name], len(EFFECTS[name]), np.ones(3), _variables(time_s, temp_c, temp_rate_c_s))
 
 
 def effect_slope_bound(name, w, r, time_s=0.0, temp_c=20.0, temp_rate_c_s=0.0):
     """s_j >= 0, shape (P, 3, 3, ...): |d phi_j / d w| <= s_j entrywise over the box of radius r (each coordinate)
-    about w, shape (3, ...) (derive/norm.py `effect_slope_bound`), so the effect's change along a unit c from w to
-    any m within r is at most sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k]."""
-    n1, n2, n3 = np.asarray(w, dtype=float)
-    return _SLOPE[name](n1, n2, n3, np.asarray(r, dtype=float), *_variables(time_s, temp_c, temp_rate_c_s))
-
-
-def _basis_scale_quadratic(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [n1**2, 0, 0],
-        [0, n2**2, 0],
-        [0, 0, n3**2],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_scale_quadratic(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[2, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 2, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_scale_quadratic(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[2*r + 2*abs(n1), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 2*r + 2*abs(n2), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 2*r + 2*abs(n3)]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_scale_asymmetry(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [abs(n1), 0, 0],
-        [0, abs(n2), 0],
-        [0, 0, abs(n3)],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_scale_asymmetry(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_scale_asymmetry(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[1, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 1, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 1]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_cross_coupling(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [n1*n2, 0, 0],
-        [n1*n3, 0, 0],
-        [0, n1*n2, 0],
-        [0, n2*n3, 0],
-        [0, 0, n1*n3],
-        [0, 0, n2*n3],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_cross_coupling(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[1, 1, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[1, 0, 1], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [1, 1, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 1, 1], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [1, 0, 1]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 1, 1]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_cross_coupling(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[r + abs(n2), r + abs(n1), 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[r + abs(n3), 0, r + abs(n1)], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [r + abs(n2), r + abs(n1), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, r + abs(n3), r + abs(n2)], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [r + abs(n3), 0, r + abs(n1)]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, r + abs(n3), r + abs(n2)]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_bias_drift(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [time_s, 0, 0],
-        [0, time_s, 0],
-        [0, 0, time_s],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_bias_drift(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_bias_drift(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_bias_temperature(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [temp_c - 20, 0, 0],
-        [0, temp_c - 20, 0],
-        [0, 0, temp_c - 20],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_bias_temperature(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_bias_temperature(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_scale_temperature(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [n1*temp_c - 20*n1, 0, 0],
-        [0, n2*temp_c - 20*n2, 0],
-        [0, 0, n3*temp_c - 20*n3],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_scale_temperature(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_scale_temperature(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[abs(temp_c - 20), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, abs(temp_c - 20), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c - 20)]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_temperature_lag(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [temp_rate_c_s, 0, 0],
-        [0, temp_rate_c_s, 0],
-        [0, 0, temp_rate_c_s],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_temperature_lag(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_temperature_lag(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_bias_temperature_2(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [temp_c**2 - 40*temp_c + 400, 0, 0],
-        [0, temp_c**2 - 40*temp_c + 400, 0],
-        [0, 0, temp_c**2 - 40*temp_c + 400],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_bias_temperature_2(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_bias_temperature_2(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_bias_temperature_3(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000, 0, 0],
-        [0, temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000, 0],
-        [0, 0, temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_bias_temperature_3(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_bias_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_scale_temperature_2(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [n1*temp_c**2 - 40*n1*temp_c + 400*n1, 0, 0],
-        [0, n2*temp_c**2 - 40*n2*temp_c + 400*n2, 0],
-        [0, 0, n3*temp_c**2 - 40*n3*temp_c + 400*n3],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_scale_temperature_2(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**2 - 40*temp_c + 400)]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_scale_temperature_2(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**2 - 40*temp_c + 400)]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_scale_temperature_3(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [n1*temp_c**3 - 60*n1*temp_c**2 + 1200*n1*temp_c - 8000*n1, 0, 0],
-        [0, n2*temp_c**3 - 60*n2*temp_c**2 + 1200*n2*temp_c - 8000*n2, 0],
-        [0, 0, n3*temp_c**3 - 60*n3*temp_c**2 + 1200*n3*temp_c - 8000*n3],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_scale_temperature_3(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000)]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_scale_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, 0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000)]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_misalignment_temperature(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [0, n1*temp_c - 20*n1, 0],
-        [0, 0, n1*temp_c - 20*n1],
-        [0, 0, n2*temp_c - 20*n2],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_misalignment_temperature(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [abs(temp_c - 20), 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c - 20), 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c - 20), 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_misalignment_temperature(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [abs(temp_c - 20), 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c - 20), 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c - 20), 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_misalignment_temperature_2(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [0, n1*temp_c**2 - 40*n1*temp_c + 400*n1, 0],
-        [0, 0, n1*temp_c**2 - 40*n1*temp_c + 400*n1],
-        [0, 0, n2*temp_c**2 - 40*n2*temp_c + 400*n2],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_misalignment_temperature_2(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_misalignment_temperature_2(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**2 - 40*temp_c + 400), 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**2 - 40*temp_c + 400), 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _basis_misalignment_temperature_3(n1, n2, n3, time_s, temp_c, temp_rate_c_s):
-    return _stack([
-        [0, n1*temp_c**3 - 60*n1*temp_c**2 + 1200*n1*temp_c - 8000*n1, 0],
-        [0, 0, n1*temp_c**3 - 60*n1*temp_c**2 + 1200*n1*temp_c - 8000*n1],
-        [0, 0, n2*temp_c**3 - 60*n2*temp_c**2 + 1200*n2*temp_c - 8000*n2],
-    ], n1, time_s, temp_c, temp_rate_c_s)
-
-
-def _jacobian_misalignment_temperature_3(time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0]], time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0]], time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-def _slope_misalignment_temperature_3(n1, n2, n3, r, time_s, temp_c, temp_rate_c_s):
-    return np.array([
-        _stack([[0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0], [0, 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0, 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-        _stack([[0, 0, 0], [0, 0, 0], [0, abs(temp_c**3 - 60*temp_c**2 + 1200*temp_c - 8000), 0]], n1, r, time_s, temp_c, temp_rate_c_s),
-    ])
-
-
-_BASIS = {
-    "scale_quadratic": _basis_scale_quadratic,
-    "scale_asymmetry": _basis_scale_asymmetry,
-    "cross_coupling": _basis_cross_coupling,
-    "bias_drift": _basis_bias_drift,
-    "bias_temperature": _basis_bias_temperature,
-    "scale_temperature": _basis_scale_temperature,
-    "temperature_lag": _basis_temperature_lag,
-    "bias_temperature_2": _basis_bias_temperature_2,
-    "bias_temperature_3": _basis_bias_temperature_3,
-    "scale_temperature_2": _basis_scale_temperature_2,
-    "scale_temperature_3": _basis_scale_temperature_3,
-    "misalignment_temperature": _basis_misalignment_temperature,
-    "misalignment_temperature_2": _basis_misalignment_temperature_2,
-    "misalignment_temperature_3": _basis_misalignment_temperature_3,
-}
-_JACOBIAN = {
-    "scale_quadratic": _jacobian_scale_quadratic,
-    "scale_asymmetry": _jacobian_scale_asymmetry,
-    "cross_coupling": _jacobian_cross_coupling,
-    "bias_drift": _jacobian_bias_drift,
-    "bias_temperature": _jacobian_bias_temperature,
-    "scale_temperature": _jacobian_scale_temperature,
-    "temperature_lag": _jacobian_temperature_lag,
-    "bias_temperature_2": _jacobian_bias_temperature_2,
-    "bias_temperature_3": _jacobian_bias_temperature_3,
-    "scale_temperature_2": _jacobian_scale_temperature_2,
-    "scale_temperature_3": _jacobian_scale_temperature_3,
-    "misalignment_temperature": _jacobian_misalignment_temperature,
-    "misalignment_temperature_2": _jacobian_misalignment_temperature_2,
-    "misalignment_temperature_3": _jacobian_misalignment_temperature_3,
-}
-_SLOPE = {
-    "scale_quadratic": _slope_scale_quadratic,
-    "scale_asymmetry": _slope_scale_asymmetry,
-    "cross_coupling": _slope_cross_coupling,
-    "bias_drift": _slope_bias_drift,
-    "bias_temperature": _slope_bias_temperature,
-    "scale_temperature": _slope_scale_temperature,
-    "temperature_lag": _slope_temperature_lag,
-    "bias_temperature_2": _slope_bias_temperature_2,
-    "bias_temperature_3": _slope_bias_temperature_3,
-    "scale_temperature_2": _slope_scale_temperature_2,
-    "scale_temperature_3": _slope_scale_temperature_3,
-    "misalignment_temperature": _slope_misalignment_temperature,
-    "misalignment_temperature_2": _slope_misalignment_temperature_2,
-    "misalignment_temperature_3": _slope_misalignment_temperature_3,
-}
+    about w, shape (3, ...) (_runtime.effect_slope with |z_k| <= |w_k| + r), so the effect's change along a unit c
+    from w to any m within r is at most sum_k |m_k - w_k| sum_j |theta_j| sum_i |c_i| s_j[i, k]."""
+    size = np.abs(np.asarray(w, dtype=float)) + np.asarray(r, dtype=float)
+    return _effect_slope(EFFECT_TERMS[name], len(EFFECTS[name]), size, _variables(time_s, temp_c, temp_rate_c_s))

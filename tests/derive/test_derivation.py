@@ -151,29 +151,84 @@ def test_trig_basis_is_the_groebner_remainder_modulo_sin2_plus_cos2(terms):
     assert all(c.is_Rational for c in trig_basis(expr, (a, b), (t,)).values())
 
 
+def _effect_jacobians(name):
+    """SymPy's own Jacobian d phi_j / d w of each basis vector of the effect (derive/norm.py `effect_basis`), as
+    functions of (n1, n2, n3, time_s, temp_c, temp_rate_c_s); the temperature written as 20 + (temp_c - 20) and
+    expanded, so that a cubic in T is not evaluated in its cancelling expanded form."""
+    from garant.derive import norm as dn
+    T, rate = sp.Symbol("temp_c", real=True), sp.Symbol("temp_rate_c_s", real=True)
+    tau = sp.Symbol("tau", real=True)
+    names, basis = dn.effect_basis(name)
+    out = []
+    for phi in basis:
+        J = sp.Matrix(phi).jacobian(sp.Matrix(dn.n_sym)).xreplace({T: tau + 20}).applyfunc(sp.expand)
+        f = sp.lambdify((*dn.n_sym, sp.Symbol("time_s", real=True), tau, rate), J, "numpy")
+        out.append(lambda n1, n2, n3, t, temp, r, f=f: f(n1, n2, n3, t, temp - 20, r))
+    return out
+
+
+def test_the_effect_terms_are_the_derived_basis_exactly():
+    # generated/norm.py EFFECT_TERMS (data the generated runtime evaluates) summed back in SymPy with exact
+    # coefficients equals derive/norm.py `effect_basis` of every effect: red when a term, a sign or an exponent is
+    # dropped in rendering (a table without the cross-coupling's n1*n3 term differs by it).
+    from garant.derive import norm as dn
+    from garant.generated import norm as N
+    absolute = [sp.Abs(v) for v in dn.n_sym]
+    v = (sp.Symbol("time_s", real=True), sp.Symbol("temp_c", real=True) - sp.Rational(N.EFFECT_T0_C),
+         sp.Symbol("temp_rate_c_s", real=True))
+    for name, params in N.EFFECTS.items():
+        names, basis = dn.effect_basis(name)
+        assert tuple(names) == params
+        got = [[sp.Integer(0)] * 3 for _ in params]
+        for j, i, num, den, a, b, e in N.EFFECT_TERMS[name]:
+            got[j][i] += sp.Rational(num, den) * sp.Mul(*(x**k for x, k in zip((*dn.n_sym, *absolute, *v),
+                                                                                 (*a, *b, *e))))
+        assert all(sp.expand(g - want) == 0 for row, wrow in zip(got, basis) for g, want in zip(row, wrow)), name
+
+
+def test_the_effects_jacobian_bound_holds_over_the_unit_cube_and_is_reached_at_a_vertex():
+    # generated/norm.py effect_jacobian_bound (the unit ball, _runtime.effect_slope with size 1) against SymPy's own
+    # Jacobian at the 8 vertices of the cube [-1, 1]^3 (which holds the ball) and 50 points of the ball: never
+    # below it, and equal to the largest at a vertex for the polynomial effects. Red when a term's bound drops its
+    # exponent (2 w_i of the quadratic scale factor bounded by 1).
+    import itertools
+
+    from garant.generated import norm as N
+    rng = np.random.default_rng(6)
+    for name in N.EFFECTS:
+        jac = _effect_jacobians(name)
+        t, T, rate = rng.uniform(-50, 50), rng.uniform(-10, 60), rng.uniform(-0.1, 0.1)
+        bound = N.effect_jacobian_bound(name, t, T, rate)
+        vertices = [np.array(s, float) for s in itertools.product((-1, 1), repeat=3)]
+        inside = [z / max(1.0, np.linalg.norm(z)) for z in rng.uniform(-1, 1, (50, 3))]
+        for j, J in enumerate(jac):
+            at = np.array([np.abs(np.array(J(*z, t, T, rate), float)) for z in vertices + inside])
+            assert np.all(at <= bound[j] * (1 + 1e-12) + 1e-15), (name, j)
+            if name != "scale_asymmetry":
+                np.testing.assert_allclose(at[:8].max(axis=0), bound[j], rtol=1e-12, atol=1e-15)
+
+
 def test_the_effects_slope_bound_holds_over_its_box_and_is_reached_at_a_vertex():
-    # generated/norm.py effect_slope_bound (derive/norm.py, expanded about w) against SymPy's own Jacobian of each
-    # effect's basis, evaluated at the 8 vertices of the box |z - w| <= r and 50 points inside: never below it;
-    # for the polynomial effects (a Jacobian linear in w) equal to the largest at a vertex, for |w_i| at most 1.
+    # generated/norm.py effect_slope_bound (_runtime.effect_slope with size |w| + r) against SymPy's own Jacobian of
+    # each effect's basis, evaluated at the 8 vertices of the box |z - w| <= r and 50 points inside: never below
+    # it; for the polynomial effects (a Jacobian linear in w) equal to the largest at a vertex, for |w_i| at most 1.
     # Red when a term of the expansion is dropped (the cross-coupling bound without r is exceeded at a vertex).
     import itertools
 
-    from garant.derive import norm as dn
     from garant.generated import norm as N
     rng = np.random.default_rng(5)
     for name in N.EFFECTS:
-        names, basis = dn.effect_basis(name)
-        jac = [sp.lambdify((*dn.n_sym, sp.Symbol("time_s"), sp.Symbol("temp_c")), sp.Matrix(phi).jacobian(
-            sp.Matrix(dn.n_sym)), "numpy") for phi in basis]
+        jac = _effect_jacobians(name)
         for _ in range(20):
             w = rng.normal(size=3)
             w /= np.linalg.norm(w)
-            r, t, T = rng.uniform(0, 0.05), rng.uniform(-50, 50), rng.uniform(-10, 60)
-            bound = N.effect_slope_bound(name, w[:, None], np.array([r]), np.array([t]), np.array([T]))[..., 0]
+            r, t, T, rate = rng.uniform(0, 0.05), rng.uniform(-50, 50), rng.uniform(-10, 60), rng.uniform(-0.1, 0.1)
+            bound = N.effect_slope_bound(name, w[:, None], np.array([r]), np.array([t]), np.array([T]),
+                                         np.array([rate]))[..., 0]
             vertices = [w + r * np.array(s) for s in itertools.product((-1, 1), repeat=3)]
             inside = [w + r * rng.uniform(-1, 1, 3) for _ in range(50)]
             for j, J in enumerate(jac):
-                at = np.array([np.abs(np.array(J(*z, t, T), float)) for z in vertices + inside])
+                at = np.array([np.abs(np.array(J(*z, t, T, rate), float)) for z in vertices + inside])
                 assert np.all(at <= bound[j] * (1 + 1e-12) + 1e-15), (name, j)
                 if name != "scale_asymmetry":
                     np.testing.assert_allclose(at[:8].max(axis=0), bound[j], rtol=1e-12, atol=1e-15)

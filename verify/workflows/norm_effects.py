@@ -7,10 +7,11 @@ point, `fixed_point`), the interval's time t (s, from the middle of the log's st
 t, T) + u with |m| = 1, m the true direction: the effect at the truth's direction. Its first order in the
 correction theta' = theta - theta_fit is a column of (2.2) beside H; the rest, v = Phi(p) theta' + (Phi(m) -
 Phi(p)) theta, enters each interval's remainder (norm_information.remainder_per_interval) with
-|(Phi(m) - Phi(p)) theta| <= ||sum_j |theta_j| b_j||_2 |m - p|, b_j the bound of the effect's Jacobian derived in
-derive/norm.py (`effect_jacobian_bound`). The parameters, the base ones and the effects', are bounded over the
-information set of that extended relation. A calibration file takes the term out at p = M (raw - b) / |M (raw - b)|
-(io/calibration.py `_with_effects` bounds what that direction's error moves it by).
+|(Phi(m) - Phi(p)) theta| <= ||sum_j |theta_j| b_j||_2 |m - p|, b_j the bound of the effect's Jacobian over the
+unit ball (generated `effect_jacobian_bound`, from the effect's derived term table). The parameters, the base ones
+and the effects', are bounded over the information set of that extended relation. A calibration file takes the term
+out at p = M (raw - b) / |M (raw - b)| (io/calibration.py `_with_effects` bounds what that direction's error moves it
+by).
 """
 import numpy as np
 
