@@ -150,7 +150,7 @@ def test_the_shared_small_lp_solver_gives_each_lp_what_a_fresh_highs_gives_bit_f
         lp.a_matrix_.index_ = np.tile(np.arange(M.shape[0], dtype=np.int32), M.shape[1])
         lp.a_matrix_.value_ = np.ascontiguousarray(M.T).ravel()
         h.passModel(lp)
-        highs.run(h)
+        highs.solve(h)
         sol = h.getSolution()
         return np.array(sol.col_value), np.array(sol.row_dual)
 
@@ -160,7 +160,7 @@ def test_the_shared_small_lp_solver_gives_each_lp_what_a_fresh_highs_gives_bit_f
 
     def shared(cost, M, row_lo, row_hi, col_lo, col_hi, strategy):
         h = highs.small(cost, col_lo, col_hi, row_lo, row_hi, *matrix(M), strategy)
-        highs.run(h)
+        highs.solve(h)
         sol = h.getSolution()
         return np.array(sol.col_value), np.array(sol.row_dual)
 

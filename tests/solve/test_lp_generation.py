@@ -54,7 +54,7 @@ def test_chebyshev_fit_of_small_residuals_is_accurate(problem, monkeypatch):
 def test_the_lps_run_after_a_highs_of_the_callers_own_with_its_default_threads():
     """A notebook that ran HiGHS itself (highspy with its default threads, or cvxpy's) before calling garant: HiGHS
     refuses a run that asks for another thread count than its running scheduler (status Not Set), which stopped
-    `python -m verify.bench` and would stop the API. solve/highs.run resets the scheduler and runs again (red
+    `python -m verify.bench` and would stop the API. solve/highs.solve resets the scheduler and runs again (red
     without it: LPFailed "dual (9)-(10): Not Set")."""
     import highspy
 

@@ -65,15 +65,34 @@ def small(cost, col_lo, col_hi, row_lo, row_hi, start, index, value, strategy=1)
     return h
 
 
-def run(h):
-    """h.run(), and once more after resetting HiGHS's global thread scheduler when another HiGHS of this process
-    (the caller's own, cvxpy's) started it with more threads than the one asked for here: HiGHS then refuses to
-    run (an error, model status Not Set) rather than change the count."""
+OPTIMAL, INFEASIBLE = highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible
+
+
+def solve(h, settled=None, presolve=False):
+    """Run h and return its model status: the one HiGHS call of the package, with both retries it needs.
+    Once more after resetting HiGHS's global thread scheduler when another HiGHS of this process (the caller's
+    own, cvxpy's) started it with more threads than the one asked for here: HiGHS then refuses to run (an error,
+    model status Not Set) rather than change the count. And, given `settled` (the statuses a model warm-started
+    from the last LP's basis may end in), any other status is a warm start that stalled: once more from scratch
+    (with presolve for that run when `presolve`)."""
     status = h.run()
     if status == highspy.HighsStatus.kError and h.getModelStatus() == highspy.HighsModelStatus.kNotset:
         highspy.Highs.resetGlobalScheduler(True)
-        status = h.run()
-    return status
+        h.run()
+    if settled is not None and h.getModelStatus() not in settled:
+        h.clearSolver()
+        if presolve:
+            h.setOptionValue("presolve", "on")
+        h.run()
+        if presolve:
+            h.setOptionValue("presolve", "off")
+    return h.getModelStatus()
+
+
+def failed(h, what):
+    """LPFailed for `what`, carrying HiGHS's model status (its text, as cvxpy's statuses are)."""
+    text = h.modelStatusToString(h.getModelStatus())
+    return LPFailed(f"{what}: {text}", text)
 
 
 def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
@@ -84,10 +103,8 @@ def minimize(c, M, row_lo, row_hi, col_lo, col_hi, what):
               np.broadcast_to(col_hi, cols).astype(float), np.asarray(row_lo, float), np.asarray(row_hi, float),
               np.arange(0, rows * cols + 1, rows, dtype=np.int32), np.tile(np.arange(rows, dtype=np.int32), cols),
               np.ascontiguousarray(M.T).ravel())
-    run(h)
-    status = h.getModelStatus()
-    if status != highspy.HighsModelStatus.kOptimal:
-        raise LPFailed(f"{what}: {h.modelStatusToString(status)}", h.modelStatusToString(status))
+    if solve(h) != OPTIMAL:
+        raise failed(h, what)
     sol = h.getSolution()
     return np.array(sol.col_value), np.array(sol.row_dual), h.getInfo().objective_function_value
 
@@ -200,17 +217,8 @@ def _l1(A, T):
     for k in range(T.shape[1]):
         if k:
             h.changeRowsBounds(m, idx, T[:, k], T[:, k])
-        run(h)
-        status = h.getModelStatus()
-        if status != highspy.HighsModelStatus.kOptimal:     # a warm start that stalls: once more from scratch
-            h.clearSolver()
-            h.setOptionValue("presolve", "on")
-            run(h)
-            h.setOptionValue("presolve", "off")
-            status = h.getModelStatus()
-        if status != highspy.HighsModelStatus.kOptimal:
-            raise LPFailed(f"primal (7)-(8), target {k + 1}: {h.modelStatusToString(status)}",
-                           h.modelStatusToString(status))
+        if solve(h, settled=(OPTIMAL,), presolve=True) != OPTIMAL:     # warm from the last target's basis
+            raise failed(h, f"primal (7)-(8), target {k + 1}")
         sol = h.getSolution()
         x = np.array(sol.col_value)
         Phi[:, k] = x[:K] - x[K:]
@@ -299,8 +307,7 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
                 return size, tuple(found), False, None, left > 0
             h.setOptionValue("mip_max_nodes", int(left))
             h.setOptionValue("time_limit", max(seconds - (time.perf_counter() - start), 0.1))
-        run(h)
-        status = h.getModelStatus()
+        status = solve(h)
         clock = status == highspy.HighsModelStatus.kTimeLimit
         if found:
             spent += max(h.getInfo().mip_node_count, 1)
@@ -317,8 +324,7 @@ def covering_plans(S, blocks, limit, seconds=30.0, search_seconds=None, fixed=()
         if status != highspy.HighsModelStatus.kOptimal:
             if found:
                 return size, tuple(found), True, None, False
-            raise LPFailed(f"the plan search (mixed-integer program): {h.modelStatusToString(h.getModelStatus())}",
-                           h.modelStatusToString(h.getModelStatus()))
+            raise failed(h, "the plan search (mixed-integer program)")
         x = np.array(h.getSolution().col_value[:S])
         plan = tuple(int(v) for v in np.flatnonzero(x > 0.5))
         if size is None:

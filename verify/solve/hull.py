@@ -12,7 +12,6 @@ box itself). The float rounding of mu and of the sums is covered outward (`upper
 proof, not a solver's report. Every column bound must be finite: it is what the rounding of mu is
 multiplied by.
 """
-import highspy
 import numpy as np
 
 from . import highs
@@ -178,15 +177,10 @@ def _solve(h, cost):
     optimum (Empty when it finds the set empty)."""
     cols = len(cost)
     h.changeColsCost(cols, np.arange(cols, dtype=np.int32), cost)
-    highs.run(h)
-    status = h.getModelStatus()
-    if status not in (highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible):
-        h.clearSolver()                           # a warm start that stalls: once more from scratch
-        highs.run(h)
-        status = h.getModelStatus()
-    if status == highspy.HighsModelStatus.kInfeasible:
+    status = highs.solve(h, settled=(highs.OPTIMAL, highs.INFEASIBLE))      # warm from the last basis
+    if status == highs.INFEASIBLE:
         raise Empty()
-    if status != highspy.HighsModelStatus.kOptimal:
+    if status != highs.OPTIMAL:
         return None                               # stalled: the box stands
     sol = h.getSolution()
     return np.array(sol.row_dual), np.array(sol.col_value)
