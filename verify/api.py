@@ -12,12 +12,12 @@ from typing import Optional, Sequence
 from . import models, options
 from .errors import DataError
 from .io import results
-from .io.recordings import FORMATS, SENSORS
+from .io.recordings import FORMATS
 from .workflows import jobs
 
 
 #: The API's arguments renamed (old name -> new): the old one is taken for a release, with a DeprecationWarning.
-RENAMED = {"temperature": "thermal_degree"}
+RENAMED = {"temperature": "thermal_degree", "fmt": "format"}
 
 
 def _api(fn):
@@ -76,12 +76,12 @@ def plan(model: str, *, grid: Optional[float] = None, count_seconds: Optional[fl
 
 @_api
 @options.constraints(logs=options.by_the_job("batch.calibrate_many"), g=options.gravity, g_uncertainty=options.small,
-                    delta_sigma=options.noise, params=options.one_of(9, 12), fmt=options.one_of(*FORMATS),
-                    sensor=options.one_of(*sorted(SENSORS)), imu=options.imu, rate=options.rate,
+                    delta_sigma=options.noise, params=options.one_of(9, 12), format=options.one_of(*FORMATS),
+                    sensor=options.sensor, imu=options.imu, rate=options.rate,
                     window=options.positive,
                     k=options.positive, min_still=options.positive, jobs=options.positive_int, spec=options.path)
 def calibrate_many(logs: Sequence, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
-                   delta_sigma: Optional[float] = None, params: int = 9, fmt: Optional[str] = None,
+                   delta_sigma: Optional[float] = None, params: int = 9, format: Optional[str] = None,
                    sensor: Optional[str] = None, imu: Optional[int] = None, rate: Optional[float] = None,
                    window: float = 1.0, k: float = 10.0, min_still: float = 2.0, jobs: Optional[int] = None,
                    spec: Optional[str] = None) -> list:
@@ -98,7 +98,7 @@ def calibrate_many(logs: Sequence, *, g: Optional[float] = None, g_uncertainty: 
     if not isinstance(logs, (list, tuple)) or not logs:
         raise DataError("logs: a list of log paths or arrays", param="logs")
     return batch.calibrate_many(logs, jobs, batch.read_spec(spec) if spec else None, None, g=g, params=params,
-                                fmt=fmt, sensor=sensor, imu=imu, window=window, k=k, min_still=min_still,
+                                format=format, sensor=sensor, imu=imu, window=window, k=k, min_still=min_still,
                                 delta_sigma=delta_sigma, g_uncertainty=g_uncertainty, rate=rate)
 
 

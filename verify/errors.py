@@ -3,7 +3,7 @@
 #: Marks an option's name inside an error's text (`opt`), so each caller names it its own way.
 _MARK = "\x1f"
 #: The command's spelling of the API arguments whose option is named otherwise.
-FLAGS = {"which_run": "--run", "fmt": "--format", "k": "--still-factor", "effects": "--effect"}
+FLAGS = {"which_run": "--run", "k": "--still-factor", "effects": "--effect"}
 
 
 def opt(name):

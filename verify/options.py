@@ -127,6 +127,18 @@ def one_of(*choices):
     return choice
 
 
+def sensor(value):
+    """A sensor of the log readers (defaults.SENSORS) in any case, as the command's --sensor takes it: BMI160 is
+    bmi160."""
+    from .defaults import SENSORS
+    if isinstance(value, str) and value.lower() in SENSORS:
+        return value.lower()
+    raise Bad(f"{_shown(value)} is not one of {', '.join(sorted(SENSORS))} (any case)")
+
+
+sensor.takes_text = True
+
+
 def text(value):
     """A short piece of text (a run's name, a mounting such as +y+z+x)."""
     if not isinstance(value, str) or len(value) > 200:

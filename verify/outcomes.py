@@ -24,6 +24,20 @@ class Status(str, enum.Enum):
         return self.value
 
 
+class Verdict(str, enum.Enum):
+    """A unit's verdict against its specification in a batch (a row's `verdict`), in the order the summary counts
+    them: every guaranteed interval within its limit, one wholly outside, neither, or retest (the recording proves
+    nothing of the unit: not calibrated, or refuting its noise bound)."""
+
+    PASS = "pass"
+    FAIL = "fail"
+    UNDECIDED = "undecided"
+    RETEST = "retest"
+
+    def __str__(self):
+        return self.value
+
+
 class Exit(enum.IntEnum):
     """The command's exit status. Each member's `meaning` is what the README says of it."""
 

@@ -248,3 +248,31 @@ def test_api_errors_speak_python_argument_names_not_the_commands_flags(kwargs, n
     with pytest.raises(garant.DataError) as e:
         garant.calibrate_norm(str(REAL / "repeat_session2_acc.txt"), g=9.81744, **kwargs)
     assert name in str(e.value) and "--" not in str(e.value), str(e.value)
+
+
+@needs_real
+def test_the_sensor_is_taken_in_any_case_by_the_api_as_by_the_command(capsys):
+    # `garant calibrate-norm --sensor BMI160` took the name in any case; the API refused sensor="BMI160". Both take
+    # it now and give the same calibration as the lower-case name; an unknown sensor is refused naming the argument.
+    log = str(REAL / "openaxes_imu9.csv")
+    upper, lower = (garant.calibrate_norm(log, sensor=s, g=9.81744) for s in ("BMI160", "bmi160"))
+    assert np.array_equal(upper.matrix, lower.matrix)
+    with pytest.raises(garant.DataError, match="sensor: 'BMX' is not one of adxl355, bmi160"):
+        garant.calibrate_norm(log, sensor="BMX", g=9.81744)
+
+
+@needs_real
+def test_the_apis_format_is_the_commands_and_the_old_fmt_is_taken_with_a_warning():
+    # The API spelt the command's --format `fmt=`; it is `format=` now, `fmt=` taken for a release with a
+    # DeprecationWarning (api.RENAMED); an unknown format is refused naming `format`.
+    import warnings
+    log = str(REAL / "repeat_session2_acc.txt")
+    new = garant.calibrate_norm(log, g=9.81744, format="imu_tk")
+    with pytest.warns(DeprecationWarning, match="fmt= is now format="):
+        old = garant.calibrate_norm(log, g=9.81744, fmt="imu_tk")
+    assert np.array_equal(new.matrix, old.matrix)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(garant.DataError, match=r"^format: 'csv2' is not one of") as e:
+            garant.calibrate_norm(log, g=9.81744, format="csv2")
+    assert e.value.param == "format"

@@ -340,7 +340,7 @@ def test_an_imucal_session_is_refused_for_another_stands_model(capsys):
              "--sections", IMUCAL_DIR / "example_ferraris_session_list.json", "--sigma", "1e-2"], capsys,
             "give --model six-face")
     with pytest.raises(garant.DataError, match="give --model six-face"):
-        garant.estimate("two-axis", str(IMUCAL_DIR / "example_ferraris_session.csv"), 1e-2, fmt="imucal",
+        garant.estimate("two-axis", str(IMUCAL_DIR / "example_ferraris_session.csv"), 1e-2, format="imucal",
                         sections=str(IMUCAL_DIR / "example_ferraris_session_list.json"))
 
 

@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import ROOT
 from garant.verify import errors
 from garant.verify.outcomes import Exit, Status, exit_sentence
 
@@ -48,3 +49,30 @@ def test_a_parameter_a_stand_cannot_observe_is_said_from_the_exception_not_its_t
     with pytest.raises(description.Unobservable) as e:
         derive(description.load(tmp_path / "t.toml"))
     assert e.value.names == ("kappa",) and "cannot be observed" in e.value.why and ": " not in e.value.why[:9]
+
+
+def test_no_status_or_verdict_is_spelt_as_a_string_outside_outcomes():
+    # A status or verdict compared with, or given as a status/verdict, a bare string ("premise refuted", "pass")
+    # drifts from the one declaration; red when a module writes `row["status"] == "refuted"`, `status="done"` or
+    # {"verdict": "retest"} again.
+    import ast
+
+    from garant.verify.outcomes import Verdict
+    words = {str(s) for s in Status} | {str(v) for v in Verdict}
+
+    def word(node):
+        return isinstance(node, ast.Constant) and node.value in words
+
+    found = []
+    for path in sorted((ROOT / "verify").rglob("*.py")):
+        if path.name == "outcomes.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Compare) and any(map(word, [node.left, *node.comparators])):
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+            elif isinstance(node, ast.keyword) and node.arg in ("status", "verdict") and word(node.value):
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+            elif isinstance(node, ast.Dict):
+                found += [f"{path.relative_to(ROOT)}:{node.lineno}" for k, v in zip(node.keys, node.values)
+                          if isinstance(k, ast.Constant) and k.value in ("status", "verdict") and word(v)]
+    assert not found, found

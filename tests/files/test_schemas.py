@@ -139,7 +139,7 @@ def test_premises_are_one_type_in_every_result(outputs):
     # A norm calibration's premises were a string, an estimate's an object: both are objects with a statement.
     log = ROOT / "tests" / "data" / "imucal" / "example_ferraris_session.csv"
     from garant.verify.workflows import jobs
-    norm = jobs.calibrate_norm(str(log), fmt="imucal", rate=102.4,
+    norm = jobs.calibrate_norm(str(log), format="imucal", rate=102.4,
                                bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2}).to_dict()
     for doc in (norm, outputs["estimate", "consistent"], outputs["diagnose", "consistent"]):
         assert isinstance(doc["premises"], dict) and doc["premises"]["statement"]

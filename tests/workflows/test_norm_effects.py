@@ -417,7 +417,7 @@ def test_every_key_of_calibrate_norms_json_is_in_its_schema(tmp_path):
             jobs.calibrate_norm(warm, g=G, effects="bias_temperature"),
             jobs.calibrate_norm(warm, g=G, thermal_degree=1),
             jobs.calibrate_norm(str(still), g=G, thermal_degree=1),
-            jobs.calibrate_norm(faces, fmt="imucal", rate=102.4, bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2})]
+            jobs.calibrate_norm(faces, format="imucal", rate=102.4, bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2})]
     keys = set().union(*(r.to_dict() for r in runs))
     assert keys - set(schema["properties"]) == set()
     import jsonschema                                     # and every value as the schema states it, nothing else

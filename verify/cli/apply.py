@@ -111,7 +111,7 @@ def _apply(args, calibration, log, output):
     from ..io.text import csv_bytes
     from ..workflows import jobs
     from ..io import calibration as cal_io
-    pieces = jobs.apply(calibration, log, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
+    pieces = jobs.apply(calibration, log, format=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                         trust_units=args.trust_units, frame=args.frame, chunk=CHUNK, outside=args.outside)
     worst, total, n, kind, dropped = np.zeros(3), 0.0, 0, cal_io.read(calibration)["kind"], 0
 

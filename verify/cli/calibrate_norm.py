@@ -138,7 +138,7 @@ def _batch(args):
     def progress(done, total):                  # one line rewritten on a terminal, a line a step into a file
         print(("\r" if live else "") + f"calibrate-norm: {done}/{total} logs",
               end="" if live and done < total else "\n", file=sys.stderr, flush=True)
-    rows = batch.calibrate_many(args.logs, args.jobs, spec, progress, g=args.g, params=args.params, fmt=args.format,
+    rows = batch.calibrate_many(args.logs, args.jobs, spec, progress, g=args.g, params=args.params, format=args.format,
                                 sensor=args.sensor, imu=imu, window=args.window, k=args.k, min_still=args.min_still,
                                 delta_sigma=args.delta_sigma, g_uncertainty=args.g_uncertainty, rate=args.rate)
     names = batch.stems(args.logs)
@@ -150,11 +150,11 @@ def _batch(args):
     report.write_text(folder / "summary.csv", _csv_text([head, *table]))
     counts = {s: sum(r["status"] == s for r in rows) for s in batch.STATUSES}
     verdicts = {v: sum(r.get("verdict") == v for r in rows) for v in batch.VERDICTS} if spec else {}
-    said = (f"{len(rows)} logs: {counts['consistent']} calibrated, {counts['refuted']} refuted their noise bound, "
-            f"{counts['error']} could not be calibrated" + (
-                f"; against {args.spec}: {verdicts['pass']} pass (guaranteed), {verdicts['fail']} fail, "
-                f"{verdicts['undecided']} undecided, {verdicts['retest']} retest (the recording proves nothing of "
-                "the unit)" if spec else ""))
+    said = (f"{len(rows)} logs: {counts[batch.CONSISTENT]} calibrated, {counts[batch.REFUTED]} refuted their noise "
+            f"bound, {counts[batch.ERROR]} could not be calibrated" + (
+                f"; against {args.spec}: {verdicts[batch.PASS]} pass (guaranteed), {verdicts[batch.FAIL]} fail, "
+                f"{verdicts[batch.UNDECIDED]} undecided, {verdicts[batch.RETEST]} retest (the recording proves "
+                "nothing of the unit)" if spec else ""))
     report.write_page(folder, f"Batch: {len(rows)} logs", report.command_line(args, "garant calibrate-norm ..."),
                       pages.batch_sections(rows, names, spec, args.spec, said, PARAM_LABELS[:9], batch.SPEC_KEYS),
                       args.logs)
@@ -162,7 +162,7 @@ def _batch(args):
         print(f"{row['log']}: {row['status']}" + (f", {row['verdict']} ({row['reason']})" if spec else
                                                   f": {row['message']}" if row["message"] else ""))
     print(said)
-    print(f"wrote {folder}/summary.csv, {folder}/index.html and {counts['consistent']} calibration file(s)")
+    print(f"wrote {folder}/summary.csv, {folder}/index.html and {counts[batch.CONSISTENT]} calibration file(s)")
     return batch_status(rows, spec is not None)
 
 
@@ -203,7 +203,7 @@ def _run(args, into=None):
     from ..io import report
     from ..workflows import jobs
     res = jobs.calibrate_norm(args.log, g=args.g, g_uncertainty=args.g_uncertainty, delta_sigma=args.delta_sigma,
-                              params=args.params, fmt=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
+                              params=args.params, format=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
                               window=args.window, k=args.k, min_still=args.min_still, diagnose=args.diagnose,
                               effects=args.effect, bound=dict(args.bound), thermal_degree=args.thermal_degree)
     if res.get("still_only"):

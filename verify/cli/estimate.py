@@ -52,7 +52,7 @@ def run(args):
     exports.check(args, "estimate")
     res = jobs.estimate(args.model, args.data, args.sigma, g=args.g, g_uncertainty=args.g_uncertainty, prior=args.prior,
                         bound=dict(args.bound), mount=args.mount, gamma=args.gamma, imu=args.imu,
-                        which_run=args.which_run, fmt=args.format, sections=args.sections,
+                        which_run=args.which_run, format=args.format, sections=args.sections,
                         thermal_degree=args.thermal_degree,
                         progress=lambda text: print(f"estimate: {text} ...", file=sys.stderr, flush=True))
     mod = (models.thermal(args.model, args.thermal_degree, res["thermal"]["t0_c"]) if "thermal" in res

@@ -89,11 +89,3 @@ def say_gravity(g_given, premises):
     line = gravity_line(g_given, premises["g_uncertainty"], premises["g_source"])
     if line:
         print(line)
-
-
-def premises_of(args, mod):
-    """The Premises of a command's bounds from its arguments (--sigma, --g given or not, --g-uncertainty,
-    --prior)."""
-    from ..workflows.premises import premises as make
-    return make(mod, args.sigma, args.g if args.g is not None else G_DEFAULT, g_given=args.g is not None,
-                g_uncertainty=args.g_uncertainty, prior=args.prior, bound=dict(args.bound))

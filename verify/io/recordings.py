@@ -322,10 +322,10 @@ def read_log(path, fmt=None, sensor="adxl355", imu=None, rate=None):
     try:
         fmt = fmt or guess_format(path)
         if imu is not None and fmt not in ("mimu", "ulog", "dataflash", "rosbag"):
-            raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('fmt')} mimu) or a flight controller's "
-                            f"log or a ROS bag (ulog, dataflash, rosbag), not to a {fmt} log")
+            raise DataError(f"{opt('imu')} applies to a multi-IMU stream ({opt('format')} mimu) or a flight "
+                            f"controller's log or a ROS bag (ulog, dataflash, rosbag), not to a {fmt} log")
         if fmt not in READERS:
-            raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}", param="fmt")
+            raise DataError(f"unknown log format {fmt!r}; use one of {', '.join(FORMATS)}", param="format")
         got = READERS[fmt](path, sensor, imu, rate)
         t, raw, unit, step, note = got.t, got.raw, got.unit, got.step, got.note
     except OSError as e:

@@ -13,7 +13,7 @@ import tomllib
 
 import numpy as np
 
-from ..outcomes import Status
+from ..outcomes import Status, Verdict
 from ..errors import DataError
 
 #: What a specification may limit: the parameters of (1.3) of 001 it covers, and their unit.
@@ -22,9 +22,8 @@ SPEC_KEYS = {"scale": (("lambda1", "lambda2", "lambda3"), "1"),
              "bias": (("eps1/g", "eps2/g", "eps3/g"), "1 (over g)")}
 
 
-#: The verdicts, in the order the summary counts them: guaranteed within every limit, one wholly outside, neither,
-#: or retest, a recording's (not calibrated, or refuting its noise bound), not the unit's.
-PASS, FAIL, UNDECIDED, RETEST = VERDICTS = ("pass", "fail", "undecided", "retest")
+#: The verdicts (outcomes.Verdict), in the order the summary counts them.
+PASS, FAIL, UNDECIDED, RETEST = VERDICTS = tuple(Verdict)
 #: A log's status in a batch: calibrated and consistent, refuting its noise bound, or not calibrated at all.
 CONSISTENT, REFUTED, ERROR = STATUSES = (Status.CONSISTENT, Status.REFUTED, Status.ERROR)
 

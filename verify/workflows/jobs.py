@@ -14,7 +14,7 @@ import numpy as np
 from .. import models
 from ..errors import DataError, opt
 from .. import options
-from ..defaults import FORMATS, SENSORS
+from ..defaults import FORMATS
 from ..options import by_the_job, constraints, real_array
 from ..io import results
 from .premises import G_DEFAULT, premises as make_premises
@@ -33,12 +33,12 @@ if TYPE_CHECKING:                          # the types of the seams, for readers
 @constraints(model=options.model, data=by_the_job("jobs.positions_of"), sigma=options.noise,
              g=options.gravity, g_uncertainty=options.small, prior=options.small, bound=options.bounds,
              mount=options.text, gamma=options.one_of("lower", "symmetric"), imu=options.imu, which_run=options.text,
-             fmt=options.one_of(*FORMATS), sections=options.path, thermal_degree=options.degree,
+             format=options.one_of(*FORMATS), sections=options.path, thermal_degree=options.degree,
              progress=options.callback)
 def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None,
              g_uncertainty: Optional[float] = None, prior: Optional[float] = None,
              bound: Optional[Mapping[str, float]] = None, mount: Optional[str] = None, gamma: str = "lower",
-             imu: Optional[int] = None, which_run: Optional[str] = None, fmt: Optional[str] = None,
+             imu: Optional[int] = None, which_run: Optional[str] = None, format: Optional[str] = None,
              sections: Optional[Path] = None, thermal_degree: Optional[int] = None,
              progress: Optional[Callable[[str], None]] = None) -> results.Estimate:
     """The verdict, q with guaranteed errors and (where the stand separates them) the block's errors, from
@@ -49,7 +49,7 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
     model : str
         A built-in stand's name or a STAND.toml path.
     data : path, DataFrame or array
-        A positions CSV, a means file (then `imu` and `which_run`), imucal's session (then fmt="imucal" and
+        A positions CSV, a means file (then `imu` and `which_run`), imucal's session (then format="imucal" and
         `sections`, its section list, unless it has a part column), a DataFrame or an array (N, angles + 3).
     sigma : float
         The noise bound (5) of 000, dimensionless (units of g).
@@ -66,7 +66,7 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
         A mounting like "+y+z+x" (two-axis): also the block's physical errors, (28)-(29) of 000.
     gamma : {"lower", "symmetric"}
         The form of Gamma in (29).
-    imu, which_run, fmt, sections
+    imu, which_run, format, sections
         Which IMU and run of a means file; the data's format and imucal's section list.
     thermal_degree : int, optional
         D (1-3): each block parameter a polynomial of degree D in T (the temp_c column), each q with one bound
@@ -85,15 +85,16 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
     if models.kind(model) == "norm":
         raise DataError("model norm: the norm relation (2.2) of 001 has no stand positions to estimate from; "
                         "calibrate a static log with calibrate_norm (garant calibrate-norm)", param="model")
-    if fmt == "imucal" and model != "six-face":
-        raise DataError(f"{opt('fmt')} imucal: imucal's Ferraris session holds the unit on the faces of a cube, the "
-                        f"six-face model; {str(model)[:60]!r} is another stand's: give --model six-face", param="fmt")
+    if format == "imucal" and model != "six-face":
+        raise DataError(f"{opt('format')} imucal: imucal's Ferraris session holds the unit on the faces of a cube, "
+                        f"the six-face model; {str(model)[:60]!r} is another stand's: give --model six-face",
+                        param="format")
     mod = models.load(model)
     remount = None if str(model).endswith(".toml") else models.load_remount(model)
     thermal = None
     if thermal_degree is not None:
         from . import thermal as th
-        base = positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections)
+        base = positions_of(mod, data, imu, which_run, fmt=format, sections=sections)
         T = th.temperatures(base, base.path)
         thermal = (thermal_degree, th.reference(T, thermal_degree, base.path))
         base_q = mod.Q_DEFINITIONS
@@ -105,7 +106,7 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
                         f"+y+z+x; got {mount!r}")
     prem = make_premises(mod, sigma, G_DEFAULT if g is None else g, g_given=g is not None,
                          g_uncertainty=g_uncertainty, prior=prior, bound=bound)
-    res = est.estimate(mod, base if thermal else positions_of(mod, data, imu, which_run, fmt=fmt, sections=sections),
+    res = est.estimate(mod, base if thermal else positions_of(mod, data, imu, which_run, fmt=format, sections=sections),
                        sigma, prem.g,
                        remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress, thermal=thermal)
@@ -143,7 +144,7 @@ def positions_of(mod, data, imu=None, which_run=None, empty_ok=False, fmt=None, 
                             "with garant calibrate-norm", param="data")
         return Positions(str(data), angles_for(mod, U, data), F)
     if sections is not None:
-        raise DataError(f"{opt('sections')} applies to {opt('fmt')} imucal")
+        raise DataError(f"{opt('sections')} applies to {opt('format')} imucal")
     if not (isinstance(data, (str, bytes)) or hasattr(data, "__fspath__")):
         return from_columns(data, names, mounts)
     if not means.looks_like(data):
@@ -191,13 +192,13 @@ def _norm_premises(premises, g_uncertainty, g_source, statement=""):
 
 
 @constraints(log=by_the_job("jobs.read_log"), g=options.gravity, g_uncertainty=options.small, bound=options.bounds,
-             delta_sigma=options.noise, params=options.one_of(9, 12), fmt=options.one_of(*FORMATS),
-             sensor=options.one_of(*sorted(SENSORS)), imu=options.imu, rate=options.rate, window=options.positive,
+             delta_sigma=options.noise, params=options.one_of(9, 12), format=options.one_of(*FORMATS),
+             sensor=options.sensor, imu=options.imu, rate=options.rate, window=options.positive,
              k=options.positive, min_still=options.positive, diagnose=options.flag,
              effects=by_the_job("norm_effects.parse"), thermal_degree=options.degree)
 def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Optional[float] = None,
                    bound: Optional[Mapping[str, float]] = None, delta_sigma: Optional[float] = None, params: int = 9,
-                   fmt: Optional[str] = None, sensor: Optional[str] = None, imu: Optional[int] = None,
+                   format: Optional[str] = None, sensor: Optional[str] = None, imu: Optional[int] = None,
                    rate: Optional[float] = None, window: float = 1.0, k: float = 10.0, min_still: float = 2.0,
                    diagnose: bool = False, effects: Union[str, Sequence[str], None] = None,
                    thermal_degree: Optional[int] = None) -> results.NormCalibration:
@@ -220,7 +221,7 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
         A guaranteed bound on |delta_sigma| of (2.2), units of g (None: the noise rule).
     params : {9, 12}
         9 (scale, misalignment, bias) or 12 (also the nonlinearity).
-    fmt, sensor, imu, rate
+    format, sensor, imu, rate
         The log's format, an OpenAXES accelerometer, an IMU of a multi-IMU stream, Hz for a log of sample
         indices (--format imucal, a DataFrame without a time column).
     window, k, min_still : float
@@ -229,8 +230,8 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     diagnose : bool
         Also test the effect catalogue.
     effects : str or sequence of str, optional
-        Catalogue effects added to the relation and calibrated with it (`--effect`: bias_drift, scale_quadratic,
-        scale_asymmetry, cross_coupling, bias_temperature, scale_temperature, temperature_lag).
+        Catalogue effects added to the relation and calibrated with it (`--effect`): names of the generated norm
+        module's EFFECTS (`garant calibrate-norm --help` and docs/diagnose.md list them).
     thermal_degree : int, optional
         D (`--thermal-degree D`, 1-3): on a log with a temperature column, each still interval (cut where the
         temperature moves) at its own mean temperature, the biases and scale factors polynomials of degree D in
@@ -245,7 +246,7 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
     from . import calibrate_norm as cn
     from .stills import still_intervals
     from .premises import gravity_uncertainty
-    data = read_log(log, fmt, sensor, imu, rate)
+    data = read_log(log, format, sensor, imu, rate)
     g_given, g = g is not None, G_DEFAULT if g is None else g
     g_unc, g_src = gravity_uncertainty(g_given, g_uncertainty)
     stills, note = still_intervals(data, window=window, k=k, min_still=min_still)
@@ -549,10 +550,10 @@ OUTSIDE = ("drop", "refuse")
 
 
 @constraints(calibration=by_the_job("calibration.checked / read"), log=by_the_job("jobs.read_log"),
-             fmt=options.one_of(*FORMATS), sensor=options.one_of(*sorted(SENSORS)), imu=options.imu, rate=options.rate,
+             format=options.one_of(*FORMATS), sensor=options.sensor, imu=options.imu, rate=options.rate,
              trust_units=options.flag, frame=options.one_of("garant", "imu_tk"), chunk=options.positive_int,
              outside=options.one_of(*OUTSIDE))
-def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = None, sensor: Optional[str] = None,
+def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] = None, sensor: Optional[str] = None,
           imu: Optional[int] = None, rate: Optional[float] = None, trust_units: bool = False, frame: str = "garant",
           chunk: Optional[int] = None, outside: str = "drop"
           ) -> Union[results.Correction, pandas.DataFrame, Iterator[results.Correction]]:
@@ -568,7 +569,7 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
         acc_y, acc_z (or x, y, z, ...) and a time column (time_s, time_ms, ...) or, without one, `rate` (Hz)
         over its index: then a calibrated copy of the DataFrame is returned (its accelerometer columns
         corrected, m/s^2, and bound_x, bound_y, bound_z added), as imucal's calibrate_df.
-    fmt, sensor, imu, rate
+    format, sensor, imu, rate
         The log's format, an OpenAXES accelerometer, an IMU of a multi-IMU stream, Hz over a sample index.
     trust_units : bool
         Skip the check that the log is in the calibration's unit.
@@ -593,7 +594,7 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, fmt: Optional[str] = N
         raise DataError(f"calibration: a calibration file's path or the dictionary a result's calibration holds, "
                         f"not {type(calibration).__name__}", param="calibration")
     cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
-    data = read_log(log, fmt, sensor, imu, rate)
+    data = read_log(log, format, sensor, imu, rate)
     if not trust_units:
         cal_io.check_units(cal, data.path, data.raw[:100_000],
                            "the calibration" if isinstance(calibration, dict) else str(calibration))
