@@ -1,6 +1,10 @@
 """python -m verify.bench.outputs OUT [--tree CHECKOUT]: what garant writes for a fixed set of commands, every one
-into OUT, so that a change meant to be only faster is shown to change no byte: run it on the checkout before and
-after (`--tree`: another checkout, e.g. a `git worktree` of the commit before), then `diff -r OUT_BEFORE OUT_AFTER`.
+into OUT, so that a change meant to be only faster is shown to change nothing but the last digits of its numbers:
+run it on the checkout before and after (`--tree`: another checkout, e.g. a `git worktree` of the commit before),
+then `python -m verify.bench.outputs --compare OUT_BEFORE OUT_AFTER [--tolerance REL]`: which files differ, the
+largest relative change of any number, and of every bound (a key naming a bound or a guaranteed error: larger is
+looser) how many got tighter and looser and the largest loosening. It exits 1 when anything but a number differs
+or a bound loosens by more than REL (default 1e-9, relative).
 
 The inputs are made here from fixed seeds or taken from the repository and ../shared: distinct two-axis positions
 (1e5, row generation and the interpolated remainder), a simulated session (next, diagnose), imucal's six-face
@@ -9,7 +13,9 @@ batch and for repeatability, a synthetic warm-up log with a temperature column (
 effect, and over temperature with both flight-stack files), and a plan. The reproduce lines of the batch's pages
 name OUT, so those two files are left out.
 """
+import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -77,12 +83,110 @@ def commands(out):
     ]
 
 
+#: A number's key path names a bound when it has one of these words: larger is looser.
+BOUND_WORDS = ("bound", "guaranteed_error", "error_bound")
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def _leaves(value, path=""):
+    """(key path, leaf) of a JSON document, depth first."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from _leaves(v, f"{path}/{k}")
+    elif isinstance(value, list):
+        for k, v in enumerate(value):
+            yield from _leaves(v, f"{path}[{k}]")
+    else:
+        yield path, value
+
+
+def _numbers(text):
+    """(key path, leaf) of a text file: each line's numbers by position, the rest of the line as one leaf."""
+    for k, line in enumerate(text.splitlines(), 1):
+        head = line.split()[0] if line.split() else ""
+        yield f"line {k} text", NUMBER.sub("#", line)
+        for j, x in enumerate(NUMBER.findall(line)):
+            yield f"line {k} ({head}) number {j + 1}", float(x)
+
+
+def _read(path):
+    """A file's leaves: a JSON document's, else a text file's (`_numbers`)."""
+    text = path.read_text()
+    try:
+        return list(_leaves(json.loads(text)))
+    except ValueError:
+        return list(_numbers(text))
+
+
+def _file_changes(a, b):
+    """(numeric changes [(relative change, path, before, after)], other differences [path]) of two files."""
+    if a.read_bytes() == b.read_bytes():
+        return [], []
+    try:
+        left, right = _read(a), _read(b)
+    except UnicodeDecodeError:
+        return [], ["(binary)"]
+    if [k for k, _ in left] != [k for k, _ in right]:
+        return [], ["(the structure)"]
+    numeric, other = [], []
+    for (path, x), (_, y) in zip(left, right):
+        if x == y:
+            continue
+        if isinstance(x, (int, float)) and isinstance(y, (int, float)) and not isinstance(x, bool):
+            numeric.append(((y - x) / max(abs(x), abs(y)), path, x, y))
+        else:
+            other.append(path)
+    return numeric, other
+
+
+def compare(before, after, tolerance=1e-9):
+    """The comparison `--compare` prints, as (lines, passed)."""
+    before, after = Path(before), Path(after)
+    names = sorted({p.relative_to(before) for p in before.rglob("*") if p.is_file()}
+                   | {p.relative_to(after) for p in after.rglob("*") if p.is_file()})
+    lines, numeric, passed, differ = [], [], True, 0
+    for name in names:
+        a, b = before / name, after / name
+        if not (a.is_file() and b.is_file()):
+            lines.append(f"{name}: only in {'the second' if b.is_file() else 'the first'} folder")
+            passed = False
+            continue
+        changes, other = _file_changes(a, b)
+        if changes or other:
+            differ += 1
+            worst = max((abs(c[0]) for c in changes), default=0.0)
+            lines.append(f"{name}: {len(changes)} numbers changed (largest relative {worst:.1e})"
+                         + (f"; not numbers: {', '.join(other[:3])}{' ...' if len(other) > 3 else ''}" if other
+                            else ""))
+            passed &= not other
+            numeric += [(c, str(name)) for c in changes]
+    bounds = [(c, name) for c, name in numeric if any(w in c[1].lower() for w in BOUND_WORDS)]
+    looser = [(c, name) for c, name in bounds if c[0] > 0]
+    largest = max(numeric, key=lambda x: abs(x[0][0]), default=None)
+    loosest = max(looser, key=lambda x: x[0][0], default=None)
+    lines.insert(0, f"{len(names)} files: {len(names) - differ} identical, {differ} differ" + (
+        f"; largest relative change of a number {abs(largest[0][0]):.1e} ({largest[1]} {largest[0][1]})"
+        if largest else ""))
+    lines.insert(1, f"bounds: {len(bounds)} changed, {len(bounds) - len(looser)} tighter, {len(looser)} looser"
+                 + (f", the largest loosening {loosest[0][0]:.1e} relative ({loosest[1]} {loosest[0][1]}: "
+                    f"{loosest[0][2]!r} -> {loosest[0][3]!r})" if loosest else ""))
+    if loosest and loosest[0][0] > tolerance:
+        passed = False
+        lines.append(f"a bound loosened by more than {tolerance:g} relative")
+    return lines, passed
+
+
 def main():
     """Make the inputs, run every command of `commands` with the checkout `--tree` (default this one) as
     `garant`, and leave their files in OUT."""
     args = sys.argv[1:]
+    if args[:1] == ["--compare"] and (len(args) == 3 or len(args) == 5 and args[3] == "--tolerance"):
+        lines, passed = compare(args[1], args[2], float(args[4]) if len(args) == 5 else 1e-9)
+        print("\n".join(lines))
+        raise SystemExit(0 if passed else 1)
     if not args or args[0].startswith("-"):
-        raise SystemExit("usage: python -m verify.bench.outputs OUT [--tree CHECKOUT]")
+        raise SystemExit("usage: python -m verify.bench.outputs OUT [--tree CHECKOUT]\n"
+                         "       python -m verify.bench.outputs --compare BEFORE AFTER [--tolerance REL]")
     out = Path(args[0]).resolve()
     tree = Path(args[args.index("--tree") + 1]).resolve() if "--tree" in args else ROOT
     if not (tree / "verify" / "cli" / "__init__.py").is_file():
@@ -103,7 +207,7 @@ def main():
             print(f"{name:18s} exit {code}")        # 3 (refuted) and 5 (a log proves nothing) write their files too
     for page in ("index.html", "report.md"):                  # they name OUT in their reproduce line
         (out / "batch" / page).unlink(missing_ok=True)
-    print(f"wrote {out} (from {tree}); compare two such folders with diff -r")
+    print(f"wrote {out} (from {tree}); compare two such folders with --compare BEFORE AFTER")
 
 
 if __name__ == "__main__":
