@@ -12,6 +12,8 @@ box itself). The float rounding of mu and of the sums is covered outward (`upper
 proof, not a solver's report. Every column bound must be finite: it is what the rounding of mu is
 multiplied by.
 """
+from typing import NamedTuple
+
 import numpy as np
 
 from . import highs
@@ -28,15 +30,46 @@ class Beyond(Exception):
     such a hull whatever its other ends, so they are not solved."""
 
 
+class Multipliers(NamedTuple):
+    """Row multipliers by their support: `values` at the rows `rows` (shape (..., len(rows))), 0 at every other
+    row. An LP's optimum has at most as many nonzero multipliers as columns, so a proof of one end keeps those
+    only: a constant size per end, not one number per reading."""
+
+    rows: np.ndarray
+    values: np.ndarray
+
+
+NONE = Multipliers(np.zeros(0, dtype=np.intp), np.zeros(0))      # lambda = 0: the column box
+
+
+def sparse(lam):
+    """Multipliers of a dense vector, or a stack of them (one a row): the rows where any is nonzero."""
+    L = np.asarray(lam, float)
+    rows = np.flatnonzero(np.any(np.atleast_2d(L) != 0, axis=0))
+    return Multipliers(rows, L[..., rows])
+
+
+def stacked(lams):
+    """One Multipliers holding a list of them (one vector each) as a stack over the union of their rows."""
+    rows = np.unique(np.concatenate([m.rows for m in lams])) if lams else NONE.rows
+    values = np.zeros((len(lams), len(rows)))
+    for i, m in enumerate(lams):
+        values[i, np.searchsorted(rows, m.rows)] = m.values
+    return Multipliers(rows, values)
+
+
 def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
-    """A proven upper bound of c^T x over X from the multipliers lam (a multiplier on a side that is
-    infinite is dropped: it would bound nothing; rows without a multiplier cost nothing). c and lam may
-    be stacks, one objective and its multipliers a row: then an array of bounds, one a row."""
-    C, L = np.atleast_2d(c), np.atleast_2d(lam)
+    """A proven upper bound of c^T x over X from the multipliers lam (Multipliers, or a dense vector; a multiplier
+    on a side that is infinite is dropped: it would bound nothing; rows without a multiplier cost nothing, and only
+    the rows with one are read). c and lam may be stacks, one objective and its multipliers a row: then an array of
+    bounds, one a row."""
+    m = lam if isinstance(lam, Multipliers) else sparse(lam)
+    B, row_lo, row_hi = B[m.rows], np.asarray(row_lo)[m.rows], np.asarray(row_hi)[m.rows]
+    C, L = np.atleast_2d(c), np.atleast_2d(m.values)
     lo_ok, hi_ok = np.isfinite(row_lo), np.isfinite(row_hi)
     if not (lo_ok.all() and hi_ok.all()):              # (all finite: nothing to drop)
         L = np.where((L > 0) & ~hi_ok | (L < 0) & ~lo_ok, 0.0, L)
-    n = B.shape[0] + 2                                  # terms of each entry of L B (zeros add no error)
+    n = B.shape[0] + 2                                  # terms of each entry of L B (the rows read)
     mu = C - L @ B
     slack = 1.01 * n * EPS * (np.abs(C) + np.abs(L) @ np.abs(B))     # |mu_true - mu| (rounding of L B)
     rows = L * np.where(L > 0, np.where(hi_ok, row_hi, 0.0), np.where(lo_ok, row_lo, 0.0))   # the same products
@@ -123,37 +156,36 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     K = len(C)
     signs = np.array([1.0, -1.0])
     objectives = (signs[None, :, None] * C[:, None, :]).reshape(2 * K, -1)     # (k, +), (k, -), ...
-    lam = np.zeros((2 * K, rows))
-    for i, (k, sign) in enumerate((k, sign) for k in range(K) for sign in signs):
-        lam[i] = _multipliers(found[k, sign], S, unit[k], r)
+    lam = [_multipliers(found[k, sign], S, unit[k], r) for k in range(K) for sign in signs]
     # lambda = 0 (the column box) is always valid: each end the better of the two proofs
-    both = upper(np.vstack([objectives, objectives]), B, row_lo, row_hi, col_lo, col_hi,
-                 np.vstack([np.zeros_like(lam), lam])).reshape(2, K, 2)
-    use = both[1] <= both[0]
-    out_hi = np.where(use[:, 0], both[1, :, 0], both[0, :, 0])
-    out_lo = -np.where(use[:, 1], both[1, :, 1], both[0, :, 1])
-    used = np.where(use.reshape(-1)[:, None], lam, 0.0).reshape(K, 2, rows)
+    box = upper(objectives, B, row_lo, row_hi, col_lo, col_hi, Multipliers(NONE.rows, np.zeros((2 * K, 0))))
+    solved = upper(objectives, B, row_lo, row_hi, col_lo, col_hi, stacked(lam))
+    use = solved <= box
+    best = np.where(use, solved, box).reshape(K, 2)
+    out_hi, out_lo = best[:, 0], -best[:, 1]
+    used = [m if u else NONE for m, u in zip(lam, use)]
     pts = [tuple(None if found[k, sign] is None else xc + dc * found[k, sign][1] for sign in (-1.0, 1.0))
            for k in range(K)]
-    lams = [(used[k, 1], used[k, 0]) for k in range(K)]
+    lams = [(used[2 * k + 1], used[2 * k]) for k in range(K)]
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
 
 
 def _multipliers(got, S, unit, r):
     """The multipliers of one end on the unscaled rows, from the row duals HiGHS gave over the rows S of the
-    model as it then was (0 on the rest; all 0 where it gave none)."""
-    lam = np.zeros(len(r))
-    if got is not None:
-        y = got[0]
-        lam[S[:len(y)]] = -y * unit / r[S[:len(y)]]
-    return lam
+    model as it then was (0 on the rest; none where it gave none)."""
+    if got is None:
+        return NONE
+    y = got[0]
+    rows = S[:len(y)]
+    keep = y != 0
+    return Multipliers(rows[keep], -y[keep] * unit / r[rows[keep]])
 
 
 def _past(c, B, row_lo, row_hi, col_lo, col_hi, lam, limit):
     """Beyond when the end max c^T x, proven as `ranges` proves it (the better of the multipliers lam and none),
     is above `limit` by more than 1e-9 of either (a bound within that margin is left to the caller's own test,
     unchanged)."""
-    end = upper(np.vstack([c, c]), B, row_lo, row_hi, col_lo, col_hi, np.vstack([np.zeros_like(lam), lam])).min()
+    end = min(upper(c, B, row_lo, row_hi, col_lo, col_hi, NONE), upper(c, B, row_lo, row_hi, col_lo, col_hi, lam))
     if end - limit > 1e-9 * max(abs(end), abs(limit)):
         raise Beyond()
 
@@ -163,12 +195,12 @@ def proven(B, row_lo, row_hi, col_lo, col_hi, C, proofs):
     list of what `ranges(..., multipliers=True)` returned for the same B and C (on other row and column
     bounds); each end is the least `upper` over them and lambda = 0 (the column box)."""
     C = np.atleast_2d(np.asarray(C, float))
-    K, rows = len(C), B.shape[0]
-    lams = np.stack([np.zeros((K, 2, rows))] + [np.array([[a, b] for a, b in p]) for p in proofs])
+    K = len(C)
+    lams = [m for p in [[(NONE, NONE)] * K] + list(proofs) for pair in p for m in pair]     # (proof, k, min/max)
     objectives = np.stack([-C, C], axis=1).reshape(2 * K, -1)                # (k, min), (k, max), ...
-    n = len(lams)
-    ends = upper(np.tile(objectives, (n, 1)), B, row_lo, row_hi, col_lo, col_hi,
-                 lams.reshape(n * 2 * K, rows)).reshape(n, K, 2).min(axis=0)
+    n = len(lams) // (2 * K)
+    ends = upper(np.tile(objectives, (n, 1)), B, row_lo, row_hi, col_lo, col_hi, stacked(lams)).reshape(
+        n, K, 2).min(axis=0)
     return -ends[:, 0], ends[:, 1]
 
 

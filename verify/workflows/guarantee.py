@@ -204,11 +204,11 @@ class InformationSet:
             lo, hi, lams = hull.ranges(self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, C,
                                        multipliers=True, start=self.start)
         except hull.Empty:                       # the verdict found a fit: empty only to HiGHS's tolerance
-            zero = np.zeros(len(self.y))
-            lams = [(zero, zero)] * len(C)
-            lo = np.array([-hull.upper(-c, self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, zero)
+            none = hull.NONE
+            lams = [(none, none)] * len(C)
+            lo = np.array([-hull.upper(-c, self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, none)
                            for c in C])
-            hi = np.array([hull.upper(c, self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, zero)
+            hi = np.array([hull.upper(c, self.A.T, self.y - self.s, self.y + self.s, self.w_lo, self.w_hi, none)
                            for c in C])
         if keep:
             self._lams = (C, lams)
@@ -234,7 +234,7 @@ class InformationSet:
     @property
     def binding(self):
         """The readings whose multipliers prove q's ranges (after `q`)."""
-        return np.flatnonzero(np.any([np.abs(a) + np.abs(b) for a, b in self._lams[1]], axis=0))
+        return np.unique(np.concatenate([m.rows[m.values != 0] for pair in self._lams[1] for m in pair]))
 
     @property
     def q(self):
