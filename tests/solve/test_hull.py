@@ -179,3 +179,23 @@ def test_the_shared_small_lp_solver_gives_each_lp_what_a_fresh_highs_gives_bit_f
     worker.start()
     worker.join()
     assert other[0] is not highs.small(cost, col_lo, col_hi, row_lo, row_hi, *matrix(M), strategy)
+
+
+def test_each_ends_multipliers_are_kept_by_their_support_and_prove_what_the_dense_ones_prove():
+    # 3,000 readings of 5 unknowns (the row generation of `ranges` at work): each end's proof keeps at most one
+    # multiplier per column (an LP optimum's basis), not one per reading; the same multipliers written out densely
+    # prove the same end (within the rounding allowance, which counts the rows read). Red when the multipliers
+    # are kept dense (3,000 per end) or an end is proven from rows it does not read.
+    rng = np.random.default_rng(4)
+    B = rng.normal(size=(3000, 5))
+    x0 = rng.normal(size=5)
+    lo, hi = B @ x0 - 1.0, B @ x0 + 1.0
+    C = np.eye(5)
+    out_lo, out_hi, lams = hull.ranges(B, lo, hi, x0 - 5, x0 + 5, C, multipliers=True)
+    for k, (a, b) in enumerate(lams):
+        assert isinstance(a, hull.Multipliers) and len(a.rows) <= 5 and len(b.rows) <= 5
+        dense = np.zeros(len(B))
+        dense[b.rows] = b.values
+        sparse_end, dense_end = (hull.upper(C[k], B, lo, hi, x0 - 5, x0 + 5, m) for m in (b, dense))
+        assert sparse_end <= out_hi[k] * (1 + 1e-12) + 1e-12 and abs(sparse_end - dense_end) <= 1e-9 * abs(dense_end)
+    assert np.all(out_hi - out_lo < 2.0)                # the readings prove far more than the box of +-5
