@@ -438,8 +438,8 @@ def _confounded(p, n):
     return (f". Orientation and temperature moved together in this log (the intervals' temperature correlates "
             f"{c:+.2f} with {share}, axis {i + 1}'s share of g{'' if k == 1 else ' squared'}): the warm-up cannot "
             "tell a temperature term from a scale factor or bias. Record the orientations in shuffled order, or at "
-            "the end, hot, turn it back through the first two thirds of its orientations in reverse order (garant "
-            "simulate --model norm --ordered --revisit N makes such a log to try)")
+            "the end, hot, turn it back through every orientation in reverse order (garant simulate --model norm "
+            "--ordered --revisit N makes such a log to try)")
 
 
 def _output(p, v, before):

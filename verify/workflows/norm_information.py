@@ -199,13 +199,13 @@ def effect_reach(A, s, bound, X, ext):
     when its box does, so the bound holds for the truth's correction too."""
     P, K = ext.phi.shape[0], len(s)
     C = np.zeros((3 * K, A.shape[0]))
-    C[:, 9:9 + P] = np.moveaxis(ext.phi, 0, 2).reshape(3 * K, P)        # row 3k + i: Phi(p_k)[i, :]
+    C[:, 9:9 + P] = np.moveaxis(ext.phi, 0, 2).reshape(3 * K, P)        # row i K + k: Phi(p_k)[i, :]
     box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
     try:
         lo, hi = hull.ranges(A.T, s - bound, s + bound, -box, box, C)
     except hull.Empty:
         return None
-    return np.maximum(np.abs(lo), np.abs(hi)).reshape(K, 3).T
+    return np.maximum(np.abs(lo), np.abs(hi)).reshape(3, K)
 
 
 def _hull(A, s, bound, X=None, proofs=None, beyond=None):
