@@ -24,5 +24,6 @@ def test_a_slice_of_the_suite_passes_with_its_files_at_long_paths(tmp_path):
     shared.symlink_to(REAL.parents[1])
     env = dict(os.environ, GARANT_SHARED=str(shared))
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-m", "not slow", "-p", "no:cacheprovider",
-                        f"--basetemp={deep / 'tmp'}", *SLICE], cwd=ROOT, env=env, capture_output=True, text=True)
+                        "--dist", "load", f"--basetemp={deep / 'tmp'}", *SLICE],      # test by test: both cores busy
+                       cwd=ROOT, env=env, capture_output=True, text=True)
     assert r.returncode == 0, r.stdout[-3000:]

@@ -1,6 +1,6 @@
 """Effect bounds at the information set's range (issue: what leaves garant as sharp as the readings prove): every
 catalogue effect's parameters, calibrated through the extended norm relation (2.2) of 001, against the range of
-the same parameters over the linearised set computed here independently (cvxpy with HiGHS)."""
+the same parameters over the linearised set computed here independently (scipy's linprog)."""
 import numpy as np
 import pytest
 
@@ -21,7 +21,7 @@ def _independent_range(res, log, names):
     intervals' fitted directions n_k, their residuals s_k at the fit and their printed bounds (noise bound and
     proven remainder, units of g), each column c_kj = n_k^T phi_j(n_k, t_k, T_k) of the generated basis at the
     interval's mid-time from the effects' reference, its mean temperature and rate (first order of (2.2) of 001)."""
-    import cvxpy as cp
+    from scipy.optimize import linprog
     data = jobs.read_log(str(log))
     stills, _ = still_intervals(data)
     temps, rates = (np.asarray(v, float) for v in norm_thermal.of_intervals(data, stills))
@@ -33,30 +33,63 @@ def _independent_range(res, log, names):
     t = np.array([0.5 * (st.start + st.stop) for st in stills]) - res["effect_reference"]["time_s"]
     T = temps - res["effect_reference"]["temp_c"] + 20.0
     A = np.vstack([N.H(n)[:9]] + [np.einsum("ik,jik->jk", n, N.effect_basis(x, n, t, T, rates)) for x in names])
-    x = cp.Variable(len(A))
-    cons = [cp.abs(s - A.T @ x) <= bound]
+    rows, rhs = np.hstack([A, -A]).T, np.r_[s + bound, bound - s]       # -bound <= s - A^T x <= bound
     half = []
     for j in range(9, len(A)):
-        ends = [cp.Problem(sense(x[j]), cons).solve(solver=cp.HIGHS) for sense in (cp.Maximize, cp.Minimize)]
-        half.append(0.5 * (ends[0] - ends[1]))
+        e = np.eye(len(A))[j]
+        top, bottom = (linprog(c, A_ub=rows, b_ub=rhs, bounds=(None, None), method="highs").fun for c in (-e, e))
+        half.append(0.5 * (-top - bottom))
     return np.array(half)
+
+
+@pytest.fixture(scope="module")
+def warm(tmp_path_factory):
+    """The 36-direction warm-up log, made once for the module."""
+    return warm_up_log(tmp_path_factory.mktemp("warm") / "warm.csv")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("effect", [e for e in N.EFFECTS if e not in SHORT])
-def test_every_effects_bound_is_within_a_tenth_of_the_sets_range(tmp_path, effect):
+def test_every_effects_bound_is_within_a_tenth_of_the_sets_range(tmp_path, warm, effect):
     # Static logs with the effect hidden (test_diagnose_norm's generator) for the effects it makes, a 36-direction
     # warm-up (biases drifting with T, 20 -> 50 C) for the temperature ones with bias_temperature beside: every
-    # printed bound within 1.1x of the independent range (measured 0.9998-1.001x). Red for a bound composed from
-    # the a-priori box or the sphere-wide remainder instead of the set's range.
+    # printed bound within 1.1x of the independent range (measured 0.9998-1.001x). Red for a bound not the set's
+    # range: the LP estimator's a-priori bound taken where it is larger is 1.19x on one of scale_temperature_3's
+    # parameters (checked).
     if effect in EFFECTS:
         log, names = static_log(tmp_path / "log.csv", effect), [effect]
     else:
-        log = tmp_path / "warm.csv"
-        warm_up_log(log)
+        log = warm
         names = [BESIDE] + ([effect] if effect != BESIDE else [])
     res = jobs.calibrate_norm(str(log), g=G, effects=",".join(names)).to_dict()
     assert res["consistent"]
     printed = np.array([v["guaranteed_error"] for x in names for v in res["effects"][x]["parameters"].values()])
     ratio = printed / _independent_range(res, log, names)
     assert np.all(ratio <= 1.1) and np.all(ratio >= 0.99), ratio
+
+
+def test_the_effects_term_is_bounded_for_each_interval_and_axis_as_its_own():
+    # norm_information.effect_reach: the largest |Phi(p_k)[i, :] theta'| over the set, per axis i and interval k,
+    # against scipy's LP for that very (i, k). Its LPs are solved axis by axis (row i K + k) and were read back as
+    # if interval by interval (3 k + i): each interval's bound of the effects' term was another's (red so).
+    from types import SimpleNamespace
+
+    from scipy.optimize import linprog
+
+    from garant.verify.workflows.norm_information import effect_reach
+    rng = np.random.default_rng(8)
+    P, K = 2, 12
+    A = rng.normal(size=(9 + P, K))
+    x0 = rng.uniform(-0.1, 0.1, 9 + P)
+    bound = np.full(K, 0.05)
+    s = A.T @ x0 + rng.uniform(-0.04, 0.04, K)
+    ext = SimpleNamespace(phi=rng.normal(size=(P, 3, K)) * np.arange(1, K + 1))     # each interval its own size
+    got = effect_reach(A, s, bound, np.ones(9 + P), ext)
+    rows, rhs = np.hstack([A, -A]).T, np.r_[s + bound, bound - s]
+    for i in range(3):
+        for k in range(K):
+            c = np.r_[np.zeros(9), ext.phi[:, i, k]]
+            ends = [linprog(sign * c, A_ub=rows, b_ub=rhs, bounds=[(-1, 1)] * (9 + P), method="highs").fun
+                    for sign in (1.0, -1.0)]
+            want = max(abs(ends[0]), abs(ends[1]))
+            assert want <= got[i, k] <= want * (1 + 1e-6) + 1e-12, (i, k, got[i, k], want)

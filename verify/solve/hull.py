@@ -125,7 +125,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     unit = np.abs(Cs).max(axis=1)                  # each objective handed over at unit size: HiGHS's optimality
     unit = np.where(unit > 0, unit, 1.0)           # tolerances are absolute (its duals are scaled back below)
     Cs = Cs / unit[:, None]
-    ends = [(k, sign) for k in range(len(C)) for sign in (1.0, -1.0)]
+    ends = [(k, 1.0) for k in range(len(C))] + [(k, -1.0) for k in reversed(range(len(C)))]   # neighbours alike
     found = {}                                     # (k, sign) -> (row duals over S as it then was, x), or None
     todo = ends
     for _ in range(100):
