@@ -86,7 +86,7 @@ TOLERANCE = 1e-9                          # a row violated by less (relative to 
 SIMPLEX = 4
 
 
-def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False, start=(), beyond=None):
+def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False, start=(), beyond=None, sweep=False):
     """(lo, hi): the least and largest value over X of c^T x for each row c of C, each end proven
     (`upper`); with `points`, also the solver's x at each end ((x_min, x_max) per row; None where it
     gave none); with `multipliers`, the lambda that proves each end ((for -c, for c) per row), which
@@ -97,7 +97,10 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     optimum violates are added until none is (the optimum over them is then the optimum over all; any
     subset's multipliers prove a bound on X, which lies inside the subset's polytope). `beyond` = (lo, hi) per
     row of C: Beyond as soon as an end is proven past them (below lo, above hi, by more than the proofs' rounding),
-    the rest unsolved; an end within them is what it would be without."""
+    the rest unsolved; an end within them is what it would be without. `sweep`: the ends solved every maximum,
+    then every minimum in reverse, each LP warm-started from its neighbour's basis (for many objectives that change
+    little from row to row: half the simplex iterations of alternating max and min); else each row's two ends in
+    turn."""
     B = np.asarray(B, float)
     C = np.atleast_2d(np.asarray(C, float))
     row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)
@@ -125,7 +128,8 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     unit = np.abs(Cs).max(axis=1)                  # each objective handed over at unit size: HiGHS's optimality
     unit = np.where(unit > 0, unit, 1.0)           # tolerances are absolute (its duals are scaled back below)
     Cs = Cs / unit[:, None]
-    ends = [(k, 1.0) for k in range(len(C))] + [(k, -1.0) for k in reversed(range(len(C)))]   # neighbours alike
+    ends = ([(k, 1.0) for k in range(len(C))] + [(k, -1.0) for k in reversed(range(len(C)))] if sweep else
+            [(k, sign) for k in range(len(C)) for sign in (1.0, -1.0)])
     found = {}                                     # (k, sign) -> (row duals over S as it then was, x), or None
     todo = ends
     for _ in range(100):

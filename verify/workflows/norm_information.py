@@ -202,7 +202,7 @@ def effect_reach(A, s, bound, X, ext):
     C[:, 9:9 + P] = np.moveaxis(ext.phi, 0, 2).reshape(3 * K, P)        # row i K + k: Phi(p_k)[i, :]
     box = np.ones(A.shape[0]) if X is None else np.asarray(X, float)
     try:
-        lo, hi = hull.ranges(A.T, s - bound, s + bound, -box, box, C)
+        lo, hi = hull.ranges(A.T, s - bound, s + bound, -box, box, C, sweep=True)   # an axis's rows alike
     except hull.Empty:
         return None
     return np.maximum(np.abs(lo), np.abs(hi)).reshape(3, K)
