@@ -186,10 +186,7 @@ def test_each_ends_multipliers_are_kept_by_their_support_and_prove_what_the_dens
     # multiplier per column (an LP optimum's basis), not one per reading; the same multipliers written out densely
     # prove the same end (within the rounding allowance, which counts the rows read). Red when the multipliers
     # are kept dense (3,000 per end) or an end is proven from rows it does not read.
-    rng = np.random.default_rng(4)
-    B = rng.normal(size=(3000, 5))
-    x0 = rng.normal(size=5)
-    lo, hi = B @ x0 - 1.0, B @ x0 + 1.0
+    B, x0, lo, hi = _polytope(np.random.default_rng(4), 3000, 5)
     C = np.eye(5)
     out_lo, out_hi, lams = hull.ranges(B, lo, hi, x0 - 5, x0 + 5, C, multipliers=True)
     for k, (a, b) in enumerate(lams):
