@@ -25,6 +25,8 @@ import sys
 
 import numpy as np
 
+from ..outcomes import Status
+
 SIGMA, G = 1e-5, 9.81
 #: (stand, plan) of the study: the 24- and 96-position grids of the two-axis stand, the single-axis table.
 SETUPS = (("two-axis", "grid:90x60"), ("two-axis", "grid:30x45"), ("single-axis", "grid:30"))
@@ -357,7 +359,8 @@ def main():
               "g exact (--g), mounting to 5e-3 rad, stand errors to 2e-5 rad")
         print("  set  verdict     largest guaranteed error  largest |q - q_true| / bound")
         for k, (ok, worst, ratio) in enumerate(mems_sets()):
-            print(f"  {k:3d}  " + (f"consistent  {worst:24.2e}  {ratio:.4f}" if ok else "refuted"))
+            verdict = f"{Status.CONSISTENT:10s}  {worst:24.2e}  {ratio:.4f}" if ok else str(Status.REFUTED)
+            print(f"  {k:3d}  {verdict}")
         return 0
     if "--mems-stands" in sys.argv:
         sets = _option("--sets", 20)
