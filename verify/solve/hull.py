@@ -114,7 +114,8 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     if not (r > 0).all():                          # rows of width 2 (one-sided: entries at most 1)
         r = np.where(r > 0, r, np.abs(B) @ dc)
     r = np.where(r > 0, r, 1.0)
-    Bs = B * dc / r[:, None]
+    Bs = np.multiply(B, dc)                        # scaled in place: one copy of B, not two
+    Bs /= r[:, None]
     shift = B @ xc
     lo_s = np.where(np.isfinite(row_lo), (row_lo - shift) / r, -highs.INF)
     hi_s = np.where(np.isfinite(row_hi), (row_hi - shift) / r, highs.INF)
@@ -145,18 +146,14 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
             break
         keys = list(pts_)
         X = np.array([pts_[e] for e in keys]).T
-        BX = Bs @ X
-        V = lo_s[:, None] - BX
-        np.maximum(V, BX - hi_s[:, None], out=V)
-        V[S] = -np.inf
-        if not (V > TOLERANCE).any():
+        per_end = max(1, GENERATE_ABOVE // 9 // X.shape[1])    # each violated end's worst rows
+        new = _worst_rows(Bs, X, lo_s, hi_s, S, per_end)
+        if not len(new):
             break
-        per_end = max(1, GENERATE_ABOVE // 9 // V.shape[1])    # each violated end's worst rows
-        top = np.argpartition(np.negative(V.T, order="C"), min(per_end, rows - 1), axis=1)[:, :per_end].T   # rows
-        new = np.unique(top[V[top, np.arange(V.shape[1])] > TOLERANCE])
         _add_rows(h, Bs[new], lo_s[new], hi_s[new])
         S = np.r_[S, new]                          # in the model's row order
-        todo = [e for e, col in zip(keys, V[new].T) if col.max() > TOLERANCE] + [e for e in ends if found[e] is None]
+        V = _violation(Bs[new], X, lo_s[new], hi_s[new])
+        todo = [e for e, col in zip(keys, V.T) if col.max() > TOLERANCE] + [e for e in ends if found[e] is None]
     K = len(C)
     signs = np.array([1.0, -1.0])
     objectives = (signs[None, :, None] * C[:, None, :]).reshape(2 * K, -1)     # (k, +), (k, -), ...
@@ -172,6 +169,38 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
            for k in range(K)]
     lams = [(used[2 * k + 1], used[2 * k]) for k in range(K)]
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
+
+
+def _violation(Bs, X, lo_s, hi_s):
+    """By how much each row (of Bs) is violated at each point (column of X): max(lo - B x, B x - hi)."""
+    BX = Bs @ X
+    V = lo_s[:, None] - BX
+    np.subtract(BX, hi_s[:, None], out=BX)
+    return np.maximum(V, BX, out=V)
+
+
+#: Rows whose violation is measured at once: the row generation's memory is a block's, not every reading's.
+VIOLATION_BLOCK = 1 << 15
+
+
+def _worst_rows(Bs, X, lo_s, hi_s, S, per_end):
+    """The rows outside S violated by more than TOLERANCE at some point (column of X), at most `per_end` of the
+    worst per point, sorted; measured block by block of rows (the same rows as over all at once)."""
+    rows, ends = Bs.shape[0], X.shape[1]
+    in_S = np.zeros(rows, bool)
+    in_S[S] = True
+    best_v, best_i = np.full((0, ends), -np.inf), np.zeros((0, ends), np.intp)
+    for start in range(0, rows, VIOLATION_BLOCK):
+        stop = min(start + VIOLATION_BLOCK, rows)
+        V = _violation(Bs[start:stop], X, lo_s[start:stop], hi_s[start:stop])
+        V[in_S[start:stop]] = -np.inf
+        vals = np.vstack([best_v, V])
+        idx = np.vstack([best_i, np.broadcast_to(np.arange(start, stop)[:, None], V.shape)])
+        if len(vals) > per_end:
+            top = np.argpartition(-vals, per_end - 1, axis=0)[:per_end]
+            vals, idx = np.take_along_axis(vals, top, axis=0), np.take_along_axis(idx, top, axis=0)
+        best_v, best_i = vals, idx
+    return np.unique(best_i[best_v > TOLERANCE])
 
 
 def _multipliers(got, S, unit, r):
