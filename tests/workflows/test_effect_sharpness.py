@@ -1,6 +1,7 @@
-"""Effect bounds at the information set's range (issue: what leaves garant as sharp as the readings prove): every
-catalogue effect's parameters, calibrated through the extended norm relation (2.2) of 001, against the range of
-the same parameters over the linearised set computed here independently (scipy's linprog)."""
+"""Effect bounds at the information set's range: the catalogue effects' parameters (all but temperature_lag, which
+the warm-up below cannot tell from bias_temperature), calibrated through the extended norm relation (2.2) of 001,
+against the range of the same parameters over the linearised set computed here independently (scipy's linprog);
+and the bound of the effects' term per interval and axis (norm_information.effect_reach) against its own LP."""
 import numpy as np
 import pytest
 
