@@ -253,12 +253,16 @@ def test_api_errors_speak_python_argument_names_not_the_commands_flags(kwargs, n
 @needs_real
 def test_the_sensor_is_taken_in_any_case_by_the_api_as_by_the_command(capsys):
     # `garant calibrate-norm --sensor BMI160` took the name in any case; the API refused sensor="BMI160". Both take
-    # it now and give the same calibration as the lower-case name; an unknown sensor is refused naming the argument.
+    # it now through one check (options.sensor) and give the same calibration as the lower-case name; an unknown
+    # sensor is refused naming the argument, or the option.
     log = str(REAL / "openaxes_imu9.csv")
     upper, lower = (garant.calibrate_norm(log, sensor=s, g=9.81744) for s in ("BMI160", "bmi160"))
     assert np.array_equal(upper.matrix, lower.matrix)
     with pytest.raises(garant.DataError, match="sensor: 'BMX' is not one of adxl355, bmi160"):
         garant.calibrate_norm(log, sensor="BMX", g=9.81744)
+    with pytest.raises(SystemExit) as e:                  # the command: the same check (options.sensor), exit 2
+        main(["calibrate-norm", log, "--sensor", "BMX", "--g", "9.81744"])
+    assert e.value.code == 2 and "--sensor: 'BMX' is not one of adxl355, bmi160" in capsys.readouterr().err
 
 
 @needs_real

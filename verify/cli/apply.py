@@ -3,7 +3,6 @@ import os
 import sys
 
 from ..outcomes import Exit
-from ..defaults import SENSORS
 from . import flags
 
 
@@ -15,8 +14,7 @@ def add(sub):
                    "batch's folder (calibrate-norm LOG... --out DIR): each log takes DIR/<its name>.json")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): each corrected into --out DIR")
     flags.log_format(p)
-    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
-                   default="adxl355", help="accelerometer of an OpenAXES log")
+    flags.sensor(p, "adxl355")
     p.add_argument("--imu", type=int, metavar="K", help="IMU K of a multi-IMU stream (--format mimu: 1-8), or the "
                    "accelerometer of a flight controller's log (ulog, dataflash: its number or device id)")
     p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a log of sample indices "

@@ -4,7 +4,7 @@ import sys
 
 from ..outcomes import Exit
 from ..errors import FLAGS, DataError
-from ..defaults import NORM_EFFECTS, SENSORS
+from ..defaults import NORM_EFFECTS
 from . import flags
 from . import exports
 
@@ -14,8 +14,7 @@ def add(sub):
     p = sub.add_parser("calibrate-norm", help="calibrate a real static log through the norm relation of 001")
     p.add_argument("logs", metavar="LOG", nargs="+", help="a log; several (or --out): a batch, one process, every core")
     flags.log_format(p)
-    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
-                   help="accelerometer of an OpenAXES log (default adxl355)")
+    flags.sensor(p)
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream (--format mimu: 1-8; a flight "
                    "controller's log: its number or device id), or all of them "
                    "in turn (then --json holds one result per IMU)")

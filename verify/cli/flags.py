@@ -3,9 +3,6 @@ from .. import options
 from ..models import STANDS
 from ..defaults import G_DEFAULT
 
-#: Exit status when the data refute the noise bound (docs: README, "Exit status").
-
-
 #: The argparse types of the shared checks (verify/options.py: the API checks its arguments with the same).
 positive, small, noise, positive_int, count, seed, gravity, rate = (
     options.argtype(k) for k in (options.positive, options.small, options.noise, options.positive_int, options.count,
@@ -31,6 +28,14 @@ def log_format(p, extra=(), more=""):
     from ..defaults import FORMATS
     p.add_argument("--format", choices=FORMATS + tuple(extra), metavar="FORMAT",
                    help=f"log format, one of {', '.join(FORMATS + tuple(extra))} (guessed when omitted){more}")
+
+
+def sensor(p, default=None):
+    """--sensor: the accelerometer of an OpenAXES log, in any case (options.sensor: the API's check)."""
+    from ..defaults import SENSORS
+    p.add_argument("--sensor", type=options.argtype(options.sensor), default=default,
+                   metavar="{" + ",".join(sorted(SENSORS)) + "}",
+                   help="accelerometer of an OpenAXES log (default adxl355)")
 
 
 def model(p):

@@ -3,7 +3,6 @@ effect named when they disagree, and the between-run envelope to expect of the n
 import sys
 
 from ..outcomes import Exit
-from ..defaults import SENSORS
 from . import flags
 
 
@@ -15,8 +14,7 @@ def add(sub):
     p.add_argument("logs", metavar="LOG", nargs="+", help="one log per run, or a means file with a run column "
                    "(exp or run) holding every run")
     flags.log_format(p, ("means",), "; means: a positions file of per-position means (docs/formats.md)")
-    p.add_argument("--sensor", type=str.lower, choices=sorted(SENSORS),
-                   help="accelerometer of an OpenAXES log (default adxl355)")
+    flags.sensor(p)
     p.add_argument("--imu", metavar="K|all", help="IMU K of a multi-IMU stream or means file, or all of them")
     flags.g(p, "local gravity, m/s^2 (default 9.81)")
     p.add_argument("--params", type=int, choices=(9, 12), default=9, help="9 or 12 parameters (as calibrate-norm)")

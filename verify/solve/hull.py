@@ -89,7 +89,7 @@ SIMPLEX = 4
 def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False, start=(), beyond=None, sweep=False):
     """(lo, hi): the least and largest value over X of c^T x for each row c of C, each end proven
     (`upper`); with `points`, also the solver's x at each end ((x_min, x_max) per row; None where it
-    gave none); with `multipliers`, the lambda that proves each end ((for -c, for c) per row), which
+    gave none); with `multipliers`, the lambda that proves each end (Multipliers (for -c, for c) per row), which
     prove a bound on any other set with the same B and columns (`upper`). HiGHS solves on X shifted to
     the centre of its column box and scaled to columns and rows of width 2 (its tolerances are absolute);
     the multipliers it returns are mapped back and proven on X. Many rows: the LPs are solved on the rows
