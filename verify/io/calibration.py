@@ -66,7 +66,16 @@ def from_norm(res, axes):
            "pendulosity_axes": list(axes), "g": res["g"], "source": res["log"],
            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias + g bound_delta_l |n_axis(l) n_l|), n = a/|a|",
            "premises": res["premises"]["statement"]}
+    st = res.get("_information_set")
+    if st is not None:
+        out["information_set"] = dict(st, g_uncertainty=float(u))
+        out["note"] += SET_NOTE
     return out
+
+
+#: What a file with its information set adds to its note.
+SET_NOTE = ("; or, where smaller, the error's largest value over information_set (its unknowns linear in the "
+            "error; workflows/sample_set.py)")
 
 
 def through_M(G, B, bias_bound, g_uncertainty=0.0):
@@ -108,18 +117,19 @@ def from_stand(res):
             "premises": res["premises"]["statement"]}
 
 
-def from_block(res):
+def from_block(res, st=None):
     """The calibration dictionary of a consistent estimate on any stand: the block's Gamma and biases over
     the information set (workflows/block.py); a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2.
     Each bound already holds the a-priori bounds of what the parameter is confounded with (Delta_g on the
     diagonal); where the block absorbs Delta_g (its Gamma is relative to the g given) the uncertainty of g
     enters the per-sample bound as the relative error of g it is, after M (`through_M`), so the bound is one
-    in m/s^2 of the true specific force."""
+    in m/s^2 of the true specific force. `st`: the block's information set (workflows/block.py), which the file
+    carries for apply (workflows/sample_set.py)."""
     blk, prem = res["block"], res["premises"]
     G, g = np.asarray(blk["Gamma"]), res["g"]
     u = g_uncertainty(res)
     M, B, eb = through_M(G, blk["Gamma_bound"], g * np.asarray(blk["bias_bound"]), u)
-    return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
+    out = {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
             "M": M.tolist(), "b": (g * np.asarray(blk["bias"])).tolist(),
             "bound_matrix": B.tolist(), "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
             "pendulosity_axes": [2, 3, 1], "g": g, "source": f"{res['model']} estimate",
@@ -129,6 +139,11 @@ def from_block(res):
                         f") / (1 - u) + u / (1 - u) E, u = {u:g} the bound of |Delta_g/g| (Gamma is relative to g = "
                         f"{g:g} m/s^2)" if u else "") + ", bound_bias = |M| (the bounds of the biases)",
             "premises": " ".join(filter(None, (prem["statement"] + ".", prem.get("meaning"))))}
+    if st is not None:
+        out["information_set"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in st.items()}
+        out["information_set"]["g_uncertainty"] = u
+        out["note"] += SET_NOTE
+    return out
 
 
 BLOCK_NAMES = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
@@ -185,6 +200,8 @@ def checked(data, path="calibration"):
     if "effects" in data and (data.get("thermal") or np.any(out["delta"]) or data["kind"] != "norm"):
         raise DataError(f"{path}: effects belong to a 9-parameter norm calibration (no delta, no thermal)",
                         param="calibration")
+    if "information_set" in data:
+        out["information_set"] = _information_set(data, path)
     if "thermal" in data:
         th = data["thermal"]
         lo, hi = th["range_c"]
@@ -198,6 +215,29 @@ def checked(data, path="calibration"):
                             "bound_Gamma and bound_bias hold one bound per piece", param="calibration")
         out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
     return out
+
+
+def _information_set(data, path):
+    """The file's information_set as numpy arrays, each part one entry per row or column of the set (rows K x P,
+    P = 9 and the effects' parameters); DataError naming what does not fit."""
+    raw = data["information_set"]
+    P = len(raw["estimate"])
+    effects = data.get("effects") or {}
+    problem = (
+        f"{P} columns, but 9 and the effects' {len(effects['theta'])} parameters make the set's"
+        if effects.get("theta") is not None and P != 9 + len(effects["theta"]) else
+        f"every row must hold one number per entry of estimate ({P})" if any(len(r) != P for r in raw["rows"]) else
+        "centre and bound must hold one number per row" if len(raw["centre"]) != len(raw["rows"])
+        or len(raw["bound"]) != len(raw["rows"]) else
+        "box_lo, box_hi and shift must hold one number per entry of estimate"
+        if any(len(raw[k]) != P for k in ("box_lo", "box_hi", "shift")) else
+        "box_lo must not exceed box_hi" if any(x > y for x, y in zip(raw["box_lo"], raw["box_hi"])) else
+        "block_columns must name 12 different columns of the set" if "block_columns" in raw
+        and (len(set(raw["block_columns"])) != 12 or max(raw["block_columns"]) >= P) else None)
+    if problem:
+        raise DataError(f"{path}: information_set: {problem}", param="calibration")
+    st = {k: np.array(v, int if k == "block_columns" else float) for k, v in raw.items()}
+    return st
 
 
 def thermal_at(cal, T):

@@ -52,7 +52,28 @@ def calibration(mod, info, premises):
     G = np.array([[value[f"Gamma{i}{j}"] for j in (1, 2, 3)] for i in (1, 2, 3)])
     GB = np.array([[half[f"Gamma{i}{j}"] for j in (1, 2, 3)] for i in (1, 2, 3)])
     return {"Gamma": G, "Gamma_bound": GB, "bias": np.array([value[f"bias{i}"] for i in (1, 2, 3)]),
-            "bias_bound": np.array([half[f"bias{i}"] for i in (1, 2, 3)]), "confounded": confounded}
+            "bias_bound": np.array([half[f"bias{i}"] for i in (1, 2, 3)]), "confounded": confounded,
+            "_set": _information_set(info, M, np.where(bounded, -b, -np.inf), np.where(bounded, b, np.inf), targets,
+                                     [value[n] for n in BLOCK])}
+
+
+def _information_set(info, R, col_lo, col_hi, targets, mid):
+    """The calibration file's information_set of the block (workflows/sample_set.py): the LP of the physical
+    parameters' set (guarantee.InformationSet.physical_set) in (p, u), its estimate the block's midpoints at
+    `targets` (the box's elsewhere: no sample's error reads them), or None where it is too large for a file."""
+    from . import sample_set
+    if info.A.shape[1] * (R.shape[1] + R.shape[0]) > sample_set.MAX_ENTRIES:
+        return None
+    B, row_lo, row_hi, lo, hi = info.physical_set(R, col_lo, col_hi, targets)
+    centre = 0.5 * (row_lo + row_hi)
+    bound = 0.5 * (row_hi - row_lo) * (1 + 4 * EPS) + 4 * EPS * np.abs(centre)    # holds [row_lo, row_hi] rounded
+    estimate = 0.5 * (lo + hi)
+    estimate[list(targets)] = mid
+    return {"rows": B, "centre": centre, "bound": bound, "box_lo": lo, "box_hi": hi, "shift": np.zeros(len(lo)),
+            "estimate": estimate, "block_columns": list(map(int, targets))}
+
+
+EPS = np.finfo(float).eps
 
 
 _CONTRADICT = ("no unit within the a-priori bounds has q within the guaranteed errors: the data contradict a premise "

@@ -245,10 +245,20 @@ class InformationSet:
 
     def physical(self, R, col_lo, col_hi, targets):
         """(lo, hi, points) of each physical parameter p_j (j in targets) over {p : R p in Q, col_lo <= p <=
-        col_hi}: one LP pair each in (p, u), w = R p - q0 + u with |u| <= shift, rows A^T w within y +- s.
-        Unbounded columns (inf) are first enclosed through a row of R whose other entries are bounded
-        (q_nu over Q); one that no row encloses is not separated (ValueError names it). points: the
-        p at each end (min, max), for what the range reaches. hull.Empty when no such p exists."""
+        col_hi}: one LP pair each in (p, u) over `physical_set`. points: the p at each end (min, max), for what
+        the range reaches. hull.Empty when no such p exists."""
+        n = np.shape(R)[1]
+        B, row_lo, row_hi, lo, hi = self.physical_set(R, col_lo, col_hi, targets)
+        C = np.zeros((len(targets), B.shape[1]))
+        C[np.arange(len(targets)), np.asarray(targets)] = 1.0
+        out_lo, out_hi, pts = hull.ranges(B, row_lo, row_hi, lo, hi, C, points=True)
+        return out_lo, out_hi, [tuple(None if x is None else x[:n] for x in ends) for ends in pts]
+
+    def physical_set(self, R, col_lo, col_hi, targets=()):
+        """The set {p : R p in Q, col_lo <= p <= col_hi} as an LP's rows and columns (B, row_lo, row_hi, lo, hi) in
+        (p, u): w = R p - q0 + u with |u| <= shift, rows A^T w within y +- s. Unbounded columns (inf) are first
+        enclosed through a row of R whose other entries are bounded (q_nu over Q); a target that no row encloses
+        is not separated (Unbounded names it)."""
         R = np.asarray(R, float)
         m, n = R.shape
         lo, hi = np.array(col_lo, float), np.array(col_hi, float)
@@ -280,12 +290,8 @@ class InformationSet:
         At = self.A.T
         base = At @ self.lin.q0
         s = self.s + taylor.SUM_ERROR * (np.abs(At) @ np.abs(self.lin.q0) + np.abs(base))
-        B = np.hstack([At @ R, At])
-        C = np.zeros((len(targets), n + m))
-        C[np.arange(len(targets)), np.asarray(targets)] = 1.0
-        out_lo, out_hi, pts = hull.ranges(B, self.y + base - s, self.y + base + s, np.r_[lo, -self.shift],
-                                          np.r_[hi, self.shift], C, points=True)
-        return out_lo, out_hi, [tuple(None if x is None else x[:n] for x in ends) for ends in pts]
+        return (np.hstack([At @ R, At]), self.y + base - s, self.y + base + s, np.r_[lo, -self.shift],
+                np.r_[hi, self.shift])
 
 
 def _weighted_minimax(A, z, rb):

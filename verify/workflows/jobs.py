@@ -111,9 +111,11 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
                        remount=remount, mount=mount,
                        gamma=gamma, premises=prem, progress=progress, thermal=thermal)
     section = res.pop("thermal_file", None)
+    block_set = res["block"].pop("_set", None) if isinstance(res.get("block"), dict) else None
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
-        res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(res)
+        res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(
+            res, None if "thermal" in res else block_set)     # a thermal file's bound is its block's (apply_thermal)
         if "thermal" in res:
             if section is None:
                 del res["calibration"]
@@ -277,6 +279,7 @@ def calibrate_norm(log: Log, *, g: Optional[float] = None, g_uncertainty: Option
             from . import norm_effects, norm_thermal
             res["calibration"].update(norm_effects.file_entry(res, p.ext.names, None if p.temps is None else
                                                               list(norm_thermal.sample_range(data, p.stills))))
+    res.pop("_information_set", None)             # the file's, not the result's
     return results.NormCalibration(res)
 
 
@@ -590,6 +593,7 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
         (t, a, bound). `outside`: the samples of its piece dropped as outside the calibrated temperature range.
     """
     from ..io import calibration as cal_io, recordings
+    from . import sample_set
     if not isinstance(calibration, (dict, str, os.PathLike)):
         raise DataError(f"calibration: a calibration file's path or the dictionary a result's calibration holds, "
                         f"not {type(calibration).__name__}", param="calibration")
@@ -621,7 +625,7 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
             a, bound = norm_effects.apply(cal, data.raw[k], frame, None if data.temp is None else data.temp[k],
                                           data.path)
         else:
-            a, bound = cal_io.apply(cal, data.raw[k], frame)
+            a, bound = sample_set.apply(cal, data.raw[k], frame)
         return results.Correction(t=data.t[k], a=a, bound=bound, kind=cal["kind"],
                                   outside=0 if keep is None else (j - i) - len(k))
     if chunk is None and hasattr(log, "columns"):       # a DataFrame in, a calibrated copy out (imucal's habit)

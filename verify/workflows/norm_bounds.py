@@ -163,6 +163,9 @@ def bounds(p, v):
             effects["definitions"] = dict(norm_thermal.DEFINITIONS)
         half, bound, err = half[:params], bound[:params], err[:params]
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err, cap=cap)
+    if params == 9 and "thermal" not in effects:          # what apply bounds each sample's error over
+        from . import sample_set
+        effects["_information_set"] = sample_set.entry(A, s, bnd, lo, hi, shift, dq)
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
         "matrix_fit": res["M"].tolist(),

@@ -294,8 +294,8 @@ def needs_temperature(cal):
 
 def apply_term(cal, a0, temp, g, path):
     """The effects of a calibration file at corrected samples a0 = M (raw - b) (3, N), m/s^2: the term g Phi(p)
-    theta (3, N) to take out (p = a0 / |a0|), g |Phi(p)| h (3, N) (h the bound of theta) and c = g L (|theta| + h)
-    (N), the bound's growth per unit |m - p| (io/calibration.py `_with_effects` composes them)."""
+    theta (3, N) to take out (p = a0 / |a0|), g |Phi(p)| h (3, N) (h the bound of theta), c = g L (|theta| + h)
+    (N), the bound's growth per unit |m - p| (`apply` composes them), and Phi(p) (J, 3, N) itself."""
     from .. import models
     mod = models.load("norm")
     eff = cal["effects"]
@@ -325,7 +325,7 @@ def apply_term(cal, a0, temp, g, path):
     jac = np.concatenate([mod.effect_jacobian_bound(x, 0.0, T) for x in names])
     theta, h = np.asarray(eff["theta"], float), np.asarray(eff["bound"], float)
     return (g * np.einsum("j,jik->ik", theta, phi), g * np.einsum("j,jik->ik", h, np.abs(phi)),
-            g * lipschitz(jac, np.abs(theta) + h))
+            g * lipschitz(jac, np.abs(theta) + h), phi)
 
 
 def apply(cal, raw, frame="garant", temp=None, path="the log"):
@@ -339,12 +339,17 @@ def apply(cal, raw, frame="garant", temp=None, path="the log"):
     from ..io.calibration import imu_tk_form
     g = cal["g"]
     a0 = cal["M"] @ (np.asarray(raw, float) - cal["b"]).T
-    term, lin, c = apply_term(cal, a0, temp, g, path)
+    term, lin, c, phi = apply_term(cal, a0, temp, g, path)
     a = a0 - term
     F = np.abs(np.asarray(cal["effects"]["frame"], float))
     inverse = np.linalg.inv(np.eye(3) - cal["bound_matrix"])
-    v = cal["bound_matrix"] @ np.abs(a) + cal["bound_bias"][:, None] + lin + F @ (np.abs(term) + lin)
-    bound0 = inverse @ v
+    v = cal["bound_matrix"] @ np.abs(a) + cal["bound_bias"][:, None] + lin
+    if "information_set" in cal:      # the linear part over the set (workflows/sample_set.py), not over its box
+        from . import sample_set
+        st = cal["information_set"]
+        u = float(st["g_uncertainty"])
+        v = np.minimum(v, (1 + u) * sample_set.linear_sup(st, a, g, phi) + u * np.abs(a))
+    bound0 = inverse @ (v + F @ (np.abs(term) + lin))
     grow = inverse @ (1.0 + F.sum(axis=1))                     # the bound's growth per unit of c |m - p|
     room = g - 2.0 * c * float(np.linalg.norm(grow))
     if np.any(room <= 0):
