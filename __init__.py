@@ -19,6 +19,7 @@ _API = {
     "diagnose": ("garant.verify.api", "diagnose"),
     "next_position": ("garant.verify.api", "next_position"),
     "apply": ("garant.verify.api", "apply"),
+    "budget": ("garant.verify.api", "budget"),
     "load_model": ("garant.verify.models", "load"),
     "DataError": ("garant.verify.errors", "DataError"),
 }

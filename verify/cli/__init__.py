@@ -26,7 +26,8 @@ from . import exports
 #: The subcommands, in the order of `garant --help`: command name -> its module.
 COMMANDS = {"verify": "verify", "plan": "plan", "next": "next", "estimate": "estimate",
             "calibrate-norm": "calibrate_norm",
-            "repeatability": "repeatability", "apply": "apply", "identify": "identify", "derive": "derive",
+            "repeatability": "repeatability", "apply": "apply", "budget": "budget", "identify": "identify",
+            "derive": "derive",
             "simulate": "simulate", "diagnose": "diagnose", "check-certificate": "check_certificate"}
 #: Output options of the commands: (attribute, what it is, a file or a folder); the exports' are in exports.py.
 OUTPUTS = (("json", "the JSON output", "file"), ("plot", "the plot", "file"), ("output", "the data file", "file"),

@@ -180,6 +180,12 @@ class Diagnosis(Result):
         return Status.EXPLAINED if self.get("consistent_after") else Status.UNEXPLAINED
 
 
+class Budget(Result):
+    """`garant budget --json`: what a calibration guarantees downstream, over the information set."""
+
+    FIELDS = _Schema("budget")
+
+
 class Correction(Result):
     """`garant.apply`: a corrected log. Unpacks as (t, a, bound) too."""
 

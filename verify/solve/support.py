@@ -32,13 +32,16 @@ class Solved:
 
     def __init__(self, budget=BUDGET):
         self.cells, self.budget, self.spent = {}, budget, 0
+        self.units, self.proofs = [], []        # every cell's unit c and proofs, for the cells past the budget
 
 
-def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None):
+def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False):
     """(lo, hi), each (N,): proven ends of c^T x over X for each row c of C (N, P), sharp to about GAP of
     the width about x0 (a point of X, e.g. the estimate) for every sample the budget of LPs reaches, and
     proven for every sample whatever the budget (lambda = 0, the column box, at worst). `solved`: the cells
-    solved before on the same set (Solved), used and added to."""
+    solved before on the same set (Solved), used and added to. `seen_too`: also (lo_seen, hi_seen), the values at
+    the LP points found (the ends lie beyond them, to HiGHS's tolerance: a guide to what is worth more LPs, no
+    proof; -inf and inf where none)."""
     solved = Solved() if solved is None else solved
     C = np.asarray(C, float)
     N = len(C)
@@ -76,13 +79,27 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None):
             for j, p_, lam in zip(new, pts, lams):
                 c = C[todo[first[j]]]
                 solved.cells[names[j]] = (_basis(B, -c, lam[0]), _basis(B, c, lam[1])), p_
+                solved.units.append(c / np.linalg.norm(c))
+                solved.proofs.append(solved.cells[names[j]][0])
         X = []
+        unsolved = [j for j, name in enumerate(names) if name not in solved.cells]
+        if unsolved and solved.units:        # past the budget: the proofs of the nearest cell solved (any round)
+            reps = C[todo[first[unsolved]]]
+            near = (reps / np.linalg.norm(reps, axis=1)[:, None]) @ np.asarray(solved.units).T
+            pick = np.argmax(np.abs(near), axis=1)
+            flip = near[np.arange(len(unsolved)), pick] < 0
+            for k, f in set(zip(pick.tolist(), flip.tolist())):
+                members = todo[np.isin(cell, np.asarray(unsolved)[(pick == k) & (flip == f)])]
+                pair = solved.proofs[k][::-1] if f else solved.proofs[k]
+                for end, sign in ((0, -1.0), (1, 1.0)):
+                    proven = _proven(sign * C[members], B, row_lo, row_hi, col_lo, col_hi, pair[end])
+                    best[end, members] = np.minimum(best[end, members], proven)
         for j, name in enumerate(names):
             got = solved.cells.get(name)
             if got is None:
                 continue
-            proofs, p_ = got
             members = todo[cell == j]
+            proofs, p_ = got
             for end, sign in ((0, -1.0), (1, 1.0)):
                 proven = _proven(sign * C[members], B, row_lo, row_hi, col_lo, col_hi, proofs[end])
                 best[end, members] = np.minimum(best[end, members], proven)
@@ -95,7 +112,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None):
         width = np.maximum(best - centre, 0.0)
         todo = todo[(best - np.maximum(seen, centre) > GAP * width)[:, todo].any(axis=0)]
         step /= 2
-    return -best[0], best[1]
+    return (-best[0], best[1]) + ((-seen[0], seen[1]) if seen_too else ())
 
 
 #: LP points whose values at every sample are taken at once (the memory of that step: samples x this).

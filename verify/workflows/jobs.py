@@ -635,6 +635,31 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
     return (piece(i, i + chunk) for i in range(0, n, chunk))
 
 
+@constraints(calibration=options.path, log=by_the_job("jobs.read_log"), g=options.gravity,
+             g_uncertainty=options.small, format=options.one_of(*FORMATS), sensor=options.sensor,
+             progress=options.callback)
+def budget(calibration: str, *, log: Optional[str] = None, g: Optional[float] = None,
+           g_uncertainty: Optional[float] = None, format: Optional[str] = None,
+           sensor: Optional[str] = None, progress: Optional[Callable] = None) -> results.Budget:
+    """What a calibration guarantees downstream: `garant budget CAL [--log LOG] --json`.
+
+    Parameters
+    ----------
+    calibration : path
+        A garant calibration file, or imu_tk's (text) or imucal's (JSON) with `log`.
+    log : path, optional
+        Judge the calibration against this log's information set (garant's calibration of it beside).
+    g, g_uncertainty, format, sensor
+        As calibrate-norm, for the log's calibration.
+    progress : callable, optional
+        Hears (attitudes done, attitudes).
+    """
+    from . import budget as bud
+    res = None if log is None else calibrate_norm(log, g=g, g_uncertainty=g_uncertainty, format=format,
+                                                   sensor=sensor)
+    return bud.run(calibration, log, res, progress)
+
+
 #: Samples corrected at a time into a DataFrame's copy: the work's memory is this piece's, not the frame's.
 FRAME_CHUNK = 1 << 16
 

@@ -1,0 +1,72 @@
+"""garant budget: what a calibration guarantees downstream (specific force, tilt, velocity, position, a filter's
+bounds), over the information set; a calibration made elsewhere judged against the log it was made from."""
+import sys
+
+from ..outcomes import Exit
+from . import flags
+
+
+def add(sub):
+    """The `garant budget` subcommand and its flags."""
+    p = sub.add_parser("budget", help="what a calibration guarantees downstream: worst-case specific force, tilt, "
+                                      "velocity and position error over the information set")
+    p.add_argument("calibration", metavar="CAL", help="a garant calibration (calibrate-norm or estimate --save), or "
+                   "imu_tk's (its text file) or imucal's (its JSON) with --log")
+    p.add_argument("--log", metavar="LOG", help="judge CAL against this log's information set (the log it was made "
+                   "from, or any static log of the same unit), garant's calibration of it beside")
+    flags.log_format(p)
+    flags.sensor(p, "adxl355")
+    flags.g(p, "local gravity, m/s^2, for the log's calibration (default 9.81, |Delta_g/g| <= 5e-3)", None)
+    p.add_argument("--g-uncertainty", type=flags.small, metavar="U", help="the bound on |Delta_g/g| (default 1e-5 "
+                   "with --g, 5e-3 without)")
+    flags.json(p)
+    return p
+
+
+def run(args):
+    """`garant budget`: compute, print the table, write --json; the exit status (REFUTED when the readings refute
+    the calibration judged)."""
+    from ..io import report
+    from ..workflows import jobs
+
+    def progress(done, total):
+        if done == total or done % 1024 < 256:
+            print(f"budget: {done} of {total} attitudes ...", file=sys.stderr, flush=True)
+    res = jobs.budget(args.calibration, log=args.log, g=args.g, g_uncertainty=args.g_uncertainty, format=args.format,
+                      sensor=args.sensor, progress=progress)
+    _print(res)
+    if args.json:
+        report.write_json(args.json, res)
+        print(f"wrote {args.json}", file=sys.stderr)
+    return Exit.REFUTED if res["refuted"] else Exit.OK
+
+
+def _print(res):
+    """The figures as a table a non-specialist reads: one column per calibration."""
+    from ..io import report
+    judged = f" judged against {res['log']}" if res["log"] else " over its own information set"
+    turn = (f"; its frame turned {res['frame_turn_deg']:.3g} deg into garant's convention (not counted: the norm "
+            "relation cannot see a turn)" if res["frame_turn_deg"] else "")
+    print(f"budget of {res['calibration']} ({res['calibration_kind']}){judged}{turn}")
+    if res["refuted"]:
+        r = res["refuted"]
+        print(f"  REFUTED: the readings rule this calibration out: still interval {r['interval']} needs "
+              f"{r['times_its_bound']:.3g} times its noise bound plus remainder for it")
+    cols = [res] + ([res["garant"]] if res["garant"] else [])
+    head = ["worst case over every attitude", "this calibration"] + (["garant's of the log"] if res["garant"] else [])
+    rows = [["specific force error, m/s^2 (mg)"] + [f"{c['specific_force_error_mps2']:.3g} "
+                                                    f"({c['specific_force_error_mg']:.3g})" for c in cols],
+            ["  per axis x, y, z, m/s^2"] + [", ".join(f"{x:.2g}" for x in c["per_axis_error_mps2"]) for c in cols],
+            ["tilt error, mrad (deg)"] + [f"{1e3 * c['tilt_error_rad']:.3g} ({c['tilt_error_deg']:.2g})" for c in cols]]
+    for T in res["horizons_s"]:
+        rows.append([f"after {T} s: velocity m/s, position m"] + [
+            f"{c['velocity_error_mps'][str(T)]:.3g}, {c['position_error_m'][str(T)]:.3g}" for c in cols])
+    rows += [["a filter's bias bound x, y, z, m/s^2"] + [", ".join(f"{x:.2g}" for x in c["bias_bound_mps2"])
+                                                        for c in cols],
+             ["a filter's scale bound x, y, z, ppm"] + [", ".join(f"{1e6 * c['slope_bound'][k][k]:.3g}"
+                                                                  for k in range(3)) for c in cols]]
+    report.table(head, rows)
+    print("  tilt: the angle of the vertical (pitch errs by at most it, roll by at most it / cos(pitch)); velocity and "
+          "position: the calibration error alone integrated with the attitude held, not a navigation solution")
+    print(f"  these hold if {res['premises'].removeprefix('the bounds hold if ')}; g = {res['g']:g} m/s^2 within "
+          f"|Delta_g/g| <= {res['g_uncertainty']:g}")

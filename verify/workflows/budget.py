@@ -1,0 +1,326 @@
+"""What a calibration guarantees downstream: the worst-case error of a corrected specific force over every
+direction at 1 g, the static tilt error, the velocity and position error that error builds up in free
+integration, and the per-axis bias and scale bounds a filter takes, each over the information set the readings
+prove; for a calibration made elsewhere (imu_tk, imucal), judged against the set of the log it was made from.
+
+A still unit with its vertical along the unit vector n (body axes) reads the true specific force g n. For every
+unit of the set (a norm set: the fit M_fit, b_fit corrected by q, (2.2) of 001; a stand's: the block's Gamma and
+biases, (28)-(29) of 000) a calibration (M_p, b_p) corrects that reading to a = g n + e with, exactly,
+
+    norm:  e = M_p (b_fit - b_p) + (K - E) g n + K (lower(q) g n + g q_eps),   K = M_p M_fit^-1,
+    stand: e = M ((Gamma - G) g n + g (beta - beta_m)) + (M (E + G) - E) g n,
+
+affine in the set's unknowns z. So each figure at one n is an LP pair over the set (solve/support.py, each end
+proven by duality). Over every n: the directions of a cube-sphere grid (every unit vector within a chord of
+sqrt(2) / N_SIDE of one) and, outward, what e can move between a grid direction and any other (|de_k / dn_j| <= g
+times the bound of the error's slope over the set, `_filter`). The error of g (|g_t/g - 1| <= u) adds u g |n_k|
+(the true specific force is g_t n, along n).
+
+- specific force: |e| <= the smaller of the norm of the three axes' bounds and that of the bounds along n and
+  across it;
+- tilt (the angle between the true and the estimated vertical: pitch errs by at most it, roll by at most it over
+  cos(pitch)): atan(|e_perp| / (g - |e_par|)), |e_perp| <= sec(pi / 16) times the largest of 16 directions across n;
+- velocity and position over a horizon T of free integration with the attitude held: |e| T and |e| T^2 / 2, a bound
+  of the integrated calibration error alone (not a navigation solution: no attitude, gyroscope or noise error).
+"""
+import numpy as np
+
+from ..errors import DataError
+from ..solve import support
+from .norm_information import lower
+
+#: Cube-sphere cells per face side of the attitudes: every unit vector within sqrt(2) / N_SIDE (chord) of one.
+N_SIDE = 24
+HORIZONS_S = (1, 10, 60)
+PERP = 16                                                # directions across n: |e_perp| <= sec(pi/16) times their max
+MG = 1e3 / 9.80665                                       # mg per m/s^2 (standard gravity)
+
+
+def grid(side):
+    """(N, 3) unit directions of the cube-sphere grid with `side` cells per face side, and its covering chord: a
+    point of a face lies within sqrt(2) / side of a grid point in face coordinates, and the radial map onto the
+    sphere (the projection onto the unit ball) is 1-Lipschitz."""
+    t = np.linspace(-1.0, 1.0, side + 1)
+    u, v = (x.ravel() for x in np.meshgrid(t, t))
+    one = np.ones_like(u)
+    faces = [np.column_stack(c) for s in (1.0, -1.0) for c in ((s * one, u, v), (u, s * one, v), (u, v, s * one))]
+    P = np.vstack(faces)
+    P = np.unique(np.round(P, 12), axis=0)
+    return P / np.linalg.norm(P, axis=1)[:, None], np.sqrt(2.0) / side
+
+
+class Model:
+    """The error of a calibration over a set: e(n) = d0 + D(n) + C(n) z, z in the set (`st`, the calibration
+    file's information_set: rows, box, shift, estimate), D and C linear in n. `kind`: "norm" or "stand"."""
+
+    def __init__(self, st, build, d0, g, u, kind):
+        self.st, self.build, self.d0, self.g, self.u, self.kind = st, build, np.asarray(d0, float), g, u, kind
+
+    def ranges(self, n, W, solved=None, seen_too=False):
+        """(lo, hi) (N, R) of w^T e(n) for each n (rows of n) and each row w of W (R, 3) or each (N, R, 3); `solved`
+        (support.Solved): the LPs of earlier calls for the same rows (a budget of its own), default the set's."""
+        d, C = self.build(n)                                       # (3, N), (3, N, P)
+        W = np.broadcast_to(W, (len(n),) + np.shape(W)[-2:])
+        obj = np.einsum("nrk,knp->nrp", W, C).reshape(-1, C.shape[2])
+        off = np.einsum("nrk,kn->nr", W, d + self.d0[:, None]).ravel()
+        st = self.st
+        rows, s, b = (np.asarray(st[k], float) for k in ("rows", "centre", "bound"))
+        got = support.ranges(rows, s - b, s + b, np.asarray(st["box_lo"], float), np.asarray(st["box_hi"], float),
+                             obj, np.asarray(st["estimate"], float),
+                             st.setdefault("_solved", support.Solved()) if solved is None else solved, seen_too)
+        lo, hi = got[:2]
+        reach = np.abs(obj) @ np.asarray(st["shift"], float)
+        pad = 4 * (obj.shape[1] + 4) * np.finfo(float).eps * (np.abs(lo) + np.abs(hi) + np.abs(off))
+        out = ((lo - reach + off - pad).reshape(len(n), -1), (hi + reach + off + pad).reshape(len(n), -1))
+        return out + ((got[2] + off).reshape(len(n), -1), (got[3] + off).reshape(len(n), -1)) if seen_too else out
+
+
+def norm_model(cal, M_p=None, b_p=None):
+    """The Model of the calibration (M_p, b_p) (default the file's own) over a norm file's set: its q's fit
+    M_fit = (E + lower(q_m)) M, b_fit = b - M_fit^-1 g q_m,eps taken back out of the file."""
+    st, g = cal["information_set"], cal["g"]
+    q_m = np.asarray(st["estimate"], float)
+    if len(q_m) != 9:
+        raise DataError("budget: a norm calibration with catalogue effects is not budgeted yet (its error depends "
+                        "on each sample's temperature and time); budget the constant calibration", param="calibration")
+    M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
+    M_fit = (np.eye(3) + lower(q_m)) @ M
+    b_fit = b - np.linalg.solve(M_fit, g * q_m[6:9])
+    M_p, b_p = (M, b) if M_p is None else (np.asarray(M_p, float), np.asarray(b_p, float))
+    K = M_p @ np.linalg.inv(M_fit)
+
+    def build(n):
+        a = g * np.asarray(n, float).T                              # (3, N)
+        R = np.zeros((3, a.shape[1], 9))
+        for j, cols in enumerate(((0,), (3, 1), (4, 5, 2))):
+            for i, c in enumerate(cols):
+                R[j, :, c] = a[i]
+            R[j, :, 6 + j] = g
+        return (K - np.eye(3)) @ a, np.einsum("kj,jnp->knp", K, R)
+    return Model(st, build, M_p @ (b_fit - b_p), g, float(st["g_uncertainty"]), "norm")
+
+
+def stand_model(cal):
+    """The Model of a stand file over its block's set (block_columns: Gamma11..Gamma33, bias1..bias3 over g)."""
+    st, g, M = cal["information_set"], cal["g"], np.asarray(cal["M"], float)
+    cols = np.asarray(st["block_columns"], int)
+    z_m = np.asarray(st["estimate"], float)
+    G = z_m[cols[:9]].reshape(3, 3)
+    left = M @ (np.eye(3) + G) - np.eye(3)
+    P = len(z_m)
+
+    def build(n):
+        a = g * np.asarray(n, float).T
+        C = np.zeros((3, a.shape[1], P))
+        for i in range(3):
+            for j in range(3):
+                C[:, :, cols[3 * i + j]] = M[:, i, None] * a[j]
+            C[:, :, cols[9 + i]] = M[:, i, None] * g
+        return left @ a - np.einsum("knp,p->kn", C, z_m), C
+    return Model(st, build, np.zeros(3), g, float(st["g_uncertainty"]), "stand")
+
+
+def figures(model, progress=None):
+    """The budget of one Model: the worst-case errors over every attitude (the module's docstring). At each
+    attitude of the grid: each axis's error, the error along n and its largest across n (PERP directions); |e| is
+    the smaller of the axes' norm and that of the parts along and across n. Only the largest over the attitudes is
+    printed, so after a first pass of few LPs, more go only to the attitudes whose bounds could still be the
+    largest (`_refine`)."""
+    g, u = model.g, model.u
+    N, delta = grid(N_SIDE)
+    filt = _filter(model)
+    G = g * (np.asarray(filt["slope_bound"]) - u * np.eye(3))    # |de_k / dn_j| <= G_kj over the set
+    slack_axis = np.linalg.norm(G, axis=1) * delta     # |n - n'|_2 <= delta
+    slack_norm = np.linalg.norm(G) * delta
+    U, L = _refine(model, N, progress)
+    axes, along = U[:, :3], U[:, -1]
+    across = U[:, 3:-1].max(axis=1) / np.cos(np.pi / PERP)
+    # the error of g moves a still unit's reading along n only: |e'| <= |(e_perp, e_par + u g)|
+    here = np.minimum(np.linalg.norm(axes + u * g * np.abs(N), axis=1), np.hypot(across, along + u * g))
+    worst = N[int(np.argmax(here))]
+    per_axis = axes.max(axis=0) + slack_axis + u * g
+    e_sup = float(here.max()) + slack_norm
+    perp_sup = float(across.max()) + slack_norm + e_sup * delta   # |n n^T - n' n'^T|_2 = sin of their angle <= chord
+    par_sup = min(float(along.max()) + slack_norm, e_sup)
+    if par_sup >= g:
+        raise DataError("budget: the error bound reaches g: no tilt is bounded", param="calibration")
+    tilt = float(np.arctan(perp_sup / (g - par_sup)))
+    return {
+        "specific_force_error_mps2": e_sup, "specific_force_error_mg": e_sup * MG,
+        "per_axis_error_mps2": per_axis.tolist(),
+        "tilt_error_rad": tilt, "tilt_error_deg": float(np.degrees(tilt)),
+        "velocity_error_mps": {str(T): e_sup * T for T in HORIZONS_S},
+        "position_error_m": {str(T): e_sup * T * T / 2 for T in HORIZONS_S},
+        **filt,
+        "attitudes": int(len(N)), "grid_chord": float(delta), "worst_attitude": worst.tolist(),
+    }
+
+
+#: LPs (cells) for each kind of row (the axes; across and along n), counted, not timed; past them a cell is proven
+#: by the multipliers of the nearest cell solved (solve/support.py).
+BUDGET = 20_000
+STEP = 256                                              # attitudes at a time (the memory of a step)
+
+
+def _refine(model, N, progress=None):
+    """(U, L) (N, 3 + PERP / 2 + 1): at each attitude the proven bound of |w^T e| over the set for the axes, the
+    directions across n and n itself (U), and a value of it at an LP's point (L, a guide, no proof)."""
+    nN, R = len(N), 3 + PERP // 2 + 1
+    U, L = np.full((nN, R), np.inf), np.zeros((nN, R))
+    solved = [support.Solved(BUDGET), support.Solved(BUDGET)]
+    for i in range(0, nN, STEP):
+        idx = np.arange(i, min(i + STEP, nN))
+        n = N[idx]
+        for cols, W, s in ((slice(0, 3), np.eye(3), solved[0]), (slice(3, R), _across(n), solved[1])):
+            lo, hi, lo_s, hi_s = model.ranges(n, W, s, seen_too=True)
+            U[idx, cols] = np.maximum(-lo, hi)
+            L[idx, cols] = np.maximum(np.maximum(-lo_s, hi_s), 0.0)
+        if progress:
+            progress(idx[-1] + 1, nN)
+    return U, L
+
+
+def _across(n):
+    """(N, PERP / 2 + 1, 3): PERP / 2 unit directions across each n, evenly over half a turn (with their opposites
+    the PERP directions of the circle), and n itself last."""
+    a = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
+    p1 = np.cross(n, a)
+    p1 /= np.linalg.norm(p1, axis=1)[:, None]
+    p2 = np.cross(n, p1)
+    ang = np.pi * np.arange(PERP // 2) / (PERP // 2)
+    W = np.cos(ang)[None, :, None] * p1[:, None] + np.sin(ang)[None, :, None] * p2[:, None]
+    return np.concatenate([W, n[:, None]], axis=1)
+
+
+def _filter(model):
+    """The bounds a filter's measurement model takes, over the set: per axis the bias (the error at a = 0, m/s^2)
+    and the 3 x 3 bound of the error's slope by the true specific force (dimensionless: scale on the diagonal,
+    misalignment and cross-axis off it); the error of g counts in the diagonal (u)."""
+    zero = np.zeros((1, 3))
+    lo, hi = model.ranges(zero, np.eye(3))
+    bias = np.maximum(-lo, hi)[0]
+    slope = np.zeros((3, 3))
+    for j in range(3):
+        e = np.zeros((1, 3))
+        e[0, j] = 1.0
+        d1, C1 = model.build(e)
+        d0, C0 = model.build(zero)
+        sub = Model(model.st, lambda n, d1=d1, d0=d0, C1=C1, C0=C0: (d1 - d0, C1 - C0), np.zeros(3), model.g, 0.0,
+                    model.kind)
+        lo, hi = sub.ranges(np.zeros((1, 3)), np.eye(3))
+        slope[:, j] = np.maximum(-lo, hi)[0] / model.g
+    slope += model.u * np.eye(3)
+    return {"bias_bound_mps2": bias.tolist(), "slope_bound": slope.tolist()}
+
+
+def peer(path):
+    """(kind, M, b) of a calibration file: garant's own ("garant", the checked dictionary, None), imucal's
+    FerrarisCalibrationInfo JSON (M = (K_a R_a)^-1, b = b_a: imucal's a = R_a^-1 K_a^-1 (raw - b_a)) or imu_tk's
+    CalibratedTriad text (M = T K, b = B); DataError naming the file otherwise."""
+    from ..io import calibration, files
+    files.regular(path, "the calibration file", calibration.MAX_BYTES, param="calibration")
+    try:
+        with open(path, "rb") as fh:
+            start = fh.read(64).lstrip()
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})", param="calibration") from None
+    if start.startswith(b"{"):
+        data = files.read_json(path, "a calibration file", calibration.MAX_BYTES, param="calibration")
+        if isinstance(data, dict) and data.get("format") == calibration.FORMAT:
+            return "garant", calibration.read(path), None
+        if isinstance(data, dict) and all(k in data for k in ("K_a", "R_a", "b_a")):
+            try:
+                K, R, b = (np.array(data[k], dtype=float) for k in ("K_a", "R_a", "b_a"))
+            except (TypeError, ValueError):
+                K = None
+            if K is None or K.shape != (3, 3) or R.shape != (3, 3) or b.shape != (3,) or not (
+                    np.all(np.isfinite(K)) and np.all(np.isfinite(R)) and np.all(np.isfinite(b))):
+                raise DataError(f"{path}: imucal's K_a and R_a must be 3 x 3 and b_a 3 finite numbers",
+                                param="calibration")
+            return "imucal", _regular(np.linalg.inv(K @ R) if abs(np.linalg.det(K @ R)) > 0 else None, path), b
+        raise DataError(f"{path}: neither a garant calibration (format {calibration.FORMAT}) nor imucal's (K_a, R_a, "
+                        "b_a)", param="calibration")
+    M, b = calibration.read_imu_tk(path)
+    return "imu_tk", _regular(M, path), b
+
+
+def _regular(M, path):
+    if M is None or not np.all(np.isfinite(M)) or np.linalg.cond(M) > 1e3:
+        raise DataError(f"{path}: its matrix is singular or ill-conditioned: not a calibration of an accelerometer",
+                        param="calibration")
+    return M
+
+
+def garant_frame(M):
+    """(L, Q, turn_deg): M = Q L with L lower-triangular (positive diagonal), garant's convention, and Q the turn
+    of the calibration's own frame from it (a norm relation sees |a| only: the turn is a convention, not an
+    error). J A J = Q' R' (QR) gives A = (J Q' J)(J R' J), J R' J lower-triangular."""
+    J = np.eye(3)[::-1]
+    Qp, Rp = np.linalg.qr(J @ M @ J)
+    Q, L = J @ Qp @ J, J @ Rp @ J
+    S = np.diag(np.sign(np.diag(L)))
+    Q, L = Q @ S, S @ L
+    return np.tril(L), Q, float(np.degrees(np.arccos(np.clip((np.trace(Q) - 1) / 2, -1, 1))))
+
+
+def refuted(cal, M_p, b_p):
+    """None when the correction (M_p, b_p) (garant's convention) is a unit of the norm set of `cal`, else
+    (the interval, its residual over its bound): the interval whose linearised relation (2.2) of 001 it misses by
+    the most, with the shift the set allows counted for it."""
+    st, g = cal["information_set"], cal["g"]
+    q_m = np.asarray(st["estimate"], float)
+    M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
+    M_fit = (np.eye(3) + lower(q_m)) @ M
+    b_fit = b - np.linalg.solve(M_fit, g * q_m[6:9])
+    Lq = M_fit @ np.linalg.inv(M_p) - np.eye(3)
+    q = np.array([Lq[0, 0], Lq[1, 1], Lq[2, 2], Lq[1, 0], Lq[2, 0], Lq[2, 1], *(M_fit @ (b_p - b_fit) / g)])
+    rows, s, bound = (np.asarray(st[k], float) for k in ("rows", "centre", "bound"))
+    over = (np.abs(s - rows @ q) - np.abs(rows) @ np.asarray(st["shift"], float)) / bound
+    k = int(np.argmax(over))
+    return None if over[k] <= 1 else (k + 1, float(over[k]))
+
+
+def run(calibration, log=None, log_result=None, progress=None):
+    """The budget of a calibration file (`garant budget CAL [--log LOG]`): of a garant file over its own set, or,
+    with `log` and its calibration `log_result` (calibrate-norm's result), of any calibration (garant's, imu_tk's,
+    imucal's) over the set of that log, with garant's calibration of the log beside it."""
+    from ..io import calibration as cal_io, results
+    path = str(calibration)
+    kind, cal, b_p = peer(path)
+    out = {"calibration": path, "calibration_kind": kind if kind != "garant" else f"garant {cal['kind']}",
+           "log": None if log is None else str(log), "horizons_s": list(HORIZONS_S), "temperature_range_c": None,
+           "frame_turn_deg": 0.0, "refuted": None, "garant": None}
+    if kind == "garant":
+        if "thermal" in cal or (cal.get("effects") or {}).get("names"):
+            raise DataError(f"{path}: a calibration over temperature or with catalogue effects is not budgeted yet; "
+                            "budget the constant calibration of the same log", param="calibration")
+        if log is None:
+            if "information_set" not in cal:
+                raise DataError(f"{path}: holds no information_set (a two-axis stand's split, a 12-parameter norm "
+                                "calibration, or a set too large for a file): give --log LOG to judge it against a "
+                                "log's own set", param="calibration")
+            model = norm_model(cal) if cal["kind"] == "norm" else stand_model(cal)
+            out.update(figures(model, progress), g=cal["g"], g_uncertainty=model.u, premises=cal["premises"])
+            return results.Budget(out)
+        M_p, b_p = cal["M"], cal["b"]
+    elif log is None:
+        raise DataError(f"{path}: a calibration made by {kind} is judged against the readings: give --log LOG (the "
+                        "log it was made from, or any static log of the same unit)", param="log")
+    else:
+        M_p = cal
+    res = log_result
+    if not res["consistent"] or "calibration" not in res:
+        raise DataError(f"{log}: the log is not consistent with the norm relation under its noise bound (worst "
+                        f"interval {res['worst_over_bound']:.3g}x its bound): no set to judge a calibration against",
+                        param="log")
+    own = cal_io.checked(res["calibration"], str(log))
+    if "information_set" not in own:
+        raise DataError(f"{log}: its calibration carries no information set (too many intervals for a file): no "
+                        "budget", param="log")
+    L, _, turn = garant_frame(np.asarray(M_p, float))
+    ref = refuted(own, L, np.asarray(b_p, float))
+    out.update(figures(norm_model(own, L, b_p), progress), g=own["g"], g_uncertainty=float(
+        own["information_set"]["g_uncertainty"]), premises=own["premises"], frame_turn_deg=turn,
+        refuted=None if ref is None else {"interval": ref[0], "times_its_bound": ref[1]},
+        garant=figures(norm_model(own)))
+    return results.Budget(out)
