@@ -208,3 +208,32 @@ def test_a_stand_file_s_budget_holds_the_truth(tmp_path, monkeypatch):
     at = _stand_error(cal)
     axis, _, _ = _largest(cal, at, np.eye(3))
     assert np.all(np.array(res["per_axis_error_mps2"]) >= axis)      # never below what one attitude's LP proves
+
+
+def test_apply_attitude_bounds_hold_the_true_roll_and_pitch(tmp_path, capsys):
+    # `apply --attitude` adds each still sample's roll and pitch with guaranteed bounds: the true vertical lies
+    # within asin(|bound| / |a|) of the corrected one; pitch errs by at most that, roll by at most
+    # asin(sin t / cos(pitch)). At 400 random attitudes (a quarter within 5 deg of the x axis, where roll is
+    # poorly defined) every true roll and pitch lies within its bound. Red with roll's 1 / cos(pitch) left out.
+    log = tmp_path / "s.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:24", "--sigma", "2e-4", "--size", "1e-2",
+                 "--seed", "3", "-o", str(log)]) == 0
+    truth = json.loads((tmp_path / "s.truth.json").read_text())
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--save", str(cal)]) == 0
+    rng = np.random.default_rng(4)
+    m = rng.normal(size=(400, 3))
+    m[:100] = [1.0, 0, 0] + 0.05 * rng.normal(size=(100, 3)) * [0, 1, 1]
+    m /= np.linalg.norm(m, axis=1)[:, None]
+    raw = np.linalg.solve(np.array(truth["matrix"]), G * m.T).T + np.array(truth["bias"])
+    src, out = tmp_path / "r.csv", tmp_path / "o.csv"
+    np.savetxt(src, np.column_stack([np.arange(400) / 100, raw]), delimiter=",", comments="", fmt="%.15g",
+               header="time_s,ax,ay,az")
+    assert main(["apply", str(cal), str(src), "--attitude", "-o", str(out)]) == 0
+    assert "roll and pitch hold for still samples only" in flat(capsys.readouterr().out)
+    got = np.genfromtxt(out, delimiter=",", names=True)
+    roll, pitch = np.arctan2(m[:, 1], m[:, 2]), np.arctan2(-m[:, 0], np.hypot(m[:, 1], m[:, 2]))
+    d_roll = np.abs((got["roll_rad"] - roll + np.pi) % (2 * np.pi) - np.pi)
+    assert np.all(d_roll <= got["roll_bound_rad"])
+    assert np.all(np.abs(got["pitch_rad"] - pitch) <= got["pitch_bound_rad"])
+    assert got["roll_bound_rad"][:100].max() > 3 * got["pitch_bound_rad"][:100].max()   # near x, roll is loose

@@ -28,6 +28,10 @@ def add(sub):
     p.add_argument("--outside", choices=("drop", "refuse"), default="drop",
                    help="samples outside a calibration's temperature range (a warm-up's first ones, before its first "
                         "still interval): dropped and counted on the summary line (default), or the log refused")
+    p.add_argument("--attitude", action="store_true",
+                   help="also roll_rad, pitch_rad and their guaranteed bounds per sample, for still samples (a moving "
+                        "sample's specific force is not its vertical): roll = atan2(ay, az), pitch = atan2(-ax, "
+                        "hypot(ay, az)); docs/navigation.md")
     p.add_argument("-o", "--output", metavar="OUT.csv",
                    help="CSV: time_s (12 digits), ax, ay, az (m/s^2, 8 significant digits), bound_x, bound_y, "
                         "bound_z (m/s^2, worst case, 4 digits rounded up); - for standard output (the line that says "
@@ -115,11 +119,15 @@ def _apply(args, calibration, log, output):
 
     def rows():
         nonlocal total, n, kind, dropped
-        yield b"time_s,ax,ay,az,bound_x,bound_y,bound_z\n"
+        from ..workflows.budget import attitude
+        yield b"time_s,ax,ay,az,bound_x,bound_y,bound_z" + (
+            b",roll_rad,pitch_rad,roll_bound_rad,pitch_bound_rad" if args.attitude else b"") + b"\n"
         for c in pieces:
             np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
             total, n, kind, dropped = total + c.bound.sum(), n + len(c.t), c.kind, dropped + c.outside
-            yield csv_bytes([c.t, *c.a.T, *c.bound.T], up=(4, 5, 6), digits=(12, 8, 8, 8, 4, 4, 4))
+            extra = list(attitude(c.a, c.bound)) if args.attitude else []
+            yield csv_bytes([c.t, *c.a.T, *c.bound.T, *extra], up=(4, 5, 6) + ((9, 10) if extra else ()),
+                            digits=(12, 8, 8, 8, 4, 4, 4) + ((12, 12, 4, 4) if extra else ()))
     if output == "-":                            # a reader that stops (| head) ends the writing and the work
         written = 0
         try:
@@ -137,7 +145,8 @@ def _apply(args, calibration, log, output):
             f"({kind} calibration)" + (f", {dropped} dropped as outside its temperature range (no bound holds there; "
                                        "--outside refuse refuses such a log)" if dropped else "")
             + f"; worst-case error per component up to {worst.max():.3e} m/s^2 (mean "
-            f"{total / max(3 * n, 1):.3e}); frame: {_frame_said(args, calibration)}{_effects_said(calibration)}")
+            f"{total / max(3 * n, 1):.3e}); frame: {_frame_said(args, calibration)}{_effects_said(calibration)}"
+            + ("; roll and pitch hold for still samples only" if args.attitude else ""))
 
 
 def _effects_said(path):

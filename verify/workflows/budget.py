@@ -324,3 +324,22 @@ def run(calibration, log=None, log_result=None, progress=None):
         refuted=None if ref is None else {"interval": ref[0], "times_its_bound": ref[1]},
         garant=figures(norm_model(own)))
     return results.Budget(out)
+
+
+def attitude(a, bound):
+    """(roll, pitch, roll_bound, pitch_bound), rad, of still samples: a (N, 3) corrected specific force (m/s^2, the
+    vertical of a still unit, up), bound (N, 3) its per-sample error bound. roll = atan2(a_y, a_z), pitch =
+    atan2(-a_x, hypot(a_y, a_z)) (the usual tilt-sensing convention: level with z up reads 0, 0). The true vertical
+    lies within the angle t = asin(|bound| / |a|) of a (every a - e with |e| <= r < |a|: the cone of half-angle
+    asin(r / |a|)): pitch, an elevation, errs by at most t; roll, the azimuth about x, by at most
+    asin(sin t / cos(pitch)) while that cap misses the x axis, else by anything (pi)."""
+    a, bound = np.asarray(a, float), np.asarray(bound, float)
+    norm = np.linalg.norm(a, axis=1)
+    r = np.linalg.norm(bound, axis=1) * (1 + 1e-12)
+    t = np.arcsin(np.clip(r / np.maximum(norm, 1e-300), 0.0, 1.0))
+    t = np.where(r < norm, t, np.pi)
+    side = np.hypot(a[:, 1], a[:, 2])
+    roll, pitch = np.arctan2(a[:, 1], a[:, 2]), np.arctan2(-a[:, 0], side)
+    s = np.sin(np.minimum(t, np.pi / 2)) / np.maximum(side / np.maximum(norm, 1e-300), 1e-300)
+    roll_bound = np.where((s < 1) & (t < np.pi / 2), np.arcsin(np.clip(s, 0.0, 1.0)), np.pi)
+    return roll, pitch, roll_bound * (1 + 1e-12), np.minimum(t, np.pi) * (1 + 1e-12)
