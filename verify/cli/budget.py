@@ -19,6 +19,11 @@ def add(sub):
     flags.g(p, "local gravity, m/s^2, for the log's calibration (default 9.81, |Delta_g/g| <= 5e-3)", None)
     p.add_argument("--g-uncertainty", type=flags.small, metavar="U", help="the bound on |Delta_g/g| (default 1e-5 "
                    "with --g, 5e-3 without)")
+    p.add_argument("--bound", action="append", type=flags.named_bound, metavar="NAME=RAD", default=[],
+                   help="as calibrate-norm: a misalignment's a-priori bound (alpha, beta, gamma; rad) for a log of six "
+                        "faces, a premise of the log's set")
+    p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a log of sample indices "
+                   "(--format imucal: imucal's session)")
     flags.json(p)
     return p
 
@@ -33,7 +38,7 @@ def run(args):
         if done == total or done % 1024 < 256:
             print(f"budget: {done} of {total} attitudes ...", file=sys.stderr, flush=True)
     res = jobs.budget(args.calibration, log=args.log, g=args.g, g_uncertainty=args.g_uncertainty, format=args.format,
-                      sensor=args.sensor, progress=progress)
+                      sensor=args.sensor, bound=dict(args.bound) or None, rate=args.rate, progress=progress)
     _print(res)
     if args.json:
         report.write_json(args.json, res)

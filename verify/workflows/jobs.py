@@ -637,10 +637,11 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
 
 @constraints(calibration=options.path, log=by_the_job("jobs.read_log"), g=options.gravity,
              g_uncertainty=options.small, format=options.one_of(*FORMATS), sensor=options.sensor,
-             progress=options.callback)
+             bound=options.bounds, rate=options.rate, progress=options.callback)
 def budget(calibration: str, *, log: Optional[str] = None, g: Optional[float] = None,
-           g_uncertainty: Optional[float] = None, format: Optional[str] = None,
-           sensor: Optional[str] = None, progress: Optional[Callable] = None) -> results.Budget:
+           g_uncertainty: Optional[float] = None, format: Optional[str] = None, sensor: Optional[str] = None,
+           bound: Optional[Mapping[str, float]] = None, rate: Optional[float] = None,
+           progress: Optional[Callable] = None) -> results.Budget:
     """What a calibration guarantees downstream: `garant budget CAL [--log LOG] --json`.
 
     Parameters
@@ -649,14 +650,14 @@ def budget(calibration: str, *, log: Optional[str] = None, g: Optional[float] = 
         A garant calibration file, or imu_tk's (text) or imucal's (JSON) with `log`.
     log : path, optional
         Judge the calibration against this log's information set (garant's calibration of it beside).
-    g, g_uncertainty, format, sensor
-        As calibrate-norm, for the log's calibration.
+    g, g_uncertainty, format, sensor, bound, rate
+        As calibrate-norm, for the log's calibration (bound: the misalignments' premise of a six-face log).
     progress : callable, optional
         Hears (attitudes done, attitudes).
     """
     from . import budget as bud
     res = None if log is None else calibrate_norm(log, g=g, g_uncertainty=g_uncertainty, format=format,
-                                                   sensor=sensor)
+                                                   sensor=sensor, bound=bound, rate=rate)
     return bud.run(calibration, log, res, progress)
 
 
