@@ -120,6 +120,7 @@ def test_a_norm_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets_
     assert res["tilt_error_rad"] <= 1.25 * tilt, (res["tilt_error_rad"], tilt)
 
 
+@pytest.mark.slow
 def test_a_peer_s_file_is_judged_against_its_log_and_a_refuted_one_is_said(tmp_path, capsys, monkeypatch):
     # imu_tk's form of garant's own calibration (--export-imu-tk: T upper-triangular, a turned frame) is the same
     # calibration: its budget against the log equals garant's beside it, the turn said and not counted. Its bias
@@ -170,6 +171,7 @@ def _stand_error(cal):
     return at
 
 
+@pytest.mark.slow
 def test_a_stand_file_s_budget_holds_the_truth(tmp_path, monkeypatch):
     # The same figures for a three-axis stand's calibration (the block over its set, 000): the unit's own errors at
     # 1,000 attitudes within them, on a coarse grid (its Lipschitz bound then carries more). Not yet within 1.25x
