@@ -119,6 +119,33 @@ def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
 
 
 @pytest.mark.slow
+@pytest.mark.skipif(not _chromium(), reason="no Chromium here (Debian package chromium): the page is not rendered")
+def test_a_budget_page_renders_in_headless_chromium(tmp_path, monkeypatch):
+    # `garant budget CAL --report DIR`: what the calibration guarantees downstream in a table a non-specialist
+    # reads (a row per figure with its unit, what each row means, the premises one a line), one self-contained page
+    # a browser draws.
+    from garant.verify.workflows import budget
+    monkeypatch.setattr(budget, "N_SIDE", 6)            # (a coarse grid: the page, not the figures, is tested)
+    log, cal = REAL / "repeat_session2_acc.txt", tmp_path / "c.json"
+    assert main(["calibrate-norm", str(log), "--g", "9.81744", "--save", str(cal)]) == 0
+    assert main(["budget", str(cal), "--report", str(tmp_path / "b")]) == 0
+    page = tmp_path / "b" / "index.html"
+    html = page.read_text()
+    assert not re.search(r"""(src|href)=["'](?!data:)""", html) and hashlib.sha256(cal.read_bytes()).hexdigest() in html
+    for said in ("What it says", "<td>tilt error, mrad (deg)</td>", "<td>specific force error, m/s^2 (mg)</td>",
+                 "not a navigation solution", "Premises"):
+        assert said in html, said
+    probe = tmp_path / "b" / "probe.html"
+    probe.write_text(html.replace("</body>", PROBE + "</body>"))
+    dom = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000",
+                          "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=120).stdout
+    seen = re.search(r'data-seen="([^"]*)"', dom)
+    assert seen, "the page did not load"
+    tables = seen.group(1).split("|")[1].split()
+    assert tables and all(float(h) > 10 for h in tables), tables
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["two-axis", "single-axis", "three-axis"])
 def test_the_plan_plot_shows_the_up_direction_of_each_position(tmp_path, capsys, model):
     """plan --plot draws, per position, the direction the readings of an error-free block point along

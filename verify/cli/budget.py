@@ -25,6 +25,8 @@ def add(sub):
     p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a log of sample indices "
                    "(--format imucal: imucal's session)")
     flags.json(p)
+    p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: the figures in a table, "
+                   "what they mean, the premises, the command, inputs SHA-256) and DIR/report.md")
     return p
 
 
@@ -43,20 +45,48 @@ def run(args):
     if args.json:
         report.write_json(args.json, res)
         print(f"wrote {args.json}", file=sys.stderr)
+    if args.report:
+        command = report.command_line(args, f"garant budget {args.calibration}")
+        inputs = [args.calibration] + ([args.log] if args.log else [])
+        print(f"wrote {report.write_page(args.report, _title(res), command, sections(res), inputs)}", file=sys.stderr)
     return Exit.REFUTED if res["refuted"] else Exit.OK
 
 
-def _print(res):
-    """The figures as a table a non-specialist reads: one column per calibration."""
+def _title(res):
+    return f"What {res['calibration']} guarantees downstream" + (f", judged against {res['log']}" if res["log"] else "")
+
+
+def sections(res):
+    """The budget as report sections (io/report.py): what it says, the table, what each row means, the
+    premises one a line."""
     from ..io import report
-    judged = f" judged against {res['log']}" if res["log"] else " over its own information set"
-    turn = (f"; its frame turned {res['frame_turn_deg']:.3g} deg into garant's convention (not counted: the norm "
-            "relation cannot see a turn)" if res["frame_turn_deg"] else "")
-    print(f"budget of {res['calibration']} ({res['calibration_kind']}){judged}{turn}")
+    head, rows = _table(res)
+    said = ("Every figure is the worst case over every attitude of a still unit and every unit the readings allow "
+            "(the information set): what the calibration guarantees if the premises below hold.")
     if res["refuted"]:
         r = res["refuted"]
-        print(f"  REFUTED: the readings rule this calibration out: still interval {r['interval']} needs "
-              f"{r['times_its_bound']:.3g} times its noise bound plus remainder for it")
+        said += (f" **Refuted**: the readings rule this calibration out (still interval {r['interval']} needs "
+                 f"{r['times_its_bound']:.3g} times its bound for it).")
+    if res["frame_turn_deg"]:
+        said += (f" Its frame is turned {res['frame_turn_deg']:.3g} degrees into garant's convention; the turn is not "
+                 "counted as error (the norm relation cannot see it).")
+    return [("What it says", said), ("The figures", report.Table(head, rows)),
+            ("What each row means", report.Bullets(MEANING)),
+            ("Premises", report.Bullets(report.clauses(res["premises"].removeprefix("the bounds hold if "))))]
+
+
+#: What each row of the table means, for a reader who is not a specialist.
+MEANING = ("specific force error: how far a corrected reading can be from the true specific force, at any attitude "
+           "(1 mg = 9.80665e-3 m/s^2)",
+           "tilt error: how far the vertical the corrected accelerometers give a still unit can be from the true one; "
+           "pitch errs by at most it, roll by at most it divided by cos(pitch)",
+           "velocity and position: what that error alone builds up over 1, 10 and 60 s of integration with the "
+           "attitude held: not a navigation solution (no attitude, gyroscope or noise error is in it)",
+           "a filter's bounds: the bias and scale error a navigation filter's accelerometer model can take")
+
+
+def _table(res):
+    """(headers, rows) of the figures: one column per calibration."""
     cols = [res] + ([res["garant"]] if res["garant"] else [])
     head = ["worst case over every attitude", "this calibration"] + (["garant's of the log"] if res["garant"] else [])
     rows = [["specific force error, m/s^2 (mg)"] + [f"{c['specific_force_error_mps2']:.3g} "
@@ -70,6 +100,21 @@ def _print(res):
                                                         for c in cols],
              ["a filter's scale bound x, y, z, ppm"] + [", ".join(f"{1e6 * c['slope_bound'][k][k]:.3g}"
                                                                   for k in range(3)) for c in cols]]
+    return head, rows
+
+
+def _print(res):
+    """The figures as a table a non-specialist reads: one column per calibration."""
+    from ..io import report
+    judged = f" judged against {res['log']}" if res["log"] else " over its own information set"
+    turn = (f"; its frame turned {res['frame_turn_deg']:.3g} deg into garant's convention (not counted: the norm "
+            "relation cannot see a turn)" if res["frame_turn_deg"] else "")
+    print(f"budget of {res['calibration']} ({res['calibration_kind']}){judged}{turn}")
+    if res["refuted"]:
+        r = res["refuted"]
+        print(f"  REFUTED: the readings rule this calibration out: still interval {r['interval']} needs "
+              f"{r['times_its_bound']:.3g} times its noise bound plus remainder for it")
+    head, rows = _table(res)
     report.table(head, rows)
     print("  tilt: the angle of the vertical (pitch errs by at most it, roll by at most it / cos(pitch)); velocity and "
           "position: the calibration error alone integrated with the attitude held, not a navigation solution")
