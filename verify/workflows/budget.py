@@ -158,7 +158,7 @@ def figures(model, progress=None):
 
 #: LPs (cells) for each kind of row (the axes; across and along n), counted, not timed; past them a cell is proven
 #: by the multipliers of the nearest cell solved (solve/support.py).
-BUDGET = 20_000
+BUDGET = 100_000
 STEP = 256                                              # attitudes at a time (the memory of a step)
 
 
