@@ -214,3 +214,18 @@ def test_a_stand_file_bounds_each_sample_by_the_sup_over_its_set(tmp_path, model
     times = -(-100 // len(P))                                     # (a log holds 100 samples)
     got = jobs.apply(str(cal_path), _frame(tmp_path, np.repeat(f0, times, axis=0)))
     assert np.all(np.abs(got.a - np.repeat(truth, times, axis=0)) <= got.bound)
+
+
+def test_a_calibration_applied_once_is_checked_again_without_its_lps(tmp_path):
+    # The LPs solved for one log stay with the set read (the next piece of the log reuses them); the dictionary
+    # handed back to `checked` (garant.apply(cal, ...) twice) dropped them rather than failing to write them as
+    # JSON. Red without the drop in calibration.checked (TypeError: a Solved is no JSON).
+    from garant.verify.workflows import sample_set
+    log, _ = _simulate(tmp_path)
+    cal_path = tmp_path / "cal.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--save", str(cal_path)]) == 0
+    cal = calibration.read(cal_path)
+    first = sample_set.apply(cal, np.loadtxt(log, delimiter=",", skiprows=1)[:500, 1:4])[1]
+    assert "_solved" in cal["information_set"]
+    again = sample_set.apply(calibration.checked(cal), np.loadtxt(log, delimiter=",", skiprows=1)[:500, 1:4])[1]
+    assert np.array_equal(first, again)

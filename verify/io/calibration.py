@@ -181,6 +181,8 @@ def checked(data, path="calibration"):
     schema and for what it cannot state; numbers as numpy arrays. `path` names it in errors."""
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise DataError(f"{path}: not a {FORMAT} file (its \"format\" must be \"{FORMAT}\")", param="calibration")
+    if isinstance(data.get("information_set"), dict):           # a set read before carries the LPs solved on it
+        data = dict(data, information_set={k: v for k, v in data["information_set"].items() if k != "_solved"})
     data = json.loads(json.dumps(data, default=json_value))      # numpy arrays and numbers as JSON has them
     where = _nan(data)
     if where is not None:                                       # NaN passes every minimum and maximum
