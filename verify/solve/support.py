@@ -10,7 +10,8 @@ every sample of the cell proven from that LP's multipliers twice: as they are, a
 own c on the same active rows and columns (the optimal basis: exact wherever it stays optimal, which it does
 for every c of its normal cone). Each sample's LP point gives a value the end cannot be below (to HiGHS's
 tolerance); a sample whose proven end is farther than GAP of its width from that value starts a cell of its own
-in the next, finer round, within a budget of LPs counted, not timed.
+in the next, finer round, within a budget of LPs counted, not timed; past it, a cell is proven by the multipliers
+of the nearest cell solved (sound, less sharp).
 """
 import numpy as np
 
