@@ -12,7 +12,7 @@ from scipy.optimize import linprog
 
 from garant.verify import api
 from garant.verify.cli import main
-from garant.verify.io import calibration
+from garant.verify.io import calibration, schemas
 from garant.verify.workflows import budget, norm_bounds
 from conftest import flat
 
@@ -85,6 +85,16 @@ def _largest_norm_at(cal, at, n):
     return max(_sup(st, w @ C, w @ off) + st["g_uncertainty"] * g * max(w @ n, 0.0) for w in _directions(5))
 
 
+def _within_1_25x(res, cal, at):
+    """Each printed figure of `res` within 1.25x of the set's largest as `_largest` bounds it from below (at the
+    attitudes of a grid and the worst one printed, with 152 error directions there), `at` the file's error."""
+    axis, norm, tilt = _largest(cal, at, np.vstack([_directions(4), res["worst_attitude"]]))
+    norm = max(norm, _largest_norm_at(cal, at, np.array(res["worst_attitude"])))
+    assert np.all(np.array(res["per_axis_error_mps2"]) <= 1.25 * axis), (res["per_axis_error_mps2"], axis)
+    assert res["specific_force_error_mps2"] <= 1.25 * norm, (res["specific_force_error_mps2"], norm)
+    assert res["tilt_error_rad"] <= 1.25 * tilt, (res["tilt_error_rad"], tilt)
+
+
 @pytest.mark.slow
 def test_a_norm_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets_largest(tmp_path):
     # A user had q and per-sample bounds, not the figures a navigation system is judged by. `garant budget CAL`
@@ -101,6 +111,7 @@ def test_a_norm_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets_
     assert main(["calibrate-norm", str(log), "--g", str(G), "--save", str(cal_path)]) == 0
     assert main(["budget", str(cal_path), "--json", str(out)]) == 0
     res = json.loads(out.read_text())
+    schemas.validate(res, "budget", str(out))                  # every key it writes is in docs/schemas/
     cal = calibration.read(cal_path)
     m = np.random.default_rng(1).normal(size=(1000, 3))
     m /= np.linalg.norm(m, axis=1)[:, None]
@@ -112,12 +123,7 @@ def test_a_norm_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets_
     tilt = np.arccos(np.clip(np.einsum("ij,ij->i", a, m) / np.linalg.norm(a, axis=1), -1, 1))
     assert tilt.max() <= res["tilt_error_rad"]
     assert res["velocity_error_mps"]["60"] == pytest.approx(60 * res["specific_force_error_mps2"])
-    at = _norm_error(cal)
-    axis, norm, tilt = _largest(cal, at, np.vstack([_directions(4), res["worst_attitude"]]))
-    norm = max(norm, _largest_norm_at(cal, at, np.array(res["worst_attitude"])))
-    assert np.all(np.array(res["per_axis_error_mps2"]) <= 1.25 * axis), (res["per_axis_error_mps2"], axis)
-    assert res["specific_force_error_mps2"] <= 1.25 * norm, (res["specific_force_error_mps2"], norm)
-    assert res["tilt_error_rad"] <= 1.25 * tilt, (res["tilt_error_rad"], tilt)
+    _within_1_25x(res, cal, _norm_error(cal))
 
 
 @pytest.mark.slow
@@ -133,6 +139,7 @@ def test_a_peer_s_file_is_judged_against_its_log_and_a_refuted_one_is_said(tmp_p
     monkeypatch.setattr(budget, "N_SIDE", 6)                # (a coarse grid: this test compares, it does not measure)
     res = api.budget(str(imu), log=str(log), g=G)
     assert res["calibration_kind"] == "imu_tk" and res["refuted"] is None and res["frame_turn_deg"] > 0.1
+    schemas.validate(res.to_dict(), "budget", "budget")       # the garant column beside too
     for key in ("specific_force_error_mps2", "tilt_error_rad"):
         assert res[key] == pytest.approx(res["garant"][key], rel=1e-6)
     vals = imu.read_text().split()
@@ -205,12 +212,7 @@ def test_a_stand_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets
     a = e + G * m
     assert np.arccos(np.clip(np.einsum("ij,ij->i", a, m) / np.linalg.norm(a, axis=1), -1, 1)).max() <= \
         res["tilt_error_rad"]
-    at = _stand_error(cal)
-    axis, norm, tilt = _largest(cal, at, np.vstack([_directions(4), res["worst_attitude"]]))
-    norm = max(norm, _largest_norm_at(cal, at, np.array(res["worst_attitude"])))
-    assert np.all(np.array(res["per_axis_error_mps2"]) <= 1.25 * axis), (res["per_axis_error_mps2"], axis)
-    assert res["specific_force_error_mps2"] <= 1.25 * norm, (res["specific_force_error_mps2"], norm)
-    assert res["tilt_error_rad"] <= 1.25 * tilt, (res["tilt_error_rad"], tilt)
+    _within_1_25x(res, cal, _stand_error(cal))
 
 
 def test_apply_attitude_bounds_hold_the_true_roll_and_pitch(tmp_path, capsys):

@@ -85,16 +85,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False
         X = []
         unsolved = [j for j, name in enumerate(names) if name not in solved.cells]
         if unsolved and solved.units:        # past the budget: the proofs of the nearest cell solved (any round)
-            reps = C[todo[first[unsolved]]]
-            near = (reps / np.linalg.norm(reps, axis=1)[:, None]) @ np.asarray(solved.units).T
-            pick = np.argmax(np.abs(near), axis=1)
-            flip = near[np.arange(len(unsolved)), pick] < 0
-            for k, f in set(zip(pick.tolist(), flip.tolist())):
-                members = todo[np.isin(cell, np.asarray(unsolved)[(pick == k) & (flip == f)])]
-                pair = solved.proofs[k][::-1] if f else solved.proofs[k]
-                for end, sign in ((0, -1.0), (1, 1.0)):
-                    proven = _proven(sign * C[members], B, row_lo, row_hi, col_lo, col_hi, pair[end])
-                    best[end, members] = np.minimum(best[end, members], proven)
+            _nearest(C, B, row_lo, row_hi, col_lo, col_hi, best, solved, todo, first, cell, unsolved)
         for j, name in enumerate(names):
             got = solved.cells.get(name)
             if got is None:
@@ -114,6 +105,21 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False
         todo = todo[(best - np.maximum(seen, centre) > GAP * width)[:, todo].any(axis=0)]
         step /= 2
     return (-best[0], best[1]) + ((-seen[0], seen[1]) if seen_too else ())
+
+
+def _nearest(C, B, row_lo, row_hi, col_lo, col_hi, best, solved, todo, first, cell, unsolved):
+    """The samples of the cells `unsolved` (past the budget) proven by the multipliers of the cell solved whose c
+    is nearest in direction (its proofs swapped where the nearest is -c); `best` lowered in place."""
+    reps = C[todo[first[unsolved]]]
+    near = (reps / np.linalg.norm(reps, axis=1)[:, None]) @ np.asarray(solved.units).T
+    pick = np.argmax(np.abs(near), axis=1)
+    flip = near[np.arange(len(unsolved)), pick] < 0
+    for k, f in set(zip(pick.tolist(), flip.tolist())):
+        members = todo[np.isin(cell, np.asarray(unsolved)[(pick == k) & (flip == f)])]
+        pair = solved.proofs[k][::-1] if f else solved.proofs[k]
+        for end, sign in ((0, -1.0), (1, 1.0)):
+            proven = _proven(sign * C[members], B, row_lo, row_hi, col_lo, col_hi, pair[end])
+            best[end, members] = np.minimum(best[end, members], proven)
 
 
 #: LP points whose values at every sample are taken at once (the memory of that step: samples x this).

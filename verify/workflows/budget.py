@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..solve import support
+from . import sample_set
 from .norm_information import lower
 
 #: Cube-sphere cells per face side of the attitudes: every unit vector within sqrt(2) / N_SIDE (chord) of one.
@@ -51,10 +52,10 @@ def grid(side):
 
 class Model:
     """The error of a calibration over a set: e(n) = d0 + D(n) + C(n) z, z in the set (`st`, the calibration
-    file's information_set: rows, box, shift, estimate), D and C linear in n. `kind`: "norm" or "stand"."""
+    file's information_set: rows, box, shift, estimate), D and C linear in n."""
 
-    def __init__(self, st, build, d0, g, u, kind):
-        self.st, self.build, self.d0, self.g, self.u, self.kind = st, build, np.asarray(d0, float), g, u, kind
+    def __init__(self, st, build, d0, g, u):
+        self.st, self.build, self.d0, self.g, self.u = st, build, np.asarray(d0, float), g, u
 
     def ranges(self, n, W, solved=None, seen_too=False):
         """(lo, hi) (N, R) of w^T e(n) for each n (rows of n) and each row w of W (R, 3) or each (N, R, 3); `solved`
@@ -75,49 +76,43 @@ class Model:
         return out + ((got[2] + off).reshape(len(n), -1), (got[3] + off).reshape(len(n), -1)) if seen_too else out
 
 
+def fit(cal):
+    """(M_fit, b_fit) of a norm file: the fit its set's q correct, the midpoint q_m taken back out of M and b
+    (norm_bounds.fold: M = (E + lower(q_m))^-1 M_fit, b = b_fit + M_fit^-1 g q_m,eps)."""
+    q_m, g = np.asarray(cal["information_set"]["estimate"], float), cal["g"]
+    M_fit = (np.eye(3) + lower(q_m)) @ np.asarray(cal["M"], float)
+    return M_fit, np.asarray(cal["b"], float) - np.linalg.solve(M_fit, g * q_m[6:9])
+
+
 def norm_model(cal, M_p=None, b_p=None):
-    """The Model of the calibration (M_p, b_p) (default the file's own) over a norm file's set: its q's fit
-    M_fit = (E + lower(q_m)) M, b_fit = b - M_fit^-1 g q_m,eps taken back out of the file."""
+    """The Model of the calibration (M_p, b_p) (default the file's own) over a norm file's set (`fit`)."""
     st, g = cal["information_set"], cal["g"]
-    q_m = np.asarray(st["estimate"], float)
-    if len(q_m) != 9:
+    if len(st["estimate"]) != 9:
         raise DataError("budget: a norm calibration with catalogue effects is not budgeted yet (its error depends "
                         "on each sample's temperature and time); budget the constant calibration", param="calibration")
-    M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
-    M_fit = (np.eye(3) + lower(q_m)) @ M
-    b_fit = b - np.linalg.solve(M_fit, g * q_m[6:9])
-    M_p, b_p = (M, b) if M_p is None else (np.asarray(M_p, float), np.asarray(b_p, float))
+    M_fit, b_fit = fit(cal)
+    M_p, b_p = (np.asarray(cal["M"], float), np.asarray(cal["b"], float)) if M_p is None else (
+        np.asarray(M_p, float), np.asarray(b_p, float))
     K = M_p @ np.linalg.inv(M_fit)
 
     def build(n):
         a = g * np.asarray(n, float).T                              # (3, N)
-        R = np.zeros((3, a.shape[1], 9))
-        for j, cols in enumerate(((0,), (3, 1), (4, 5, 2))):
-            for i, c in enumerate(cols):
-                R[j, :, c] = a[i]
-            R[j, :, 6 + j] = g
-        return (K - np.eye(3)) @ a, np.einsum("kj,jnp->knp", K, R)
-    return Model(st, build, M_p @ (b_fit - b_p), g, float(st["g_uncertainty"]), "norm")
+        return (K - np.eye(3)) @ a, sample_set.objectives(st, a, g, N=K)
+    return Model(st, build, M_p @ (b_fit - b_p), g, float(st["g_uncertainty"]))
 
 
 def stand_model(cal):
     """The Model of a stand file over its block's set (block_columns: Gamma11..Gamma33, bias1..bias3 over g)."""
     st, g, M = cal["information_set"], cal["g"], np.asarray(cal["M"], float)
-    cols = np.asarray(st["block_columns"], int)
     z_m = np.asarray(st["estimate"], float)
-    G = z_m[cols[:9]].reshape(3, 3)
+    G = z_m[np.asarray(st["block_columns"], int)[:9]].reshape(3, 3)
     left = M @ (np.eye(3) + G) - np.eye(3)
-    P = len(z_m)
 
     def build(n):
         a = g * np.asarray(n, float).T
-        C = np.zeros((3, a.shape[1], P))
-        for i in range(3):
-            for j in range(3):
-                C[:, :, cols[3 * i + j]] = M[:, i, None] * a[j]
-            C[:, :, cols[9 + i]] = M[:, i, None] * g
+        C = sample_set.objectives(st, a, g, M=M)
         return left @ a - np.einsum("knp,p->kn", C, z_m), C
-    return Model(st, build, np.zeros(3), g, float(st["g_uncertainty"]), "stand")
+    return Model(st, build, np.zeros(3), g, float(st["g_uncertainty"]))
 
 
 def figures(model, progress=None):
@@ -205,8 +200,7 @@ def _filter(model):
         e[0, j] = 1.0
         d1, C1 = model.build(e)
         d0, C0 = model.build(zero)
-        sub = Model(model.st, lambda n, d1=d1, d0=d0, C1=C1, C0=C0: (d1 - d0, C1 - C0), np.zeros(3), model.g, 0.0,
-                    model.kind)
+        sub = Model(model.st, lambda n, d1=d1, d0=d0, C1=C1, C0=C0: (d1 - d0, C1 - C0), np.zeros(3), model.g, 0.0)
         lo, hi = sub.ranges(np.zeros((1, 3)), np.eye(3))
         slope[:, j] = np.maximum(-lo, hi)[0] / model.g
     slope += model.u * np.eye(3)
@@ -268,10 +262,7 @@ def refuted(cal, M_p, b_p):
     (the interval, its residual over its bound): the interval whose linearised relation (2.2) of 001 it misses by
     the most, with the shift the set allows counted for it."""
     st, g = cal["information_set"], cal["g"]
-    q_m = np.asarray(st["estimate"], float)
-    M, b = np.asarray(cal["M"], float), np.asarray(cal["b"], float)
-    M_fit = (np.eye(3) + lower(q_m)) @ M
-    b_fit = b - np.linalg.solve(M_fit, g * q_m[6:9])
+    M_fit, b_fit = fit(cal)
     Lq = M_fit @ np.linalg.inv(M_p) - np.eye(3)
     q = np.array([Lq[0, 0], Lq[1, 1], Lq[2, 2], Lq[1, 0], Lq[2, 0], Lq[2, 1], *(M_fit @ (b_p - b_fit) / g)])
     rows, s, bound = (np.asarray(st[k], float) for k in ("rows", "centre", "bound"))

@@ -38,11 +38,12 @@ def entry(A, s, bound, lo, hi, shift, q_m, u=0.0):
             "estimate": np.asarray(q_m, float).tolist(), "g_uncertainty": float(u)}
 
 
-def objectives(st, a, g, phi=None, M=None):
+def objectives(st, a, g, phi=None, M=None, N=None):
     """C (3, N, P): row k of sample n, c_k(a_n) with e_k = c_k(a)^T dq + ... (the module's docstring); `phi`
-    (J, 3, N), the effects' basis at each sample's direction, for the parameters after the 9. A stand's set
-    (`block_columns`, the columns of Gamma11..Gamma33, bias1..bias3 over g) with the file's M:
-    e = M ((Gamma - G) a_t + g (beta - beta_m)) exactly, so c_k reads M_ki a_j at Gamma_ij and M_ki g at bias_i."""
+    (J, 3, N), the effects' basis at each sample's direction, for the parameters after the 9; `N` the matrix the
+    norm set's rows are read through (default (E + lower(q_m))^-1, the file's own; workflows/budget.py passes a
+    peer's). A stand's set (`block_columns`, the columns of Gamma11..Gamma33, bias1..bias3 over g) with the file's
+    M: e = M ((Gamma - G) a_t + g (beta - beta_m)) exactly, so c_k reads M_ki a_j at Gamma_ij and M_ki g at bias_i."""
     q_m = np.asarray(st["estimate"], float)
     P, n = len(q_m), a.shape[1]
     C = np.zeros((3, n, P))
@@ -58,7 +59,7 @@ def objectives(st, a, g, phi=None, M=None):
         for i, c in enumerate(cols):
             R[j, :, c] = a[i]
         R[j, :, 6 + j] = g
-    C = np.einsum("kj,jnp->knp", np.linalg.inv(np.eye(3) + lower(q_m)), R)
+    C = np.einsum("kj,jnp->knp", np.linalg.inv(np.eye(3) + lower(q_m)) if N is None else N, R)
     if phi is not None:
         C[:, :, 9:9 + len(phi)] += g * np.moveaxis(phi, 0, 2)
     return C
