@@ -1,11 +1,12 @@
 """python -m verify.bench.peer: `garant calibrate-norm` against the real imu_tk (C++, Ceres), side by side.
 
 imu_tk is the peer a user would pick instead: its accelerometer multi-position calibration, built from
-its own source (`../shared/peers/imu_tk/build.sh`, or the IMU_TK_ACC environment variable naming the
-binary). Both run as fresh processes on the same log, alternately, REPEAT times each; the figures are
-the medians of CPU seconds (user + system of the child), wall seconds and peak memory (ru_maxrss of
-the child). Then the parameters: imu_tk's biases and scale factors against garant's estimates and
-guaranteed bounds (imu_tk's misalignments are upper-triangular, garant's lower: not comparable one by one).
+its own source (`../shared/peers/imu_tk/build.sh`; `.ci/run` builds a copy into `.venv/peers/imu_tk/`; or the
+IMU_TK_ACC environment variable naming the binary). Both run as fresh processes on the same log, alternately,
+REPEAT times each; the figures are the medians of CPU seconds (user + system of the child), wall seconds and
+peak memory (ru_maxrss of the child). Then the parameters: imu_tk's biases and scale factors against garant's
+estimates and guaranteed bounds (imu_tk's misalignments are upper-triangular, garant's lower: not comparable
+one by one).
 """
 import json
 import os
@@ -29,7 +30,8 @@ LOGS = (("repeat_session1_acc.txt", 0), ("repeat_session2_acc.txt", 0), ("repeat
 
 def imu_tk_binary():
     """The imu_tk_acc binary, or None when it is not built."""
-    for p in (os.environ.get("IMU_TK_ACC"), SHARED / "peers" / "imu_tk" / "imu_tk_acc"):
+    for p in (os.environ.get("IMU_TK_ACC"), SHARED / "peers" / "imu_tk" / "imu_tk_acc",
+              ROOT / ".venv" / "peers" / "imu_tk" / "imu_tk_acc"):
         if p and Path(p).is_file() and os.access(p, os.X_OK):
             return str(p)
     return None
