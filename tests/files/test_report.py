@@ -64,6 +64,9 @@ def test_each_report_is_one_self_contained_page(reports):
     assert "<th>unit</th>" in norm and "on the optimal plan (the 18 orientations" in norm
     human = re.findall(r"<tr><td>lambda\d</td>(?:<td>[^<]*</td>){3}<td>([^<]*)</td>", norm)
     assert len(human) == 3 and all(x.endswith(" ppm") for x in human), human
+    assert "What the calibration guarantees downstream" in norm and "<td>tilt error, mrad (deg)</td>" in norm
+    # a two-axis stand's file is the remount split's (28)-(29) of 000: no set on file, and the page says so
+    assert "No budget on this page: holds no information_set" in (tmp_path / "e" / "report.md").read_text()
     assert "a&lt;b&gt;.csv" in (tmp_path / "e" / "index.html").read_text() and "a<b>" not in (
         tmp_path / "e" / "index.html").read_text()
 
@@ -123,12 +126,20 @@ def test_a_batch_summary_page_renders_in_headless_chromium(tmp_path, capsys):
 def test_a_budget_page_renders_in_headless_chromium(tmp_path, monkeypatch):
     # `garant budget CAL --report DIR`: what the calibration guarantees downstream in a table a non-specialist
     # reads (a row per figure with its unit, what each row means, the premises one a line), one self-contained page
-    # a browser draws.
+    # a browser draws. calibrate-norm's own page carries the same table (issue 76: the budget as a section of the
+    # --report pages): its rows are budget's, cell for cell.
     from garant.verify.workflows import budget
     monkeypatch.setattr(budget, "N_SIDE", 6)            # (a coarse grid: the page, not the figures, is tested)
     log, cal = REAL / "repeat_session2_acc.txt", tmp_path / "c.json"
-    assert main(["calibrate-norm", str(log), "--g", "9.81744", "--save", str(cal)]) == 0
+    assert main(["calibrate-norm", str(log), "--g", "9.81744", "--save", str(cal), "--report",
+                 str(tmp_path / "c")]) == 0
     assert main(["budget", str(cal), "--report", str(tmp_path / "b")]) == 0
+
+    def rows(md, heading):
+        part = md.split(f"## {heading}\n", 1)[1].split("\n## ", 1)[0]
+        return [line for line in part.splitlines() if line.startswith("| ")][1:]
+    own = rows((tmp_path / "c" / "report.md").read_text(), "The downstream figures")
+    assert len(own) == 8 and own == rows((tmp_path / "b" / "report.md").read_text(), "The figures")
     page = tmp_path / "b" / "index.html"
     html = page.read_text()
     assert not re.search(r"""(src|href)=["'](?!data:)""", html) and hashlib.sha256(cal.read_bytes()).hexdigest() in html

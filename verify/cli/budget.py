@@ -35,10 +35,6 @@ def run(args):
     the calibration judged)."""
     from ..io import report
     from ..workflows import jobs
-
-    def progress(done, total):
-        if done == total or done % 1024 < 256:
-            print(f"budget: {done} of {total} attitudes ...", file=sys.stderr, flush=True)
     res = jobs.budget(args.calibration, log=args.log, g=args.g, g_uncertainty=args.g_uncertainty, format=args.format,
                       sensor=args.sensor, bound=dict(args.bound) or None, rate=args.rate, progress=progress)
     _print(res)
@@ -50,6 +46,33 @@ def run(args):
         inputs = [args.calibration] + ([args.log] if args.log else [])
         print(f"wrote {report.write_page(args.report, _title(res), command, sections(res), inputs)}", file=sys.stderr)
     return Exit.REFUTED if res["refuted"] else Exit.OK
+
+
+def progress(done, total):
+    """budget's progress line on standard error (about every 1,024 attitudes)."""
+    if done == total or done % 1024 < 256:
+        print(f"budget: {done} of {total} attitudes ...", file=sys.stderr, flush=True)
+
+
+def downstream(res, name):
+    """The sections a calibration's own report page (calibrate-norm or estimate --report) gives its budget: what
+    the calibration `res["calibration"]` guarantees downstream, over its own information set, in the table `garant
+    budget` prints; where it carries no set or is a kind budget does not take, one line saying so."""
+    from ..errors import DataError
+    from ..io import calibration, report
+    from ..workflows import budget
+    if not res.get("consistent") or "calibration" not in res:
+        return []
+    heading = "What the calibration guarantees downstream (garant budget)"
+    try:
+        bud = budget.own(calibration.checked(res["calibration"], name), name, progress)
+    except DataError as e:
+        return [(heading, f"No budget on this page: {str(e).removeprefix(name + ': ')}.")]
+    head, rows = _table(bud)
+    said = ("Every figure is the worst case over every attitude of a still unit and every unit the readings allow "
+            "(the information set), under the premises above.")
+    return [(heading, said), ("The downstream figures", report.Table(head, rows)),
+            ("What each downstream figure means", report.Bullets(MEANING))]
 
 
 def _title(res):

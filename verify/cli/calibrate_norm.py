@@ -48,7 +48,8 @@ def add(sub):
     flags.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residual per interval, before and after")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
-                                                   "tables, plots, the command, inputs SHA-256) and DIR/report.md")
+                                                   "tables, what the calibration guarantees downstream (garant "
+                                                   "budget), plots, the command, inputs SHA-256) and DIR/report.md")
     exports.add(p, "calibrate-norm")
     p.add_argument("--rate", type=flags.rate, metavar="HZ", help="sample rate of a log of sample indices "
                    "(--format imucal: imucal's session)")
@@ -217,8 +218,10 @@ def _run(args, into=None):
     exports.write(args, res, "calibrate-norm")
     if args.report:
         from ..io import pages
+        from .budget import downstream
         command = report.command_line(args, f"garant calibrate-norm {args.log} --params {args.params}")
-        print(f"wrote {pages.norm(res, args.report, args.log, _log_of(args), command)}")
+        page = pages.norm(res, args.report, args.log, _log_of(args), command, lambda: downstream(res, args.log))
+        print(f"wrote {page}")
     if into is not None:
         into.update(res)
     return Exit.OK if res["consistent"] else Exit.REFUTED

@@ -31,7 +31,8 @@ def add(sub):
     flags.json(p)
     p.add_argument("--plot", metavar="FILE.png", help="residuals of the minimax fit against each stand angle")
     p.add_argument("--report", metavar="DIR", help="DIR/index.html (one self-contained page: verdict, premises, "
-                                                   "tables, plots, the command, inputs SHA-256) and DIR/report.md")
+                                                   "tables, what the calibration guarantees downstream (garant "
+                                                   "budget), plots, the command, inputs SHA-256) and DIR/report.md")
     p.add_argument("--thermal-degree", type=int, choices=(1, 2, 3), metavar="D",
                    help="each block parameter a polynomial of degree D (1-3) in T, the temp_c column (C): each q's "
                         "coefficients and one guaranteed "
@@ -67,8 +68,9 @@ def run(args):
         from ..io import pages
         command = report.command_line(args, f"garant estimate --model {args.model} {args.data} --sigma "
                                             f"{args.sigma:g} --g {res['g']:g}")
+        from .budget import downstream
         page = pages.estimate(res, mod.ANGLES, mod.Q_NAMES, args.sigma, args.data, args.model, args.plot, args.report,
-                              command)
+                              command, lambda: downstream(res, args.data))
         if page:
             print(f"wrote {page}")
     code = print_verdict(res, mod, args.data) if not res["consistent"] else print_estimate(res, mod, args)

@@ -63,10 +63,12 @@ def unit_of(k):
     return side(k, 1.0).split(" ", 1)[1]
 
 
-def norm(res, folder, log, log_data, command):
+def norm(res, folder, log, log_data, command, downstream=tuple):
     """The norm calibration's page (calibrate-norm --report) in `folder`: the verdict, the premises a line each, M
-    and b by entry, the parameters with their guaranteed errors in SI and in ppm, mrad or mg, the effects, and the
-    plots of the log (`log_data`: its t, raw) and of each interval's residual. Returns the page's path."""
+    and b by entry, the parameters with their guaranteed errors in SI and in ppm, mrad or mg, the effects, the
+    sections `downstream()` gives (the budget, cli/budget.py: called once the plots are written, so that a folder
+    that cannot take them is said before that work) and the plots of the log (`log_data`: its t, raw) and of each
+    interval's residual. Returns the page's path."""
     import numpy as np
 
     from . import plots
@@ -118,15 +120,16 @@ def norm(res, folder, log, log_data, command):
             ("effect", "parameter", "estimate", "guaranteed error", "a priori", "unit"),
             [(name, p, f"{v['estimate']:+.4e}", f"{v['guaranteed_error']:.3e}", f"{v['guaranteed_error_a_priori']:.3e}",
               v["unit"]) for name, e in res["effects"].items() for p, v in e["parameters"].items()])))
-    sections += [("The log, its still intervals, and the residual of each", report.Image("residuals.png")),
+    sections += [*downstream(), ("The log, its still intervals, and the residual of each",
+                                 report.Image("residuals.png")),
                  ("Residual against the direction of gravity", report.Image("directions.png"))]
     return report.write_page(folder, f"Norm calibration: {log}", command, sections, [log])
 
 
-def estimate(res, angles, q_names, sigma, data, model, plot, folder, command):
+def estimate(res, angles, q_names, sigma, data, model, plot, folder, command, downstream=tuple):
     """estimate's residual plot (`plot`) and page (`folder`, --report): the verdict, the premises, q with the
-    guaranteed error's linear and remainder parts, the residuals against each stand angle. Returns the page's path,
-    or None without a folder."""
+    guaranteed error's linear and remainder parts, the sections `downstream()` gives (as `norm`'s), the
+    residuals against each stand angle. Returns the page's path, or None without a folder."""
     import numpy as np
 
     from . import plots
@@ -153,6 +156,6 @@ def estimate(res, angles, q_names, sigma, data, model, plot, folder, command):
             [(q, res["definitions"][q], f"{res['q'][q]:+.6e}", f"{res['guaranteed_error'][q]:.3e}",
               f"{res['guaranteed_error_linear'][q]:.3e}", f"{res['guaranteed_error_remainder'][q]:.1e}",
               res["units"][q]) for q in q_names])))
-    sections.append(("Residuals against each stand angle", report.Image("residuals.png")))
+    sections += [*downstream(), ("Residuals against each stand angle", report.Image("residuals.png"))]
     return report.write_page(folder, f"Estimate: {data}", command, sections,
                              [data, *([model] if str(model).endswith(".toml") else [])])

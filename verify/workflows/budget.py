@@ -271,6 +271,29 @@ def refuted(cal, M_p, b_p):
     return None if over[k] <= 1 else (k + 1, float(over[k]))
 
 
+def _constant(cal, path):
+    if "thermal" in cal or (cal.get("effects") or {}).get("names"):
+        raise DataError(f"{path}: a calibration over temperature or with catalogue effects is not budgeted yet; "
+                        "budget the constant calibration of the same log", param="calibration")
+
+
+def own(cal, path, progress=None):
+    """The budget of a garant calibration (the checked dictionary, read from `path`) over its own information set;
+    DataError naming what is missing when it carries none or is one budget does not take yet."""
+    from ..io import results
+    _constant(cal, path)
+    if "information_set" not in cal:
+        raise DataError(f"{path}: holds no information_set (a two-axis stand's split, a 12-parameter norm "
+                        "calibration, or a set too large for a file): give --log LOG to judge it against a "
+                        "log's own set", param="calibration")
+    model = norm_model(cal) if cal["kind"] == "norm" else stand_model(cal)
+    out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "log": None,
+           "horizons_s": list(HORIZONS_S), "temperature_range_c": None, "frame_turn_deg": 0.0, "refuted": None,
+           "garant": None}
+    out.update(figures(model, progress), g=cal["g"], g_uncertainty=model.u, premises=cal["premises"])
+    return results.Budget(out)
+
+
 def run(calibration, log=None, log_result=None, progress=None):
     """The budget of a calibration file (`garant budget CAL [--log LOG]`): of a garant file over its own set, or,
     with `log` and its calibration `log_result` (calibrate-norm's result), of any calibration (garant's, imu_tk's,
@@ -282,17 +305,9 @@ def run(calibration, log=None, log_result=None, progress=None):
            "log": None if log is None else str(log), "horizons_s": list(HORIZONS_S), "temperature_range_c": None,
            "frame_turn_deg": 0.0, "refuted": None, "garant": None}
     if kind == "garant":
-        if "thermal" in cal or (cal.get("effects") or {}).get("names"):
-            raise DataError(f"{path}: a calibration over temperature or with catalogue effects is not budgeted yet; "
-                            "budget the constant calibration of the same log", param="calibration")
         if log is None:
-            if "information_set" not in cal:
-                raise DataError(f"{path}: holds no information_set (a two-axis stand's split, a 12-parameter norm "
-                                "calibration, or a set too large for a file): give --log LOG to judge it against a "
-                                "log's own set", param="calibration")
-            model = norm_model(cal) if cal["kind"] == "norm" else stand_model(cal)
-            out.update(figures(model, progress), g=cal["g"], g_uncertainty=model.u, premises=cal["premises"])
-            return results.Budget(out)
+            return own(cal, path, progress)
+        _constant(cal, path)
         M_p, b_p = cal["M"], cal["b"]
     elif log is None:
         raise DataError(f"{path}: a calibration made by {kind} is judged against the readings: give --log LOG (the "
@@ -304,16 +319,16 @@ def run(calibration, log=None, log_result=None, progress=None):
         raise DataError(f"{log}: the log is not consistent with the norm relation under its noise bound (worst "
                         f"interval {res['worst_over_bound']:.3g}x its bound): no set to judge a calibration against",
                         param="log")
-    own = cal_io.checked(res["calibration"], str(log))
-    if "information_set" not in own:
+    mine = cal_io.checked(res["calibration"], str(log))
+    if "information_set" not in mine:
         raise DataError(f"{log}: its calibration carries no information set (too many intervals for a file): no "
                         "budget", param="log")
     L, _, turn = garant_frame(np.asarray(M_p, float))
-    ref = refuted(own, L, np.asarray(b_p, float))
-    out.update(figures(norm_model(own, L, b_p), progress), g=own["g"], g_uncertainty=float(
-        own["information_set"]["g_uncertainty"]), premises=own["premises"], frame_turn_deg=turn,
+    ref = refuted(mine, L, np.asarray(b_p, float))
+    out.update(figures(norm_model(mine, L, b_p), progress), g=mine["g"], g_uncertainty=float(
+        mine["information_set"]["g_uncertainty"]), premises=mine["premises"], frame_turn_deg=turn,
         refuted=None if ref is None else {"interval": ref[0], "times_its_bound": ref[1]},
-        garant=figures(norm_model(own)))
+        garant=figures(norm_model(mine)))
     return results.Budget(out)
 
 
