@@ -16,6 +16,53 @@ FLIGHT = REAL / "flight"
 G = 9.81
 
 
+def test_ardupilots_board_orientations_are_its_own_matrices():
+    # The 16 matrices ArduPilot's own rotation test holds (libraries/AP_Math/examples/rotations: MATRIX_ROTATION_*,
+    # rows a, b, c; the test checks v.rotate(r) == m * v) against flight.ap_rotation's Rz(yaw) Ry(pitch) Rx(roll) of
+    # the enum's angles. Red with the product in another order (Rx Ry Rz: YAW_45 after ROLL_180 differs).
+    h = 0.70710678
+    theirs = {0: (1, 0, 0, 0, 1, 0, 0, 0, 1), 1: (h, -h, 0, h, h, 0, 0, 0, 1), 2: (0, -1, 0, 1, 0, 0, 0, 0, 1),
+              3: (-h, -h, 0, h, -h, 0, 0, 0, 1), 4: (-1, 0, 0, 0, -1, 0, 0, 0, 1), 5: (-h, h, 0, -h, -h, 0, 0, 0, 1),
+              6: (0, 1, 0, -1, 0, 0, 0, 0, 1), 7: (h, h, 0, -h, h, 0, 0, 0, 1), 8: (1, 0, 0, 0, -1, 0, 0, 0, -1),
+              9: (h, h, 0, h, -h, 0, 0, 0, -1), 10: (0, 1, 0, 1, 0, 0, 0, 0, -1), 11: (-h, h, 0, h, h, 0, 0, 0, -1),
+              12: (-1, 0, 0, 0, 1, 0, 0, 0, -1), 13: (-h, -h, 0, -h, h, 0, 0, 0, -1),
+              14: (0, -1, 0, -1, 0, 0, 0, 0, -1), 15: (h, -h, 0, -h, -h, 0, 0, 0, -1)}
+    for code, m in theirs.items():
+        np.testing.assert_allclose(flight.ap_rotation(code), np.reshape(m, (3, 3)), atol=1e-8, err_msg=str(code))
+    for code in range(len(flight.AP_ROTATIONS)):
+        R = flight.ap_rotation(code)
+        assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
+
+
+def test_ardupilots_thermal_correction_is_undone_too_and_what_cannot_be_is_one_line():
+    # With INS_TCAL2_ENABLE 1 ArduPilot also corrects accelerometer 1 for temperature before its offsets
+    # (AP_InertialSensor_tempcal.cpp, TCal::correct_sensor: v = raw - P(T) + P(T_cal), T and T_cal held within
+    # [TMIN, TMAX], P(x) = (c1 + (c2 + c3 x) x) x 1e-6, x = T - 35 C): forward here on what the reader returns gives
+    # the logged values back, past TMAX too. Red with the polynomial's sign flipped in the reader.
+    rng = np.random.default_rng(0)
+    raw = rng.normal(0, 5, (50, 3))
+    T = np.linspace(10, 70, 50)
+    c = {(p, a): rng.uniform(-3e3, 3e3) for p in (1, 2, 3) for a in "XYZ"}
+    params = {"INS_TCAL2_ENABLE": 1, "INS_TCAL2_TMIN": 15.0, "INS_TCAL2_TMAX": 60.0, "INS_ACC2_CALTEMP": 25.0,
+              "AHRS_ORIENTATION": 2, **{f"INS_TCAL2_ACC{p}_{a}": v for (p, a), v in c.items()},
+              **{f"INS_ACC2OFFS_{a}": o for a, o in zip("XYZ", (0.1, -0.2, 0.3))},
+              **{f"INS_ACC2SCAL_{a}": s for a, s in zip("XYZ", (1.01, 0.99, 1.02))}}
+    C = np.array([[c[p, a] for a in "XYZ"] for p in (1, 2, 3)])
+
+    def P(t):
+        x = (np.clip(t, 15.0, 60.0) - 35.0)[:, None]
+        return (C[0] + (C[1] + C[2] * x) * x) * x * 1e-6
+    v = raw - P(T) + P(np.full(50, 25.0))
+    logged = ((v - [0.1, -0.2, 0.3]) * [1.01, 0.99, 1.02]) @ np.array([[0, -1.0, 0], [1.0, 0, 0], [0, 0, 1.0]]).T
+    got, said = flight.ardupilot_raw(logged, T, params, 1, "log.bin")
+    np.testing.assert_allclose(got, raw, rtol=0, atol=1e-12)
+    assert "INS_TCAL2_* about INS_ACC2_CALTEMP 25 C" in said and "AHRS_ORIENTATION 2" in said
+    with pytest.raises(DataError, match="holds no temperature of accelerometer 1"):
+        flight.ardupilot_raw(logged, None, params, 1, "log.bin")
+    with pytest.raises(DataError, match="AHRS_ORIENTATION 101 .a custom or irregular board rotation. cannot be undone"):
+        flight.ardupilot_raw(logged, T, {**params, "AHRS_ORIENTATION": 101}, 1, "log.bin")
+
+
 @needs_real
 def test_the_real_px4_log_is_read_instance_by_instance_with_its_device_ids_and_temperatures(capsys):
     # shared/data/real/flight/README.md: sensor_accel instances 0-2, device ids 2424842, 3670050, 2621474, 6 samples
@@ -43,17 +90,31 @@ def test_the_real_px4_log_is_read_instance_by_instance_with_its_device_ids_and_t
 @needs_real
 def test_the_real_ardupilot_log_is_read_with_its_imus_and_temperatures(capsys):
     # test.BIN: IMU and IMU2, 45 messages each (TimeUS, AccX..AccZ m/s^2, T C), INS_ACC_ID and INS_ACC2_ID in PARM;
-    # checked against pymavlink's messages read here directly.
+    # checked against pymavlink's messages read here directly. ArduPilot logs the reading corrected
+    # (AP_InertialSensor_Backend.cpp, _rotate_and_correct_accel: a = (raw - INS_ACCOFFS) * INS_ACCSCAL per axis, then
+    # a.rotate(AHRS_ORIENTATION)); the reader undoes it, so ArduPilot's correction applied here, forward, to what it
+    # read gives the logged values back. This vehicle: offsets up to 2.49 m/s^2, a scale 0.90, the board rolled 180
+    # deg (AHRS_ORIENTATION 8). Red with the reader passing the logged values through (the offsets not undone).
     from pymavlink import DFReader
     reader = DFReader.DFReader_binary(str(FLIGHT / "test.BIN"), zero_time_base=True)
-    theirs = {"IMU": [], "IMU2": []}
-    while (m := reader.recv_match(type=["IMU", "IMU2"])) is not None:
-        theirs[m.get_type()].append((m.AccX, m.T))
+    theirs, params = {"IMU": [], "IMU2": []}, {}
+    while (m := reader.recv_match(type=["IMU", "IMU2", "PARM"])) is not None:
+        if m.get_type() == "PARM":
+            params.setdefault(m.Name, m.Value)
+        else:
+            theirs[m.get_type()].append((m.AccX, m.AccY, m.AccZ, m.T))
+    assert params["AHRS_ORIENTATION"] == 8 and abs(params["INS_ACCOFFS_Y"]) > 2
+    roll_180 = np.diag([1.0, -1.0, -1.0])                 # AP_Math's examples/rotations: MATRIX_ROTATION_ROLL_180
     for k, kind in enumerate(("IMU", "IMU2")):
         t, raw, temp, meta = flight.read_dataflash(FLIGHT / "test.BIN", k)
-        assert len(t) == len(theirs[kind]) == 45
-        np.testing.assert_array_equal(raw[:, 0], [a for a, _ in theirs[kind]])
-        np.testing.assert_array_equal(temp, [T for _, T in theirs[kind]])
+        n = "" if k == 0 else "2"
+        offs, scal = (np.array([params[f"INS_ACC{n}{w}_{a}"] for a in "XYZ"]) for w in ("OFFS", "SCAL"))
+        logged = np.array(theirs[kind])
+        assert len(t) == len(logged) == 45
+        np.testing.assert_allclose(((raw - offs) * scal) @ roll_180.T, logged[:, :3], rtol=0, atol=1e-12)
+        assert np.abs(raw - logged[:, :3]).max() > 1.0
+        np.testing.assert_array_equal(temp, logged[:, 3])
+        assert "ArduPilot's correction undone" in meta["undone"]
     assert meta["instances"] == {0: 1246730, 1: 1442826} and meta["stack"] == "ardupilot"
     assert recordings.guess_format(FLIGHT / "test.BIN") == "dataflash"
     assert main(["calibrate-norm", str(FLIGHT / "test.BIN"), "--imu", "1"]) == 2

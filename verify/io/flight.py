@@ -96,8 +96,12 @@ def read_ulog(path, imu=None):
 DATAFLASH_IMU = ("IMU", "IMU2", "IMU3")
 
 
+#: The parameters of ArduPilot's correction of a logged reading (`ardupilot_raw`).
+CORRECTION = ("INS_ACC", "INS_TCAL", "AHRS_ORIENTATION")
+
+
 def _load_dataflash(path):
-    """(accelerometer rows by instance number, {number: device id}, the PARM values)."""
+    """(accelerometer rows by instance number, {number: device id}, the PARM values at start)."""
     dfreader = _need("pymavlink.DFReader", path)
     try:
         reader = dfreader.DFReader_binary(str(path), zero_time_base=True)
@@ -112,8 +116,14 @@ def _load_dataflash(path):
         if m is None:
             break
         kind = m.get_type()
-        if kind == "PARM":
-            params[m.Name] = float(m.Value)
+        if kind == "PARM":                             # the value at start; a correction changed later is said
+            value = float(m.Value)
+            if not rows:
+                params[m.Name] = value
+            elif params.setdefault(m.Name, value) != value and m.Name.startswith(CORRECTION):
+                raise DataError(f"{path}: {m.Name} changed during the log ({params[m.Name]:g} -> {value:g}): its "
+                                "readings before and after are corrected differently by ArduPilot; log again with the "
+                                "parameters fixed", param="log")
             continue
         fields = [getattr(m, f, None) for f in ("TimeUS", "AccX", "AccY", "AccZ")]
         if any(f is None for f in fields):             # a message of another layout: not an accelerometer's
@@ -125,14 +135,78 @@ def _load_dataflash(path):
 
 
 def read_dataflash(path, imu=None):
-    """(t s, raw (N, 3) m/s^2, temperature C or None, meta) of one accelerometer of an ArduPilot DataFlash log."""
+    """(t s, raw (N, 3) m/s^2, temperature C or None, meta) of one accelerometer of an ArduPilot DataFlash log: the
+    IMU message's reading with the vehicle's own correction undone (`ardupilot_raw`), so that a calibration of it
+    is one ArduPilot applies as loaded."""
     rows, ids, params = _load_dataflash(path)
     k = _pick(path, ids, imu, "ArduPilot")
     a = np.array(rows[k], float)
     temp = a[:, 4] if np.all(np.isfinite(a[:, 4])) else None
-    meta = {"stack": "ardupilot", "instance": k, "device_id": ids[k], "instances": ids,
-            "parameters": {n: v for n, v in params.items() if n.startswith(("INS_ACC", "INS_TCAL"))}}
-    return a[:, 0] * 1e-6, a[:, 1:4], temp, meta
+    raw, undone = ardupilot_raw(a[:, 1:4], temp, params, k, path)
+    meta = {"stack": "ardupilot", "instance": k, "device_id": ids[k], "instances": ids, "undone": undone,
+            "parameters": {n: v for n, v in params.items() if n.startswith(CORRECTION)}}
+    return a[:, 0] * 1e-6, raw, temp, meta
+
+
+#: ArduPilot's board orientations (AHRS_ORIENTATION, the enum Rotation of AP_Math/rotations.h): (roll, pitch, yaw)
+#: in degrees; its matrix is Rz(yaw) Ry(pitch) Rx(roll) and v.rotate(r) is that matrix times v (AP_Math's
+#: examples/rotations test checks both). Values past 37 (irregular angles, custom rotations) are refused.
+AP_ROTATIONS = ((0, 0, 0), (0, 0, 45), (0, 0, 90), (0, 0, 135), (0, 0, 180), (0, 0, 225), (0, 0, 270), (0, 0, 315),
+                (180, 0, 0), (180, 0, 45), (180, 0, 90), (180, 0, 135), (0, 180, 0), (180, 0, 225), (180, 0, 270),
+                (180, 0, 315), (90, 0, 0), (90, 0, 45), (90, 0, 90), (90, 0, 135), (270, 0, 0), (270, 0, 45),
+                (270, 0, 90), (270, 0, 135), (0, 90, 0), (0, 270, 0), (0, 180, 90), (0, 180, 270), (90, 90, 0),
+                (180, 90, 0), (270, 90, 0), (90, 180, 0), (270, 180, 0), (90, 270, 0), (180, 270, 0), (270, 270, 0),
+                (90, 180, 90), (90, 0, 270))
+
+
+def ap_rotation(code):
+    """The matrix of ArduPilot's board orientation `code` (AP_ROTATIONS), rounded to the exact 0, +-1 of right
+    angles."""
+    r, p, y = np.radians(AP_ROTATIONS[code])
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    R = np.array([[cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
+                  [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
+                  [-sp, sr * cp, cr * cp]])
+    return np.where(np.abs(R) < 1e-12, 0.0, np.where(np.abs(np.abs(R) - 1) < 1e-12, np.sign(R), R))
+
+
+def ardupilot_raw(acc, temp, params, k, path):
+    """(raw (N, 3), what was undone) of accelerometer k's IMU readings `acc`. ArduPilot logs them corrected
+    (AP_InertialSensor_Backend.cpp, _rotate_and_correct_accel, before the filter and get_accel that IMU logs):
+    in the driver's axes v = raw - (P(T) - P(T_cal)) when INS_TCALn_ENABLE is 1 (TCal::correct_sensor, as
+    io/tcal.py writes it), then a = (v - INS_ACCOFFS) * INS_ACCSCAL per axis, then a.rotate(AHRS_ORIENTATION). The
+    inverse, with the parameters the log recorded: v = R^T a / INS_ACCSCAL + INS_ACCOFFS, raw = v + P(T) -
+    P(T_cal). Affine, so the low-pass filter between commutes with it. A parameter the log does not hold is taken
+    as ArduPilot's default (no offset, unit scale, no rotation, no thermal correction) and said."""
+    n = "" if k == 0 else str(k + 1)
+    offs = np.array([params.get(f"INS_ACC{n}OFFS_{a}", 0.0) for a in "XYZ"], float)
+    scal = np.array([params.get(f"INS_ACC{n}SCAL_{a}", 1.0) for a in "XYZ"], float)
+    code = int(params.get("AHRS_ORIENTATION", 0))
+    if not 0 <= code < len(AP_ROTATIONS):
+        raise DataError(f"{path}: AHRS_ORIENTATION {code} (a custom or irregular board rotation) cannot be undone "
+                        "here: log with AHRS_ORIENTATION 0 to 37", param="log")
+    if np.any(scal <= 0):
+        raise DataError(f"{path}: INS_ACC{n}SCAL_* of accelerometer {k} is {scal.tolist()}: not the scale "
+                        "ArduPilot corrected this log with (it must be positive)", param="log")
+    v = acc @ ap_rotation(code) / scal + offs
+    held = [name for name in (f"INS_ACC{n}OFFS_X", f"INS_ACC{n}SCAL_X", "AHRS_ORIENTATION") if name in params]
+    said = (f"ArduPilot's correction undone (INS_ACC{n}OFFS_* {offs.round(6).tolist()} m/s^2, INS_ACC{n}SCAL_* "
+            f"{scal.round(6).tolist()}, AHRS_ORIENTATION {code}" + ("" if len(held) == 3 else
+                                                                     ", the rest ArduPilot's defaults: not in the log"))
+    if int(params.get(f"INS_TCAL{k + 1}_ENABLE", 0)) == 1:
+        if temp is None:
+            raise DataError(f"{path}: INS_TCAL{k + 1}_ENABLE is 1 but the log holds no temperature of accelerometer "
+                            f"{k}: its thermal correction cannot be undone", param="log")
+        lo, hi = (float(params.get(f"INS_TCAL{k + 1}_{x}", 0.0)) for x in ("TMIN", "TMAX"))
+        c = np.array([[params.get(f"INS_TCAL{k + 1}_ACC{p}_{a}", 0.0) for a in "XYZ"] for p in (1, 2, 3)], float)
+        t_cal = float(params.get(f"INS_ACC{k + 1}_CALTEMP", 35.0))
+
+        def P(T):
+            x = (np.clip(np.atleast_1d(T), lo, hi) - 35.0)[:, None]
+            return (c[0] + (c[1] + c[2] * x) * x) * x * 1e-6
+        v = v + P(temp) - P([t_cal])
+        said += f", INS_TCAL{k + 1}_* about INS_ACC{k + 1}_CALTEMP {t_cal:g} C"
+    return v, said + "): the raw readings"
 
 
 def px4_slot(meta, device_id):

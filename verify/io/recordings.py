@@ -301,7 +301,8 @@ def _read_flight(reader):
     def read(path, sensor, imu, rate):
         t, raw, temp, meta = reader(path, imu)
         which = f"topic {meta['topic']}" if "topic" in meta else f"device id {meta['device_id']}"
-        note = f"{meta['stack']} accelerometer {meta['instance']} ({which}) of {len(meta['instances'])}"
+        note = f"{meta['stack']} accelerometer {meta['instance']} ({which}) of {len(meta['instances'])}" + (
+            f"; {meta['undone']}" if meta.get("undone") else "")
         return Read(t, raw, True, None, note, temp, meta)
     return read
 
