@@ -331,3 +331,79 @@ def test_imu_tks_own_calibration_of_its_xsens_log_is_budgeted_beside_garants(tmp
     assert np.allclose(M_p, T @ K, rtol=1e-5) and np.allclose(b_p, B, rtol=1e-5)
     own = api.calibrate_norm(str(log), g=G_REAL)
     _brute_force(res, calibration.checked(own["calibration"]), M_p, b_p)
+
+
+def _diagonal_unit(tmp_path, offset, scale):
+    """A simulated hand-turned log re-read as a unit whose calibration is a = scale * (raw - offset) per axis (no
+    misalignment: the only kind a flight stack's parameters hold): (its log, the three files stating that
+    calibration: PX4's .params in QGroundControl's tab form, ArduPilot's .parm as NAME,VALUE, imu_tk's T K B)."""
+    log = tmp_path / "s.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:24", "--sigma", "2e-4", "--size", "1e-2",
+                 "--seed", "3", "-o", str(log)]) == 0
+    truth = json.loads((tmp_path / "s.truth.json").read_text())
+    d = np.genfromtxt(log, delimiter=",", names=True)
+    a = (np.column_stack([d["ax"], d["ay"], d["az"]]) - truth["bias"]) @ np.array(truth["matrix"]).T
+    out = tmp_path / "d.csv"
+    np.savetxt(out, np.column_stack([d["time_s"], offset + a / scale]), delimiter=",", header="time_s,ax,ay,az",
+               comments="", fmt="%.15g")
+    px4, ap, tk = tmp_path / "cal.params", tmp_path / "cal.parm", tmp_path / "cal.txt"
+    offset, scale = [float(v) for v in offset], [float(v) for v in scale]
+    px4.write_text("# Onboard parameters for Vehicle 1\n# Vehicle-Id\tComponent-Id\tName\tValue\tType\n" + "".join(
+        f"1\t1\tCAL_ACC0_{x}OFF\t{o!r}\t9\n1\t1\tCAL_ACC0_{x}SCALE\t{s!r}\t9\n"
+        for x, o, s in zip("XYZ", offset, scale))
+        + "1\t1\tCAL_ACC0_ID\t1310988\t6\n1\t1\tTC_A_ENABLE\t0\t6\n")
+    ap.write_text("".join(f"INS_ACCOFFS_{x},{o!r}\nINS_ACCSCAL_{x},{s!r}\n" for x, o, s in zip("XYZ", offset, scale))
+                  + "INS_ACC2OFFS_X,0\nINS_ACC2OFFS_Y,0\nINS_ACC2OFFS_Z,0\nINS_ACC2SCAL_X,0\nINS_ACC2SCAL_Y,0\n"
+                  "INS_ACC2SCAL_Z,0\n")
+    tk.write_text("1 0 0\n0 1 0\n0 0 1\n\n" + "\n".join(" ".join(repr(float(v)) for v in row) for row in np.diag(scale))
+                  + "\n\n" + "\n".join(map(repr, offset)) + "\n")
+    return out, (px4, ap, tk)
+
+
+@pytest.mark.slow
+def test_px4_and_ardupilot_parameter_files_are_judged_as_their_stacks_apply_them(tmp_path, capsys, monkeypatch):
+    # PX4 corrects by a = (raw - CAL_ACCn_xOFF) * CAL_ACCn_xSCALE (Accelerometer.hpp, Correct), ArduPilot by
+    # a = (raw - INS_ACCOFFS) * INS_ACCSCAL (_rotate_and_correct_accel): the same correction as imu_tk's file with
+    # T = I, K = diag(scale), B = offset, so its budget is imu_tk's to the last digit, and the unit's own
+    # calibration is not refuted. Its X offset moved by 0.02 m/s^2 is (exit 3). Red with a stack's offset read as
+    # added (a = scale (raw + offset)).
+    monkeypatch.setattr(budget, "N_SIDE", 6)                # (a coarse grid: this test compares, it does not measure)
+    log, (px4, ap, tk) = _diagonal_unit(tmp_path, np.array([0.05, -0.1, 0.2]), np.array([1.01, 0.99, 1.02]))
+    ref = api.budget(str(tk), log=str(log), g=G)
+    assert ref["refuted"] is None
+    for path, kind, slot in ((px4, "px4", "CAL_ACC0 (device id 1310988)"),
+                             (ap, "ardupilot", "INS_ACCOFFS/SCAL (IMU 1)")):
+        res = api.budget(str(path), log=str(log), g=G)
+        assert (res["calibration_kind"], res["calibration_slot"], res["refuted"]) == (kind, slot, None)
+        schemas.validate(res.to_dict(), "budget", "budget")
+        for key in ("specific_force_error_mps2", "tilt_error_rad", "per_axis_error_mps2"):
+            np.testing.assert_allclose(res[key], ref[key], rtol=1e-12)
+    moved = tmp_path / "moved.params"
+    moved.write_text(px4.read_text().replace("CAL_ACC0_XOFF\t0.05", "CAL_ACC0_XOFF\t0.07"))
+    capsys.readouterr()
+    assert main(["budget", str(moved), "--log", str(log), "--g", str(G)]) == 3
+    assert "REFUTED" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("text, said", [
+    ("1\t1\tCAL_ACC0_XOFF\t0.1\t9\n1\t1\tCAL_ACC0_YOFF\t0\t9\n1\t1\tCAL_ACC0_ZOFF\t0\t9\n1\t1\tCAL_ACC0_XSCALE\t1\t9\n"
+     "1\t1\tCAL_ACC0_YSCALE\t1\t9\n1\t1\tCAL_ACC0_ZSCALE\t1\t9\n1\t1\tCAL_ACC0_ID\t7\t6\n1\t1\tTC_A_ENABLE\t1\t6\n"
+     "1\t1\tTC_A0_ID\t7\t6\n", "PX4's thermal compensation is enabled for CAL_ACC0's sensor"),
+    ("INS_ACCOFFS_X 0\nINS_ACCOFFS_Y 0\nINS_ACCOFFS_Z 0\nINS_ACCSCAL_X 1\nINS_ACCSCAL_Y 1\nINS_ACCSCAL_Z 1\n"
+     "INS_TCAL1_ENABLE 1\n", "ArduPilot's thermal correction is enabled for IMU 1"),
+    ("INS_ACCOFFS_X 0\nINS_ACCOFFS_Y 0\nINS_ACCOFFS_Z 0\nINS_ACCSCAL_X 1\nINS_ACCSCAL_Y 1\nINS_ACCSCAL_Z 1\n"
+     "INS_ACC2OFFS_X 0\nINS_ACC2OFFS_Y 0\nINS_ACC2OFFS_Z 0\nINS_ACC2SCAL_X 1\nINS_ACC2SCAL_Y 1\nINS_ACC2SCAL_Z 1\n",
+     "2 accelerometer calibrations in this file (IMU (0-based) [0, 1]): choose one with --imu K"),
+    ("INS_ACCOFFS_X 0\nINS_ACCOFFS_Y nan\n", "line 2: INS_ACCOFFS_Y is not a finite number"),
+    ("INS_ACCOFFS_X 0\n__import__('os') 1\n", "line 2 is not a parameter"),
+    ("SYSID_THISMAV 1\n", "a parameter file without an accelerometer calibration"),
+    ("rostopic: /imu0\nupdate_rate: 200.0\naccelerometer_noise_density: 2.0e-03\n",
+     "Kalibr's imu.yaml states the noise (accelerometer_noise_density, random walk), no scale"),
+])
+def test_a_parameter_file_budget_cannot_take_is_one_line(tmp_path, capsys, text, said):
+    path, log = tmp_path / "p.parm", tmp_path / "l.csv"
+    path.write_text(text)
+    log.write_text("time_s,ax,ay,az\n0,0,0,9.81\n")
+    assert main(["budget", str(path), "--log", str(log)]) == 2
+    err = capsys.readouterr().err
+    assert said in flat(err) and len(err.strip().splitlines()) == 1, err

@@ -11,11 +11,15 @@ def add(sub):
     p = sub.add_parser("budget", help="what a calibration guarantees downstream: worst-case specific force, tilt, "
                                       "velocity and position error over the information set")
     p.add_argument("calibration", metavar="CAL", help="a garant calibration (calibrate-norm or estimate --save), or "
-                   "imu_tk's (its text file) or imucal's (its JSON) with --log")
+                   "with --log imu_tk's (its text file), imucal's (its JSON), PX4's .params or ArduPilot's .parm "
+                   "(their constant accelerometer calibration)")
     p.add_argument("--log", metavar="LOG", help="judge CAL against this log's information set (the log it was made "
                    "from, or any static log of the same unit), garant's calibration of it beside")
     flags.log_format(p)
     flags.sensor(p, "adxl355")
+    p.add_argument("--imu", type=flags.count, metavar="K", help="a flight log's accelerometer (its number or device "
+                   "id), whose slot of a parameter file CAL is judged; with another log, the slot's number (PX4's "
+                   "CAL_ACCK, ArduPilot's IMU K + 1)")
     flags.g(p, "local gravity, m/s^2, for the log's calibration (default 9.81, |Delta_g/g| <= 5e-3)", None)
     p.add_argument("--g-uncertainty", type=flags.small, metavar="U", help="the bound on |Delta_g/g| (default 1e-5 "
                    "with --g, 5e-3 without)")
@@ -36,7 +40,8 @@ def run(args):
     from ..io import report
     from ..workflows import jobs
     res = jobs.budget(args.calibration, log=args.log, g=args.g, g_uncertainty=args.g_uncertainty, format=args.format,
-                      sensor=args.sensor, bound=dict(args.bound) or None, rate=args.rate, progress=progress)
+                      sensor=args.sensor, imu=args.imu, bound=dict(args.bound) or None, rate=args.rate,
+                      progress=progress)
     _print(res)
     if args.json:
         report.write_json(args.json, res)
@@ -132,7 +137,8 @@ def _print(res):
     judged = f" judged against {res['log']}" if res["log"] else " over its own information set"
     turn = (f"; its frame turned {res['frame_turn_deg']:.3g} deg into garant's convention (not counted: the norm "
             "relation cannot see a turn)" if res["frame_turn_deg"] else "")
-    print(f"budget of {res['calibration']} ({res['calibration_kind']}){judged}{turn}")
+    slot = f" {res['calibration_slot']}" if res.get("calibration_slot") else ""
+    print(f"budget of {res['calibration']} ({res['calibration_kind']}{slot}){judged}{turn}")
     if res["refuted"]:
         r = res["refuted"]
         print(f"  REFUTED: the readings rule this calibration out: still interval {r['interval']} needs "

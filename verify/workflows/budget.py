@@ -207,11 +207,13 @@ def _filter(model):
     return {"bias_bound_mps2": bias.tolist(), "slope_bound": slope.tolist()}
 
 
-def peer(path):
-    """(kind, M, b) of a calibration file: garant's own ("garant", the checked dictionary, None), imucal's
-    FerrarisCalibrationInfo JSON (M = (K_a R_a)^-1, b = b_a: imucal's a = R_a^-1 K_a^-1 (raw - b_a)) or imu_tk's
-    CalibratedTriad text (M = T K, b = B); DataError naming the file otherwise."""
-    from ..io import calibration, files
+def peer(path, flight=None, imu=None):
+    """(kind, M, b, slot) of a calibration file: garant's own ("garant", the checked dictionary, None), imucal's
+    FerrarisCalibrationInfo JSON (M = (K_a R_a)^-1, b = b_a: imucal's a = R_a^-1 K_a^-1 (raw - b_a)), a PX4 .params
+    or ArduPilot .parm (io/stack_params.py: the slot of the log's accelerometer `flight`, or of `imu`) or imu_tk's
+    CalibratedTriad text (M = T K, b = B); slot names a parameter file's calibration, None otherwise; DataError
+    naming the file otherwise."""
+    from ..io import calibration, files, stack_params
     files.regular(path, "the calibration file", calibration.MAX_BYTES, param="calibration")
     try:
         with open(path, "rb") as fh:
@@ -221,7 +223,7 @@ def peer(path):
     if start.startswith(b"{"):
         data = files.read_json(path, "a calibration file", calibration.MAX_BYTES, param="calibration")
         if isinstance(data, dict) and data.get("format") == calibration.FORMAT:
-            return "garant", calibration.read(path), None
+            return "garant", calibration.read(path), None, None
         if isinstance(data, dict) and all(k in data for k in ("K_a", "R_a", "b_a")):
             try:
                 K, R, b = (np.array(data[k], dtype=float) for k in ("K_a", "R_a", "b_a"))
@@ -231,11 +233,25 @@ def peer(path):
                     np.all(np.isfinite(K)) and np.all(np.isfinite(R)) and np.all(np.isfinite(b))):
                 raise DataError(f"{path}: imucal's K_a and R_a must be 3 x 3 and b_a 3 finite numbers",
                                 param="calibration")
-            return "imucal", _regular(np.linalg.inv(K @ R) if abs(np.linalg.det(K @ R)) > 0 else None, path), b
+            return "imucal", _regular(np.linalg.inv(K @ R) if abs(np.linalg.det(K @ R)) > 0 else None, path), b, None
         raise DataError(f"{path}: neither a garant calibration (format {calibration.FORMAT}) nor imucal's (K_a, R_a, "
                         "b_a)", param="calibration")
+    params = stack_params.read(path)
+    if params:
+        stack, M, b, slot = stack_params.constant(params, path, flight, imu)
+        return stack, _regular(M, path), b, slot
     M, b = calibration.read_imu_tk(path)
-    return "imu_tk", _regular(M, path), b
+    return "imu_tk", _regular(M, path), b, None
+
+
+def precheck(path, imu, flight_log):
+    """`peer`'s refusals of the file, said before the log is calibrated; a parameter file's slot is left to the log
+    when it is a flight log (its accelerometer chooses the slot)."""
+    try:
+        peer(path, None, imu)
+    except DataError as e:
+        if not (flight_log and e.param == "imu"):
+            raise
 
 
 def _regular(M, path):
@@ -287,23 +303,24 @@ def own(cal, path, progress=None):
                         "calibration, or a set too large for a file): give --log LOG to judge it against a "
                         "log's own set", param="calibration")
     model = norm_model(cal) if cal["kind"] == "norm" else stand_model(cal)
-    out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "log": None,
+    out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "calibration_slot": None, "log": None,
            "horizons_s": list(HORIZONS_S), "temperature_range_c": None, "frame_turn_deg": 0.0, "refuted": None,
            "garant": None}
     out.update(figures(model, progress), g=cal["g"], g_uncertainty=model.u, premises=cal["premises"])
     return results.Budget(out)
 
 
-def run(calibration, log=None, log_result=None, progress=None):
+def run(calibration, log=None, log_result=None, progress=None, imu=None):
     """The budget of a calibration file (`garant budget CAL [--log LOG]`): of a garant file over its own set, or,
     with `log` and its calibration `log_result` (calibrate-norm's result), of any calibration (garant's, imu_tk's,
-    imucal's) over the set of that log, with garant's calibration of the log beside it."""
+    imucal's, a flight stack's parameter file: the slot of the log's accelerometer, or of `imu`) over the set of
+    that log, with garant's calibration of the log beside it."""
     from ..io import calibration as cal_io, results
     path = str(calibration)
-    kind, cal, b_p = peer(path)
+    kind, cal, b_p, slot = peer(path, (log_result or {}).get("flight"), imu)
     out = {"calibration": path, "calibration_kind": kind if kind != "garant" else f"garant {cal['kind']}",
-           "log": None if log is None else str(log), "horizons_s": list(HORIZONS_S), "temperature_range_c": None,
-           "frame_turn_deg": 0.0, "refuted": None, "garant": None}
+           "calibration_slot": slot, "log": None if log is None else str(log), "horizons_s": list(HORIZONS_S),
+           "temperature_range_c": None, "frame_turn_deg": 0.0, "refuted": None, "garant": None}
     if kind == "garant":
         if log is None:
             return own(cal, path, progress)

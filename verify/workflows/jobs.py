@@ -636,29 +636,43 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
 
 
 @constraints(calibration=options.path, log=by_the_job("jobs.read_log"), g=options.gravity,
-             g_uncertainty=options.small, format=options.one_of(*FORMATS), sensor=options.sensor,
+             g_uncertainty=options.small, format=options.one_of(*FORMATS), sensor=options.sensor, imu=options.count,
              bound=options.bounds, rate=options.rate, progress=options.callback)
 def budget(calibration: str, *, log: Optional[str] = None, g: Optional[float] = None,
            g_uncertainty: Optional[float] = None, format: Optional[str] = None, sensor: Optional[str] = None,
-           bound: Optional[Mapping[str, float]] = None, rate: Optional[float] = None,
+           imu: Optional[int] = None, bound: Optional[Mapping[str, float]] = None, rate: Optional[float] = None,
            progress: Optional[Callable] = None) -> results.Budget:
     """What a calibration guarantees downstream: `garant budget CAL [--log LOG] --json`.
 
     Parameters
     ----------
     calibration : path
-        A garant calibration file, or imu_tk's (text) or imucal's (JSON) with `log`.
+        A garant calibration file, or with `log` imu_tk's (text), imucal's (JSON), PX4's .params or ArduPilot's
+        .parm (their constant accelerometer calibration).
     log : path, optional
         Judge the calibration against this log's information set (garant's calibration of it beside).
-    g, g_uncertainty, format, sensor, bound, rate
-        As calibrate-norm, for the log's calibration (bound: the misalignments' premise of a six-face log).
+    g, g_uncertainty, format, sensor, imu, bound, rate
+        As calibrate-norm, for the log's calibration (bound: the misalignments' premise of a six-face log; imu: the
+        flight log's accelerometer, whose slot of a parameter file is judged, or that slot's number).
     progress : callable, optional
         Hears (attitudes done, attitudes).
     """
     from . import budget as bud
+    picks = log is not None and _picks_imu(log, format)
+    bud.precheck(calibration, None if picks else imu, picks)     # a file budget cannot take, said before the log's work
     res = None if log is None else calibrate_norm(log, g=g, g_uncertainty=g_uncertainty, format=format,
-                                                   sensor=sensor, bound=bound, rate=rate)
-    return bud.run(calibration, log, res, progress)
+                                                   sensor=sensor, imu=imu if picks else None, bound=bound, rate=rate)
+    return bud.run(calibration, log, res, progress, None if picks else imu)
+
+
+def _picks_imu(log, format):
+    """Whether --imu picks one IMU of the log (a flight controller's log, a MIMU stream); for another log it names
+    the slot of a parameter file."""
+    from ..io import recordings
+    try:
+        return (format or recordings.guess_format(log)) in ("ulog", "dataflash", "rosbag", "mimu")
+    except OSError:
+        return False                                   # (read_log says what is wrong with the file)
 
 
 #: Samples corrected at a time into a DataFrame's copy: the work's memory is this piece's, not the frame's.
