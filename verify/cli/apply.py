@@ -28,6 +28,10 @@ def add(sub):
     p.add_argument("--outside", choices=("drop", "refuse"), default="drop",
                    help="samples outside a calibration's temperature range (a warm-up's first ones, before its first "
                         "still interval): dropped and counted on the summary line (default), or the log refused")
+    p.add_argument("--bound-over", choices=("set", "box"), default="set",
+                   help="each sample's bound over the calibration's information set (default: the sharpest the "
+                        "readings prove; LPs: seconds to minutes on a long moving log, progress said) or over its box "
+                        "alone (fast, wider)")
     p.add_argument("--attitude", action="store_true",
                    help="also roll_rad, pitch_rad and their guaranteed bounds per sample, for still samples (a moving "
                         "sample's specific force is not its vertical): roll = atan2(ay, az), pitch = atan2(-ax, "
@@ -114,7 +118,8 @@ def _apply(args, calibration, log, output):
     from ..workflows import jobs
     from ..io import calibration as cal_io
     pieces = jobs.apply(calibration, log, format=args.format, sensor=args.sensor, imu=args.imu, rate=args.rate,
-                        trust_units=args.trust_units, frame=args.frame, chunk=CHUNK, outside=args.outside)
+                        trust_units=args.trust_units, frame=args.frame, chunk=CHUNK, outside=args.outside,
+                        bound_over=args.bound_over)
     worst, total, n, kind, dropped = np.zeros(3), 0.0, 0, cal_io.read(calibration)["kind"], 0
 
     def rows():
@@ -125,6 +130,8 @@ def _apply(args, calibration, log, output):
         for c in pieces:
             np.maximum(worst, c.bound.max(axis=0, initial=0.0), out=worst)
             total, n, kind, dropped = total + c.bound.sum(), n + len(c.t), c.kind, dropped + c.outside
+            if n >= CHUNK:                         # a log of more than one piece: progress, a line a piece
+                print(f"apply: {n} samples corrected ...", file=sys.stderr, flush=True)
             extra = list(attitude(c.a, c.bound)) if args.attitude else []
             yield csv_bytes([c.t, *c.a.T, *c.bound.T, *extra], up=(4, 5, 6) + ((9, 10) if extra else ()),
                             digits=(12, 8, 8, 8, 4, 4, 4) + ((12, 12, 4, 4) if extra else ()))

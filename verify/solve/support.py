@@ -27,13 +27,15 @@ BUDGET = 4000
 
 
 class Solved:
-    """The LPs solved for one set, by cell: each round's cell (its rounded direction) -> (the proofs of its least
-    and largest end (`_basis`), the LP's points), and the LPs spent against the budget. One
-    for the pieces of a log (`ranges(..., solved=...)`): a cell solved for one piece proves the next's samples."""
+    """The LPs solved for one set, by cell: each round's cell (its rounded direction) -> (the indices of the proofs
+    of its least and largest end in `proofs` (`_basis`), the LP's points), and the LPs spent against the budget.
+    One for the pieces of a log (`ranges(..., solved=...)`): a cell solved for one piece proves the next's
+    samples."""
 
     def __init__(self, budget=BUDGET):
         self.cells, self.budget, self.spent = {}, budget, 0
-        self.units, self.proofs = [], []        # every cell's unit c and proofs, for the cells past the budget
+        self.units, self.pairs = [], []         # every cell's unit c and its pair of proofs, for those past the budget
+        self.proofs = []                        # (rows, multipliers, K or None) of each end solved
 
 
 def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False):
@@ -79,23 +81,26 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False
                 break
             for j, p_, lam in zip(new, pts, lams):
                 c = C[todo[first[j]]]
-                solved.cells[names[j]] = (_basis(B, -c, lam[0]), _basis(B, c, lam[1])), p_
+                pair = (len(solved.proofs), len(solved.proofs) + 1)
+                solved.proofs += [_basis(B, -c, lam[0]), _basis(B, c, lam[1])]
+                solved.cells[names[j]] = pair, p_
                 solved.units.append(c / np.linalg.norm(c))
-                solved.proofs.append(solved.cells[names[j]][0])
+                solved.pairs.append(pair)
         X = []
-        unsolved = [j for j, name in enumerate(names) if name not in solved.cells]
-        if unsolved and solved.units:        # past the budget: the proofs of the nearest cell solved (any round)
-            _nearest(C, B, row_lo, row_hi, col_lo, col_hi, best, solved, todo, first, cell, unsolved)
+        pair_of = np.full((len(names), 2), -1)               # each cell's proofs: its own, or the nearest's
         for j, name in enumerate(names):
             got = solved.cells.get(name)
-            if got is None:
-                continue
-            members = todo[cell == j]
-            proofs, p_ = got
-            for end, sign in ((0, -1.0), (1, 1.0)):
-                proven = _proven(sign * C[members], B, row_lo, row_hi, col_lo, col_hi, proofs[end])
-                best[end, members] = np.minimum(best[end, members], proven)
-            X += [x for x in p_ if x is not None]
+            if got is not None:
+                pair_of[j] = got[0]
+                X += [x for x in got[1] if x is not None]
+        unsolved = np.flatnonzero(pair_of[:, 0] < 0)
+        if len(unsolved) and solved.units:   # past the budget: the proofs of the nearest cell solved (any round)
+            pair_of[unsolved] = _nearest(C[todo[first[unsolved]]], solved)
+        members = np.flatnonzero(pair_of[cell, 0] >= 0)
+        for end, sign in ((0, -1.0), (1, 1.0)):
+            proven = _proven(sign * C[todo[members]], B, row_lo, row_hi, col_lo, col_hi, solved.proofs,
+                             pair_of[cell[members], end])
+            best[end, todo[members]] = np.minimum(best[end, todo[members]], proven)
         X = np.array(X).reshape(-1, C.shape[1])
         for k in range(0, len(X), POINTS_AT_ONCE):    # every sample left at every point of the cells used
             V = C[todo] @ X[k:k + POINTS_AT_ONCE].T
@@ -107,19 +112,14 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False
     return (-best[0], best[1]) + ((-seen[0], seen[1]) if seen_too else ())
 
 
-def _nearest(C, B, row_lo, row_hi, col_lo, col_hi, best, solved, todo, first, cell, unsolved):
-    """The samples of the cells `unsolved` (past the budget) proven by the multipliers of the cell solved whose c
-    is nearest in direction (its proofs swapped where the nearest is -c); `best` lowered in place."""
-    reps = C[todo[first[unsolved]]]
+def _nearest(reps, solved):
+    """(n, 2): the proofs (least end, largest end) for cells past the budget, each that of the cell solved whose c
+    is nearest in direction to the cell's first c (`reps`), the pair swapped where the nearest is -c."""
     near = (reps / np.linalg.norm(reps, axis=1)[:, None]) @ np.asarray(solved.units).T
     pick = np.argmax(np.abs(near), axis=1)
-    flip = near[np.arange(len(unsolved)), pick] < 0
-    for k, f in set(zip(pick.tolist(), flip.tolist())):
-        members = todo[np.isin(cell, np.asarray(unsolved)[(pick == k) & (flip == f)])]
-        pair = solved.proofs[k][::-1] if f else solved.proofs[k]
-        for end, sign in ((0, -1.0), (1, 1.0)):
-            proven = _proven(sign * C[members], B, row_lo, row_hi, col_lo, col_hi, pair[end])
-            best[end, members] = np.minimum(best[end, members], proven)
+    pairs = np.asarray(solved.pairs)[pick]
+    flip = near[np.arange(len(reps)), pick] < 0
+    return np.where(flip[:, None], pairs[:, ::-1], pairs)
 
 
 #: LP points whose values at every sample are taken at once (the memory of that step: samples x this).
@@ -141,14 +141,49 @@ def _basis(B, c, lam):
     return lam, np.linalg.pinv(basis)[:len(lam.rows)]
 
 
-def _proven(C, B, row_lo, row_hi, col_lo, col_hi, proof):
-    """The proven ends max c_s^T x of the rows c_s of C from a cell's proof (`_basis`): its multipliers as they
-    are, and re-solved for each c_s on its basis; the better of the two (one `hull.upper` for both)."""
-    lam, K = proof
-    n = len(C)
-    if K is None:
-        return hull.upper(C, B, row_lo, row_hi, col_lo, col_hi,
-                          hull.Multipliers(lam.rows, np.broadcast_to(lam.values, (n, len(lam.rows)))))
-    both = hull.upper(np.vstack([C, C]), B, row_lo, row_hi, col_lo, col_hi,
-                      hull.Multipliers(lam.rows, np.vstack([np.broadcast_to(lam.values, (n, len(lam.rows))), C @ K.T])))
-    return np.minimum(both[:n], both[n:])
+#: Objectives proven at once by `_proven` (its memory: this x the rows read x the columns).
+PROVEN_AT_ONCE = 2048
+
+
+def _proven(C, B, row_lo, row_hi, col_lo, col_hi, proofs, which):
+    """The proven ends max c_s^T x of the rows c_s of C, each from its proof proofs[which[s]] (`_basis`): its
+    multipliers as they are, and re-solved for c_s on its basis; the better of the two. hull.upper's arithmetic
+    and rounding allowances, for many proofs at once (each objective's multipliers on its proof's rows, padded with
+    zeros: a zero multiplier reads nothing; the allowances count every padded row, so they are not smaller)."""
+    out = np.empty(len(C))
+    ids, inverse = np.unique(which, return_inverse=True)
+    R = max((len(proofs[i][0].rows) for i in ids), default=0)
+    P = B.shape[1]
+    rows, lam, K = np.zeros((len(ids), R), np.intp), np.zeros((len(ids), R)), np.zeros((len(ids), R, P))
+    for t, i in enumerate(ids):
+        m, k = proofs[i]
+        r = len(m.rows)
+        rows[t, :r], lam[t, :r] = m.rows, m.values
+        if k is not None:
+            K[t, :r] = k
+    plain = np.array([proofs[i][1] is None for i in ids], bool)   # no basis: the multipliers as they are, twice
+    row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)
+    lo_ok, hi_ok = np.isfinite(row_lo), np.isfinite(row_hi)
+    lo_v, hi_v = np.where(lo_ok, row_lo, 0.0), np.where(hi_ok, row_hi, 0.0)
+    span = np.maximum(np.abs(col_lo), np.abs(col_hi))
+    n = R + 2
+    for a in range(0, len(C), PROVEN_AT_ONCE):
+        part = slice(a, a + PROVEN_AT_ONCE)
+        c, t = C[part], inverse.ravel()[part]
+        Bt, rt = B[rows[t]], rows[t]                               # (m, R, P), (m, R)
+        resolved = np.einsum("mrp,mp->mr", K[t], c)
+        ends = []
+        for L in (lam[t], np.where(plain[t][:, None], lam[t], resolved)):
+            L = np.where((L > 0) & ~hi_ok[rt] | (L < 0) & ~lo_ok[rt], 0.0, L)
+            mu = c - np.einsum("mr,mrp->mp", L, Bt)
+            slack = 1.01 * n * EPS * (np.abs(c) + np.einsum("mr,mrp->mp", np.abs(L), np.abs(Bt)))
+            row_terms = L * np.where(L > 0, hi_v[rt], lo_v[rt])
+            col_terms = np.maximum(mu * col_lo, mu * col_hi) + slack * span
+            total = row_terms.sum(axis=1) + col_terms.sum(axis=1)
+            size = np.abs(row_terms).sum(axis=1) + np.abs(col_terms).sum(axis=1)
+            ends.append(total + 1.01 * (R + P + 2) * EPS * size)
+        out[part] = np.minimum(*ends)
+    return out
+
+
+EPS = np.finfo(float).eps

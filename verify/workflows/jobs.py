@@ -552,13 +552,17 @@ def diagnose(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
 OUTSIDE = ("drop", "refuse")
 
 
+#: What `apply` takes each sample's bound over.
+BOUND_OVER = ("set", "box")
+
+
 @constraints(calibration=by_the_job("calibration.checked / read"), log=by_the_job("jobs.read_log"),
              format=options.one_of(*FORMATS), sensor=options.sensor, imu=options.imu, rate=options.rate,
              trust_units=options.flag, frame=options.one_of("garant", "imu_tk"), chunk=options.positive_int,
-             outside=options.one_of(*OUTSIDE))
+             outside=options.one_of(*OUTSIDE), bound_over=options.one_of(*BOUND_OVER))
 def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] = None, sensor: Optional[str] = None,
           imu: Optional[int] = None, rate: Optional[float] = None, trust_units: bool = False, frame: str = "garant",
-          chunk: Optional[int] = None, outside: str = "drop"
+          chunk: Optional[int] = None, outside: str = "drop", bound_over: str = "set"
           ) -> Union[results.Correction, pandas.DataFrame, Iterator[results.Correction]]:
     """Correct a raw log with a calibration: `garant apply`.
 
@@ -585,6 +589,10 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
         A calibration over temperature holds only within its calibrated range: the log's samples outside it (a
         warm-up's first ones, before its first still interval) are dropped, each Correction saying how many of
         its piece (`outside`), or the log is refused.
+    bound_over : {"set", "box"}
+        Each sample's bound over the calibration's information set where the file carries one (the sharpest the
+        readings prove; LPs, by cells of nearby samples: seconds to minutes on a long moving log), or over its box
+        alone (fast; wider).
 
     Returns
     -------
@@ -598,6 +606,8 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
         raise DataError(f"calibration: a calibration file's path or the dictionary a result's calibration holds, "
                         f"not {type(calibration).__name__}", param="calibration")
     cal = cal_io.checked(calibration) if isinstance(calibration, dict) else cal_io.read(calibration)
+    if bound_over == "box":
+        cal.pop("information_set", None)
     data = read_log(log, format, sensor, imu, rate)
     if not trust_units:
         cal_io.check_units(cal, data.path, data.raw[:100_000],
