@@ -80,6 +80,7 @@ def test_api_errors_name_the_api_arguments(tmp_path):
 
 
 @needs_real
+@pytest.mark.slow
 def test_calibrate_norm_and_apply_of_the_api_are_the_commands(tmp_path, capsys):
     # One function per job (workflows/jobs.py): the still-interval options, the calibration, the diagnosis
     # and the correction are the command's own. Before, garant.calibrate_norm had no window/k/min_still and
@@ -197,6 +198,7 @@ def test_docs_api_states_each_function_as_it_is():
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_returns_what_docs_api_says_for_each_kind_of_log(tmp_path):
     # garant.apply(cal, DataFrame) returned a DataFrame while docs/api.md's table said a Correction that unpacks:
     # the table now says what each input gives, and each is called as documented.

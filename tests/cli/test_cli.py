@@ -177,6 +177,7 @@ def test_lines_wrap_at_100_columns_on_a_terminal_into_a_file_and_into_a_pipe():
 
 
 @needs_real
+@pytest.mark.slow
 def test_no_command_prints_a_line_over_100_columns_into_a_pipe(tmp_path):
     # The widest outputs of the issue (estimate --units human --mount, calibrate-norm, plan), run as a user
     # runs them with their output into a pipe.
@@ -198,6 +199,7 @@ def test_no_command_prints_a_line_over_100_columns_into_a_pipe(tmp_path):
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_without_output_says_how_and_writes_standard_output_on_dash(tmp_path, capsys):
     # `apply CAL LOG` without -o was an error that did not say where the corrected log could go; -o - now writes
     # the CSV to standard output (the line saying what was written to standard error). A norm calibration of a
@@ -215,6 +217,7 @@ def test_apply_without_output_says_how_and_writes_standard_output_on_dash(tmp_pa
     assert err.startswith("wrote standard output:")
 
 
+@pytest.mark.slow
 def test_verify_prints_a_summary_and_every_row_with_verbose(capsys):
     # `garant verify` printed every one of its rows, ~240 lines: now each group's count and the failing rows, every
     # row with --verbose (the JSON always holds every row).

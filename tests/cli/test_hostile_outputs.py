@@ -360,6 +360,7 @@ def test_imucal_gyro_is_checked_before_any_work_and_never_ignored(tmp_path, caps
 
 
 @pytest.mark.parametrize("name, magic", [("p.svg", b"<?xml"), ("p.pdf", b"%PDF"), ("p.png", b"\x89PNG")])
+@pytest.mark.slow
 def test_a_plot_is_written_in_the_format_its_name_says(tmp_path, capsys, name, magic):
     # `plan --plot p.svg` wrote PNG bytes under an .svg name.
     assert main(["plan", "--model", "two-axis", "--plot", str(tmp_path / name)]) == 0

@@ -89,6 +89,7 @@ def test_effects_twice_join_and_effects_on_12_parameters_are_refused_in_one_line
     assert err.count("\n") == 1 and "--effect takes the 9-parameter model" in err
 
 
+@pytest.mark.slow
 def test_px4_ids_are_written_as_px4_holds_them_and_kalibr_topics_cannot_inject(tmp_path, capsys):
     # Case 13: --px4-device-id 2147483648 (a uint32 device_id) went into an INT32 parameter PX4 cannot hold, and a
     # negative id (as PX4 shows such a sensor) was refused. Case 14: --kalibr-topic carried a newline and a YAML key.
@@ -138,6 +139,7 @@ def _number(text):
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_to_a_closed_or_stopped_standard_output_says_what_happened(tmp_path):
     # Case 1: `apply ... -o - >&-` died in an AttributeError traceback; case 15: `apply -o - | head -1` said "wrote
     # standard output: 3950 samples", and into `| true` "0 samples ... ( calibration)".
@@ -286,6 +288,7 @@ def test_logs_that_prove_nothing_are_refused_before_they_are_read_whole(tmp_path
     ("[0.123456789012345, 0.98765432109876, 0.5555555555555]",
      "[0.923456789012345, 0.18765432109876, 0.3555555555555]"),
 ])
+@pytest.mark.slow
 def test_two_turning_axes_of_many_digits_derive(tmp_path, capsys, inner, outer):
     # Case 21: with both axes tilted and given in many digits, derive did not finish in 120 s (SymPy's rref tested each
     # pivot for zero through minimal polynomials; nsimplify ran PSLQ on exact coefficients). The rank analysis is now
@@ -322,6 +325,7 @@ def test_a_mimu_stream_read_in_chunks_is_the_stream_read_whole(monkeypatch):
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_to_a_dataframe_costs_its_new_columns_not_copies_of_the_frame(tmp_path):
     # Case 22: garant.apply(cal, df) on a 1e7-row frame took 1.69 GB above the frame (5.3 frames of 4 columns): a
     # float copy of every column read, a copy of the frame, the new columns made twice. Now the frame's other columns
@@ -380,6 +384,7 @@ def test_next_sizes_its_search_with_the_measured_positions_before_any_work(tmp_p
     assert "--max-candidates 150" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_next_on_many_rows_at_few_positions_costs_the_positions_not_the_rows(tmp_path):
     # Case 23: 2,000,000 rows at 9 positions took 1.53 GB (here 2.2 GB and 44 s): the file read twice, cell by cell
     # in Python, and the measurement matrix made of every row (rows x 3 x 15). Now the file is read once in C and

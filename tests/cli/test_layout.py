@@ -272,6 +272,7 @@ def test_the_bench_runs_its_subprocesses_from_the_repository():
     assert peer.ROOT == ROOT
 
 
+@pytest.mark.slow
 def test_one_command_regenerates_everything_derived_and_checks_it():
     """`python -m verify.regenerate --check`: the generated modules, the certificates, docs/cli.md, docs/fields.md
     and the module table of docs/architecture.md are as a fresh rendering makes them. The table was kept by hand and

@@ -162,6 +162,7 @@ def test_kalibr_export_is_the_file_kalibrs_reader_takes(tmp_path, capsys):
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_in_the_imu_tk_frame_is_the_imu_tk_file(tmp_path, capsys):
     # The imu_tk file holds a norm calibration turned into imu_tk's upper-triangular T, while apply
     # corrected into garant's frame: up to 0.42 m/s^2 apart on the Xsens log. apply --frame imu_tk gives the

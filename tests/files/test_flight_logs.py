@@ -179,6 +179,7 @@ def test_a_warm_up_in_a_ulog_calibrates_into_the_slot_px4_will_use(tmp_path, cap
 
 
 @needs_real
+@pytest.mark.slow
 def test_px4_slots_follow_the_vehicles_parameters_and_a_second_slot_with_the_id_is_cleared(tmp_path, capsys):
     # The sensor of instance 1 (3670050): where the vehicle already holds it in TC_A2 and again in TC_A3, the rows
     # go to slot 2 and TC_A3_ID is cleared (PX4 applies the first slot whose id matches); --px4-instance overrides.

@@ -44,6 +44,7 @@ def test_calibration_and_imu_tk_examples_agree(tmp_path):
     assert np.all(bound > cal["bound_bias"])
 
 
+@pytest.mark.slow
 def test_api_example_runs(capsys):
     # The example needs no file beside the clone (it made a log of 001's plan in memory).
     exec(compile(block("api.md", "python"), "docs/api.md", "exec"), {})

@@ -67,6 +67,7 @@ def test_a_specification_is_checked_and_single_log_outputs_are_refused_in_a_batc
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_corrects_each_log_by_its_own_calibration_from_the_batch_folder(tmp_path, capsys):
     """`apply DIR LOG... --out OUT`: each log takes DIR/<its name>.json, the file is byte for byte the one-log
     command's, and a log without a calibration is said on its line (exit status 1) while the others go on.

@@ -83,6 +83,7 @@ def test_the_cross_coupling_log_is_not_said_to_be_a_quadratic_scale_factor(tmp_p
     assert d["named"] == ["cross_coupling"] and d["equivalent"]["cross_coupling"] == []
 
 
+@pytest.mark.slow
 def test_the_saved_file_takes_the_effect_out_of_each_sample_within_its_bound(tmp_path, capsys):
     # Noise-free readings of the same unit (its 9 parameters and its scale asymmetry) at 2,000 random directions,
     # corrected by the file: within the per-sample bound, component by component. Red when apply leaves the
@@ -113,6 +114,7 @@ def test_the_saved_file_takes_the_effect_out_of_each_sample_within_its_bound(tmp
 
 
 @needs_real
+@pytest.mark.slow
 def test_the_real_openaxes_log_is_named_added_and_calibrated(tmp_path, capsys):
     # The OpenAXES ADXL355 log (the recordings' g) refutes the 9-parameter model with the default noise rule; the
     # diagnosis checks the sets that fit to first order by their whole calibration and ends with the command of
@@ -212,6 +214,7 @@ def test_each_intervals_remainder_with_effects_holds_at_the_vertices(names):
     assert worst > 0.1, worst
 
 
+@pytest.mark.slow
 def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remove_the_drift(tmp_path, capsys):
     # A unit turned through 36 still orientations while it warms from 20 C (to 43 C), its biases drifting 2e-5 g/C
     # (bias_temperature of the generator): `calibrate-norm --thermal-degree 1` is consistent; each axis's raw bias,
@@ -331,6 +334,7 @@ def _lagging_warm_up(path, tau=8.0, seed=0, noise=1e-4, rate=100, still_s=5.0, m
     return path, truth, coef
 
 
+@pytest.mark.slow
 def test_a_sensor_lagging_the_logged_temperature_is_named_and_calibrated(tmp_path):
     # Through a heat-cool cycle the sensor's temperature lags the logged one by tau = 8 s, so the same logged
     # temperature gives another bias heating than cooling: a temperature coefficient alone leaves 2.4 noise bounds
@@ -354,6 +358,7 @@ def test_a_sensor_lagging_the_logged_temperature_is_named_and_calibrated(tmp_pat
     assert d["named"] == ["bias_temperature"] and d["equivalent"] == {"bias_temperature": ["temperature_lag"]}
 
 
+@pytest.mark.slow
 def test_a_warm_up_with_a_curved_drift_calibrates_with_degree_2(tmp_path, monkeypatch, capsys):
     # The biases drift as 2e-5 g/C plus 1e-6 g/C^2 of (T - 20 C) through a warm-up from 20 to 43 C: degree 1
     # leaves the data refuted (the curvature is 5e-4 g over the range); `--thermal-degree 2` is consistent and each
@@ -398,6 +403,7 @@ def test_the_calibration_schema_names_every_effect_the_norm_relation_carries():
 
 
 @needs_real
+@pytest.mark.slow
 def test_every_key_of_calibrate_norms_json_is_in_its_schema(tmp_path):
     # 24 keys of calibrate-norm's JSON (directions_gain, duration_s, format, ...) were in no schema: every key of
     # real runs (plain, --diagnose, --effect, --thermal-degree 1, a still-only warm-up, six faces with --bound) is now

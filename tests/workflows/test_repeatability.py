@@ -216,6 +216,7 @@ def test_the_published_repeatability_tables_are_what_the_command_writes(tmp_path
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_reads_one_imu_of_a_mimu_stream(tmp_path, capsys):
     # `garant apply cal.json data.bin --format mimu --imu 3 -o x.csv` said "unrecognized arguments".
     # The calibration of IMU 3 applied to IMU 3's samples: every sample corrected, |a| near g when still.

@@ -68,6 +68,7 @@ def _ratios(cal, raw, a, bound, jac):
     return bound / true, calibration.apply(cal, raw)[1] / true
 
 
+@pytest.mark.slow
 def test_a_norm_file_bounds_each_sample_by_the_sup_over_its_set(tmp_path):
     # The per-sample bound was the box's, (I - B)^-1 (B |a| + eps): on this unit up to 2x the largest error the set
     # allows (the scale factor and bias of an axis trade against each other along it). Now it is the set's sup
@@ -174,6 +175,7 @@ def _block_jacobian(cal, raw, h=1e-7):
 
 
 @pytest.mark.parametrize("model", ["three-axis", "single-axis", "six-face"])
+@pytest.mark.slow
 def test_a_stand_file_bounds_each_sample_by_the_sup_over_its_set(tmp_path, model):
     # A stand calibration's per-sample bound was the box's, (I - B)^-1 (B |a| + bound_bias) from each entry's
     # bound of Gamma and the biases: up to several times the largest error the set allows, since the set ties
@@ -234,6 +236,7 @@ def test_a_calibration_applied_once_is_checked_again_without_its_lps(tmp_path):
     assert np.array_equal(first, again)
 
 
+@pytest.mark.slow
 def test_bound_over_box_gives_the_box_and_a_long_log_says_its_progress(tmp_path, capsys, monkeypatch):
     # `apply --bound-over box` takes each sample's bound over the file's box alone (io/calibration.py apply: fast,
     # wider); the default, over the set, is never wider. A log of more than one piece says its progress on

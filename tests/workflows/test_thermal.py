@@ -401,6 +401,7 @@ def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_consta
 
 
 @pytest.mark.parametrize("mount", ["+y+z+x", "-x-y+z"])
+@pytest.mark.slow
 def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mount):
     """`--mount` with `--thermal-degree`: the block mounted by Q reads Q times the readings of the unit with
     Gamma' = Q^T Gamma Q, bias' = Q^T bias and theta' = Q^T theta ((26)-(27) of 000, at every T); its file, in
