@@ -103,14 +103,17 @@ def _frame(tmp_path, raw, T=None):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("how", [("--effect", "bias_temperature"), ("--thermal-degree", "1"),
-                                 ("--thermal-degree", "2")])
+                                 ("--thermal-degree", "2"), ("--effect", "bias_drift", "--effect", "bias_temperature")])
 def test_a_file_with_effects_bounds_each_sample_by_the_sup_over_its_set(tmp_path, how):
     # With catalogue effects the linear part of a sample's error holds the effects' corrections too (g Phi(p)
     # dtheta, p the sample's direction): bounded over the same set. The derivative by theta is taken here from
     # norm_effects.apply_term with theta moved (the file's own term), by q from the fold; the effects' frame and
     # Lipschitz terms (a few 1e-9 g here) stay beside it, so 1.25x holds with room. A warm-up calibrated over
     # temperature (--thermal-degree D: bias, scale and misalignment polynomials of degree D, the thermal effects of
-    # the catalogue) is such a file too, each sample at its own temperature (issue 74: thermal files).
+    # the catalogue) is such a file too, each sample at its own temperature (issue 74: thermal files). An effect
+    # the file does not apply (bias_drift: its calibration session's own) keeps its columns in the set, after the
+    # applied ones, and no sample's error moves with them (such a file was refused by apply: its set's columns did
+    # not match the effects it applies).
     log, truth = _simulate(tmp_path, "--temperature-profile", "warmup:20,45,150", "--plan", "random:48",
                            "--effect", "bias_temperature=2e-5,-2e-5,1.5e-5")
     cal_path = tmp_path / "cal.json"
@@ -134,6 +137,8 @@ def test_a_file_with_effects_bounds_each_sample_by_the_sup_over_its_set(tmp_path
         terms = [norm_effects.apply_term(x, a0, T, cal["g"], "t")[0] for x in moved]
         extra.append(((terms[0] - terms[1]) / 2e-6).T)        # a = a0 - term: e = a - a_t moves by +dterm/dtheta
     jac = np.concatenate([jac, np.stack(extra, axis=2)], axis=2)
+    P = len(cal["information_set"]["estimate"])
+    jac = np.concatenate([jac, np.zeros(jac.shape[:2] + (P - jac.shape[2],))], axis=2)   # the effects not applied
     ratio, box = _ratios(cal, raw, c.a, c.bound, jac)
     assert ratio.min() >= 1 - 1e-6 and ratio.max() <= 1.25, (ratio.min(), ratio.max())
     assert box.max() > 1.25

@@ -225,9 +225,12 @@ def _information_set(data, path):
     raw = data["information_set"]
     P = len(raw["estimate"])
     effects = data.get("effects") or {}
+    from ...generated import norm as norm_model          # the effects' parameters, by name
+    session = sum(len(norm_model.EFFECTS.get(x, ())) for x in effects.get("not_applied") or {})
     problem = (
-        f"{P} columns, but 9 and the effects' {len(effects['theta'])} parameters make the set's"
-        if effects.get("theta") is not None and P != 9 + len(effects["theta"]) else
+        f"{P} columns, but 9, the effects' {len(effects['theta'])} parameters and the {session} of those not "
+        "applied make the set's"
+        if effects.get("theta") is not None and P != 9 + len(effects["theta"]) + session else
         f"every row must hold one number per entry of estimate ({P})" if any(len(r) != P for r in raw["rows"]) else
         "centre and bound must hold one number per row" if len(raw["centre"]) != len(raw["rows"])
         or len(raw["bound"]) != len(raw["rows"]) else

@@ -165,7 +165,9 @@ def bounds(p, v):
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err, cap=cap)
     if params == 9:                                       # what apply bounds each sample's error over
         from . import sample_set
-        effects["_information_set"] = sample_set.entry(A, s, bnd, lo, hi, shift, dq)
+        order = np.arange(len(lo)) if ext is None else _applied_first(ext)
+        effects["_information_set"] = sample_set.entry(A[order], s, bnd, lo[order], hi[order],
+                                                       np.broadcast_to(shift, lo.shape)[order], dq[order])
     return {
         "matrix": M.tolist(), "bias": b.tolist(), "nonlinearity_delta_g": delta.tolist() if params == 12 else None,
         "matrix_fit": res["M"].tolist(),
@@ -187,6 +189,19 @@ def bounds(p, v):
         "raw_axes_counts": counts,
         **effects,
     }
+
+
+def _applied_first(ext):
+    """The set's columns in the calibration file's order: q's 9, the effects a file applies (in the order named), then
+    those it does not (norm_effects.SESSION_ONLY: their columns stay in the set, which is over them too, and no
+    sample's error moves with them)."""
+    from .norm_effects import SESSION_ONLY
+    cols, at = {}, 9
+    for x in ext.names:
+        cols[x] = list(range(at, at + len(ext.mod.EFFECTS[x])))
+        at += len(ext.mod.EFFECTS[x])
+    return np.array(list(range(9)) + [c for x in ext.names if x not in SESSION_ONLY for c in cols[x]]
+                    + [c for x in ext.names if x in SESSION_ONLY for c in cols[x]])
 
 
 def _wider(p, v, A, Phi, wider, shift, C, dq, unit):
