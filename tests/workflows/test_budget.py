@@ -87,14 +87,20 @@ def _largest_norm_at(cal, at, n):
     return max(_sup(st, w @ C, w @ off) + st["g_uncertainty"] * g * max(w @ n, 0.0) for w in _directions(5))
 
 
+def _between(res, axis, norm, tilt):
+    """Each printed figure of `res` at least the lower bound found of the set's largest (a unit of the set errs by
+    that much: a figure below it is no bound) and within 1.25x of it."""
+    for got, low in ((np.array(res["per_axis_error_mps2"]), axis), (res["specific_force_error_mps2"], norm),
+                     (res["tilt_error_rad"], tilt)):
+        assert np.all(low * (1 - 1e-9) <= got) and np.all(got <= 1.25 * low), (got, low)
+
+
 def _within_1_25x(res, cal, at):
     """Each printed figure of `res` within 1.25x of the set's largest as `_largest` bounds it from below (at the
     attitudes of a grid and the worst one printed, with 152 error directions there), `at` the file's error."""
     axis, norm, tilt = _largest(cal, at, np.vstack([_directions(4), res["worst_attitude"]]))
     norm = max(norm, _largest_norm_at(cal, at, np.array(res["worst_attitude"])))
-    assert np.all(np.array(res["per_axis_error_mps2"]) <= 1.25 * axis), (res["per_axis_error_mps2"], axis)
-    assert res["specific_force_error_mps2"] <= 1.25 * norm, (res["specific_force_error_mps2"], norm)
-    assert res["tilt_error_rad"] <= 1.25 * tilt, (res["tilt_error_rad"], tilt)
+    _between(res, axis, norm, tilt)
 
 
 @pytest.mark.slow
@@ -407,3 +413,105 @@ def test_a_parameter_file_budget_cannot_take_is_one_line(tmp_path, capsys, text,
     assert main(["budget", str(path), "--log", str(log)]) == 2
     err = capsys.readouterr().err
     assert said in flat(err) and len(err.strip().splitlines()) == 1, err
+
+
+def _warm_error(cal):
+    """e(n, T, z) of a norm file with effects for the unit z of its set (q, then theta) at attitude n and
+    temperature T, exactly as the model has it (a = u - g Phi(p) theta, p = u / |u|: the unit's own u_t = g n +
+    g Phi(p_t) theta_t solved by iteration, its raw reading from the fold of q, then the file's correction)."""
+    from garant.verify import models
+    mod = models.load("norm")
+    st, g, eff = cal["information_set"], cal["g"], cal["effects"]
+    shift = 20.0 - eff["temp_ref_c"]
+    q_m = np.array(st["estimate"])
+    L = np.array([[q_m[0], 0, 0], [q_m[3], q_m[1], 0], [q_m[4], q_m[5], q_m[2]]])
+    M_fit = (np.eye(3) + L) @ cal["M"]
+    b_fit = cal["b"] - np.linalg.solve(M_fit, g * q_m[6:9])
+
+    def phi(p, T):
+        return np.concatenate([mod.effect_basis(x, p[:, None], 0.0, np.array([T + shift]))[..., 0]
+                               for x in eff["names"]])
+
+    def e(n, T, z):
+        M_t, b_t, _ = norm_bounds.fold(M_fit, b_fit, np.zeros(3), z[:9], g)
+        u = g * n
+        for _ in range(30):
+            u = g * n + g * np.einsum("j,jk->k", z[9:], phi(u / np.linalg.norm(u), T))
+        raw = b_t + np.linalg.solve(M_t, u)
+        a0 = cal["M"] @ (raw - cal["b"])
+        return a0 - g * np.einsum("j,jk->k", np.asarray(eff["theta"]), phi(a0 / np.linalg.norm(a0), T)) - g * n
+    return e
+
+
+def _argmax(st, c):
+    """A unit of the set (z = x + s) where c^T z is largest (scipy's LP on x, the shift's corner for s)."""
+    R, s, bd = (np.array(st[k]) for k in ("rows", "centre", "bound"))
+    lo, hi, shift = (np.array(st[k]) for k in ("box_lo", "box_hi", "shift"))
+    xc, dc = (lo + hi) / 2, (hi - lo) / 2
+    k = max(np.abs(c * dc).max(), 1e-300)
+    r = linprog(-c * dc / k, A_ub=np.vstack([R * dc / bd[:, None], -R * dc / bd[:, None]]),
+                b_ub=np.r_[(s - R @ xc) / bd + 1, 1 - (s - R @ xc) / bd], bounds=[(-1, 1)] * len(c), method="highs")
+    assert r.status == 0
+    return xc + r.x * dc + np.sign(c) * shift
+
+
+@pytest.mark.slow
+def test_a_warm_up_file_s_budget_holds_the_truth_over_the_range_and_sits_within_1_25x_of_the_sets_largest(tmp_path):
+    # A warm-up calibrated over temperature (--thermal-degree 1: the bias, scale and misalignment polynomials) is
+    # budgeted over every attitude and every temperature of its calibrated range: the simulated unit's own errors
+    # at 1,000 random attitudes and temperatures within every figure, and each figure within 1.25x of a lower bound
+    # of the set's largest: at the attitudes of a grid and the range's ends, the unit of the set an LP finds for
+    # the error's linear part along each axis, across n and along it, its error evaluated exactly (the model's
+    # Phi at each direction, the unit's u_t by iteration); no figure below that bound (a unit of the set errs by
+    # it). Measured 1.13-1.15x per axis, 1.13x |e|, 1.19x tilt. Red with the effects' columns left out of the
+    # budget's model (its figures 0.19-0.24x the lower bound). The second-order remainder (workflows/budget.py
+    # effect_figures) moves the figures by under 0.5 % here: it is there for larger effects.
+    log = tmp_path / "w.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:48", "--sigma", "2e-4", "--size", "1e-2",
+                 "--seed", "3", "--temperature-profile", "warmup:20,45,150", "--effect",
+                 "bias_temperature=2e-5,-2e-5,1.5e-5", "--effect", "scale_temperature=1e-4,-1e-4,1e-4",
+                 "-o", str(log)]) == 0
+    truth = json.loads((tmp_path / "w.truth.json").read_text())
+    cal_path, out = tmp_path / "cal.json", tmp_path / "b.json"
+    assert main(["calibrate-norm", str(log), "--g", str(G), "--thermal-degree", "1", "--save", str(cal_path)]) == 0
+    assert main(["budget", str(cal_path), "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    schemas.validate(res, "budget", str(out))
+    cal = calibration.read(cal_path)
+    lo, hi = res["temperature_range_c"]
+    assert [lo, hi] == cal["effects"]["temp_range_c"]
+    from garant.generated import norm as N
+    from garant.verify.workflows import norm_effects
+    rng = np.random.default_rng(1)
+    m = rng.normal(size=(3, 1000))
+    m /= np.linalg.norm(m, axis=0)
+    T = rng.uniform(lo, hi, 1000)
+    term = sum(np.einsum("j,jik->ik", np.array(list(th.values())), N.effect_basis(x, m, 0.0, T, np.zeros(1000)))
+               for x, th in truth["effects"].items())
+    raw = np.linalg.solve(np.array(truth["matrix"]), G * (m + term)).T + np.array(truth["bias"])
+    a0 = cal["M"] @ (raw - cal["b"]).T
+    a = a0 - norm_effects.apply_term(cal, a0, T, G, "t")[0]
+    e = (a - G * m).T
+    assert np.all(np.abs(e).max(axis=0) <= res["per_axis_error_mps2"])
+    assert np.linalg.norm(e, axis=1).max() <= res["specific_force_error_mps2"]
+    assert np.arccos(np.clip(np.einsum("ij,ji->i", a.T, m) / np.linalg.norm(a, axis=0), -1, 1)).max() <= \
+        res["tilt_error_rad"]
+    st, exact = cal["information_set"], _warm_error(cal)
+    z_m = np.array(st["estimate"])
+    axis, norm, tilt = np.zeros(3), 0.0, 0.0
+    for n in np.vstack([_directions(3), res["worst_attitude"]]):
+        for t in (lo, hi):
+            off = exact(n, t, z_m)
+            C = np.column_stack([(exact(n, t, z_m + 1e-6 * np.eye(len(z_m))[j]) - off) / 1e-6
+                                 for j in range(len(z_m))])
+            p = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+            p /= np.linalg.norm(p)
+            across = [np.cos(t_) * p + np.sin(t_) * np.cross(n, p) for t_ in np.pi * np.arange(16) / 16]
+            for w in [*np.eye(3), *across, n]:
+                for sign in (1.0, -1.0):
+                    got = exact(n, t, _argmax(st, sign * w @ C))
+                    norm = max(norm, float(np.linalg.norm(got)))
+                    axis = np.maximum(axis, np.abs(got))
+                    par = float(got @ n)
+                    tilt = max(tilt, float(np.arctan(np.linalg.norm(got - par * n) / (G + par))))
+    _between(res, axis, norm, tilt)

@@ -116,7 +116,9 @@ MEANING = ("specific force error: how far a corrected reading can be from the tr
 def _table(res):
     """(headers, rows) of the figures: one column per calibration."""
     cols = [res] + ([res["garant"]] if res["garant"] else [])
-    head = ["worst case over every attitude", "this calibration"] + (["garant's of the log"] if res["garant"] else [])
+    span = res.get("temperature_range_c")
+    head = ["worst case over every attitude" + (f" and {span[0]:.4g} to {span[1]:.4g} C" if span else ""),
+            "this calibration"] + (["garant's of the log"] if res["garant"] else [])
     rows = [["specific force error, m/s^2 (mg)"] + [f"{c['specific_force_error_mps2']:.3g} "
                                                     f"({c['specific_force_error_mg']:.3g})" for c in cols],
             ["  per axis x, y, z, m/s^2"] + [", ".join(f"{x:.2g}" for x in c["per_axis_error_mps2"]) for c in cols],

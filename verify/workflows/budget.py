@@ -23,6 +23,8 @@ times the bound of the error's slope over the set, `_filter`). The error of g (|
 - velocity and position over a horizon T of free integration with the attitude held: |e| T and |e| T^2 / 2, a bound
   of the integrated calibration error alone (not a navigation solution: no attitude, gyroscope or noise error).
 """
+from math import comb
+
 import numpy as np
 
 from ..errors import DataError
@@ -84,20 +86,27 @@ def fit(cal):
     return M_fit, np.asarray(cal["b"], float) - np.linalg.solve(M_fit, g * q_m[6:9])
 
 
-def norm_model(cal, M_p=None, b_p=None):
-    """The Model of the calibration (M_p, b_p) (default the file's own) over a norm file's set (`fit`)."""
+def norm_model(cal, M_p=None, b_p=None, phi=None):
+    """The Model of the calibration (M_p, b_p) (default the file's own) over a norm file's set (`fit`); with
+    catalogue effects, `phi(n)` (J, 3, N) their basis at the attitudes n (a temperature's, or a control point's of
+    their polynomial in T): the linear part of e, g Phi(n) (theta - theta_m), in the set's columns after the 9
+    (theta_m, the file's)."""
     st, g = cal["information_set"], cal["g"]
-    if len(st["estimate"]) != 9:
-        raise DataError("budget: a norm calibration with catalogue effects is not budgeted yet (its error depends "
-                        "on each sample's temperature and time); budget the constant calibration", param="calibration")
+    if len(st["estimate"]) != 9 and phi is None:
+        raise DataError("budget: a norm calibration with catalogue effects is budgeted by `effect_figures`",
+                        param="calibration")
     M_fit, b_fit = fit(cal)
     M_p, b_p = (np.asarray(cal["M"], float), np.asarray(cal["b"], float)) if M_p is None else (
         np.asarray(M_p, float), np.asarray(b_p, float))
     K = M_p @ np.linalg.inv(M_fit)
+    theta = np.asarray((cal.get("effects") or {}).get("theta", []), float)
 
     def build(n):
         a = g * np.asarray(n, float).T                              # (3, N)
-        return (K - np.eye(3)) @ a, sample_set.objectives(st, a, g, N=K)
+        if phi is None:
+            return (K - np.eye(3)) @ a, sample_set.objectives(st, a, g, N=K)
+        f = phi(n)
+        return (K - np.eye(3)) @ a - g * np.einsum("j,jkn->kn", theta, f), sample_set.objectives(st, a, g, f, N=K)
     return Model(st, build, M_p @ (b_fit - b_p), g, float(st["g_uncertainty"]))
 
 
@@ -121,34 +130,127 @@ def figures(model, progress=None):
     the smaller of the axes' norm and that of the parts along and across n. Only the largest over the attitudes is
     printed, so after a first pass of few LPs, more go only to the attitudes whose bounds could still be the
     largest (`_refine`)."""
+    filt = _filter(model)
+    return _finish(_sups(model, filt, 0.0, progress), filt, model.g)
+
+
+def _sups(model, filt, extra, progress=None):
+    """The largest per-axis error, |e|, and parts across and along n over every attitude, each proven: at the grid's
+    attitudes by LPs, between them by the slope the set allows (`filt`, from `_filter`) and `extra` (m/s^2 per unit
+    of the chord: a slope not in the Model's linear part)."""
     g, u = model.g, model.u
     N, delta = grid(N_SIDE)
-    filt = _filter(model)
     G = g * (np.asarray(filt["slope_bound"]) - u * np.eye(3))    # |de_k / dn_j| <= G_kj over the set
-    slack_axis = np.linalg.norm(G, axis=1) * delta     # |n - n'|_2 <= delta
-    slack_norm = np.linalg.norm(G) * delta
+    slack_axis = np.linalg.norm(G, axis=1) * delta + extra * delta     # |n - n'|_2 <= delta
+    slack_norm = np.linalg.norm(G) * delta + extra * delta
     U, L = _refine(model, N, progress)
     axes, along = U[:, :3], U[:, -1]
     across = U[:, 3:-1].max(axis=1) / np.cos(np.pi / PERP)
     # the error of g moves a still unit's reading along n only: |e'| <= |(e_perp, e_par + u g)|
     here = np.minimum(np.linalg.norm(axes + u * g * np.abs(N), axis=1), np.hypot(across, along + u * g))
-    worst = N[int(np.argmax(here))]
-    per_axis = axes.max(axis=0) + slack_axis + u * g
     e_sup = float(here.max()) + slack_norm
-    perp_sup = float(across.max()) + slack_norm + e_sup * delta   # |n n^T - n' n'^T|_2 = sin of their angle <= chord
-    par_sup = min(float(along.max()) + slack_norm, e_sup)
+    return {"per_axis": axes.max(axis=0) + slack_axis + u * g, "e": e_sup,
+            "perp": float(across.max()) + slack_norm + e_sup * delta,   # |n n^T - n' n'^T|_2 = sin of their angle
+            "par": min(float(along.max()) + slack_norm, e_sup),
+            "worst": N[int(np.argmax(here))], "attitudes": len(N), "delta": delta}
+
+
+def _finish(sup, filt, g):
+    """The printed figures from the largest values `_sups` proves (tilt from the parts across and along n)."""
+    e_sup, perp_sup, par_sup = sup["e"], sup["perp"], sup["par"]
     if par_sup >= g:
         raise DataError("budget: the error bound reaches g: no tilt is bounded", param="calibration")
     tilt = float(np.arctan(perp_sup / (g - par_sup)))
     return {
         "specific_force_error_mps2": e_sup, "specific_force_error_mg": e_sup * MG,
-        "per_axis_error_mps2": per_axis.tolist(),
+        "per_axis_error_mps2": np.asarray(sup["per_axis"]).tolist(),
         "tilt_error_rad": tilt, "tilt_error_deg": float(np.degrees(tilt)),
         "velocity_error_mps": {str(T): e_sup * T for T in HORIZONS_S},
         "position_error_m": {str(T): e_sup * T * T / 2 for T in HORIZONS_S},
         **filt,
-        "attitudes": int(len(N)), "grid_chord": float(delta), "worst_attitude": worst.tolist(),
+        "attitudes": int(sup["attitudes"]), "grid_chord": float(sup["delta"]),
+        "worst_attitude": np.asarray(sup["worst"]).tolist(),
     }
+
+
+def effect_figures(cal, progress=None):
+    """The budget of a norm file with catalogue effects (--thermal-degree, --effect) over every attitude and every
+    temperature of its calibrated range.
+
+    With u = M (raw - b) and u_t the true unit's, u - u_t = N (lower(dq) u_t + g dq_eps) exactly, and the model
+    (a = u - g Phi(p) theta, p = u / |u|) gives for a still unit at n (u_t = g n + g Phi(p_t) theta_t, p_t its
+    direction)
+
+        e = [N (lower(dq) g n + g dq_eps) + g Phi(n) (theta_t - theta)]                      (linear in the set)
+            + g N lower(dq) Phi(p_t) theta_t + g (Phi(p_t) - Phi(n)) theta_t + g (Phi(n) - Phi(p)) theta.
+
+    The linear part's figures are LPs as a constant file's, at each control point of Phi's polynomial in T (its
+    Bernstein coefficients over pieces of the range, whose hull holds every value between: exact at the range's
+    ends for degree 1); the rest, outward: |N lower(dq)| <= B (bound_matrix), |Phi(m) theta - Phi(m') theta| <=
+    l |m - m'| (l the effects' Lipschitz bound at |theta| + bound), |p_t - n| <= 2 s / (1 - 2 l) and |p - n| <= 2
+    (|e| / g + s) / (1 - 2 l) with s the largest |Phi(n)| (|theta| + bound), |e| closed on itself."""
+    from .. import models
+    from .norm_effects import lipschitz
+    mod = models.load("norm")
+    st, g, eff = cal["information_set"], cal["g"], cal["effects"]
+    names, theta, h = eff["names"], np.asarray(eff["theta"], float), np.asarray(eff["bound"], float)
+    shift = 20.0 - float(eff.get("temp_ref_c", 20.0))          # the basis reads T - 20: counted from temp_ref_c
+    thermal = [x for x in names if "temp_c" in mod.EFFECT_VARIABLES[x]]
+    if any(mod.EFFECT_VARIABLES[x] and x not in thermal for x in names):
+        raise DataError("budget: an effect of time or of the temperature's rate is not budgeted", param="calibration")
+    degree = max((int(x.rsplit("_", 1)[1]) if x[-1].isdigit() else 1 for x in thermal), default=0)
+    lo, hi = eff["temp_range_c"] if thermal else (20.0 - shift, 20.0 - shift)
+    pieces = np.linspace(lo, hi, (1 if degree <= 1 else EFFECT_PIECES) + 1)
+    t = np.linspace(0.0, 1.0, degree + 1)
+    bern = np.array([[comb(degree, k) * x ** k * (1 - x) ** (degree - k) for k in range(degree + 1)] for x in t])
+    weights = np.linalg.inv(bern)                      # Bernstein coefficients from values at equispaced points
+
+    def basis(n, T):
+        p = np.asarray(n, float).T
+        return np.concatenate([mod.effect_basis(x, p, 0.0, np.full(p.shape[1], T + shift)) for x in names]
+                              + [np.zeros((0, 3, p.shape[1]))])     # (a session-only effect's columns: none)
+    controls = [(np.linspace(a, b, degree + 1), w) for a, b in zip(pieces[:-1], pieces[1:]) for w in weights]
+    reach = max(float(np.abs(w).sum()) for _, w in controls)     # a control point's slope in n, over a value's
+    phis = [lambda n, T=T, w=w: sum(wi * basis(n, Ti) for wi, Ti in zip(w, T)) for T, w in controls]
+    jac = np.concatenate([mod.effect_jacobian_bound(x, 0.0, np.array([lo, hi]) + shift) for x in names]
+                         + [np.zeros((0, 3, 3, 2))])
+    ell = float(lipschitz(jac, np.abs(theta) + h).max())         # of Phi(m) theta_t in m, theta_t in the box
+    J = len(theta)                                              # (the set's columns past them: not applied)
+    box = np.maximum(np.abs(np.asarray(st["box_lo"], float)[9:9 + J] - theta),
+                     np.abs(np.asarray(st["box_hi"], float)[9:9 + J] - theta))
+    extra = g * float(lipschitz(jac, box).max()) * reach         # g Phi(n) (theta_t - theta) between attitudes
+    filt = _filter(norm_model(cal, phi=lambda n: np.zeros((len(theta), 3, len(n)))))
+    sups = []
+    for k, phi in enumerate(phis):
+        sups.append(_sups(norm_model(cal, phi=phi), filt, extra,
+                          None if progress is None else lambda d, n, k=k: progress(k * n + d, len(phis) * n)))
+    N, delta = grid(N_SIDE)
+    size = np.abs(theta) + h
+    top = np.max([np.abs(phi(N)) for phi in phis], axis=0)       # each entry of Phi(n, T) within its control points'
+    s_max = float(np.linalg.norm(np.einsum("j,jkn->kn", size, top), axis=0).max()) + ell * delta   # (between n's)
+    if 2 * ell >= 0.25:
+        raise DataError("budget: the effects are too large for their remainder to close (Lipschitz bound "
+                        f"{ell:.3g} >= 1/8)", param="calibration")
+    kappa = 2 * ell / (1 - 2 * ell)
+    r0 = g * s_max / (1 - 2 * ell) * np.asarray(cal["bound_matrix"], float).sum(axis=1) \
+        + 4 * g * ell * s_max / (1 - 2 * ell)
+    worst = max(sups, key=lambda x: x["e"])
+    e_sup = (worst["e"] + float(np.linalg.norm(r0))) / (1 - np.sqrt(3) * kappa)
+    r_axis = r0 + kappa * e_sup
+    r_norm = float(np.linalg.norm(r0)) + np.sqrt(3) * kappa * e_sup
+    sup = {"per_axis": np.max([x["per_axis"] for x in sups], axis=0) + r_axis, "e": e_sup * (1 + 1e-12),
+           "perp": max(x["perp"] for x in sups) + r_norm, "par": min(max(x["par"] for x in sups) + r_norm, e_sup),
+           "worst": worst["worst"], "attitudes": worst["attitudes"], "delta": worst["delta"]}
+    # a filter's model, |e_k| <= bias_k + sum_j slope_kj |a_j|: the effects' linear part (g Phi(n) (theta_t -
+    # theta), per axis over every attitude and temperature) and the remainder as bias
+    linear = g * np.einsum("j,jkn->kn", box, top).max(axis=1) + extra * delta
+    out = _finish(sup, dict(filt, bias_bound_mps2=(np.asarray(filt["bias_bound_mps2"]) + linear + r_axis).tolist()),
+                  g)
+    return dict(out, temperature_range_c=[float(lo), float(hi)] if thermal else None)
+
+
+#: Pieces of the temperature range the budget of a polynomial of degree 2 or 3 is bounded over (Bernstein).
+EFFECT_PIECES = 2
 
 
 #: LPs (cells) for each kind of row (the axes; across and along n), counted, not timed; past them a cell is proven
@@ -289,24 +391,29 @@ def refuted(cal, M_p, b_p):
 
 def _constant(cal, path):
     if "thermal" in cal or (cal.get("effects") or {}).get("names"):
-        raise DataError(f"{path}: a calibration over temperature or with catalogue effects is not budgeted yet; "
-                        "budget the constant calibration of the same log", param="calibration")
+        raise DataError(f"{path}: a calibration over temperature or with catalogue effects is budgeted over its own "
+                        "information set only: give it without --log", param="calibration")
 
 
 def own(cal, path, progress=None):
     """The budget of a garant calibration (the checked dictionary, read from `path`) over its own information set;
     DataError naming what is missing when it carries none or is one budget does not take yet."""
     from ..io import results
-    _constant(cal, path)
+    if "thermal" in cal:
+        raise DataError(f"{path}: a stand's calibration over temperature is not budgeted yet; budget the constant "
+                        "calibration of the same readings", param="calibration")
     if "information_set" not in cal:
         raise DataError(f"{path}: holds no information_set (a two-axis stand's split, a 12-parameter norm "
                         "calibration, or a set too large for a file): give --log LOG to judge it against a "
                         "log's own set", param="calibration")
-    model = norm_model(cal) if cal["kind"] == "norm" else stand_model(cal)
+    effects = len(cal["information_set"]["estimate"]) > 9         # catalogue effects (applied or not) in the set
     out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "calibration_slot": None, "log": None,
            "horizons_s": list(HORIZONS_S), "temperature_range_c": None, "frame_turn_deg": 0.0, "refuted": None,
            "garant": None}
-    out.update(figures(model, progress), g=cal["g"], g_uncertainty=model.u, premises=cal["premises"])
+    got = effect_figures(cal, progress) if effects else figures(
+        norm_model(cal) if cal["kind"] == "norm" else stand_model(cal), progress)
+    out.update(got, g=cal["g"], g_uncertainty=float(cal["information_set"]["g_uncertainty"]),
+               premises=cal["premises"])
     return results.Budget(out)
 
 
