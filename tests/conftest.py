@@ -91,3 +91,17 @@ def command_line(text, prefix):
         parts[-1] = parts[-1][:-2]
         parts.append(lines[k].strip())
     return " ".join(parts)
+
+
+def warm_truth_readings(truth, g, count, lo, hi, seed):
+    """A simulated warm-up unit's noise-free raw readings (simulate's truth: raw = M^-1 g (m + Phi(m, T) theta) + b)
+    at `count` random directions m (3, count) and temperatures T within [lo, hi] C: (m, T, raw (count, 3))."""
+    from garant.generated import norm
+    rng = np.random.default_rng(seed)
+    m = rng.normal(size=(3, count))
+    m /= np.linalg.norm(m, axis=0)
+    T = rng.uniform(lo, hi, count)
+    term = sum(np.einsum("j,jik->ik", np.array(list(th.values())), norm.effect_basis(x, m, 0.0, T, np.zeros(count)))
+               for x, th in truth["effects"].items())
+    return m, T, np.linalg.solve(np.array(truth["matrix"]), g * (m + term)).T + np.array(truth["bias"])
+

@@ -16,7 +16,7 @@ from garant.verify.bench.peer import imu_tk_binary
 from garant.verify.cli import main
 from garant.verify.io import calibration, schemas
 from garant.verify.workflows import budget, norm_bounds
-from conftest import G_REAL, REAL, flat, needs_real
+from conftest import G_REAL, REAL, flat, needs_real, warm_truth_readings
 
 G = 9.81
 
@@ -480,15 +480,8 @@ def test_a_warm_up_file_s_budget_holds_the_truth_over_the_range_and_sits_within_
     cal = calibration.read(cal_path)
     lo, hi = res["temperature_range_c"]
     assert [lo, hi] == cal["effects"]["temp_range_c"]
-    from garant.generated import norm as N
     from garant.verify.workflows import norm_effects
-    rng = np.random.default_rng(1)
-    m = rng.normal(size=(3, 1000))
-    m /= np.linalg.norm(m, axis=0)
-    T = rng.uniform(lo, hi, 1000)
-    term = sum(np.einsum("j,jik->ik", np.array(list(th.values())), N.effect_basis(x, m, 0.0, T, np.zeros(1000)))
-               for x, th in truth["effects"].items())
-    raw = np.linalg.solve(np.array(truth["matrix"]), G * (m + term)).T + np.array(truth["bias"])
+    m, T, raw = warm_truth_readings(truth, G, 1000, lo, hi, 1)
     a0 = cal["M"] @ (raw - cal["b"]).T
     a = a0 - norm_effects.apply_term(cal, a0, T, G, "t")[0]
     e = (a - G * m).T

@@ -7,7 +7,7 @@ import pytest
 
 from garant.verify.cli import main
 from garant.verify.io import calibration
-from conftest import flat
+from conftest import flat, warm_truth_readings
 
 G = 9.81
 
@@ -129,15 +129,8 @@ def _warm_up(tmp_path, K, effects, seed=0):
 def _apply_holds(tmp_path, cal, truth, lo, hi):
     """The saved file applied to the truth's noise-free readings at 500 directions and temperatures across the
     calibrated range: every component within its per-sample bound."""
-    from garant.generated import norm as N
     from garant.verify.workflows import jobs
-    rng = np.random.default_rng(7)
-    m = rng.normal(size=(3, 500))
-    m /= np.linalg.norm(m, axis=0)
-    T = rng.uniform(lo, hi, 500)
-    term = sum(np.einsum("j,jik->ik", np.array(list(th.values())), N.effect_basis(x, m, 0.0, T, np.zeros(500)))
-               for x, th in truth["effects"].items())
-    raw = np.linalg.solve(np.array(truth["matrix"]), G * (m + term)).T + np.array(truth["bias"])
+    m, T, raw = warm_truth_readings(truth, G, 500, lo, hi, 7)
     log = tmp_path / "apply.csv"
     np.savetxt(log, np.column_stack([np.arange(500) / 100, raw, T]), delimiter=",", comments="", fmt="%.12g",
                header="time_s,ax,ay,az,temp_c")
