@@ -406,7 +406,7 @@ def own(cal, path, progress=None):
         raise DataError(f"{path}: holds no information_set (a two-axis stand's split, a 12-parameter norm "
                         "calibration, or a set too large for a file): give --log LOG to judge it against a "
                         "log's own set", param="calibration")
-    effects = len(cal["information_set"]["estimate"]) > 9         # catalogue effects (applied or not) in the set
+    effects = cal["kind"] == "norm" and len(cal["information_set"]["estimate"]) > 9   # effects (applied or not)
     out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "calibration_slot": None, "log": None,
            "horizons_s": list(HORIZONS_S), "temperature_range_c": None, "frame_turn_deg": 0.0, "refuted": None,
            "garant": None}
