@@ -62,16 +62,21 @@ def upper(c, B, row_lo, row_hi, col_lo, col_hi, lam):
     """A proven upper bound of c^T x over X from the multipliers lam (Multipliers, or a dense vector; a multiplier
     on a side that is infinite is dropped: it would bound nothing; rows without a multiplier cost nothing, and only
     the rows with one are read). c and lam may be stacks, one objective and its multipliers a row: then an array of
-    bounds, one a row."""
+    bounds, one a row. Multipliers whose rows are a stack too (one set of rows per objective, padded with zero
+    multipliers: support.py, many proofs at once) read each objective's own rows."""
     m = lam if isinstance(lam, Multipliers) else sparse(lam)
     B, row_lo, row_hi = B[m.rows], np.asarray(row_lo)[m.rows], np.asarray(row_hi)[m.rows]
     C, L = np.atleast_2d(c), np.atleast_2d(m.values)
     lo_ok, hi_ok = np.isfinite(row_lo), np.isfinite(row_hi)
     if not (lo_ok.all() and hi_ok.all()):              # (all finite: nothing to drop)
         L = np.where((L > 0) & ~hi_ok | (L < 0) & ~lo_ok, 0.0, L)
-    n = B.shape[0] + 2                                  # terms of each entry of L B (the rows read)
-    mu = C - L @ B
-    slack = 1.01 * n * EPS * (np.abs(C) + np.abs(L) @ np.abs(B))     # |mu_true - mu| (rounding of L B)
+    n = B.shape[-2] + 2                                 # terms of each entry of L B (the rows read)
+    if B.ndim == 3:                                     # each objective's own rows
+        LB, size = np.einsum("kr,krp->kp", L, B), np.einsum("kr,krp->kp", np.abs(L), np.abs(B))
+    else:
+        LB, size = L @ B, np.abs(L) @ np.abs(B)
+    mu = C - LB
+    slack = 1.01 * n * EPS * (np.abs(C) + size)        # |mu_true - mu| (rounding of L B)
     rows = L * np.where(L > 0, np.where(hi_ok, row_hi, 0.0), np.where(lo_ok, row_lo, 0.0))   # the same products
     cols = np.maximum(mu * col_lo, mu * col_hi) + slack * np.maximum(np.abs(col_lo), np.abs(col_hi))
     terms = np.hstack([rows, cols])

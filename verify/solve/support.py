@@ -147,43 +147,24 @@ PROVEN_AT_ONCE = 2048
 
 def _proven(C, B, row_lo, row_hi, col_lo, col_hi, proofs, which):
     """The proven ends max c_s^T x of the rows c_s of C, each from its proof proofs[which[s]] (`_basis`): its
-    multipliers as they are, and re-solved for c_s on its basis; the better of the two. hull.upper's arithmetic
-    and rounding allowances, for many proofs at once (each objective's multipliers on its proof's rows, padded with
-    zeros: a zero multiplier reads nothing; the allowances count every padded row, so they are not smaller)."""
+    multipliers as they are, and re-solved for c_s on its basis; the better of the two. One `hull.upper` for many
+    proofs at once: each objective's multipliers on its proof's rows, padded with zero multipliers (which read
+    nothing)."""
     out = np.empty(len(C))
     ids, inverse = np.unique(which, return_inverse=True)
     R = max((len(proofs[i][0].rows) for i in ids), default=0)
-    P = B.shape[1]
-    rows, lam, K = np.zeros((len(ids), R), np.intp), np.zeros((len(ids), R)), np.zeros((len(ids), R, P))
+    rows, lam, K = np.zeros((len(ids), R), np.intp), np.zeros((len(ids), R)), np.zeros((len(ids), R, B.shape[1]))
     for t, i in enumerate(ids):
         m, k = proofs[i]
-        r = len(m.rows)
-        rows[t, :r], lam[t, :r] = m.rows, m.values
+        rows[t, :len(m.rows)], lam[t, :len(m.rows)] = m.rows, m.values
         if k is not None:
-            K[t, :r] = k
+            K[t, :len(m.rows)] = k
     plain = np.array([proofs[i][1] is None for i in ids], bool)   # no basis: the multipliers as they are, twice
-    row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)
-    lo_ok, hi_ok = np.isfinite(row_lo), np.isfinite(row_hi)
-    lo_v, hi_v = np.where(lo_ok, row_lo, 0.0), np.where(hi_ok, row_hi, 0.0)
-    span = np.maximum(np.abs(col_lo), np.abs(col_hi))
-    n = R + 2
     for a in range(0, len(C), PROVEN_AT_ONCE):
         part = slice(a, a + PROVEN_AT_ONCE)
         c, t = C[part], inverse.ravel()[part]
-        Bt, rt = B[rows[t]], rows[t]                               # (m, R, P), (m, R)
-        resolved = np.einsum("mrp,mp->mr", K[t], c)
-        ends = []
-        for L in (lam[t], np.where(plain[t][:, None], lam[t], resolved)):
-            L = np.where((L > 0) & ~hi_ok[rt] | (L < 0) & ~lo_ok[rt], 0.0, L)
-            mu = c - np.einsum("mr,mrp->mp", L, Bt)
-            slack = 1.01 * n * EPS * (np.abs(c) + np.einsum("mr,mrp->mp", np.abs(L), np.abs(Bt)))
-            row_terms = L * np.where(L > 0, hi_v[rt], lo_v[rt])
-            col_terms = np.maximum(mu * col_lo, mu * col_hi) + slack * span
-            total = row_terms.sum(axis=1) + col_terms.sum(axis=1)
-            size = np.abs(row_terms).sum(axis=1) + np.abs(col_terms).sum(axis=1)
-            ends.append(total + 1.01 * (R + P + 2) * EPS * size)
-        out[part] = np.minimum(*ends)
+        resolved = np.where(plain[t][:, None], lam[t], np.einsum("mrp,mp->mr", K[t], c))
+        out[part] = np.minimum(*(hull.upper(c, B, row_lo, row_hi, col_lo, col_hi, hull.Multipliers(rows[t], L))
+                                 for L in (lam[t], resolved)))
     return out
 
-
-EPS = np.finfo(float).eps

@@ -23,8 +23,6 @@ times the bound of the error's slope over the set, `_filter`). The error of g (|
 - velocity and position over a horizon T of free integration with the attitude held: |e| T and |e| T^2 / 2, a bound
   of the integrated calibration error alone (not a navigation solution: no attitude, gyroscope or noise error).
 """
-from math import comb
-
 import numpy as np
 
 from ..errors import DataError
@@ -191,6 +189,7 @@ def effect_figures(cal, progress=None):
     (|e| / g + s) / (1 - 2 l) with s the largest |Phi(n)| (|theta| + bound), |e| closed on itself."""
     from .. import models
     from .norm_effects import lipschitz
+    from .thermal import bernstein
     mod = models.load("norm")
     st, g, eff = cal["information_set"], cal["g"], cal["effects"]
     names, theta, h = eff["names"], np.asarray(eff["theta"], float), np.asarray(eff["bound"], float)
@@ -201,15 +200,17 @@ def effect_figures(cal, progress=None):
     degree = max((int(x.rsplit("_", 1)[1]) if x[-1].isdigit() else 1 for x in thermal), default=0)
     lo, hi = eff["temp_range_c"] if thermal else (20.0 - shift, 20.0 - shift)
     pieces = np.linspace(lo, hi, (1 if degree <= 1 else EFFECT_PIECES) + 1)
-    t = np.linspace(0.0, 1.0, degree + 1)
-    bern = np.array([[comb(degree, k) * x ** k * (1 - x) ** (degree - k) for k in range(degree + 1)] for x in t])
-    weights = np.linalg.inv(bern)                      # Bernstein coefficients from values at equispaced points
+    # on a piece of width w, Phi's values at degree + 1 equispaced temperatures give its coefficients in T - a
+    # (Vandermonde) and those its Bernstein control points (thermal.bernstein): weights from values to controls
+    tau = np.linspace(0.0, 1.0, degree + 1)
+    inverse = np.linalg.inv(np.vander(tau, degree + 1, increasing=True))
 
     def basis(n, T):
         p = np.asarray(n, float).T
         return np.concatenate([mod.effect_basis(x, p, 0.0, np.full(p.shape[1], T + shift)) for x in names]
                               + [np.zeros((0, 3, p.shape[1]))])     # (a session-only effect's columns: none)
-    controls = [(np.linspace(a, b, degree + 1), w) for a, b in zip(pieces[:-1], pieces[1:]) for w in weights]
+    controls = [(np.linspace(a, b, degree + 1), w) for a, b in zip(pieces[:-1], pieces[1:])
+                for w in bernstein([inverse[k] / (b - a or 1.0) ** k for k in range(degree + 1)], 0.0, b - a)]
     reach = max(float(np.abs(w).sum()) for _, w in controls)     # a control point's slope in n, over a value's
     phis = [lambda n, T=T, w=w: sum(wi * basis(n, Ti) for wi, Ti in zip(w, T)) for T, w in controls]
     jac = np.concatenate([mod.effect_jacobian_bound(x, 0.0, np.array([lo, hi]) + shift) for x in names]
@@ -228,12 +229,7 @@ def effect_figures(cal, progress=None):
     size = np.abs(theta) + h
     top = np.max([np.abs(phi(N)) for phi in phis], axis=0)       # each entry of Phi(n, T) within its control points'
     s_max = float(np.linalg.norm(np.einsum("j,jkn->kn", size, top), axis=0).max()) + ell * delta   # (between n's)
-    if 2 * ell >= 0.25:
-        raise DataError("budget: the effects are too large for their remainder to close (Lipschitz bound "
-                        f"{ell:.3g} >= 1/8)", param="calibration")
-    kappa = 2 * ell / (1 - 2 * ell)
-    r0 = g * s_max / (1 - 2 * ell) * np.asarray(cal["bound_matrix"], float).sum(axis=1) \
-        + 4 * g * ell * s_max / (1 - 2 * ell)
+    r0, kappa = _rest(s_max, ell, np.asarray(cal["bound_matrix"], float), g)
     worst = max(sups, key=lambda x: x["e"])
     e_sup = (worst["e"] + float(np.linalg.norm(r0))) / (1 - np.sqrt(3) * kappa)
     r_axis = r0 + kappa * e_sup
@@ -247,6 +243,16 @@ def effect_figures(cal, progress=None):
     out = _finish(sup, dict(filt, bias_bound_mps2=(np.asarray(filt["bias_bound_mps2"]) + linear + r_axis).tolist()),
                   g)
     return dict(out, temperature_range_c=[float(lo), float(hi)] if thermal else None)
+
+
+def _rest(s_max, ell, B, g):
+    """(r0, kappa): the second-order rest of an effects file's error per axis is at most r0 + kappa |e| (the
+    docstring of `effect_figures`: g B 1 s / (1 - 2 l) + 4 g l s / (1 - 2 l), kappa = 2 l / (1 - 2 l))."""
+    if 2 * ell >= 0.25:
+        raise DataError("budget: the effects are too large for their remainder to close (Lipschitz bound "
+                        f"{ell:.3g} >= 1/8)", param="calibration")
+    return (g * s_max / (1 - 2 * ell) * B.sum(axis=1) + 4 * g * ell * s_max / (1 - 2 * ell),
+            2 * ell / (1 - 2 * ell))
 
 
 #: Pieces of the temperature range the budget of a polynomial of degree 2 or 3 is bounded over (Bernstein).
