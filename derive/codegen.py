@@ -156,7 +156,7 @@ def model_context(d):
 def _absorbed_context(m, names, subs):
     """ABSORBED and the code of `equivalent`: (index, code) of each Gamma' entry, the indices set to 0, and,
     for a turn about the mountings' axis (derive/model.py, `Turn`), the code of its angle and of theta'."""
-    gone, Gp, turn = absorbed(m)
+    gone, Gp, turn, drift = absorbed(m)
     none = dict(absorbed=[], equivalent=[], equivalent_cse=[], absorbed_idx=[], turn=None,
                 absorbed_formula="Gamma (none absorbed)")
     if not gone:
@@ -165,14 +165,18 @@ def _absorbed_context(m, names, subs):
     offset = [n for n in gone if n not in m.stand.theta and n != dg]
     turn_text = f"C({theta})" + "".join(f" C_link(-{n})" for n in offset)
     formula = f"(1 - {dg})(E + Gamma) Q {turn_text} Q^T - E" if len(gone) > 1 else f"(1 - {dg})(E + Gamma) - E"
-    exprs = [Gp[i, j].xreplace(subs) for i in range(3) for j in range(3)]
+    if drift:
+        formula += ", and each Gamma_Tk' alike (without E)"
+    targets = [f"Gamma{i + 1}{j + 1}" for i in range(3) for j in range(3)] + list(drift)
+    exprs = [Gp[i, j].xreplace(subs) for i in range(3) for j in range(3)] + [e.xreplace(subs) for e in drift.values()]
     if turn is None:
         code = _cse_code(exprs)
-        entries = [(names.index(f"Gamma{i + 1}{j + 1}"), code["exprs"][3 * i + j]) for i in range(3) for j in range(3)]
+        entries = [(names.index(t), c) for t, c in zip(targets, code["exprs"])]
         return dict(none, absorbed=list(gone), equivalent=entries, equivalent_cse=code["cse"],
                     absorbed_idx=[names.index(n) for n in gone], absorbed_formula=formula)
     formula = (f"(1 - {dg})(E + Gamma) R^T - E,\n#: R the turn about TURN_AXIS that sets {m.stand.theta[0]} and "
-               f"{turn.offset} to 0 ({m.stand.theta[0]} folded into {turn.offset} first)")
+               f"{turn.offset} to 0 ({m.stand.theta[0]} folded into {turn.offset} first)") + (
+        "; each Gamma_Tk' alike (without E)" if drift else "")
     # one cse over the turn's condition and the rest; what needs the turn (cos a, sin a) comes after it
     cse, out = sp.cse([e.xreplace(subs) for e in (*turn.condition, *turn.theta)] + exprs,
                       symbols=sp.numbered_symbols("t"))
@@ -185,7 +189,7 @@ def _absorbed_context(m, names, subs):
         else:
             before.append((pycode(sym), pycode(e)))
     code = [pycode(e) for e in out]
-    entries = [(names.index(f"Gamma{i + 1}{j + 1}"), code[6 + 3 * i + j]) for i in range(3) for j in range(3)]
+    entries = [(names.index(t), c) for t, c in zip(targets, code[6:])]
     turn_context = dict(axis=[repr(float(v)) for v in turn.axis], condition_cse=before, condition=code[:3],
                         theta=code[3:6], theta_idx=[names.index(n) for n in m.stand.theta[1:]])
     return dict(none, absorbed=list(gone), equivalent=entries, equivalent_cse=after, turn=turn_context,

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .effects import TEMP, TIME, effect
+from .effects import TEMP, THERMAL_PREFIX, TIME, effect
 from .parameter import Parameter
 from .remount import mountings
 from .rotations import C, small_turn
@@ -240,7 +240,7 @@ class Turn:
 
 
 def absorbed(model):
-    """(names, Gamma', turn) of the parameters the block absorbs exactly, else ((), None, None).
+    """(names, Gamma', turn, drift') of the parameters the block absorbs exactly, else ((), None, None, {}).
 
     Without sensor effects the readings depend on Gamma and Delta_g only through (1 - Delta_g)(E + Gamma),
     and with one mounting Q also theta only through (1 - Delta_g)(E + Gamma) Q C(theta) = (E + Gamma') Q,
@@ -251,13 +251,20 @@ def absorbed(model):
     C_k(s (read - offset)) = C_k(-s offset) C_k(s read), and goes into Gamma' with it. With several mountings
     about one axis, theta1 and the first link's offset go instead (`Turn`): Gamma' = (1 - Delta_g)(E + Gamma)
     R^T - E, in `turn.c`, `turn.s`. Checked here, not assumed: the identities exactly, and the absorbed
-    parameters nowhere else in the readings."""
+    parameters nowhere else in the readings.
+
+    The thermal effect (derive/effects.py `thermal`) adds sum_k tau^k Gamma_Tk to Gamma: the readings read
+    (E + Gamma(T)) w, so the same turn goes into each Gamma_Tk, Gamma_Tk' = (1 - Delta_g) Gamma_Tk Q C Q^T
+    (R^T with a turn): `drift'` maps each Gamma_ij_Tk to its entry of Gamma_Tk'. Any other effect: none."""
     st = model.stand
-    if model.effects:
-        return (), None, None
+    none = (), None, None, {}
+    if any(not e.startswith(THERMAL_PREFIX) for e in model.effects) or len(model.effects) > 1:
+        return none
     s = model.symbols
     EG, _ = block_matrices(model)
     dg = s[st.gravity_error]
+    degree = int(model.effects[0][len(THERMAL_PREFIX):].split("_t")[0]) if model.effects else 0
+    drifts = [sp.Matrix(3, 3, lambda i, j: s[f"Gamma{i + 1}{j + 1}_T{k}"]) for k in range(1, degree + 1)]
     names, Gp, same, turn = (st.gravity_error,), (1 - dg) * EG - sp.eye(3), True, None
     links = st.chain
     if len(model.mountings) == 1:
@@ -277,19 +284,25 @@ def absorbed(model):
                 turn_m, gone_names, links = turn_m * offset, gone_names | {first.error}, links[1:]
         names = tuple(p.name for p in model.parameters if p.name in gone_names)
         Gp = (1 - dg) * EG * Q * turn_m * Q.T - sp.eye(3)
-        same = sp.expand((sp.eye(3) + Gp) * Q - (1 - dg) * EG * Q * turn_m) == sp.zeros(3, 3)
+        Dp = [(1 - dg) * D * Q * turn_m * Q.T for D in drifts]
+        same = all(sp.expand(A * Q - (1 - dg) * B * Q * turn_m) == sp.zeros(3, 3)
+                   for A, B in zip([sp.eye(3) + Gp, *Dp], [EG, *drifts]))
     else:
         turn = _turn(model)
+        Dp = [(1 - dg) * D for D in drifts]                   # Delta_g alone, unless the turn goes too
         if turn is not None:
             names = tuple(p.name for p in model.parameters if p.name in (turn.offset, st.theta[0], st.gravity_error))
-            Gp = (1 - dg) * EG * _turn_matrix(turn.axis, turn.c, turn.s).T - sp.eye(3)
+            R = _turn_matrix(turn.axis, turn.c, turn.s)
+            Gp = (1 - dg) * EG * R.T - sp.eye(3)
+            Dp = [(1 - dg) * D * R.T for D in drifts]
             links = st.chain[1:]
     angles = {a.name: a.symbol for a in st.angles}
     rest = set().union(*(C(ln.axis, link_angle(ln, s, angles)).free_symbols for ln in links))
     gone = {s[n] for n in names} | ({s[n] for n in st.theta} if turn is not None else set())
     if not same or rest & gone:
-        return (), None, None
-    return names, Gp, turn
+        return none
+    drift = {f"Gamma{i + 1}{j + 1}_T{k + 1}": D[i, j] for k, D in enumerate(Dp) for i in range(3) for j in range(3)}
+    return names, Gp, turn, drift
 
 
 def _turn_matrix(axis, c, s):

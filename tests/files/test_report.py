@@ -65,8 +65,10 @@ def test_each_report_is_one_self_contained_page(reports):
     human = re.findall(r"<tr><td>lambda\d</td>(?:<td>[^<]*</td>){3}<td>([^<]*)</td>", norm)
     assert len(human) == 3 and all(x.endswith(" ppm") for x in human), human
     assert "What the calibration guarantees downstream" in norm and "<td>tilt error, mrad (deg)</td>" in norm
-    # a two-axis stand's file is the remount split's (28)-(29) of 000: no set on file, and the page says so
-    assert "No budget on this page: holds no information_set" in (tmp_path / "e" / "report.md").read_text()
+    # a two-axis stand's file (the LQ split of (29) of 000) carries its set of q with each entry's part linear in
+    # q: its page shows the budget too (before: "No budget on this page: holds no information_set")
+    estimate_page = (tmp_path / "e" / "report.md").read_text()
+    assert "What the calibration guarantees downstream" in estimate_page and "tilt error, mrad (deg)" in estimate_page
     assert "a&lt;b&gt;.csv" in (tmp_path / "e" / "index.html").read_text() and "a<b>" not in (
         tmp_path / "e" / "index.html").read_text()
 

@@ -388,16 +388,86 @@ def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_consta
     thermal_cal, constant = calibration.read(folder / "cal.json"), calibration.read(tmp_path / "c0.json")
     th = thermal_cal["thermal"]
     assert th["frame"] == "lower" and np.all(np.triu(np.linalg.inv(thermal_cal["M"]), 1) == 0)
-    rng = np.random.default_rng(3)
-    angles = rng.uniform(0, 360, (500, 2))
-    p = [MEMS.get(k, 0.0) for k in mod.PARAMETER_NAMES]
-    T = np.full(len(angles), 20.0)
-    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T
-    ratio = calibration.apply_thermal(thermal_cal, f, T)[1] / calibration.apply(constant, f)[1]
-    assert ratio.max() <= 3.0 and np.median(ratio) < 1.6, (ratio.max(), np.median(ratio))
+    ratio = _t0_ratio(mod, MEMS, thermal_cal, constant, np.random.default_rng(3))
+    assert ratio.max() <= 2.0 and np.median(ratio) < 1.0, (ratio.max(), np.median(ratio))
     piece = np.searchsorted(th["pieces_c"], 20.0, side="right") - 1
     lower = np.tril_indices(3, -1)
     assert np.all(th["bound_Gamma"][piece][lower] <= 3 * constant["bound_matrix"][lower])
+
+
+def _t0_ratio(mod, truth, thermal_cal, constant, rng, n=500):
+    """The thermal file's per-sample bound (over its set: `garant apply`'s) over the constant file's, at n random
+    attitudes of the unit `truth` at t0 = 20 C."""
+    from garant.verify.io import calibration
+    from garant.verify.workflows import sample_set
+    angles = rng.uniform(0, 360, (n, 2))
+    p = [truth.get(k, 0.0) for k in mod.PARAMETER_NAMES]
+    T = np.full(n, 20.0)
+    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T
+    return sample_set.apply_thermal(thermal_cal, f, T)[1] / calibration.apply(constant, f)[1]
+
+
+@pytest.mark.slow
+def test_the_thermal_file_is_within_twice_the_constant_file_on_random_chamber_units(tmp_path):
+    """Issue 74's target for the stand's thermal file: on 5 random units of the chamber example's kind (scale factors
+    to 1.2 %, misalignments to 4e-3, biases to 50 mg, drifts to 100 ppm/C and 1 mg/C with quadratic parts, the
+    mounting to 3e-3 rad; the 45 x 90 degree grid at -20, 0, 20, 40, 60 C, noise uniform within sigma), each
+    sample's bound at t0 within 2x that of the constant file made from the t0 readings alone, at 300 random
+    attitudes (measured: largest 0.67-1.03x). Red without the mounting absorbed into the thermal model's Gamma'
+    (derive/model.py `absorbed` refusing the thermal effect: largest 1.7-3.0x; the mounting's a-priori bound then
+    stays in each Gamma q as its unseparable part, whatever the readings)."""
+    from garant.verify.io import calibration
+    mod = models.thermal("two-axis", 2, 20)
+    P1 = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 90)], float)
+    P, T = np.tile(P1, (len(TEMPS), 1)), np.repeat(TEMPS, len(P1))
+    worst = []
+    for seed in range(5):
+        rng = np.random.default_rng(seed)
+        truth = {n: rng.uniform(-3e-3, 3e-3) for n in ("theta1", "theta2", "theta3")}
+        truth.update(kappa=rng.uniform(-2e-5, 2e-5), epsilon=rng.uniform(-2e-5, 2e-5))
+        for i in (1, 2, 3):
+            truth.update({f"Gamma{i}{j}": rng.uniform(-4e-3, 4e-3) for j in range(1, i)})
+            truth.update({f"Gamma{i}{i}": rng.uniform(-1.2e-2, 1.2e-2), f"bias{i}": rng.uniform(-0.05, 0.05),
+                          f"bias{i}_T1": rng.uniform(-1e-3, 1e-3), f"bias{i}_T2": rng.uniform(-1e-5, 1e-5),
+                          f"Gamma{i}{i}_T1": rng.uniform(-1e-4, 1e-4), f"Gamma{i}{i}_T2": rng.uniform(-1e-6, 1e-6)})
+        p = [truth.get(n, 0.0) for n in mod.PARAMETER_NAMES]
+        f = mod.readings(*np.deg2rad(P).T, p, G, temp_c=T).T + G * rng.uniform(-SIGMA, SIGMA, (len(P), 3))
+        _write(tmp_path / "chamber.csv", P, f, T)
+        np.savetxt(tmp_path / "t0.csv", np.column_stack([P, f])[T == 20.0], delimiter=",", comments="", fmt="%.17g",
+                   header="alpha_deg,beta_deg,f1,f2,f3")
+        for data, extra, out in (("chamber.csv", ["--thermal-degree", "2"], "cal.json"), ("t0.csv", [], "c0.json")):
+            assert main(["estimate", "--model", "two-axis", str(tmp_path / data), "--sigma", str(SIGMA), "--g", str(G),
+                         *extra, "--save", str(tmp_path / out)]) == 0
+        ratio = _t0_ratio(mod, truth, calibration.read(tmp_path / "cal.json"),
+                          calibration.read(tmp_path / "c0.json"), rng, 300)
+        worst.append(ratio.max())
+    assert max(worst) <= 2.0, worst
+
+
+@pytest.mark.slow
+def test_the_thermal_file_bounds_each_sample_by_the_sup_over_its_set(mems):
+    """apply's per-sample bound of the thermal file against the largest error its information set allows at that
+    sample and temperature, computed here independently (test_sample_set.py `lower_jacobian`: the exact correction
+    of a unit q at T differentiated by central differences; `_set_sup`: scipy's LP over the set); the error of g
+    (|s - 1| <= u = 1e-5 with --g) adds u |a_k|. Within 1.25x of it and never below, at 40 random attitudes and
+    temperatures of the range (measured 1.001-1.014x). Red with the rest of each entry (rest_Gamma) left out of the
+    bound: 0.75x."""
+    from test_sample_set import _set_sup, lower_jacobian
+    from garant.verify.io import calibration
+    from garant.verify.workflows import sample_set
+    folder, mod, _, res = mems
+    cal = calibration.read(folder / "cal.json")
+    st = cal["information_set"]
+    rng = np.random.default_rng(4)
+    n = 40
+    angles, T = rng.uniform(0, 360, (n, 2)), rng.uniform(-20, 60, n)
+    p = [MEMS.get(k, 0.0) for k in mod.PARAMETER_NAMES]
+    f = mod.readings(*np.deg2rad(angles).T, p, G, temp_c=T).T
+    a, bound = sample_set.apply_thermal(cal, f, T)
+    ratio = np.array([[bound[i, k] / (_set_sup(st, jac[k]) + 1e-5 * abs(a[i, k])) for k in range(3)]
+                      for i, jac in enumerate(lower_jacobian(st, res["definitions"], f[i], T[i] - 20.0)
+                                              for i in range(n))])
+    assert ratio.min() >= 1 - 1e-6 and ratio.max() <= 1.25, (ratio.min(), ratio.max())
 
 
 @pytest.mark.parametrize("mount", ["+y+z+x", "-x-y+z"])
@@ -409,6 +479,7 @@ def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mou
     positions and temperatures within each per-sample bound. Red when the mounting is ignored (the file would
     be the equivalent unit's) or refused."""
     from garant.verify.io import calibration
+    from garant.verify.workflows import sample_set
     rm = models.load_remount("two-axis")
     Q = np.asarray(rm.MOUNTS[mount], float)
     mod = models.thermal("two-axis", 2, 20)
@@ -437,7 +508,7 @@ def test_a_unit_in_another_mounting_is_calibrated_over_temperature(tmp_path, mou
     rng = np.random.default_rng(2)
     angles, T = rng.uniform(0, 360, (1000, 2)), rng.uniform(-20, 60, 1000)
     ideal = {k: v for k, v in MEMS.items() if not k.startswith(("Gamma", "bias"))}
-    a, bound = calibration.apply_thermal(cal, block(angles, T, MEMS), T)
+    a, bound = sample_set.apply_thermal(cal, block(angles, T, MEMS), T)
     truth = block(angles, T, ideal) @ _lower_turn(MEMS).T
     assert np.all(np.abs(a - truth) <= bound) and bound.max() < 1e-2
 

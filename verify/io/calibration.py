@@ -101,20 +101,21 @@ def through_M(G, B, bias_bound, g_uncertainty=0.0):
     return M, bound, (absM @ np.asarray(bias_bound, float)[..., None])[..., 0] * (1 + 1e-12)
 
 
-def from_stand(res):
+def from_stand(res, st=None):
     """The calibration dictionary of a consistent stand estimate with the block's physical errors
     ((28)-(29) of 000): a = (E + Gamma)^-1 (f - bias) for readings f in m/s^2. The bounds of Gamma hold
     Delta_g/g on its diagonal (a premise: the stand cannot separate it from the scale factors); they reach
     the sample through M (`through_M`); the premises travel with the file."""
     G, eG = np.array(res["physical"]["Gamma"]), np.array(res["physical_bound"]["Gamma"])
     M, B, eb = through_M(G, np.abs(eG), res["physical_bound"]["bias"])
-    return {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
-            "M": M.tolist(), "b": list(res["physical"]["bias"]), "bound_matrix": B.tolist(),
-            "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
-            "pendulosity_axes": [2, 3, 1], "g": res["g"], "source": f"{res['model']} estimate, mounting {res['mount']}",
-            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = |M (E + Gamma) - E| + |M| (the bounds of "
-                    "Gamma, Delta_g/g on its diagonal), bound_bias = |M| (the bounds of the biases)",
-            "premises": res["premises"]["statement"]}
+    out = {"format": FORMAT, "kind": "stand", "model": "a = M (raw - b)", "raw_unit": "m/s^2",
+           "M": M.tolist(), "b": list(res["physical"]["bias"]), "bound_matrix": B.tolist(),
+           "bound_bias": eb.tolist(), "bound_delta": [0.0, 0.0, 0.0],
+           "pendulosity_axes": [2, 3, 1], "g": res["g"], "source": f"{res['model']} estimate, mounting {res['mount']}",
+           "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = |M (E + Gamma) - E| + |M| (the bounds of "
+                   "Gamma, Delta_g/g on its diagonal), bound_bias = |M| (the bounds of the biases)",
+           "premises": res["premises"]["statement"]}
+    return out if st is None else with_set(out, dict(st), st["g_uncertainty"])
 
 
 def from_block(res, st=None):
@@ -139,11 +140,16 @@ def from_block(res, st=None):
                         f") / (1 - u) + u / (1 - u) E, u = {u:g} the bound of |Delta_g/g| (Gamma is relative to g = "
                         f"{g:g} m/s^2)" if u else "") + ", bound_bias = |M| (the bounds of the biases)",
             "premises": " ".join(filter(None, (prem["statement"] + ".", prem.get("meaning"))))}
-    if st is not None:
-        out["information_set"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in st.items()}
-        out["information_set"]["g_uncertainty"] = u
-        out["note"] += SET_NOTE
-    return out
+    return out if st is None else with_set(out, st, u)
+
+
+def with_set(cal, st, u):
+    """The calibration dictionary `cal` carrying the information set `st` (workflows/sample_set.py) with u, the
+    bound of |Delta_g/g| its per-sample bound holds, and its note saying so."""
+    cal["information_set"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in st.items()}
+    cal["information_set"]["g_uncertainty"] = float(u)
+    cal["note"] += SET_NOTE
+    return cal
 
 
 BLOCK_NAMES = tuple(f"Gamma{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3)) + ("bias1", "bias2", "bias3")
@@ -215,8 +221,38 @@ def checked(data, path="calibration"):
                 or len(th["bound_Gamma"]) != len(cuts) - 1 or len(th["bound_bias"]) != len(cuts) - 1):
             raise DataError(f"{path}: thermal: pieces_c must rise from range_c's first to its last temperature and "
                             "bound_Gamma and bound_bias hold one bound per piece", param="calibration")
-        out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
+        try:
+            out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
+        except ValueError:
+            raise DataError(f"{path}: thermal: every row of an array must hold as many numbers as the others",
+                            param="calibration") from None
+    _lower_rows(out, path)
     return out
+
+
+def _lower_rows(cal, path):
+    """A two-axis stand's set reads the error through its rows (`Gamma_rows`, `bias_rows`, `rest_Gamma`,
+    `rest_bias`: workflows/sample_set.py `lower_bound`): they come together, in the frame the data define, one term
+    per power 0..degree (0 alone without thermal) and one rest per piece; a thermal file's set holds them;
+    DataError naming what does not fit."""
+    st, th = cal.get("information_set"), cal.get("thermal")
+    if st is None or (th is None and "Gamma_rows" not in st):
+        return
+    P = len(st["estimate"])
+    D1, pieces = (th["degree"] + 1, len(th["pieces_c"]) - 1) if th is not None else (1, 1)
+    parts = [k in st for k in ("Gamma_rows", "bias_rows", "rest_Gamma", "rest_bias")]
+    problem = (
+        "Gamma_rows, bias_rows, rest_Gamma and rest_bias come together" if any(parts) and not all(parts) else
+        "a calibration over temperature reads its set through Gamma_rows" if not any(parts) else
+        "Gamma_rows and block_columns do not go together" if "block_columns" in st else
+        "Gamma_rows belong to the frame the data define (thermal.frame lower)" if th is not None
+        and th["frame"] != "lower" else
+        f"Gamma_rows must be {D1} x 3 x 3 x {P} and bias_rows {D1} x 3 x {P} (a term per power of T - t0, a column "
+        "per entry of estimate)" if st["Gamma_rows"].shape != (D1, 3, 3, P) or st["bias_rows"].shape != (D1, 3, P) else
+        f"rest_Gamma must hold one 3 x 3 bound per piece ({pieces})" if st["rest_Gamma"].shape != (pieces, 3, 3)
+        else None)
+    if problem:
+        raise DataError(f"{path}: information_set: {problem}", param="calibration")
 
 
 def _information_set(data, path):
@@ -241,16 +277,27 @@ def _information_set(data, path):
         and (len(set(raw["block_columns"])) != 12 or max(raw["block_columns"]) >= P) else None)
     if problem:
         raise DataError(f"{path}: information_set: {problem}", param="calibration")
-    st = {k: np.array(v, int if k == "block_columns" else float) for k, v in raw.items()}
-    return st
+    try:
+        return {k: np.array(v, int if k == "block_columns" else float) for k, v in raw.items()}
+    except ValueError:
+        raise DataError(f"{path}: information_set: every row of an array must hold as many numbers as the others",
+                        param="calibration") from None
 
 
 def thermal_at(cal, T):
     """Per sample at temperatures T (C): (M (N, 3, 3), b (N, 3), bound_matrix (N, 3, 3), bound_bias (N, 3)) of a
-    calibration with a temperature polynomial: Gamma(T) = Gamma(t0) + sum_k Gamma_k (T - t0)^k with Gamma(t0) =
-    M^-1 - E of the file, b(T) likewise, through `through_M` with the bounds of the piece of the range that
+    calibration with a temperature polynomial, through `through_M` with the bounds of the piece of the range that
     holds T (each over the estimate's information set and the whole piece, workflows/thermal_file.py; a T at a
     cut lies in both pieces, and either bound holds there)."""
+    th = cal["thermal"]
+    G, b, piece = thermal_gamma(cal, T)
+    M, B, eb = through_M(G, th["bound_Gamma"][piece], th["bound_bias"][piece], th.get("g_uncertainty", 0.0))
+    return M, b, B, eb
+
+
+def thermal_gamma(cal, T):
+    """Per sample at temperatures T (C): the file's Gamma(T) = Gamma(t0) + sum_k Gamma_k (T - t0)^k (N, 3, 3),
+    Gamma(t0) = M^-1 - E, its b(T) likewise (N, 3), and the index of the piece of the range that holds T."""
     th = cal["thermal"]
     T = np.asarray(T, float)
     tau = T - th["t0_c"]
@@ -258,9 +305,7 @@ def thermal_at(cal, T):
     G = (np.linalg.inv(cal["M"]) - np.eye(3))[None] + np.einsum("nk,kij->nij", powers, th["Gamma"])
     b = cal["b"][None] + powers @ th["bias"]
     cuts = th["pieces_c"]
-    piece = np.clip(np.searchsorted(cuts, T, side="right") - 1, 0, len(cuts) - 2)
-    M, B, eb = through_M(G, th["bound_Gamma"][piece], th["bound_bias"][piece], th.get("g_uncertainty", 0.0))
-    return M, b, B, eb
+    return G, b, np.clip(np.searchsorted(cuts, T, side="right") - 1, 0, len(cuts) - 2)
 
 
 def _nan(value, where=""):

@@ -19,7 +19,8 @@ times the bound of the error's slope over the set, `_filter`). The error of g (|
 - specific force: |e| <= the smaller of the norm of the three axes' bounds and that of the bounds along n and
   across it;
 - tilt (the angle between the true and the estimated vertical: pitch errs by at most it, roll by at most it over
-  cos(pitch)): atan(|e_perp| / (g - |e_par|)), |e_perp| <= sec(pi / 16) times the largest of 16 directions across n;
+  cos(pitch)): atan(|e_perp| / (g (1 - u) - |e_par|)), |e_perp| <= sec(pi / 16) times the largest of 16 directions
+  across n;
 - velocity and position over a horizon T of free integration with the attitude held: |e| T and |e| T^2 / 2, a bound
   of the integrated calibration error alone (not a navigation solution: no attitude, gyroscope or noise error).
 """
@@ -54,8 +55,9 @@ class Model:
     """The error of a calibration over a set: e(n) = d0 + D(n) + C(n) z, z in the set (`st`, the calibration
     file's information_set: rows, box, shift, estimate), D and C linear in n."""
 
-    def __init__(self, st, build, d0, g, u):
+    def __init__(self, st, build, d0, g, u, rest=None):
         self.st, self.build, self.d0, self.g, self.u = st, build, np.asarray(d0, float), g, u
+        self.rest = rest            # (R, r): a part of e outside the set's LP, |r_k(n)| <= g (R |n|)_k + r_k
 
     def ranges(self, n, W, solved=None, seen_too=False):
         """(lo, hi) (N, R) of w^T e(n) for each n (rows of n) and each row w of W (R, 3) or each (N, R, 3); `solved`
@@ -109,8 +111,11 @@ def norm_model(cal, M_p=None, b_p=None, phi=None):
 
 
 def stand_model(cal):
-    """The Model of a stand file over its block's set (block_columns: Gamma11..Gamma33, bias1..bias3 over g)."""
+    """The Model of a stand file over its block's set (block_columns: Gamma11..Gamma33, bias1..bias3 over g), or a
+    two-axis file's over its q (Gamma_rows: `lower_model`)."""
     st, g, M = cal["information_set"], cal["g"], np.asarray(cal["M"], float)
+    if "Gamma_rows" in st:
+        return lower_model(cal)
     z_m = np.asarray(st["estimate"], float)
     G = z_m[np.asarray(st["block_columns"], int)[:9]].reshape(3, 3)
     left = M @ (np.eye(3) + G) - np.eye(3)
@@ -122,6 +127,26 @@ def stand_model(cal):
     return Model(st, build, np.zeros(3), g, float(st["g_uncertainty"]))
 
 
+def lower_model(cal):
+    """The Model of a constant two-axis file over its q (sample_set.lower_bound): e = M (dGamma g n + dbias) +
+    (M (E + G) - E) g n with dGamma = Gamma_rows^T dq + r, dbias = bias_rows^T dq + r_b; the rest r, r_b outward
+    (|M| rest_Gamma, |M| rest_bias), the rounding of M as an inverse with it; the error of g (s, within 1 +- u) as
+    the Model's u: the data fix the reading of g n, so g_t n differs from it along n only."""
+    st, g, M = cal["information_set"], cal["g"], np.asarray(cal["M"], float)
+    G = np.linalg.inv(M) - np.eye(3)
+    R, Rb = np.asarray(st["Gamma_rows"], float)[0], np.asarray(st["bias_rows"], float)[0]
+    q_m = np.asarray(st["estimate"], float)
+    left = M @ (np.eye(3) + G) - np.eye(3)
+    slack = 8 * np.finfo(float).eps * (np.abs(M) @ (1 + np.abs(G)))
+    rest = (np.abs(M) @ np.asarray(st["rest_Gamma"], float)[0] + slack, np.abs(M) @ np.asarray(st["rest_bias"]))
+
+    def build(n):
+        a = g * np.asarray(n, float).T                                  # (3, N)
+        C = np.einsum("ka,nap->knp", M, np.einsum("abp,bn->nap", R, a) + Rb[None])
+        return left @ a - np.einsum("knp,p->kn", C, q_m), C
+    return Model(st, build, np.zeros(3), g, float(st["g_uncertainty"]), rest)
+
+
 def figures(model, progress=None):
     """The budget of one Model: the worst-case errors over every attitude (the module's docstring). At each
     attitude of the grid: each axis's error, the error along n and its largest across n (PERP directions); |e| is
@@ -129,7 +154,16 @@ def figures(model, progress=None):
     printed, so after a first pass of few LPs, more go only to the attitudes whose bounds could still be the
     largest (`_refine`)."""
     filt = _filter(model)
-    return _finish(_sups(model, filt, 0.0, progress), filt, model.g)
+    sup = _sups(model, filt, 0.0, progress)
+    if model.rest is not None:                 # outward, at every attitude: |r(n)| <= g R |n| + r, |n| = 1
+        R, r = model.rest
+        r_axis, r_norm = model.g * np.linalg.norm(R, axis=1) + r, model.g * np.linalg.norm(R, 2) + np.linalg.norm(r)
+        e = sup["e"] + r_norm
+        sup = dict(sup, per_axis=sup["per_axis"] + r_axis, e=e, perp=sup["perp"] + r_norm,
+                   par=min(sup["par"] + r_norm, e))
+        filt = {"bias_bound_mps2": (np.asarray(filt["bias_bound_mps2"]) + r).tolist(),
+                "slope_bound": (np.asarray(filt["slope_bound"]) + R).tolist()}
+    return _finish(sup, filt, model.g)
 
 
 def _sups(model, filt, extra, progress=None):
@@ -144,21 +178,50 @@ def _sups(model, filt, extra, progress=None):
     U, L = _refine(model, N, progress)
     axes, along = U[:, :3], U[:, -1]
     across = U[:, 3:-1].max(axis=1) / np.cos(np.pi / PERP)
-    # the error of g moves a still unit's reading along n only: |e'| <= |(e_perp, e_par + u g)|
-    here = np.minimum(np.linalg.norm(axes + u * g * np.abs(N), axis=1), np.hypot(across, along + u * g))
-    e_sup = float(here.max()) + slack_norm
-    return {"per_axis": axes.max(axis=0) + slack_axis + u * g, "e": e_sup,
+    # the error of g, d g n with |d| <= u, moves a still unit's reading along n only: |e| <= |(e_perp, e_par + u g)|;
+    # between attitudes it moves by at most u g |n - n'| (per axis and in norm)
+    here = _net(model, N, np.minimum(np.linalg.norm(axes + u * g * np.abs(N), axis=1), np.hypot(across, along + u * g)))
+    e_sup = float(here.max()) + slack_norm + u * g * delta
+    return {"per_axis": (axes + u * g * np.abs(N)).max(axis=0) + slack_axis + u * g * delta, "e": e_sup,
             "perp": float(across.max()) + slack_norm + e_sup * delta,   # |n n^T - n' n'^T|_2 = sin of their angle
-            "par": min(float(along.max()) + slack_norm, e_sup),
+            "par": min(float(along.max()) + slack_norm, e_sup), "u": u,
             "worst": N[int(np.argmax(here))], "attitudes": len(N), "delta": delta}
+
+
+#: |e| at an attitude over a net of directions: the cube-sphere grid with this many cells per face side (every unit
+#: vector within 13.6 degrees of one of it), at the attitudes whose bound could be the largest, at most NET_AT of them.
+NET_SIDE = 6
+NET_AT = 512
+
+
+def _net(model, N, here):
+    """`here` (N,), each attitude's bound of |e| from the axes and the parts along and across n, made the smaller of
+    it and the bound over a net of directions w (|e| <= max_w w^T e / cos(theta), theta the net's covering angle;
+    w^T e <= the LP's end plus u g |w^T n|, the error of g along n), at the attitudes in order of `here` until the
+    largest found is at least every bound not yet refined (or NET_AT of them, counted)."""
+    W, chord = grid(NET_SIDE)
+    W = W[W @ np.array([1.0, 0.5 ** 0.5, 3.0 ** -0.5]) > 0]         # one of each +-w pair (the net is symmetric)
+    sec = 1.0 / np.cos(2 * np.arcsin(chord / 2))
+    out, best, solved = here.copy(), -np.inf, support.Solved(BUDGET)
+    order = np.argsort(-here, kind="stable")[:NET_AT]
+    for k in range(0, len(order), 32):
+        idx = order[k:k + 32]
+        if here[idx[0]] <= best:
+            break                                       # every attitude left is bounded by one refined
+        lo, hi = model.ranges(N[idx], W, solved)
+        g_part = model.u * model.g * np.abs(N[idx] @ W.T)
+        out[idx] = np.minimum(here[idx], np.maximum(hi + g_part, g_part - lo).max(axis=1) * sec * (1 + 1e-12))
+        best = max(best, float(out[idx].max()))
+    return out
 
 
 def _finish(sup, filt, g):
     """The printed figures from the largest values `_sups` proves (tilt from the parts across and along n)."""
     e_sup, perp_sup, par_sup = sup["e"], sup["perp"], sup["par"]
-    if par_sup >= g:
+    g_low = g * (1 - sup["u"])                 # the true g n, whose tilt the error across n sets against it
+    if par_sup >= g_low:
         raise DataError("budget: the error bound reaches g: no tilt is bounded", param="calibration")
-    tilt = float(np.arctan(perp_sup / (g - par_sup)))
+    tilt = float(np.arctan(perp_sup / (g_low - par_sup)))
     return {
         "specific_force_error_mps2": e_sup, "specific_force_error_mg": e_sup * MG,
         "per_axis_error_mps2": np.asarray(sup["per_axis"]).tolist(),
@@ -236,7 +299,7 @@ def effect_figures(cal, progress=None):
     r_norm = float(np.linalg.norm(r0)) + np.sqrt(3) * kappa * e_sup
     sup = {"per_axis": np.max([x["per_axis"] for x in sups], axis=0) + r_axis, "e": e_sup * (1 + 1e-12),
            "perp": max(x["perp"] for x in sups) + r_norm, "par": min(max(x["par"] for x in sups) + r_norm, e_sup),
-           "worst": worst["worst"], "attitudes": worst["attitudes"], "delta": worst["delta"]}
+           "worst": worst["worst"], "attitudes": worst["attitudes"], "delta": worst["delta"], "u": worst["u"]}
     # a filter's model, |e_k| <= bias_k + sum_j slope_kj |a_j|: the effects' linear part (g Phi(n) (theta_t -
     # theta), per axis over every attitude and temperature) and the remainder as bias
     linear = g * np.einsum("j,jkn->kn", box, top).max(axis=1) + extra * delta
@@ -409,8 +472,8 @@ def own(cal, path, progress=None):
         raise DataError(f"{path}: a stand's calibration over temperature is not budgeted yet; budget the constant "
                         "calibration of the same readings", param="calibration")
     if "information_set" not in cal:
-        raise DataError(f"{path}: holds no information_set (a two-axis stand's split, a 12-parameter norm "
-                        "calibration, or a set too large for a file): give --log LOG to judge it against a "
+        raise DataError(f"{path}: holds no information_set (a two-axis stand with --gamma symmetric, a 12-parameter "
+                        "norm calibration, or a set too large for a file): give --log LOG to judge it against a "
                         "log's own set", param="calibration")
     effects = cal["kind"] == "norm" and len(cal["information_set"]["estimate"]) > 9   # effects (applied or not)
     out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "calibration_slot": None, "log": None,

@@ -232,7 +232,17 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
         out.update(block_errors(mod, v, g, premises, remount, mount, gamma))
         if thermal is not None:
             out.update(_thermal_file(mod, v, q, positions, thermal, g, premises, remount, out))
+        elif out.get("gamma") == "lower" and "physical" in out:      # the file's set (workflows/thermal_file.py)
+            from . import thermal_file
+            out["_set"] = thermal_file.lower_set(mod, remount, out["mount"], v.info, q, v.interval,
+                                                 _own(premises).get("Delta_g", 0.0), g, out["physical"]["Gamma"],
+                                                 out["physical"]["bias"])
     return out
+
+
+def _own(premises):
+    """{parameter: its own a-priori bound}."""
+    return dict(zip(premises.names, premises.physical()))
 
 
 def _thermal_file(mod, v, q, positions, thermal, g, premises, remount, out):
@@ -245,9 +255,8 @@ def _thermal_file(mod, v, q, positions, thermal, g, premises, remount, out):
         if out["gamma"] != "lower":
             return {"block_not_separated": "a calibration over temperature is written in the frame the data define "
                                            "(--gamma lower); with --gamma symmetric none is written"}
-        own = dict(zip(premises.names, premises.physical()))
         return {"thermal_file": thermal_file.lower_section(
-            mod, remount, out["mount"], v.info, q, v.interval, T, t0, degree, own.get("Delta_g", 0.0), g,
+            mod, remount, out["mount"], v.info, q, v.interval, T, t0, degree, _own(premises).get("Delta_g", 0.0), g,
             out["physical"]["Gamma"], out["physical"]["bias"])}
     if "block" in out:
         from ..io.calibration import g_uncertainty

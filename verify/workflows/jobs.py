@@ -112,16 +112,20 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
                        gamma=gamma, premises=prem, progress=progress, thermal=thermal)
     section = res.pop("thermal_file", None)
     block_set = res["block"].pop("_set", None) if isinstance(res.get("block"), dict) else None
+    lower_set = res.pop("_set", None)                 # the files', not the result's
     if res["consistent"] and not res.get("premises_refuted") and ("physical" in res or "block" in res):
         from ..io import calibration
-        res["calibration"] = calibration.from_stand(res) if "physical" in res else calibration.from_block(
+        res["calibration"] = calibration.from_stand(res, lower_set) if "physical" in res else calibration.from_block(
             res, None if "thermal" in res else block_set)     # a thermal file's bound is its block's (apply_thermal)
         if "thermal" in res:
             if section is None:
                 del res["calibration"]
             else:
+                st = section.pop("_set", None)
                 res["calibration"]["thermal"] = {"t0_c": res["thermal"]["t0_c"], "range_c": res["thermal"]["range_c"],
                                                  "degree": res["thermal"]["degree"], **section}
+                if st is not None:
+                    calibration.with_set(res["calibration"], st, st.pop("g_uncertainty"))
     return results.Estimate(res)
 
 

@@ -38,6 +38,24 @@ def entry(A, s, bound, lo, hi, shift, q_m, u=0.0):
             "estimate": np.asarray(q_m, float).tolist(), "g_uncertainty": float(u)}
 
 
+def q_entry(info, q_m):
+    """The calibration file's `information_set` of a stand's q (guarantee.InformationSet: q = q0 + w - u,
+    |y_k - a_k^T w| <= s_k, w in its proven box, |u| <= shift) in the form `entry` writes: x = q0 + w, so
+    |y_k + a_k^T q0 - a_k^T x| <= s_k, each row's bound widened by the rounding of its centre; the estimate q_m.
+    None where it is too large for a file (MAX_ENTRIES)."""
+    A = np.asarray(info.A, float)
+    if A.size > MAX_ENTRIES:
+        return None
+    q0, rows = np.asarray(info.lin.q0, float), A.T
+    centre = info.y + rows @ q0
+    slack = 4 * (len(q0) + 2) * EPS * (np.abs(info.y) + np.abs(rows) @ np.abs(q0) + np.abs(centre))
+    pad = 4 * EPS * (np.abs(q0) + np.abs(info.w_lo) + np.abs(info.w_hi))
+    return {"rows": rows, "centre": centre, "bound": (np.asarray(info.s, float) + slack) * (1 + 4 * EPS),
+            "box_lo": q0 + info.w_lo - pad, "box_hi": q0 + info.w_hi + pad,
+            "shift": np.broadcast_to(np.asarray(info.shift, float), q0.shape).copy(),
+            "estimate": np.asarray(q_m, float)}
+
+
 def objectives(st, a, g, phi=None, M=None, N=None):
     """C (3, N, P): row k of sample n, c_k(a_n) with e_k = c_k(a)^T dq + ... (the module's docstring); `phi`
     (J, 3, N), the effects' basis at each sample's direction, for the parameters after the 9; `N` the matrix the
@@ -67,23 +85,28 @@ def objectives(st, a, g, phi=None, M=None, N=None):
 
 def linear_sup(st, a, g, phi=None, M=None):
     """w (3, N): the largest |c_k(a)^T dq| over the set at each corrected sample a (3, N) (`objectives`, with the
-    effects' basis `phi` or a stand file's M), proven (each end by duality, the rounding of c^T q_m and of the
-    difference covered outward); the LPs solved kept with the set for the next piece of the same log
-    (solve/support.py Solved)."""
-    rows, s, bound = (np.asarray(st[k], float) for k in ("rows", "centre", "bound"))
-    lo, hi, shift, q_m = (np.asarray(st[k], float) for k in ("box_lo", "box_hi", "shift", "estimate"))
-    solved = st.setdefault("_solved", support.Solved())
+    effects' basis `phi` or a stand file's M), proven (`sup`); the LPs solved kept with the set for the next piece
+    of the same log (solve/support.py Solved)."""
     n = a.shape[1]
     w = np.empty((3, n))
     for i in range(0, n, SAMPLES_AT_ONCE):             # the work's memory is a block's, not the log's
         part = slice(i, i + SAMPLES_AT_ONCE)
         C = objectives(st, a[:, part], g, None if phi is None else phi[:, :, part], M)
-        flat = C.reshape(-1, len(q_m))
-        e_lo, e_hi = support.ranges(rows, s - bound, s + bound, lo, hi, flat, q_m, solved)
-        mid = flat @ q_m
-        rounding = 4 * (len(q_m) + 2) * EPS * (np.abs(e_lo) + np.abs(e_hi) + np.abs(flat) @ np.abs(q_m))
-        w[:, part] = (np.maximum(e_hi - mid, mid - e_lo) + np.abs(flat) @ shift + rounding).reshape(3, -1)
+        w[:, part] = sup(st, C.reshape(-1, C.shape[-1])).reshape(3, -1)
     return w
+
+
+def sup(st, flat):
+    """The largest |c^T dq| over the set for each row c of `flat`, dq = q - estimate, proven: each end by duality
+    (solve/support.py, the LPs kept with the set in `_solved`), the rounding of c^T q_m and of the difference
+    covered outward, the shift q absorbs added as |c|^T shift."""
+    rows, s, bound = (np.asarray(st[k], float) for k in ("rows", "centre", "bound"))
+    lo, hi, shift, q_m = (np.asarray(st[k], float) for k in ("box_lo", "box_hi", "shift", "estimate"))
+    solved = st.setdefault("_solved", support.Solved())
+    e_lo, e_hi = support.ranges(rows, s - bound, s + bound, lo, hi, flat, q_m, solved)
+    mid = flat @ q_m
+    rounding = 4 * (len(q_m) + 2) * EPS * (np.abs(e_lo) + np.abs(e_hi) + np.abs(flat) @ np.abs(q_m))
+    return np.maximum(e_hi - mid, mid - e_lo) + np.abs(flat) @ shift + rounding
 
 
 #: Samples whose errors are bounded at once (3 rows each).
@@ -113,13 +136,72 @@ def bound(cal, a):
 EPS = np.finfo(float).eps
 
 
+def lower_bound(cal, a, T=None):
+    """The per-sample bound (3, N) over the set of a two-axis stand file in the frame the data define (constant, or
+    over temperature with T (N,) in C: workflows/thermal_file.py `_lower`), at its corrected samples a (3, N). Each
+    entry of Gamma(T) - Gamma_hat(T) is psi_ij(tau)^T dq + r_ij, |r_ij| <= rest_Gamma of the piece, and each bias
+    error g psi_i(tau)^T dq + r_i, |r_i| <= rest_bias (the set's `Gamma_rows`, `bias_rows`: coefficients of tau^k,
+    tau = T - t0; one power and one piece for a constant file), each for the unit read at s = 1: the readings are
+    f = (E + Gamma'') a_t / s + bias with E + Gamma'' = L0 (T) and |s - 1| <= u (`g_uncertainty`). With M = (E +
+    Gamma_hat(T))^-1 and a_s = a_t / s = a - e_s, exactly
+        e_s = c(a, tau)^T dq + M r a + M r_b + (M (E + Gamma_hat) - E) a - (M dGamma + M (E + Gamma_hat) - E) e_s,
+    c_k = sum_i M_ki (sum_j a_j psi_ij(tau) + g psi_i(tau)), so |e_s| <= (I - B)^-1 (w + |M| rest_Gamma |a| +
+    |M| rest_bias + left |a|), B the (piece's) bound matrix (io/calibration.py through_M: its bounds hold s = 1), w
+    the largest |c_k^T dq| over the set (`sup`), left the rounding of M as an inverse; and a - a_t = e_s + a_t (1/s -
+    1), |1/s - 1| <= u' = u / (1 - u), |a_t| <= |a| + |e|: |e| <= (|e_s| + u' |a|) / (1 - u')."""
+    from ..io import calibration as cal_io
+    st, n = cal["information_set"], a.shape[1]
+    if T is None:
+        G = np.broadcast_to(np.linalg.inv(cal["M"]) - np.eye(3), (n, 3, 3))
+        M, B = np.broadcast_to(cal["M"], (n, 3, 3)), np.broadcast_to(cal["bound_matrix"], (n, 3, 3))
+        piece, tau = np.zeros(n, int), np.zeros(n)
+    else:
+        th = cal["thermal"]
+        G, _, piece = cal_io.thermal_gamma(cal, T)
+        M, B, _ = cal_io.through_M(G, th["bound_Gamma"][piece], th["bound_bias"][piece])
+        tau = np.asarray(T, float) - th["t0_c"]
+    absM = np.abs(M)
+    left = np.abs(M @ (np.eye(3) + G) - np.eye(3)) + 8 * EPS * (absM @ (1 + np.abs(G)))
+    R, Rb = np.asarray(st["Gamma_rows"], float), np.asarray(st["bias_rows"], float)    # (D+1, 3, 3, P), (D+1, 3, P)
+    q_m = np.asarray(st["estimate"], float)
+    reach = np.maximum(np.asarray(st["box_hi"]) - q_m, q_m - np.asarray(st["box_lo"])) + np.asarray(st["shift"])
+    w = np.empty((3, n))
+    for i in range(0, n, SAMPLES_AT_ONCE):
+        part = slice(i, i + SAMPLES_AT_ONCE)
+        pw = tau[part, None] ** np.arange(len(R))                                   # (n, D + 1)
+        inner = np.einsum("nabp,bn->nap", np.einsum("nk,kabp->nabp", pw, R), a[:, part]) + np.einsum(
+            "nk,kap->nap", pw, Rb)
+        flat = np.einsum("nka,nap->knp", M[part], inner).reshape(-1, len(q_m))
+        size = np.einsum("nka,nap->knp", absM[part], np.einsum("nabp,bn->nap", np.einsum(
+            "nk,kabp->nabp", np.abs(pw), np.abs(R)), np.abs(a[:, part])) + np.einsum(
+            "nk,kap->nap", np.abs(pw), np.abs(Rb)))
+        rounding = 16 * (len(R) + 8) * EPS * (size.reshape(-1, len(q_m)) @ reach)
+        w[:, part] = (sup(st, flat) + rounding).reshape(3, -1)
+    rest = (np.einsum("nka,nab,bn->kn", absM, np.asarray(st["rest_Gamma"], float)[piece], np.abs(a))
+            + np.einsum("nka,a->kn", absM, np.asarray(st["rest_bias"], float))
+            + np.einsum("nka,an->kn", left, np.abs(a)))
+    e_s = np.linalg.solve(np.eye(3)[None] - B, (w + rest).T[..., None])[..., 0].T
+    up = float(st["g_uncertainty"]) / (1 - float(st["g_uncertainty"]))
+    return (e_s + up * np.abs(a)) / (1 - up) * (1 + 1e-12)
+
+
+def apply_thermal(cal, raw, T, path="the log"):
+    """io/calibration.py `apply_thermal` with each sample's bound the smaller of the piece's box bound and the
+    set's (`lower_bound`; a file that carries its set)."""
+    from ..io import calibration as cal_io
+    a, box = cal_io.apply_thermal(cal, raw, T, path)
+    if "information_set" in cal:
+        box = np.minimum(box, lower_bound(cal, a.T, T).T)
+    return a, box
+
+
 def apply(cal, raw, frame="garant"):
     """io/calibration.py `apply` with each sample's bound the smaller of the box's and the set's (a file with an
     `information_set` and no effects); in the frame asked for."""
     from ..io import calibration as cal_io
     a, box = cal_io.apply(cal, raw)
     if "information_set" in cal:
-        box = np.minimum(box, bound(cal, a.T).T)
+        box = np.minimum(box, (lower_bound if "Gamma_rows" in cal["information_set"] else bound)(cal, a.T).T)
     if frame == "imu_tk":
         R = cal_io.imu_tk_form(cal)[2]
         a, box = a @ R.T, (box @ np.abs(R).T) * (1 + 1e-12)

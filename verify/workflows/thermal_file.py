@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import DataError
 from ..io.calibration import BLOCK_NAMES
 from ..solve import interval
-from . import mounting, thermal
+from . import mounting, sample_set, thermal
 
 PAD = 1 + 1e-12
 
@@ -72,18 +72,21 @@ def _control_mag(coef, cuts):
 LOWER = [(0, 0), (1, 0), (2, 0), (1, 1), (2, 1), (2, 2)]
 
 
-def lower_section(mod, remount, mount, info, q_hat, interval_q, T, t0, degree, u, g, G0, b0):
-    """The thermal section of a two-axis calibration in the frame the data define (module docstring): G0
-    (3 x 3) and b0 (3, m/s^2) the file's Gamma and biases at t0 (the constant calibration's, `from_stand`);
-    interval_q the box of q holding the set; u the bound of |Delta_g/g| (s within 1 +- u)."""
+def _lower(mod, remount, mount, info, q_hat, interval_q, degree, u, g, G0, b0):
+    """The parts of the error of a two-axis file in the frame the data define (module docstring), as polynomials
+    in tau of degree `degree` (0: a constant file): rows (3, 3, D + 1, nq), each entry of Gamma' - Gamma_hat's part
+    linear in q; fixed (3, 3), the bound of its rest at t0 (rho and the offset of G0 from the split at q_hat), and
+    at_s1 the same for the unit read at s = 1 (Gamma'' = L0 - E: the readings over s, the error of g apart);
+    Dl (3, 3, D + 1, nq) the drift Delta(T); W_hat, W_err; brows (3, D + 1, nq) the biases' rows (over g);
+    bias_hat (D + 1, 3) m/s^2 and b_off (3), the offset of b0 from it. G0 (3 x 3) and b0 (3, m/s^2): the file's
+    Gamma and biases at t0 (the constant calibration's, `from_stand`); interval_q the box of q holding the set; u
+    the bound of |Delta_g/g| (s within 1 +- u)."""
     Q = np.asarray(remount.MOUNTS[mount], float)
     idx = np.asarray(remount.G_INDEX)
-    nq = len(q_hat)
     S = _series(mod, degree)                                           # (nq, D + 1, nq)
     # Delta(T) in block axes: (Q G_drift Q^T)_ab, coefficient vectors (3, 3, D + 1, nq), k = 0 part zero
     Gs = S[idx]                                                        # (3, 3, D + 1, nq): G(q(T)), stand axes
-    Mb = np.einsum("ai,bj,ijkn->abkn", Q, Q, Gs)
-    Dl = Mb.copy()
+    Dl = np.einsum("ai,bj,ijkn->abkn", Q, Q, Gs)
     Dl[:, :, 0] = 0.0
     # f and W at the estimate, and their gradients over the box (G's 9 entries and s)
     g_hat = q_hat[idx]
@@ -102,33 +105,61 @@ def lower_section(mod, remount, mount, info, q_hat, interval_q, T, t0, degree, u
     radius = np.append(np.maximum(hi_g - g_hat, g_hat - lo_g).ravel(), u)
     # the linear function of q of each entry of Gamma': l^T G(q(t0)) (lower entries) + (Delta(T) W_hat)_ab
     rows = np.einsum("amkn,mb->abkn", Dl, W_hat)
-    offset, rho = np.zeros((3, 3)), np.zeros((3, 3))
+    offset, rho, by_s = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
     for (a, b), fp, fb in zip(LOWER, f_pt, f_box):
         ell = np.array([(d.lo[0] + d.hi[0]) / 2 for d in fp.d])
         rows[a, b, 0] = np.einsum("ij,ijn->n", ell[:9].reshape(3, 3), S[idx, 0])
         spread = np.array([max(d.hi[0] - e, e - d.lo[0]) for d, e in zip(fb.d, ell)])
-        spread[9] = max(abs(fb.d[9].lo[0]), abs(fb.d[9].hi[0]))       # s enters only here: |df/ds| u
-        rho[a, b] = spread @ radius
+        rho[a, b] = spread[:9] @ radius[:9]
+        by_s[a, b] = max(abs(fb.d[9].lo[0]), abs(fb.d[9].hi[0])) * u     # s enters only here: |df/ds| u
         offset[a, b] = max(fp.v.hi[0] - G0[a][b], G0[a][b] - fp.v.lo[0])
+    # the biases in block axes: K's bias rows of the remount formulas, each q its polynomial
+    nq = len(q_hat)
+    K = np.zeros((len(remount.OUTPUTS), nq))
+    K[:, :remount.recovery_matrix(mount).shape[1]] = remount.recovery_matrix(mount)
+    rb = [list(remount.OUTPUTS).index(f"bias{i}") for i in (1, 2, 3)]
+    brows = np.einsum("rn,nkm->rkm", K[rb], S)
+    bias_hat = np.einsum("rkm,m->kr", brows, q_hat) * g
+    return {"rows": rows, "fixed": offset + rho + by_s, "at_s1": offset + rho, "Dl": Dl, "W_hat": W_hat,
+            "W_err": W_err, "brows": brows, "bias_hat": bias_hat, "b_off": np.abs(bias_hat[0] - np.asarray(b0, float))}
+
+
+def _with_rows(info, q_hat, parts, g, u, rest_Gamma):
+    """The file's information_set (sample_set.q_entry) with the error's rows (`Gamma_rows` (D + 1, 3, 3, nq),
+    `bias_rows` (D + 1, 3, nq) in m/s^2), the bounds of its rest at s = 1 (`rest_Gamma` per piece, `rest_bias`) and
+    u, the bound of |s - 1| (`g_uncertainty`: the error of g, apart), for apply's bound over the set
+    (sample_set.lower_bound); None where the set is too large for a file."""
+    st = sample_set.q_entry(info, q_hat)
+    if st is not None:
+        st.update(Gamma_rows=np.moveaxis(parts["rows"], 2, 0), bias_rows=g * np.moveaxis(parts["brows"], 1, 0),
+                  rest_Gamma=rest_Gamma * PAD, rest_bias=parts["b_off"] * PAD, g_uncertainty=float(u))
+    return st
+
+
+def lower_set(mod, remount, mount, info, q_hat, interval_q, u, g, G0, b0):
+    """The information_set of a constant two-axis file in the frame the data define (`_lower` at degree 0)."""
+    parts = _lower(mod, remount, mount, info, q_hat, interval_q, 0, u, g, G0, b0)
+    return _with_rows(info, q_hat, parts, g, u, parts["at_s1"][None])
+
+
+def lower_section(mod, remount, mount, info, q_hat, interval_q, T, t0, degree, u, g, G0, b0):
+    """The thermal section of a two-axis calibration in the frame the data define (module docstring, `_lower`),
+    with its information set (`_set`)."""
+    parts = _lower(mod, remount, mount, info, q_hat, interval_q, degree, u, g, G0, b0)
+    rows, Dl, brows, nq = parts["rows"], parts["Dl"], parts["brows"], len(q_hat)
     cuts = pieces(*(np.array([T.min(), T.max()]) - t0))
     linear = _worst(info, q_hat, rows.reshape(9, degree + 1, nq), cuts).reshape(-1, 3, 3)
     # |Delta(T)| over each piece: the estimate's largest value there plus the drift's bound over the set
     drift_hat = np.einsum("abkn,n->kab", Dl, q_hat)
     drift_mag = _control_mag(drift_hat, cuts) + _worst(info, q_hat, Dl.reshape(9, degree + 1, nq),
                                                        cuts).reshape(-1, 3, 3)
-    turn = np.einsum("pam,mb->pab", drift_mag, W_err)
-    bound_G = (linear + (offset + rho)[None] + turn) * PAD
-    # the biases in block axes: K's bias rows of the remount formulas, each q its polynomial
-    K = np.zeros((len(remount.OUTPUTS), nq))
-    K[:, :remount.recovery_matrix(mount).shape[1]] = remount.recovery_matrix(mount)
-    rb = [list(remount.OUTPUTS).index(f"bias{i}") for i in (1, 2, 3)]
-    brows = np.einsum("rn,nkm->rkm", K[rb], S)
-    bias_hat = np.einsum("rkm,m->kr", brows, q_hat) * g
-    b_off = np.abs(bias_hat[0] - np.asarray(b0, float))
-    bound_b = (g * _worst(info, q_hat, brows, cuts) + b_off[None]) * PAD
+    turn = np.einsum("pam,mb->pab", drift_mag, parts["W_err"])
+    bound_G = (linear + parts["fixed"][None] + turn) * PAD
+    bound_b = (g * _worst(info, q_hat, brows, cuts) + parts["b_off"][None]) * PAD
     return {"frame": "lower", "pieces_c": (cuts + t0).tolist(),
-            "Gamma": np.einsum("kam,mb->kab", drift_hat, W_hat)[1:].tolist(),
-            "bias": bias_hat[1:].tolist(), "bound_Gamma": bound_G.tolist(), "bound_bias": bound_b.tolist()}
+            "Gamma": np.einsum("kam,mb->kab", drift_hat, parts["W_hat"])[1:].tolist(),
+            "bias": parts["bias_hat"][1:].tolist(), "bound_Gamma": bound_G.tolist(), "bound_bias": bound_b.tolist(),
+            "_set": _with_rows(info, q_hat, parts, g, u, parts["at_s1"][None] + turn)}
 
 
 def block_section(mod, info, q_hat, T, t0, degree, g, block, u):
