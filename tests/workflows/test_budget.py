@@ -118,6 +118,16 @@ def _ascend_tilt(cal, at, n, step=0.1, smallest=0.01):
     return best
 
 
+def _truth_inside(res, e, m):
+    """The unit's own errors e (N, 3, m/s^2) at the attitudes m (N, 3, unit) within each printed figure of `res`: per
+    axis, |e| and the tilt between the corrected reading and the true vertical."""
+    assert np.all(np.abs(e).max(axis=0) <= res["per_axis_error_mps2"])
+    assert np.linalg.norm(e, axis=1).max() <= res["specific_force_error_mps2"]
+    a = e + G * m
+    assert np.arccos(np.clip(np.einsum("ij,ij->i", a, m) / np.linalg.norm(a, axis=1), -1, 1)).max() <= \
+        res["tilt_error_rad"]
+
+
 def _between(res, axis, norm, tilt):
     """Each printed figure of `res` at least the lower bound found of the set's largest (a unit of the set errs by
     that much: a figure below it is no bound) and within 1.25x of it."""
