@@ -162,6 +162,34 @@ def test_a_file_whose_set_does_not_fit_is_refused_in_one_line(tmp_path, capsys):
         assert said in flat(err) and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
+def test_a_two_axis_file_whose_rows_do_not_fit_its_set_is_refused_in_one_line(tmp_path, capsys):
+    # A two-axis file's set is read through its rows (Gamma_rows, bias_rows, rest_Gamma, rest_bias: one term per
+    # power of T - t0, a column per entry of the set's estimate, one rest per piece): a file whose parts do not fit
+    # is refused naming the part, in one line, with nothing written (io/calibration.py `_lower_rows`).
+    data_path = tmp_path / "d.csv"
+    assert main(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(data_path)]) == 0
+    cal_path = tmp_path / "cal.json"
+    assert main(["estimate", "--model", "two-axis", str(data_path), "--sigma", "1e-5", "--save", str(cal_path)]) == 0
+    data = json.loads(cal_path.read_text())
+    assert "Gamma_rows" in data["information_set"]
+    m = np.random.default_rng(0).normal(size=(100, 3))
+    log = _frame(tmp_path, G * m / np.linalg.norm(m, axis=1)[:, None])
+    for bad, said in (
+            (lambda st: st.pop("rest_bias"), "Gamma_rows, bias_rows, rest_Gamma and rest_bias come together"),
+            (lambda st: st["Gamma_rows"].append(st["Gamma_rows"][0]), "Gamma_rows must be 1 x 3 x 3 x"),
+            (lambda st: st["rest_Gamma"].append(st["rest_Gamma"][0]), "rest_Gamma must hold one 3 x 3 bound per piece"),
+            (lambda st: st.update(block_columns=list(range(12))), "Gamma_rows and block_columns do not go together"),
+            (lambda st: st["Gamma_rows"][0][0][0].pop(), "every row of an array must hold as many numbers")):
+        broken = json.loads(json.dumps(data))
+        bad(broken["information_set"])
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(broken))
+        assert main(["apply", str(path), log, "-o", str(tmp_path / "o.csv")]) == 2
+        err = capsys.readouterr().err
+        assert said in flat(err) and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+        assert not (tmp_path / "o.csv").exists()
+
+
 def _block_jacobian(cal, raw, h=1e-7):
     """(N, 3, 12): d(a - a_t)/d(Gamma11..Gamma33, bias1..bias3 over g) at the file's estimate, central differences
     of a_t = (E + Gamma)^-1 (f - g beta), the block's model of a reading f (000)."""

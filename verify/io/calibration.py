@@ -115,7 +115,7 @@ def from_stand(res, st=None):
            "note": "per-sample bound: (I - B)^-1 (B |a| + bound_bias); B = |M (E + Gamma) - E| + |M| (the bounds of "
                    "Gamma, Delta_g/g on its diagonal), bound_bias = |M| (the bounds of the biases)",
            "premises": res["premises"]["statement"]}
-    return out if st is None else with_set(out, dict(st), st["g_uncertainty"])
+    return out if st is None else with_set(out, st, st["g_uncertainty"])
 
 
 def from_block(res, st=None):
@@ -221,11 +221,7 @@ def checked(data, path="calibration"):
                 or len(th["bound_Gamma"]) != len(cuts) - 1 or len(th["bound_bias"]) != len(cuts) - 1):
             raise DataError(f"{path}: thermal: pieces_c must rise from range_c's first to its last temperature and "
                             "bound_Gamma and bound_bias hold one bound per piece", param="calibration")
-        try:
-            out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
-        except ValueError:
-            raise DataError(f"{path}: thermal: every row of an array must hold as many numbers as the others",
-                            param="calibration") from None
+        out["thermal"] = {k: (np.array(v, float) if isinstance(v, list) else v) for k, v in th.items()}
     _lower_rows(out, path)
     return out
 

@@ -125,7 +125,7 @@ def estimate(model: Path, data: Data, sigma: float, *, g: Optional[float] = None
                 res["calibration"]["thermal"] = {"t0_c": res["thermal"]["t0_c"], "range_c": res["thermal"]["range_c"],
                                                  "degree": res["thermal"]["degree"], **section}
                 if st is not None:
-                    calibration.with_set(res["calibration"], st, st.pop("g_uncertainty"))
+                    calibration.with_set(res["calibration"], st, st["g_uncertainty"])
     return results.Estimate(res)
 
 
