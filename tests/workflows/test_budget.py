@@ -15,7 +15,7 @@ from garant.verify import api
 from garant.verify.bench.peer import imu_tk_binary
 from garant.verify.cli import main
 from garant.verify.io import calibration, schemas
-from garant.verify.workflows import budget, norm_bounds
+from garant.verify.workflows import budget, norm_bounds, peer_files
 from conftest import G_REAL, REAL, flat, needs_real, warm_truth_readings
 
 G = 9.81
@@ -150,8 +150,8 @@ def test_a_norm_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets_
     # prints the worst-case specific-force error over every attitude, the static tilt error, the velocity and
     # position error the calibration error builds up, and a filter's bias and scale bounds. The simulated unit's
     # own errors at 1,000 random attitudes stay within them; each is within 1.25x of the largest the set allows
-    # at attitudes of a grid (LPs here). Red with the Lipschitz slack left out of the figures (the truth check at
-    # attitudes between the grid's), or with budget.N_SIDE at 2 (over 1.25x).
+    # at attitudes of a grid (LPs here). Red with budget.N_SIDE at 2 (|e| 1.30x the lower bound); the geometry that
+    # carries the figures between grid attitudes is checked in test_budget_grid.py.
     log = tmp_path / "s.csv"
     assert main(["simulate", "--model", "norm", "--plan", "random:24", "--sigma", "2e-4", "--size", "1e-2",
                  "--seed", "3", "-o", str(log)]) == 0
@@ -273,7 +273,7 @@ def _brute_force(res, cal, M_p, b_p):
     L = np.array([[q_m[0], 0, 0], [q_m[3], q_m[1], 0], [q_m[4], q_m[5], q_m[2]]])
     M_fit = (np.eye(3) + L) @ cal["M"]
     b_fit = cal["b"] - np.linalg.solve(M_fit, g * q_m[6:9])
-    L_p = budget.garant_frame(M_p)[0]
+    L_p = peer_files.garant_frame(M_p)[0]
     R, s, bd = (np.array(st[k]) for k in ("rows", "centre", "bound"))
     lo, hi, shift = (np.array(st[k]) for k in ("box_lo", "box_hi", "shift"))
     rng = np.random.default_rng(2)

@@ -35,7 +35,8 @@ def _stand_error(cal):
 def test_a_stand_file_s_budget_holds_the_truth_and_sits_within_1_25x_of_the_sets_largest(tmp_path):
     # The same figures for a three-axis stand's calibration (the block over its set, 000, 39 columns): the unit's
     # own errors at 1,000 attitudes within them, each within 1.25x of the largest the set allows at a grid's
-    # attitudes (LPs here). Red with too few LPs for the grid (budget.BUDGET at 20,000: the tilt 4.6x).
+    # attitudes (LPs here). Red with every other row that can bind left out of the LPs (support.essential: per axis
+    # 1.45x).
     from garant.verify import models
     from garant.verify.solve import plans
     mod = models.load("three-axis")

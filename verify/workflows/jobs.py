@@ -672,8 +672,9 @@ def budget(calibration: str, *, log: Optional[str] = None, g: Optional[float] = 
         Hears (attitudes done, attitudes).
     """
     from . import budget as bud
+    from .peer_files import precheck
     picks = log is not None and _picks_imu(log, format)
-    bud.precheck(calibration, None if picks else imu, picks)     # a file budget cannot take, said before the log's work
+    precheck(calibration, None if picks else imu, picks)     # a file budget cannot take, said before the log's work
     res = None if log is None else calibrate_norm(log, g=g, g_uncertainty=g_uncertainty, format=format,
                                                    sensor=sensor, imu=imu if picks else None, bound=bound, rate=rate)
     return bud.run(calibration, log, res, progress, None if picks else imu)
