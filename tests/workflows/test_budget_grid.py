@@ -20,7 +20,7 @@ def test_every_unit_vector_is_a_point_of_a_grid_triangles_hull_stretched_by_at_m
     rng = np.random.default_rng(side)
     n = rng.normal(size=(200_000, 3))
     n /= np.linalg.norm(n, axis=1)[:, None]
-    # the face of +x (every face is the same up to a permutation and signs of the coordinates)
+    # each vector's face: its largest coordinate, moved first (the faces are alike up to the order and signs)
     f = np.argmax(np.abs(n), axis=1)
     perm = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1]])[f]
     m = np.take_along_axis(n, perm, axis=1)

@@ -57,12 +57,13 @@ def grid(side):
 
 class Model:
     """The error of a calibration over a set: e(n) = d0 + D(n) + C(n) z, z in the set (`st`, the calibration
-    file's information_set: rows, box, shift, estimate), D and C linear in n."""
+    file's information_set: rows, box, shift, estimate); `affine`: D and C affine in n, so e is at each z (not so
+    with the effects' basis Phi(n))."""
 
     def __init__(self, st, build, d0, g, u, rest=None, affine=True):
         self.st, self.build, self.d0, self.g, self.u = st, build, np.asarray(d0, float), g, u
         self.rest = rest            # (R, r): a part of e outside the set's LP, |r_k(n)| <= g (R |n|)_k + r_k
-        self.affine = affine        # e affine in n at each z (`_sups`); not so with effects' basis Phi(n)
+        self.affine = affine        # `_sups`: the figures between grid attitudes by convexity
 
     def ranges(self, n, W):
         """(lo, hi) (N, R) of w^T e(n) for each n (rows of n) and each row w of W (R, 3) or each (N, R, 3): each end an
@@ -157,9 +158,8 @@ def lower_model(cal):
 def figures(model, progress=None):
     """The budget of one Model: the worst-case errors over every attitude (the module's docstring). At each
     attitude of the grid: each axis's error, the error along n and its largest across n (PERP directions); |e| is
-    the smaller of the axes' norm and that of the parts along and across n. Only the largest over the attitudes is
-    printed, so after a first pass of few LPs, more go only to the attitudes whose bounds could still be the
-    largest (`_refine`)."""
+    the smaller of the axes' norm, that of the parts along and across n, and, at the attitudes where it could be the
+    largest, the bound over a net of directions (`_net`)."""
     return _finish(*_outward(model, progress), model.g)
 
 
@@ -290,8 +290,7 @@ def stretch(side):
 
 #: |e| at an attitude over nets of directions: cube-sphere grids with these many cells per face side (5: every unit
 #: vector within 16.3 degrees of one), each at the attitudes whose bound could be the largest, at most NET_AT of them
-#: a net (counted). Measured on a two-axis file: |e| 1.235x a lower bound of the set's largest (1.33x without; a
-#: net of side 6, 1.225x, costs 6x the LPs), 10 s beside the 42 s of the axes and planes; three-axis 38 s beside 72.
+#: a net (counted).
 NET_SIDES = (5,)
 NET_AT = 512
 
