@@ -278,7 +278,7 @@ def bench_scale(rows=(1_000, 10_000, 100_000, 1_000_000), distinct=96):
     with tempfile.TemporaryDirectory() as tmp:
         for n in rows:
             P = grid[rng.integers(0, len(grid), n)]
-            f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (n, 3))
+            f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-0.999e-5, 0.999e-5, (n, 3))
             path = f"{tmp}/d{n}.csv"
             np.savetxt(path, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3",
                        comments="", fmt="%.10g")
@@ -294,13 +294,14 @@ def bench_scale(rows=(1_000, 10_000, 100_000, 1_000_000), distinct=96):
 
 def distinct_positions(n, path, seed=0):
     """Write a two-axis positions file of n distinct random positions (both angles uniform), read by the exact
-    model with errors within 1e-4 and noise within 1e-5 g (10 digits): what `bench_estimate` times, to run
-    `garant estimate --model two-axis PATH --sigma 1e-5` on at any size (docs/bench.md). Returns the path."""
+    model with errors within 1e-4 and noise within 0.999e-5 g (10 digits: noise up to 1e-5 itself, rounded, put
+    readings past sigma at 1e6 positions): what `bench_estimate` times, to run `garant estimate --model two-axis
+    PATH --sigma 1e-5` on at any size (docs/bench.md). Returns the path."""
     mod = load("two-axis")
     rng = np.random.default_rng(seed)
     p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
     P = rng.uniform(0, 360, (n, 2))
-    f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-1e-5, 1e-5, (n, 3))
+    f = mod.readings(*np.deg2rad(P).T, p, 9.81).T + 9.81 * rng.uniform(-0.999e-5, 0.999e-5, (n, 3))
     np.savetxt(path, np.column_stack([P, f]), delimiter=",", header="alpha_deg,beta_deg,f1,f2,f3", comments="",
                fmt="%.10g")
     return path

@@ -123,26 +123,45 @@ def spread(K, size):
 def _generate(K, solve_on, violation, what, start=None):
     """An LP over K measurements solved on a subset S (spread over all, with `start` added), measurements
     that violate its optimum added (the worst first), until none does: then that optimum is the optimum
-    over all K (the others' constraints hold at it). A subset too small to be feasible is doubled."""
-    S = spread(K, GENERATE_ABOVE // 3) if start is None else np.union1d(spread(K, GENERATE_ABOVE // 6), start)
+    over all K (the others' constraints hold at it). A subset too small to be feasible is doubled.
+    Returns (S, the optimum)."""
+    return _generate_each(K, 1, lambda k, S: solve_on(S), lambda outs: violation(outs[0][1], outs[0][0])[:, None],
+                          lambda k: what, start)[0]
+
+
+def _generate_each(K, n, solve_on, violations, what, start=None):
+    """`_generate` for n LPs over the same K measurements at once, each with its own subset: LP k solved on its S
+    by solve_on(k, S), then every unfinished LP's violations measured in one pass (`violations` of [(S, optimum)]
+    in order: (K, that many)): one read of the measurements per round, not one per LP. Each LP's rounds are those
+    it would have alone. Returns [(S, optimum)] per LP."""
+    base = spread(K, GENERATE_ABOVE // 3) if start is None else np.union1d(spread(K, GENERATE_ABOVE // 6), start)
+    S, out, todo = [base] * n, [None] * n, list(range(n))
     for _ in range(100):
-        try:
-            out = solve_on(S)
-        except LPFailed:
-            if len(S) == K:
-                raise
-            S = np.union1d(S, spread(K, 2 * len(S)))
-            continue
-        v = violation(out, S)
-        v[S] = -np.inf
-        new = np.flatnonzero(v > 0)
-        if not len(new):
-            return S, out
-        keep = GENERATE_ABOVE // 9
-        if len(new) > keep:
-            new = new[np.argpartition(-v[new], keep)[:keep]]
-        S = np.union1d(S, new)
-    raise LPFailed(f"{what}: no convergence adding measurements", "no convergence")
+        solved = []
+        for k in todo:
+            try:
+                out[k] = solve_on(k, S[k])
+                solved.append(k)
+            except LPFailed:
+                if len(S[k]) == K:
+                    raise
+                S[k] = np.union1d(S[k], spread(K, 2 * len(S[k])))
+        V = violations([(S[k], out[k]) for k in solved]) if solved else np.zeros((K, 0))
+        todo = [k for k in todo if k not in solved]
+        for k, v in zip(solved, V.T):
+            v[S[k]] = -np.inf
+            new = np.flatnonzero(v > 0)
+            if not len(new):
+                continue
+            keep = GENERATE_ABOVE // 9
+            if len(new) > keep:
+                new = new[np.argpartition(-v[new], keep)[:keep]]
+            S[k] = np.union1d(S[k], new)
+            todo.append(k)
+        if not todo:
+            return list(zip(S, out))
+        todo.sort()
+    raise LPFailed(f"{what(todo[0])}: no convergence adding measurements", "no convergence")
 
 
 def chebyshev_fit(A, z, weights=None, slack=None, what="minimax fit"):
@@ -194,12 +213,21 @@ def l1_estimators(A, targets=None):
     if K <= GENERATE_ABOVE:
         return _l1(A, T)[:2]
     Phi, err = np.zeros((K, T.shape[1])), np.zeros(T.shape[1])
-    for k in range(T.shape[1]):                         # target by target: each dual has its own peaks
-        S, (Phi_S, e, _) = _generate(K, lambda S: _l1(A[:, S], T[:, [k]]),
-                                     lambda out, S: np.abs(A.T @ out[2][:, 0]) - 1 - TOLERANCE,
-                                     f"primal (7)-(8), target {k + 1}")
+    found = _generate_each(K, T.shape[1], lambda k, S: _l1(A[:, S], T[:, [k]]),   # each dual has its own peaks
+                           lambda outs: _beyond_one(A.T @ np.column_stack([o[2][:, 0] for _, o in outs])),
+                           lambda k: f"primal (7)-(8), target {k + 1}")
+    for k, (S, (Phi_S, e, _)) in enumerate(found):
         Phi[S, k], err[k] = Phi_S[:, 0], e[0]
     return Phi, err
+
+
+def _beyond_one(V):
+    """|V| - 1 - TOLERANCE, in place (V is a measurement per row: a new array of that size each round was most of
+    the column generation's system time)."""
+    np.abs(V, out=V)
+    V -= 1
+    V -= TOLERANCE
+    return V
 
 
 def _l1(A, T):

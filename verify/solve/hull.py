@@ -137,6 +137,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     ends = ([(k, 1.0) for k in range(len(C))] + [(k, -1.0) for k in reversed(range(len(C)))] if sweep else
             [(k, sign) for k in range(len(C)) for sign in (1.0, -1.0)])
     found = {}                                     # (k, sign) -> (row duals over S as it then was, x), or None
+    norms = None                                   # each scaled row's 2-norm, once rows are generated
     todo = ends
     for _ in range(100):
         for k, sign in todo:
@@ -152,7 +153,9 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
         keys = list(pts_)
         X = np.array([pts_[e] for e in keys]).T
         per_end = max(1, GENERATE_ABOVE // 9 // X.shape[1])    # each violated end's worst rows
-        new = _worst_rows(Bs, X, lo_s, hi_s, S, per_end)
+        if norms is None:
+            norms = np.sqrt(np.einsum("ij,ij->i", Bs, Bs))
+        new = _worst_rows(Bs, X, lo_s, hi_s, S, per_end, norms)
         if not len(new):
             break
         _add_rows(h, Bs[new], lo_s[new], hi_s[new])
@@ -188,19 +191,30 @@ def _violation(Bs, X, lo_s, hi_s):
 VIOLATION_BLOCK = 1 << 15
 
 
-def _worst_rows(Bs, X, lo_s, hi_s, S, per_end):
+def _worst_rows(Bs, X, lo_s, hi_s, S, per_end, norms):
     """The rows outside S violated by more than TOLERANCE at some point (column of X), at most `per_end` of the
-    worst per point, sorted; measured block by block of rows (the same rows as over all at once)."""
+    worst per point, sorted; measured block by block of rows (the same rows as over all at once), and only on the
+    rows that can be: |b_k^T (x - m)| <= |b_k| rho for every point x within rho of their mean m, so a row whose
+    slack at m exceeds that (with a margin for rounding) holds at every point (the optimal points of a set much
+    smaller than its column box lie close together: one product over every row instead of one per point)."""
     rows, ends = Bs.shape[0], X.shape[1]
+    m = X.mean(axis=1)
+    rho = np.sqrt(((X - m[:, None]) ** 2).sum(axis=0)).max()
+    c = Bs @ m
+    worst = np.maximum(lo_s - c, c - hi_s) + norms * rho
+    may = np.flatnonzero(worst + 1e-12 * (1 + np.abs(c) + norms * rho) > TOLERANCE)
     in_S = np.zeros(rows, bool)
     in_S[S] = True
+    may = may[~in_S[may]]
     best_v, best_i = np.full((0, ends), -np.inf), np.zeros((0, ends), np.intp)
-    for start in range(0, rows, VIOLATION_BLOCK):
-        stop = min(start + VIOLATION_BLOCK, rows)
-        V = _violation(Bs[start:stop], X, lo_s[start:stop], hi_s[start:stop])
-        V[in_S[start:stop]] = -np.inf
-        vals = np.vstack([best_v, V])
-        idx = np.vstack([best_i, np.broadcast_to(np.arange(start, stop)[:, None], V.shape)])
+    for start in range(0, len(may), VIOLATION_BLOCK):
+        block = may[start:start + VIOLATION_BLOCK]
+        V = _violation(Bs[block], X, lo_s[block], hi_s[block])
+        hit = np.flatnonzero((V > TOLERANCE).any(axis=1))     # only these can be kept
+        if not len(hit):
+            continue
+        vals = np.vstack([best_v, V[hit]])
+        idx = np.vstack([best_i, np.broadcast_to(block[hit][:, None], (len(hit), ends))])
         if len(vals) > per_end:
             top = np.argpartition(-vals, per_end - 1, axis=0)[:per_end]
             vals, idx = np.take_along_axis(vals, top, axis=0), np.take_along_axis(idx, top, axis=0)

@@ -182,6 +182,7 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     say = progress if progress is not None and distinct >= PROGRESS_ABOVE else (lambda text: None)
     say(f"{rows} rows, {distinct} distinct positions: the exact-model fit and the linearisation there")
     lin = guarantee.linearise(mod, positions, z.reshape(-1), A, premises)
+    del A                                      # H at zero errors: what follows uses lin.A, H at the fit
     say("the optimal estimators (LP (7)-(8)) at the linearisation")
     W, method = choose_estimator(mod, positions, lin.A)
     say("the verdict and the proven remainder")
@@ -411,8 +412,12 @@ def unrefutable(A, W, mod, fraction=0.999):
     columns: noise shaped like those weights is fitted, not seen, so no verdict can refute an
     understated sigma along it (a minimal plan: offsets of 10 sigma so shaped move that q by 10 sigma
     and leave the fit exact); the bound then rests on sigma alone."""
-    Qa = np.linalg.qr(A.T)[0]
-    inside = np.linalg.norm(W @ Qa, axis=1) ** 2 / np.maximum(np.linalg.norm(W, axis=1) ** 2, 1e-300)
+    # |W_nu projected on the span of A's rows|^2 = (W A^T (A A^T)^+ A W^T)_nu,nu: from m x m products, no
+    # orthonormal basis of every reading (a QR of A^T copies it and makes a basis of its size)
+    d, V = np.linalg.eigh(A @ A.T)
+    live = d > d.max() * 1e-12
+    X = V[:, live].T @ (A @ W.T)
+    inside = (X ** 2 / d[live, None]).sum(axis=0) / np.maximum(np.einsum("ij,ij->i", W, W), 1e-300)
     names = [mod.Q_NAMES[nu] for nu in np.flatnonzero(inside >= fraction)]
     if not names:
         return []

@@ -34,6 +34,25 @@ from .remainder import EPS, ROUNDING, Remainder, _columns, _extra, linear_parame
 
 
 
+class Weights:
+    """An estimator W (m x 3N, q = q0 + W y) with its part on the readings it weighs: `Wc` on the columns `cols`, 0
+    on the rest. An optimal estimator of (7)-(8) of 000 weighs a few positions, so |W| and the bounds made of it
+    cost theirs, not every reading's (|W| made at each use was a copy of all of W). W's own products (W y, W A^T)
+    stay over every reading: their rounding is what the bounds' rounding terms measure, unchanged."""
+
+    def __init__(self, W):
+        m = W.shape[0]
+        self.W = W
+        self.support = np.flatnonzero((W != 0).reshape(m, -1, 3).any(axis=(0, 2)))     # positions
+        self.cols = _columns(self.support)
+        self.Wc = W[:, self.cols]
+        self.abs = np.abs(self.Wc)
+
+    def absolute(self, x):
+        """|W| x."""
+        return self.abs @ x[self.cols]
+
+
 def coordinates(mod, bounds):
     """p = L v with v = (q, t): q = PHYSICAL_TO_Q p, and t the physical parameters (indices T) with the
     smallest a-priori bounds that make the map invertible, so that the directions no data can see are
@@ -167,10 +186,10 @@ class InformationSet:
         self.lin, self.A, self.y, self.s, self.shift = lin, lin.A, y, s, shift
         self.start = start                      # rows that bound a previous set's hull: where this one starts
         m = self.A.shape[0]
-        absW = np.abs(W)
-        Wy = W @ y
-        E = np.abs(W @ self.A.T - np.eye(m)) + taylor.SUM_ERROR * (absW @ np.abs(self.A.T))
-        e = absW @ s + taylor.SUM_ERROR * (absW @ np.abs(y))
+        Ac = self.A[:, W.cols]                  # W: Weights, on the readings it weighs
+        Wy = W.W @ y
+        E = np.abs(W.W @ self.A.T - np.eye(m)) + taylor.SUM_ERROR * (W.abs @ np.abs(Ac.T))
+        e = W.absolute(s) + taylor.SUM_ERROR * W.absolute(np.abs(y))
         e_max = (e.max() + (E @ np.abs(Wy)).max()) / max(1 - E.sum(axis=1).max(), 1e-3)
         e = (e + E @ (np.abs(Wy) + e_max)) * (1 + 1e-9) + 1e-300
         self.w_lo, self.w_hi = Wy - e, Wy + e
@@ -180,7 +199,7 @@ class InformationSet:
         w_lo, w_hi = np.maximum(self.w_lo, q_lo - lin.q0 - pad), np.minimum(self.w_hi, q_hi - lin.q0 + pad)
         if np.all(w_lo <= w_hi):
             self.w_lo, self.w_hi = w_lo, w_hi
-        self._reach = absW.sum(axis=1) / max(1 - E.sum(axis=1).max(), 1e-3) * (1 + 1e-9)   # w's box per unit of s
+        self._reach = W.abs.sum(axis=1) / max(1 - E.sum(axis=1).max(), 1e-3) * (1 + 1e-9)   # w's box per unit of s
         self._q = None
 
     def ranges(self, C, keep=False):
@@ -347,20 +366,21 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
     sharp = np.zeros(len(y)) if sharper is None else np.asarray(sharper, float)
     m = lin.A.shape[0]
     if W is not None:
-        support = np.flatnonzero(np.abs(W).reshape(m, -1, 3).max(axis=(0, 2)) > 0)
-        cols = _columns(support)
-        WA = W @ lin.A.T
-        E = np.abs(WA - np.eye(m)) + taylor.SUM_ERROR * (np.abs(W) @ np.abs(lin.A.T))
+        W = Weights(W)
+        support, cols = W.support, W.cols
+        Ac = lin.A[:, cols]
+        WA = W.W @ lin.A.T
+        E = np.abs(WA - np.eye(m)) + taylor.SUM_ERROR * (W.abs @ np.abs(Ac.T))
         unseparable = np.abs(WA @ rem.G) @ lin.t_bound * (1 + taylor.SUM_ERROR)
         unseparable_q = np.abs(rem.G) @ lin.t_bound * (1 + taylor.SUM_ERROR)
-        dq = W @ y
+        dq = W.W @ y
 
     def errors(s, rb, cb, functional):
         """Per q: (linear part, remainder part, its terms, the part beyond W's readings)."""
-        left = np.minimum(np.abs(W) @ rb, functional) if functional is not None else np.abs(W) @ rb
+        left = np.minimum(W.absolute(rb), functional) if functional is not None else W.absolute(rb)
         absorbed = np.abs(WA) @ cb
         beyond = absorbed + unseparable
-        linear = np.abs(W) @ (s - sharp)
+        linear = W.abs @ (s - sharp[cols])
         r = linear + left + beyond
         # W A^T = I only to rounding: |(W A^T - I) dq_true| with |dq_true| <= |dq| + e, e <= r + E (|dq| + e)
         norm = E.sum(axis=1).max()
@@ -401,9 +421,10 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
         cb = np.minimum(cb, cb_all)
         functional = None
         if len(support) <= rem.DIRECT_ROWS:         # the functional W_nu r at once: R' and the t residual
-            t_res = np.abs(W @ (lin.Jt - lin.A.T @ rem.G)) @ lin.t_bound
-            t_res += taylor.SUM_ERROR * (np.abs(W) @ (np.abs(lin.Jt) + np.abs(lin.A.T) @ np.abs(rem.G))) @ lin.t_bound
-            functional = rem.functional(W, lo, hi, support) + t_res + np.abs(W).sum(axis=1) * ROUNDING
+            Jt = lin.Jt[cols]
+            t_res = np.abs(W.Wc @ (Jt - Ac.T @ rem.G)) @ lin.t_bound
+            t_res += taylor.SUM_ERROR * (W.abs @ (np.abs(Jt) + np.abs(Ac.T) @ np.abs(rem.G))) @ lin.t_bound
+            functional = rem.functional(W.W, lo, hi, support) + t_res + W.abs.sum(axis=1) * ROUNDING
         errs = errors(s, rb_all + rem.t_residual, cb, functional)
         # what these readings prove: the information set, its box contracting the remainder in turn
         info = InformationSet(lin, y, s - sharp + rb_all + rem.t_residual, cb * (1 + taylor.SUM_ERROR) + unseparable_q,
@@ -411,7 +432,7 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
         for _ in range(steps):
             ql, qh = info.q
             half = 0.5 * (qh - ql)
-            if np.all(np.abs(W) @ rb_all + cb <= INFO_GAIN * half):
+            if np.all(W.absolute(rb_all) + cb <= INFO_GAIN * half):
                 break                                # a smaller box would lower no bound by INFO_GAIN
             lo2, hi2 = box(lin, 0.5 * (ql + qh), half)
             lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
@@ -443,7 +464,7 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
         v.interval = _printed(q_apriori, v.guaranteed_error, info.q, lin.q_box)
         if consistent:                               # a sensitivity: sigma larger, the remainder as proven for sigma
             wider = info.widened((SIGMA_WIDER - 1) * sigma)
-            more = (SIGMA_WIDER - 1) * sigma * np.abs(W).sum(axis=1)
+            more = (SIGMA_WIDER - 1) * sigma * W.abs.sum(axis=1)
             v.interval_wider = _printed(q_apriori, v.guaranteed_error + more, wider, lin.q_box)
     return v
 

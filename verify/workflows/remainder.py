@@ -62,9 +62,12 @@ class Remainder:
         At = lin.A[:, _columns(fit_rows)].T
         self.C = np.linalg.lstsq(At, mid.reshape(len(fit_rows) * 3, -1), rcond=None)[0]
         self.G = np.linalg.lstsq(At, lin.Jt[_columns(fit_rows)], rcond=None)[0] if len(lin.T) else np.zeros((m, 0))
-        t_res = np.abs(lin.Jt - lin.A.T @ self.G)
-        t_res += taylor.SUM_ERROR * (np.abs(lin.Jt) + np.abs(lin.A.T) @ np.abs(self.G))
-        self.t_residual = t_res @ lin.t_bound + ROUNDING     # |J_t - A^T G| t_max, per reading
+        self.t_residual = np.empty(lin.Jt.shape[0])          # |J_t - A^T G| t_max, per reading
+        for b in range(0, len(self.t_residual), 3 * self.BLOCK):            # a block at a time: linear, small
+            Jt, At = lin.Jt[b:b + 3 * self.BLOCK], lin.A[:, b:b + 3 * self.BLOCK].T
+            t_res = np.abs(Jt - At @ self.G)
+            t_res += taylor.SUM_ERROR * (np.abs(Jt) + np.abs(At) @ np.abs(self.G))
+            self.t_residual[b:b + 3 * self.BLOCK] = t_res @ lin.t_bound + ROUNDING
 
     def prepare(self, boxes):
         """Enclose the Hessian at the nodes for several boxes (lo, hi) in one evaluation (interpolation
