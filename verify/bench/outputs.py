@@ -30,20 +30,22 @@ ROOT = Path(__file__).resolve().parents[2]
 IMUCAL = ROOT / "tests" / "data" / "imucal"
 
 
-def warm_up_log(path, seed=0, directions=36, still_s=10.0, move_s=2.0, rate=100):
+def warm_up_log(path, seed=0, directions=36, still_s=10.0, move_s=2.0, rate=100, cool=False):
     """A csv log (time_s, ax, ay, az in m/s^2, temp_c) of still intervals in random directions joined by moves,
     read by (1.3) of 001 with errors within 2e-3, while the unit warms from 20 C towards 50 C (time constant
-    300 s) and its biases drift by g (2e-5, -2e-5, 1.5e-5) per C; noise within 2e-5 g."""
+    300 s) and its biases drift by g (2e-5, -2e-5, 1.5e-5) per C; noise within 2e-5 g. `cool`: the unit heats to
+    50 C and cools back to 20 C over the log (a half sine), so that its temperature's rate is no function of the
+    temperature (warming alone, dT/dt = (50 C - T) / 300 s: a lag reads as the biases' temperature coefficient)."""
     from garant.generated import norm as N
     g = 9.81
     rng = np.random.default_rng(seed)
     truth = np.concatenate([rng.uniform(-2e-3, 2e-3, 9), np.zeros(7)])
-    rows, now = [], 0.0
+    rows, now, total = [], 0.0, directions * (int(still_s * rate) + int(move_s * rate)) / rate
     for d in rng.normal(size=(directions, 3)):
         m = d / np.linalg.norm(d)
         for still, count in ((True, int(still_s * rate)), (False, int(move_s * rate))):
             for _ in range(count):
-                temp = 20 + 30 * (1 - np.exp(-now / 300))
+                temp = 20 + 30 * (np.sin(np.pi * now / total) if cool else 1 - np.exp(-now / 300))
                 f = (g * N.readings(m, truth) + g * np.array([2e-5, -2e-5, 1.5e-5]) * (temp - 20)
                      + g * rng.uniform(-2e-5, 2e-5, 3)) if still else g * rng.normal(size=3)
                 rows.append([now, *f, temp])
