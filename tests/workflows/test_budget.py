@@ -210,6 +210,21 @@ def test_a_peer_s_file_without_a_log_is_refused_in_one_line(tmp_path, capsys):
     assert len(err.strip().splitlines()) == 1
 
 
+def test_a_12_parameter_file_is_refused_in_one_line_not_budgeted_as_effects(tmp_path, capsys):
+    # A 12-parameter norm file now carries its set (12 columns, the nonlinearity the last 3: apply bounds each
+    # sample over it); budget read any norm set past 9 columns as catalogue effects. Refused in one line (exit 2)
+    # until its budget takes the nonlinearity; red when the file's set is read as effects (a traceback).
+    log, cal = tmp_path / "s.csv", tmp_path / "c.json"
+    assert main(["simulate", "--model", "norm", "--plan", "random:24", "--sigma", "2e-4", "--size", "1e-2", "--seed",
+                 "3", "-o", str(log)]) == 0
+    assert main(["calibrate-norm", str(log), "--g", "9.81", "--params", "12", "--save", str(cal)]) == 0
+    capsys.readouterr()
+    assert main(["budget", str(cal)]) == 2
+    err = capsys.readouterr().err
+    assert "a 12-parameter norm calibration (its nonlinearity delta) is not budgeted yet" in flat(err)
+    assert len(err.strip().splitlines()) == 1
+
+
 def test_apply_attitude_bounds_hold_the_true_roll_and_pitch(tmp_path, capsys):
     # `apply --attitude` adds each still sample's roll and pitch with guaranteed bounds: the true vertical lies
     # within asin(|bound| / |a|) of the corrected one; pitch errs by at most that, roll by at most

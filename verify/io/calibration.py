@@ -263,6 +263,8 @@ def _information_set(data, path):
         f"{P} columns, but 9, the effects' {len(effects['theta'])} parameters and the {session} of those not "
         "applied make the set's"
         if effects.get("theta") is not None and P != 9 + len(effects["theta"]) + session else
+        f"{P} columns, but a norm calibration without effects has 9, or 12 with its nonlinearity delta"
+        if data["kind"] == "norm" and "effects" not in data and P not in (9, 12) else
         f"every row must hold one number per entry of estimate ({P})" if any(len(r) != P for r in raw["rows"]) else
         "centre and bound must hold one number per row" if len(raw["centre"]) != len(raw["rows"])
         or len(raw["bound"]) != len(raw["rows"]) else

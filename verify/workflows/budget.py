@@ -536,9 +536,12 @@ def own(cal, path, progress=None):
                         "carries no information_set and is not budgeted; budget the constant calibration of the same "
                         "readings", param="calibration")
     if "information_set" not in cal:
-        raise DataError(f"{path}: holds no information_set (a two-axis stand with --gamma symmetric, a 12-parameter "
-                        "norm calibration, or a set too large for a file): give --log LOG to judge it against a "
-                        "log's own set", param="calibration")
+        raise DataError(f"{path}: holds no information_set (a two-axis stand with --gamma symmetric, or a set too "
+                        "large for a file): give --log LOG to judge it against a log's own set", param="calibration")
+    if sample_set.twelve(cal):
+        raise DataError(f"{path}: a 12-parameter norm calibration (its nonlinearity delta) is not budgeted yet: give "
+                        "--log LOG to judge it against a log's own set, or budget the 9-parameter calibration of the "
+                        "same log", param="calibration")
     effects = cal["kind"] == "norm" and len(cal["information_set"]["estimate"]) > 9   # effects (applied or not)
     out = {"calibration": str(path), "calibration_kind": f"garant {cal['kind']}", "calibration_slot": None, "log": None,
            "horizons_s": list(HORIZONS_S), "temperature_range_c": None, "frame_turn_deg": 0.0, "refuted": None,

@@ -163,7 +163,7 @@ def bounds(p, v):
             effects["definitions"] = dict(norm_thermal.DEFINITIONS)
         half, bound, err = half[:params], bound[:params], err[:params]
     found, factor, which = directions_to_add(mod, res["n"], params, noise, err, cap=cap)
-    if params == 9:                                       # what apply bounds each sample's error over
+    if params in (9, 12):                                 # what apply bounds each sample's error over
         from . import sample_set
         order = np.arange(len(lo)) if ext is None else _applied_first(ext)
         effects["_information_set"] = sample_set.entry(A[order], s, bnd, lo[order], hi[order],

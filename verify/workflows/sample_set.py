@@ -113,14 +113,17 @@ def sup(st, flat):
 SAMPLES_AT_ONCE = 4096
 
 
-def bound(cal, a):
+def bound(cal, a, linear=None):
     """The per-sample bound (3, N) over the set of a file without effects, at its corrected samples a (3, N):
-    (I - B)^-1 v, B the file's bound_matrix. A norm file: v = (1 + u) w + u |a|. A stand file, whose Gamma is
+    (I - B)^-1 v, B the file's bound_matrix. A norm file: v = (1 + u) w + u |a| (of the 12-parameter model:
+    `nonlinear`, with its linear correction `linear` = M (raw - b)). A stand file, whose Gamma is
     relative to g where it absorbs Delta_g (io/calibration.py `through_M`: the truth's specific force is a_t / c,
     |1/c - 1| <= u' = u / (1 - u)): v = w + u B |a| + u' |a| + (1 + u') |M (E + G) - E| |a|, the last the rounding
     of M as an inverse (G the estimate's Gamma)."""
     st, B, g = cal["information_set"], cal["bound_matrix"], cal["g"]
     u = float(st["g_uncertainty"])
+    if twelve(cal):
+        return nonlinear(cal, a, linear)
     w = linear_sup(st, a, g, M=cal["M"])
     if "block_columns" in st:
         M = cal["M"]
@@ -134,6 +137,38 @@ def bound(cal, a):
 
 
 EPS = np.finfo(float).eps
+
+
+def twelve(cal):
+    """Whether the file is a 12-parameter norm calibration's: its set's columns 10-12 the nonlinearity delta (a file
+    with effects holds theirs there)."""
+    return cal["kind"] == "norm" and "effects" not in cal and len(cal["information_set"]["estimate"]) == 12
+
+
+def nonlinear(cal, a, linear):
+    """`bound` of a 12-parameter norm file (the nonlinearity delta of (1.3) of 001 as q_10..q_12): the file corrects
+    a' = M (raw - b) to a = a' - g delta o P(n'), P_l(n) = n_ax(l) n_l (its pendulosity axes), n' = a' / |a'|; the
+    truth a_t = a'_t - g delta_t o P(n'_t), delta_t = delta + dq_d. Exactly
+        e = a - a_t = c(a')^T dq + g dq_d o P(n') - N lower(dq) e' - g delta_t o (P(n') - P(n'_t)),
+    e' = a' - a'_t the linear part's error (the module's docstring, at a'), so with W the largest |c_k(a')^T dq +
+    g P_k(n') dq_d,k| over the set (the 12 columns: `sup`) and E' = (I - B)^-1 w' the bound of |e'| (w' = W + g
+    |P(n')| r_d >= |c_k(a')^T dq|, r_d the set's reach in delta), |P_k(n') - P_k(n'_t)| <= 2 |n' - n'_t| <= 4 |e'| /
+    |a'|: |e| <= W + B E' + g (|delta| + r_d) 4 |E'| / |a'|. The error of g (|d| <= u) scales the truth: a -
+    a_t / (1 + d) adds u' (|a| + |e|), u' = u / (1 - u)."""
+    st, B, g = cal["information_set"], cal["bound_matrix"], cal["g"]
+    u = float(st["g_uncertainty"])
+    q_m = np.asarray(st["estimate"], float)
+    r_d = (np.maximum(np.asarray(st["box_hi"]) - q_m, q_m - np.asarray(st["box_lo"])) + np.asarray(st["shift"]))[9:]
+    norm = np.sqrt((linear * linear).sum(axis=0))
+    P = linear[np.asarray(cal["pendulosity_axes"], int) - 1] * linear / np.maximum(norm, 1e-300) ** 2
+    phi = np.zeros((3, 3, linear.shape[1]))
+    phi[[0, 1, 2], [0, 1, 2]] = P
+    W = linear_sup(st, linear, g, phi)
+    E1 = np.linalg.solve(np.eye(3) - B, W + g * r_d[:, None] * np.abs(P))
+    e = W + B @ E1 + (g * (np.abs(np.asarray(cal["delta"], float)) + r_d))[:, None] * (
+        4 * np.sqrt((E1 * E1).sum(axis=0)) / np.maximum(norm, 1e-300))
+    up = u / (1 - u)
+    return ((1 + up) * e + up * np.abs(a)) * (1 + 1e-12)
 
 
 def lower_bound(cal, a, T=None):
@@ -201,7 +236,9 @@ def apply(cal, raw, frame="garant"):
     from ..io import calibration as cal_io
     a, box = cal_io.apply(cal, raw)
     if "information_set" in cal:
-        box = np.minimum(box, (lower_bound if "Gamma_rows" in cal["information_set"] else bound)(cal, a.T).T)
+        st = cal["information_set"]
+        box = np.minimum(box, lower_bound(cal, a.T).T if "Gamma_rows" in st else bound(
+            cal, a.T, cal["M"] @ (np.asarray(raw, float) - cal["b"]).T).T)
     if frame == "imu_tk":
         R = cal_io.imu_tk_form(cal)[2]
         a, box = a @ R.T, (box @ np.abs(R).T) * (1 + 1e-12)
