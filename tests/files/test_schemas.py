@@ -67,13 +67,11 @@ def outputs(tmp_path_factory):
     text = d.read_text().splitlines()
     s.write_text("\n".join(text[:3]) + "\n")
     run("next", "start", ["next", "--model", "two-axis", str(s), "--sigma", "1e-5"])
-    run("diagnose", "consistent", ["diagnose", "--model", "two-axis", str(d), "--sigma", "1e-5"])
     cells = text[1].split(",")
     cells[4] = str(float(cells[4]) + 0.1)                         # f3 1000 sigma off: inconsistent
     bad = t / "bad.csv"
     bad.write_text("\n".join([text[0], ",".join(cells), *text[2:]]) + "\n")
     run("estimate", "inconsistent", ["estimate", "--model", "two-axis", str(bad), "--sigma", "1e-5"], 3)
-    run("diagnose", "inconsistent", ["diagnose", "--model", "two-axis", str(bad), "--sigma", "1e-5"], None)
     rep = t / "rep.csv"
     rep.write_text("\n".join([text[0], text[1], ",".join(cells), *text[2:]]) + "\n")
     run("estimate", "repeated", ["estimate", "--model", "two-axis", str(rep), "--sigma", "1e-5"], 3)
@@ -86,7 +84,6 @@ def outputs(tmp_path_factory):
     run("identify", "stand", ["identify", "--model", "two-axis"])
     run("identify", "plan", ["identify", "--model", "two-axis", "--plan", str(d)])
     run("identify", "003", ["identify", "--model", "003-example1"])
-    run("verify", "all", ["verify"])
     out["truth", "simulate"] = json.loads(d.with_suffix(".truth.json").read_text())
     out["truth", "chamber"] = json.loads(chamber.with_suffix(".truth.json").read_text())
     logs = [str(REAL / f"repeat_session{k}_acc.txt") for k in (2, 3, 4)]
@@ -96,22 +93,51 @@ def outputs(tmp_path_factory):
     return out
 
 
+@pytest.fixture(scope="module")
+def slow_outputs(tmp_path_factory):
+    """The documents of the commands that take seconds (diagnose's search, verify's 235 checks): the slow lane's."""
+    t = tmp_path_factory.mktemp("slow")
+    d, bad = t / "d.csv", t / "bad.csv"
+    _run(["simulate", "--model", "two-axis", "--plan", "quarter", "--sigma", "1e-5", "-o", str(d)])
+    text = d.read_text().splitlines()
+    cells = text[1].split(",")
+    cells[4] = str(float(cells[4]) + 0.1)                         # f3 1000 sigma off: inconsistent
+    bad.write_text("\n".join([text[0], ",".join(cells), *text[2:]]) + "\n")
+    out = {}
+    for schema, kind, args, code in (
+            ("diagnose", "consistent", ["diagnose", "--model", "two-axis", str(d), "--sigma", "1e-5"], 0),
+            ("diagnose", "inconsistent", ["diagnose", "--model", "two-axis", str(bad), "--sigma", "1e-5"], None),
+            ("verify", "all", ["verify"], 0)):
+        path = t / f"{schema}-{kind}.json"
+        _run([*args, "--json", str(path)], code)
+        out[schema, kind] = json.loads(path.read_text())
+    return out
+
+
 EXPECTED = {("estimate", k) for k in ("consistent", "mounting", "inconsistent", "repeated", "thermal")} | {
-    ("next", "measure"), ("next", "start"), ("diagnose", "consistent"), ("diagnose", "inconsistent"),
-    ("plan", "stand"), ("plan-temperatures", "chamber"), ("plan-norm", "001"), ("identify", "stand"),
-    ("identify", "plan"), ("identify", "003"), ("verify", "all"), ("truth", "simulate"), ("truth", "chamber"),
+    ("next", "measure"), ("next", "start"), ("plan", "stand"), ("plan-temperatures", "chamber"), ("plan-norm", "001"),
+    ("identify", "stand"), ("identify", "plan"), ("identify", "003"), ("truth", "simulate"), ("truth", "chamber"),
     ("repeatability", "three runs")}
+SLOW = {("diagnose", "consistent"), ("diagnose", "inconsistent"), ("verify", "all")}
+CASES = [*sorted(EXPECTED), *(pytest.param(*x, marks=pytest.mark.slow) for x in sorted(SLOW))]
 
 
-@pytest.mark.parametrize("schema, kind", sorted(EXPECTED))
-def test_every_key_a_command_writes_is_a_property_of_its_schema(outputs, schema, kind):
+def _document(request, schema, kind):
+    return request.getfixturevalue("slow_outputs" if (schema, kind) in SLOW else "outputs")[schema, kind]
+
+
+@pytest.mark.parametrize("schema, kind", CASES)
+def test_every_key_a_command_writes_is_a_property_of_its_schema(request, schema, kind):
     # A key outside the schema, or a value of another type than the schema states, turns it red.
-    assert _errors(schema, outputs[schema, kind]) == []
+    assert _errors(schema, _document(request, schema, kind)) == []
+
+
+@pytest.mark.parametrize("schema, kind", CASES)
+def test_each_schema_refuses_a_key_nobody_described(request, schema, kind):
+    assert _errors(schema, {**_document(request, schema, kind), "unknown_key": 1})
 
 
 def test_the_schemas_can_fail(outputs):
-    for (schema, kind), doc in outputs.items():
-        assert _errors(schema, {**doc, "unknown_key": 1}), (schema, kind)     # a key nobody described
     broken = dict(outputs["estimate", "consistent"])
     broken.pop("premises")
     assert _errors("estimate", broken)
@@ -141,6 +167,6 @@ def test_premises_are_one_type_in_every_result(outputs):
     from garant.verify.workflows import jobs
     norm = jobs.calibrate_norm(str(log), format="imucal", rate=102.4,
                                bound={"alpha": 1e-2, "beta": 1e-2, "gamma": 1e-2}).to_dict()
-    for doc in (norm, outputs["estimate", "consistent"], outputs["diagnose", "consistent"]):
+    for doc in (norm, outputs["estimate", "consistent"], outputs["estimate", "thermal"]):
         assert isinstance(doc["premises"], dict) and doc["premises"]["statement"]
     assert np.isfinite(norm["premises"]["g"])
