@@ -234,6 +234,11 @@ def _lower_rows(cal, path):
     st, th = cal.get("information_set"), cal.get("thermal")
     if st is None or (th is None and "Gamma_rows" not in st):
         return
+    if th is not None and th["frame"] == "block":               # the block's set, each power's columns beside
+        if "block_powers" not in st or "Gamma_rows" in st:
+            raise DataError(f"{path}: information_set: a calibration over temperature in the block's axes reads its "
+                            "set through block_columns and block_powers", param="calibration")
+        return
     P = len(st["estimate"])
     D1, pieces = (th["degree"] + 1, len(th["pieces_c"]) - 1) if th is not None else (1, 1)
     parts = [k in st for k in ("Gamma_rows", "bias_rows", "rest_Gamma", "rest_bias")]
@@ -272,11 +277,16 @@ def _information_set(data, path):
         if any(len(raw[k]) != P for k in ("box_lo", "box_hi", "shift")) else
         "box_lo must not exceed box_hi" if any(x > y for x, y in zip(raw["box_lo"], raw["box_hi"])) else
         "block_columns must name 12 different columns of the set" if "block_columns" in raw
-        and (len(set(raw["block_columns"])) != 12 or max(raw["block_columns"]) >= P) else None)
+        and (len(set(raw["block_columns"])) != 12 or max(raw["block_columns"]) >= P) else
+        "block_powers need block_columns and the calibration's thermal degree, each power 12 columns of the set apart "
+        "from the others" if "block_powers" in raw and (
+            "block_columns" not in raw or len(raw["block_powers"]) != (data.get("thermal") or {}).get("degree")
+            or len({c for cols in [raw["block_columns"], *raw["block_powers"]] for c in cols})
+            != 12 * (1 + len(raw["block_powers"])) or max(map(max, raw["block_powers"])) >= P) else None)
     if problem:
         raise DataError(f"{path}: information_set: {problem}", param="calibration")
     try:
-        return {k: np.array(v, int if k == "block_columns" else float) for k, v in raw.items()}
+        return {k: np.array(v, int if k in ("block_columns", "block_powers") else float) for k, v in raw.items()}
     except ValueError:
         raise DataError(f"{path}: information_set: every row of an array must hold as many numbers as the others",
                         param="calibration") from None

@@ -538,6 +538,10 @@ def own(cal, path, progress=None):
     if "information_set" not in cal:
         raise DataError(f"{path}: holds no information_set (a two-axis stand with --gamma symmetric, or a set too "
                         "large for a file): give --log LOG to judge it against a log's own set", param="calibration")
+    if "thermal" in cal and "block_columns" in cal["information_set"]:
+        raise DataError(f"{path}: a stand's calibration over temperature in the block's axes (three-axis, single-axis) "
+                        "is not budgeted yet; budget the constant calibration of the same readings",
+                        param="calibration")
     if sample_set.twelve(cal):
         raise DataError(f"{path}: a 12-parameter norm calibration (its nonlinearity delta) is not budgeted yet: give "
                         "--log LOG to judge it against a log's own set, or budget the 9-parameter calibration of the "

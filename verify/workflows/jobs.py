@@ -633,7 +633,7 @@ def apply(calibration: Union[Path, Mapping], log: Log, *, format: Optional[str] 
         j = min(j, n)
         k = slice(i, j) if keep is None else keep[slice(*np.searchsorted(keep, [i, j]))]
         if "thermal" in cal:
-            a, bound = cal_io.apply_thermal(cal, data.raw[k], data.temp[k], data.path)
+            a, bound = sample_set.apply_thermal(cal, data.raw[k], data.temp[k], data.path)
         elif cal.get("effects") and cal["effects"]["names"]:
             from . import norm_effects
             a, bound = norm_effects.apply(cal, data.raw[k], frame, None if data.temp is None else data.temp[k],

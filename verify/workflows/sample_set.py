@@ -56,21 +56,26 @@ def q_entry(info, q_m):
             "estimate": np.asarray(q_m, float)}
 
 
-def objectives(st, a, g, phi=None, M=None, N=None):
+def objectives(st, a, g, phi=None, M=None, N=None, tau=None):
     """C (3, N, P): row k of sample n, c_k(a_n) with e_k = c_k(a)^T dq + ... (the module's docstring); `phi`
     (J, 3, N), the effects' basis at each sample's direction, for the parameters after the 9; `N` the matrix the
     norm set's rows are read through (default (E + lower(q_m))^-1, the file's own; workflows/budget.py passes a
     peer's). A stand's set (`block_columns`, the columns of Gamma11..Gamma33, bias1..bias3 over g) with the file's
-    M: e = M ((Gamma - G) a_t + g (beta - beta_m)) exactly, so c_k reads M_ki a_j at Gamma_ij and M_ki g at bias_i."""
+    M: e = M ((Gamma - G) a_t + g (beta - beta_m)) exactly, so c_k reads M_ki a_j at Gamma_ij and M_ki g at bias_i;
+    over temperature (`block_powers`, the columns of each power of tau = T - t0; M (N, 3, 3) per sample, `tau` (N,))
+    the same times tau^k at the k-th power's columns."""
     q_m = np.asarray(st["estimate"], float)
     P, n = len(q_m), a.shape[1]
     C = np.zeros((3, n, P))
     if "block_columns" in st:
-        cols = np.asarray(st["block_columns"], int)
-        for i in range(3):
-            for j in range(3):
-                C[:, :, cols[3 * i + j]] = M[:, i, None] * a[j]
-            C[:, :, cols[9 + i]] = M[:, i, None] * g
+        Mt = np.moveaxis(np.broadcast_to(M, (n, 3, 3)), 0, 1)               # (3, N, 3): Mt[k, n, i] = M_n,ki
+        powers = [st["block_columns"], *st.get("block_powers", ())]
+        for k, cols in enumerate(np.asarray(powers, int)):
+            t = 1.0 if k == 0 else tau ** k
+            for i in range(3):
+                for j in range(3):
+                    C[:, :, cols[3 * i + j]] = Mt[:, :, i] * (a[j] * t)
+                C[:, :, cols[9 + i]] = Mt[:, :, i] * (g * t)
         return C
     R = np.zeros((3, n, P))
     for j, cols in enumerate(((0,), (3, 1), (4, 5, 2))):      # lower(dq) a: row j reads a_1..a_(j+1)
@@ -83,7 +88,7 @@ def objectives(st, a, g, phi=None, M=None, N=None):
     return C
 
 
-def linear_sup(st, a, g, phi=None, M=None):
+def linear_sup(st, a, g, phi=None, M=None, tau=None):
     """w (3, N): the largest |c_k(a)^T dq| over the set at each corrected sample a (3, N) (`objectives`, with the
     effects' basis `phi` or a stand file's M), proven (`sup`); the LPs solved kept with the set for the next piece
     of the same log (solve/support.py Solved)."""
@@ -91,7 +96,8 @@ def linear_sup(st, a, g, phi=None, M=None):
     w = np.empty((3, n))
     for i in range(0, n, SAMPLES_AT_ONCE):             # the work's memory is a block's, not the log's
         part = slice(i, i + SAMPLES_AT_ONCE)
-        C = objectives(st, a[:, part], g, None if phi is None else phi[:, :, part], M)
+        C = objectives(st, a[:, part], g, None if phi is None else phi[:, :, part],
+                       M[part] if M is not None and np.ndim(M) == 3 else M, tau=None if tau is None else tau[part])
         w[:, part] = sup(st, C.reshape(-1, C.shape[-1])).reshape(3, -1)
     return w
 
@@ -220,13 +226,33 @@ def lower_bound(cal, a, T=None):
     return (e_s + up * np.abs(a)) / (1 - up) * (1 + 1e-12)
 
 
+def block_thermal_bound(cal, a, T):
+    """The per-sample bound (3, N) over the set of a stand's file over temperature in the block's axes (the block's
+    set with each power's columns, `block_powers`), at its corrected samples a (3, N) and temperatures T (N,): as
+    `bound`'s stand file, with each sample's M(T) = (E + Gamma_hat(T))^-1 and the bound matrix B of its piece
+    (io/calibration.py thermal_at), w the largest |c_k(a, tau)^T dp| over the set."""
+    from ..io import calibration as cal_io
+    st, g, th = cal["information_set"], cal["g"], cal["thermal"]
+    u = float(st["g_uncertainty"])
+    M, _, B, _ = cal_io.thermal_at(cal, T)
+    G = cal_io.thermal_gamma(cal, T)[0]
+    tau = np.asarray(T, float) - th["t0_c"]
+    w = linear_sup(st, a, g, M=M, tau=tau)
+    left = np.abs(M @ (np.eye(3) + G) - np.eye(3)) + 8 * EPS * (np.abs(M) @ (1 + np.abs(G)))
+    up = u / (1 - u)
+    absa = np.abs(a).T[..., None]                                                     # (N, 3, 1)
+    v = w.T[..., None] + u * (B @ absa) + up * absa + (1 + up) * (left @ absa)
+    return (np.linalg.solve(np.eye(3)[None] - B, v)[..., 0] * (1 + 1e-12)).T
+
+
 def apply_thermal(cal, raw, T, path="the log"):
     """io/calibration.py `apply_thermal` with each sample's bound the smaller of the piece's box bound and the
-    set's (`lower_bound`; a file that carries its set)."""
+    set's (`lower_bound`, or `block_thermal_bound` in the block's axes; a file that carries its set)."""
     from ..io import calibration as cal_io
     a, box = cal_io.apply_thermal(cal, raw, T, path)
     if "information_set" in cal:
-        box = np.minimum(box, lower_bound(cal, a.T, T).T)
+        box = np.minimum(box, (block_thermal_bound if "block_columns" in cal["information_set"] else lower_bound)(
+            cal, a.T, T).T)
     return a, box
 
 

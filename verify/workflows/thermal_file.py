@@ -185,8 +185,19 @@ def block_section(mod, info, q_hat, T, t0, degree, g, block, u):
     cuts = pieces(*(np.array([T.min(), T.max()]) - t0))
     drift = _worst(info, q_hat, rows, cuts)                          # (pieces, 12)
     coef = np.einsum("pkn,n->kp", rows, q_hat)                        # (D + 1, 12)
-    return {"frame": "block", "pieces_c": (cuts + t0).tolist(),
+    out = {"frame": "block", "pieces_c": (cuts + t0).tolist(),
             "Gamma": coef[1:, :9].reshape(-1, 3, 3).tolist(), "bias": (g * coef[1:, 9:]).tolist(),
             "bound_Gamma": ((np.asarray(block["Gamma_bound"])[None] + drift[:, :9].reshape(-1, 3, 3)) * PAD).tolist(),
             "bound_bias": (g * (np.asarray(block["bias_bound"])[None] + drift[:, 9:]) * PAD).tolist(),
             "g_uncertainty": u}
+    st = block.get("_set")
+    powers = [[names.index(f"{n}_T{k}") if f"{n}_T{k}" in names else -1 for n in BLOCK_NAMES]
+              for k in range(1, degree + 1)]
+    if st is not None and min(map(min, powers)) >= 0:
+        # the block's set is over every parameter of the thermal model: each power's columns beside the block's, at
+        # the file's polynomial (the q that hold them alone, q_hat's series)
+        estimate = np.array(st["estimate"], float)
+        for k, cols in enumerate(powers, start=1):
+            estimate[cols] = coef[k]
+        out["_set"] = dict(st, estimate=estimate, block_powers=powers, g_uncertainty=float(u))
+    return out
