@@ -429,3 +429,45 @@ def test_a_single_axis_file_over_temperature_bounds_each_sample_by_the_sup_over_
     got = jobs.apply(str(cal_path), _frame(tmp_path, np.repeat(f0, 3, axis=0), np.repeat(T, 3)))
     assert np.all(np.abs(got.a - np.repeat(truth, 3, axis=0)) <= got.bound)
     assert main(["budget", str(cal_path)]) == 2          # not read as a two-axis file's rows: refused in one line
+
+
+def test_a_set_too_large_for_a_file_keeps_the_rows_that_can_bind_and_is_the_same_set():
+    # A set over MAX_ENTRIES numbers was not carried (the box bound alone; a 3,000-interval norm log's file held
+    # none). The rows that cannot bind are dropped (sample_set.binding: strictly inside over the box, or by their
+    # proven ends over the rows left): on 4,000 random rows in 9 unknowns, over the set's own hull, what is left
+    # fits (1,988 rows), and every linear function's range over it is its range over all rows (to 1e-9 of the
+    # widths). Red when rows that bind are dropped (every other kept row left out: ranges up to 1.32x wider).
+    rng = np.random.default_rng(4)
+    B = rng.normal(size=(4000, 9))
+    x0 = rng.normal(size=9)
+    lo, hi = B @ x0 - rng.uniform(0.1, 1, 4000), B @ x0 + rng.uniform(0.1, 1, 4000)
+    from garant.verify.solve import hull
+    box_lo, box_hi = hull.ranges(B, lo, hi, x0 - 5, x0 + 5, np.eye(9))
+    keep = sample_set.binding(B, lo, hi, box_lo, box_hi)
+    assert keep is not None and B.size > sample_set.MAX_ENTRIES and keep.size * 9 <= sample_set.MAX_ENTRIES
+    C = rng.normal(size=(40, 9))
+    all_lo, all_hi = hull.ranges(B, lo, hi, box_lo, box_hi, C)
+    kept_lo, kept_hi = hull.ranges(B[keep], lo[keep], hi[keep], box_lo, box_hi, C)
+    width = all_hi - all_lo
+    assert np.all(np.abs(kept_lo - all_lo) <= 1e-9 * width) and np.all(np.abs(kept_hi - all_hi) <= 1e-9 * width)
+
+
+@pytest.mark.slow
+def test_a_norm_file_over_the_limit_carries_the_rows_that_bind_and_bounds_each_sample_as_before(tmp_path, monkeypatch):
+    # The wiring of `binding` into the norm file (sample_set.entry): with the limit below this log's set (200
+    # intervals x 9; 94 rows can bind), the file carries those rows, not none (before: the box bound alone), and
+    # apply's per-sample bounds stay within 1.25x of the independent sup over the set of every row and never below
+    # it (as the file with every row: each bound an LP cell's proof, the two within 0.96-1.04x of each other here).
+    # Red when entry keeps the old refusal.
+    log = tmp_path / "s.csv"
+    assert main(["simulate", "--model", "norm", "--plan", "random:200", "--sigma", "2e-4", "--size", "1e-2",
+                 "--seed", "3", "-o", str(log)]) == 0
+    raw = np.loadtxt(log, delimiter=",", skiprows=1)[::500, 1:4]
+    full = jobs.calibrate_norm(str(log), g=G).to_dict()["calibration"]
+    monkeypatch.setattr(sample_set, "MAX_ENTRIES", 900)
+    cut = jobs.calibrate_norm(str(log), g=G).to_dict()["calibration"]
+    assert len(cut["information_set"]["rows"]) * 9 <= 900 < len(full["information_set"]["rows"]) * 9
+    cal_full, cal_cut = calibration.checked(full), calibration.checked(cut)
+    a, b_cut = sample_set.apply(cal_cut, raw)
+    ratio = _ratios(cal_full, raw, a, b_cut, _fold_jacobian(cal_full, raw))[0]
+    assert ratio.min() >= 1 - 1e-6 and ratio.max() <= 1.25, (ratio.min(), ratio.max())

@@ -22,18 +22,45 @@ import numpy as np
 from ..solve import support
 from .norm_information import lower
 
-#: The largest set (rows x columns) a calibration file carries: beyond it the file keeps the box bound alone.
+#: The largest set (rows x columns) a calibration file carries: beyond it, the rows that can bind (`binding`), or
+#: where those are still more, the box bound alone.
 MAX_ENTRIES = 24_000
+#: The most rows a file's set holds (its schema's limit).
+MAX_ROWS = 4000
+
+
+def binding(rows, lo, hi, box_lo, box_hi):
+    """The indices of the rows of {x : lo <= rows x <= hi, box_lo <= x <= box_hi} a file carries: every row where
+    they fit MAX_ENTRIES; else those that can bind, or None where still too many. A row whose range over the box
+    (its centre's value +- |row| times the half-widths, with the rounding outward) lies strictly inside its bounds,
+    or whose proven ends over the set of the rows left do (support.essential: that set holds the set), is strictly
+    met at every point of the set; the set without all such rows is the set (a point beyond it would join the set
+    by a segment leaving it where a dropped row is met with equality)."""
+    rows = np.asarray(rows, float)
+    if rows.size <= MAX_ENTRIES:
+        return np.arange(len(rows))
+    c, r = 0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo)
+    mid, reach = rows @ c, np.abs(rows) @ r
+    pad = 8 * (rows.shape[1] + 2) * EPS * (np.abs(rows) @ np.abs(c) + reach + np.abs(lo) + np.abs(hi))
+    may = np.flatnonzero((mid - reach - pad <= lo) | (mid + reach + pad >= hi))
+    if len(may) * rows.shape[1] > 4 * MAX_ENTRIES:
+        return None
+    if len(may) * rows.shape[1] > MAX_ENTRIES or len(may) > MAX_ROWS:      # the LPs only where the box leaves many
+        may = may[support.essential(rows[may], lo[may], hi[may], box_lo, box_hi)[0]]
+    return may if may.size * rows.shape[1] <= MAX_ENTRIES and len(may) <= MAX_ROWS else None
 
 
 def entry(A, s, bound, lo, hi, shift, q_m, u=0.0):
     """The calibration file's `information_set` of a norm calibration: the set {x : |s_k - A_k^T x| <= bound_k,
     lo - shift <= x <= hi + shift} + {|s| <= shift} of the corrections q (A: parameters x intervals), its
-    midpoint q_m, the bound u of |Delta_g/g|; None where it is too large for a file (MAX_ENTRIES)."""
-    if A.size > MAX_ENTRIES:
-        return None
+    midpoint q_m, the bound u of |Delta_g/g|; the rows that can bind where all are too many for a file
+    (`binding`), None where those are too."""
     shift = np.broadcast_to(np.asarray(shift, float), lo.shape)
-    return {"rows": A.T.tolist(), "centre": np.asarray(s, float).tolist(), "bound": np.asarray(bound, float).tolist(),
+    s, bound = np.asarray(s, float), np.asarray(bound, float)
+    keep = binding(A.T, s - bound, s + bound, lo - shift, hi + shift)
+    if keep is None:
+        return None
+    return {"rows": A.T[keep].tolist(), "centre": s[keep].tolist(), "bound": bound[keep].tolist(),
             "box_lo": (lo - shift).tolist(), "box_hi": (hi + shift).tolist(), "shift": shift.tolist(),
             "estimate": np.asarray(q_m, float).tolist(), "g_uncertainty": float(u)}
 
@@ -42,16 +69,24 @@ def q_entry(info, q_m):
     """The calibration file's `information_set` of a stand's q (guarantee.InformationSet: q = q0 + w - u,
     |y_k - a_k^T w| <= s_k, w in its proven box, |u| <= shift) in the form `entry` writes: x = q0 + w, so
     |y_k + a_k^T q0 - a_k^T x| <= s_k, each row's bound widened by the rounding of its centre; the estimate q_m.
-    None where it is too large for a file (MAX_ENTRIES)."""
+    Where the rows are too many for a file, the box is the set's hull and the rows those that can bind
+    (`binding`); None where those are too."""
     A = np.asarray(info.A, float)
-    if A.size > MAX_ENTRIES:
-        return None
     q0, rows = np.asarray(info.lin.q0, float), A.T
     centre = info.y + rows @ q0
     slack = 4 * (len(q0) + 2) * EPS * (np.abs(info.y) + np.abs(rows) @ np.abs(q0) + np.abs(centre))
+    bound = (np.asarray(info.s, float) + slack) * (1 + 4 * EPS)
     pad = 4 * EPS * (np.abs(q0) + np.abs(info.w_lo) + np.abs(info.w_hi))
-    return {"rows": rows, "centre": centre, "bound": (np.asarray(info.s, float) + slack) * (1 + 4 * EPS),
-            "box_lo": q0 + info.w_lo - pad, "box_hi": q0 + info.w_hi + pad,
+    lo, hi = q0 + info.w_lo - pad, q0 + info.w_hi + pad
+    if A.size > MAX_ENTRIES:                     # x = q0 + w lies in the set's hull too (q = x - u, |u| <= shift)
+        shift = np.broadcast_to(np.asarray(info.shift, float), q0.shape)
+        ql, qh = info.q
+        wide = 4 * EPS * (np.abs(ql) + np.abs(qh)) + 1e-300
+        lo, hi = np.maximum(lo, ql - shift - wide), np.minimum(hi, qh + shift + wide)
+    keep = binding(rows, centre - bound, centre + bound, lo, hi)
+    if keep is None:
+        return None
+    return {"rows": rows[keep], "centre": centre[keep], "bound": bound[keep], "box_lo": lo, "box_hi": hi,
             "shift": np.broadcast_to(np.asarray(info.shift, float), q0.shape).copy(),
             "estimate": np.asarray(q_m, float)}
 
