@@ -471,3 +471,34 @@ def test_a_norm_file_over_the_limit_carries_the_rows_that_bind_and_bounds_each_s
     a, b_cut = sample_set.apply(cal_cut, raw)
     ratio = _ratios(cal_full, raw, a, b_cut, _fold_jacobian(cal_full, raw))[0]
     assert ratio.min() >= 1 - 1e-6 and ratio.max() <= 1.25, (ratio.min(), ratio.max())
+
+
+@pytest.mark.slow
+def test_a_stand_file_of_many_positions_carries_the_rows_that_bind_of_the_same_set(monkeypatch):
+    # The block's set of 2,000 distinct two-axis positions (6,000 readings x 36 columns) was not carried: the file
+    # kept the box bound alone. Its readings are screened over the hull of q (each row reads p through w = R p - q0 +
+    # u, which lies there: workflows/block.py) and the rest by their proven ends: 170 rows, and every block
+    # functional's range over them is its range over all 6,000 (to 1e-7 of the width: each end an LP's proof).
+    # Red when the screen's box is taken half as wide (rows that bind are lost).
+    from garant.verify import models
+    from garant.verify.io.positions import Positions
+    from garant.verify.solve import hull
+    from garant.verify.workflows.estimate import estimate
+    mod = models.load("two-axis")
+    rng = np.random.default_rng(1)
+    p = rng.uniform(-1e-4, 1e-4, len(mod.PARAMETER_NAMES))
+    P = rng.uniform(0, 360, (2000, 2))
+    f = mod.readings(*np.deg2rad(P).T, p, G).T + G * rng.uniform(-0.999e-5, 0.999e-5, (2000, 3))
+    cut = estimate(mod, Positions("many", P, f, None), 1e-5, G)["block"]["_set"]
+    monkeypatch.setattr(sample_set, "MAX_ENTRIES", 10 ** 9)
+    full = estimate(mod, Positions("many", P, f, None), 1e-5, G)["block"]["_set"]
+    assert len(full["rows"]) == 6000 and 0 < len(cut["rows"]) * 36 <= 24_000
+    C = np.zeros((30, len(full["estimate"])))
+    C[:, full["block_columns"]] = rng.normal(size=(30, 12))
+
+    def ranges(st):
+        return hull.ranges(st["rows"], st["centre"] - st["bound"], st["centre"] + st["bound"], st["box_lo"],
+                           st["box_hi"], C)
+    (lo, hi), (lo_all, hi_all) = ranges(cut), ranges(full)
+    width = hi_all - lo_all
+    assert np.all(np.abs(lo - lo_all) <= 1e-7 * width) and np.all(np.abs(hi - hi_all) <= 1e-7 * width)

@@ -62,9 +62,18 @@ def _information_set(info, R, col_lo, col_hi, targets, mid):
     parameters' set (guarantee.InformationSet.physical_set) in (p, u), its estimate the block's midpoints at
     `targets` (the box's elsewhere: no sample's error reads them), or None where it is too large for a file."""
     from . import sample_set
+    rows = None
     if info.A.shape[1] * (R.shape[1] + R.shape[0]) > sample_set.MAX_ENTRIES:
-        return None
-    B, row_lo, row_hi, lo, hi = info.physical_set(R, col_lo, col_hi, targets)
+        # only the readings that can bind: each row reads p through w = R p - q0 + u, which lies in the set of q's
+        # hull (q = q0 + w - u, |u| <= shift): screened there (sample_set.binding), a file's width per row
+        ql, qh = info.q
+        q0, shift = np.asarray(info.lin.q0, float), np.broadcast_to(np.asarray(info.shift, float), ql.shape)
+        wide = 4 * EPS * (np.abs(ql) + np.abs(qh) + np.abs(q0)) + 1e-300
+        rows = sample_set.binding(info.A.T, info.y - info.s, info.y + info.s, ql - q0 - shift - wide,
+                                  qh - q0 + shift + wide, width=R.shape[1] + R.shape[0])
+        if rows is None:
+            return None
+    B, row_lo, row_hi, lo, hi = info.physical_set(R, col_lo, col_hi, targets, rows)
     centre = 0.5 * (row_lo + row_hi)
     bound = 0.5 * (row_hi - row_lo) * (1 + 4 * EPS) + 4 * EPS * np.abs(centre)    # holds [row_lo, row_hi] rounded
     estimate = 0.5 * (lo + hi)

@@ -273,11 +273,11 @@ class InformationSet:
         out_lo, out_hi, pts = hull.ranges(B, row_lo, row_hi, lo, hi, C, points=True)
         return out_lo, out_hi, [tuple(None if x is None else x[:n] for x in ends) for ends in pts]
 
-    def physical_set(self, R, col_lo, col_hi, targets=()):
+    def physical_set(self, R, col_lo, col_hi, targets=(), rows=None):
         """The set {p : R p in Q, col_lo <= p <= col_hi} as an LP's rows and columns (B, row_lo, row_hi, lo, hi) in
-        (p, u): w = R p - q0 + u with |u| <= shift, rows A^T w within y +- s. Unbounded columns (inf) are first
-        enclosed through a row of R whose other entries are bounded (q_nu over Q); a target that no row encloses
-        is not separated (Unbounded names it)."""
+        (p, u): w = R p - q0 + u with |u| <= shift, rows A^T w within y +- s (only the readings `rows`, when given:
+        those that can bind). Unbounded columns (inf) are first enclosed through a row of R whose other entries are
+        bounded (q_nu over Q); a target that no row encloses is not separated (Unbounded names it)."""
         R = np.asarray(R, float)
         m, n = R.shape
         lo, hi = np.array(col_lo, float), np.array(col_hi, float)
@@ -306,11 +306,11 @@ class InformationSet:
         # binds nothing on the built-in stands (every parameter is bounded or enclosed there)
         lo, hi = np.where(free, -1.0, lo), np.where(free, 1.0, hi)
         # w = R p - q0 + u, |u| <= shift: the rows A^T (R p + u) within y + A^T q0 +- s (its rounding in s)
-        At = self.A.T
+        pick = slice(None) if rows is None else np.asarray(rows)
+        At, y, s = self.A.T[pick], self.y[pick], self.s[pick]
         base = At @ self.lin.q0
-        s = self.s + taylor.SUM_ERROR * (np.abs(At) @ np.abs(self.lin.q0) + np.abs(base))
-        return (np.hstack([At @ R, At]), self.y + base - s, self.y + base + s, np.r_[lo, -self.shift],
-                np.r_[hi, self.shift])
+        s = s + taylor.SUM_ERROR * (np.abs(At) @ np.abs(self.lin.q0) + np.abs(base))
+        return (np.hstack([At @ R, At]), y + base - s, y + base + s, np.r_[lo, -self.shift], np.r_[hi, self.shift])
 
 
 def _weighted_minimax(A, z, rb):

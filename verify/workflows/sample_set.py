@@ -29,25 +29,37 @@ MAX_ENTRIES = 24_000
 MAX_ROWS = 4000
 
 
-def binding(rows, lo, hi, box_lo, box_hi):
-    """The indices of the rows of {x : lo <= rows x <= hi, box_lo <= x <= box_hi} a file carries: every row where
-    they fit MAX_ENTRIES; else those that can bind, or None where still too many. A row whose range over the box
+def binding(rows, lo, hi, box_lo, box_hi, width=None):
+    """The indices of the rows of {x : lo <= rows x <= hi, box_lo <= x <= box_hi} a file carries (`width` numbers
+    each, default a row's): every row where they fit MAX_ENTRIES; else those that can bind, or None where still too
+    many. A row whose range over the box
     (its centre's value +- |row| times the half-widths, with the rounding outward) lies strictly inside its bounds,
     or whose proven ends over the set of the rows left do (support.essential: that set holds the set), is strictly
     met at every point of the set; the set without all such rows is the set (a point beyond it would join the set
     by a segment leaving it where a dropped row is met with equality)."""
     rows = np.asarray(rows, float)
-    if rows.size <= MAX_ENTRIES:
+    width = rows.shape[1] if width is None else width
+    if len(rows) * width <= MAX_ENTRIES:
         return np.arange(len(rows))
     c, r = 0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo)
-    mid, reach = rows @ c, np.abs(rows) @ r
-    pad = 8 * (rows.shape[1] + 2) * EPS * (np.abs(rows) @ np.abs(c) + reach + np.abs(lo) + np.abs(hi))
+    mid, (reach, size) = rows @ c, _abs_products(rows, r, np.abs(c))
+    pad = 8 * (rows.shape[1] + 2) * EPS * (size + reach + np.abs(lo) + np.abs(hi))
     may = np.flatnonzero((mid - reach - pad <= lo) | (mid + reach + pad >= hi))
-    if len(may) * rows.shape[1] > 4 * MAX_ENTRIES:
+    if len(may) * width > 4 * MAX_ENTRIES:
         return None
-    if len(may) * rows.shape[1] > MAX_ENTRIES or len(may) > MAX_ROWS:      # the LPs only where the box leaves many
+    if len(may) * width > MAX_ENTRIES or len(may) > MAX_ROWS:      # the LPs only where the box leaves many
         may = may[support.essential(rows[may], lo[may], hi[may], box_lo, box_hi)[0]]
-    return may if may.size * rows.shape[1] <= MAX_ENTRIES and len(may) <= MAX_ROWS else None
+    return may if may.size * width <= MAX_ENTRIES and len(may) <= MAX_ROWS else None
+
+
+def _abs_products(rows, *vectors):
+    """|rows| v for each v, a block of rows at a time (|rows| of 3e6 readings would be a copy of them)."""
+    out = [np.empty(len(rows)) for _ in vectors]
+    for b in range(0, len(rows), 1 << 16):
+        block = np.abs(rows[b:b + (1 << 16)])
+        for o, v in zip(out, vectors):
+            o[b:b + len(block)] = block @ v
+    return out
 
 
 def entry(A, s, bound, lo, hi, shift, q_m, u=0.0):
@@ -74,7 +86,7 @@ def q_entry(info, q_m):
     A = np.asarray(info.A, float)
     q0, rows = np.asarray(info.lin.q0, float), A.T
     centre = info.y + rows @ q0
-    slack = 4 * (len(q0) + 2) * EPS * (np.abs(info.y) + np.abs(rows) @ np.abs(q0) + np.abs(centre))
+    slack = 4 * (len(q0) + 2) * EPS * (np.abs(info.y) + _abs_products(rows, np.abs(q0))[0] + np.abs(centre))
     bound = (np.asarray(info.s, float) + slack) * (1 + 4 * EPS)
     pad = 4 * EPS * (np.abs(q0) + np.abs(info.w_lo) + np.abs(info.w_hi))
     lo, hi = q0 + info.w_lo - pad, q0 + info.w_hi + pad
