@@ -288,6 +288,7 @@ def test_the_scale_drift_premise_is_refused_where_it_is_not_one(tmp_path, capsys
 
 
 @needs_real
+@pytest.mark.slow
 def test_a_still_warm_up_in_a_ulog_writes_the_slot_px4_will_use(tmp_path, capsys):
     # The still warm-up in a real ULog's instance 0: --export-px4 without --px4-device-id writes TC_A0 for 2424842
     # (the vehicle's CAL_ACC0) and leaves CAL_ACC0 alone.
@@ -304,6 +305,7 @@ def test_a_still_warm_up_in_a_ulog_writes_the_slot_px4_will_use(tmp_path, capsys
 
 
 @needs_real
+@pytest.mark.slow
 def test_the_flight_controller_example_of_the_docs_runs_as_written(tmp_path, monkeypatch, capsys):
     # docs/thermal.md's "From your flight controller" lines, run as written in a folder holding the logs they name.
     import shlex

@@ -343,7 +343,7 @@ def _independent_hull(res):
     return np.array(half)
 
 
-@pytest.mark.parametrize("n, seed", [(24, 1), (96, 2), (400, 3)])
+@pytest.mark.parametrize("n, seed", [(24, 1), (96, 2), pytest.param(400, 3, marks=pytest.mark.slow)])
 def test_the_norm_bounds_sit_at_the_limit_the_readings_prove(tmp_path, n, seed):
     # q of (2.2) of 001 at the limit: logs of 24 to 400 still intervals in random directions (noise within 1e-4
     # g, errors of 2e-3): the median printed bound is within 1 % of an independent hull of the same set (cvxpy:

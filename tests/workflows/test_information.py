@@ -60,7 +60,7 @@ def _independent_hull(mod, pos):
     return np.array(half)
 
 
-@pytest.mark.parametrize("n, seed", [(24, 1), (96, 2), (400, 3)])
+@pytest.mark.parametrize("n, seed", [(24, 1), (96, 2), pytest.param(400, 3, marks=pytest.mark.slow)])
 def test_the_bounds_sit_at_the_limit_the_readings_prove(n, seed):
     # q at the limit: at 24 to 400 random positions (uniform noise within sigma, a small unit) the median printed
     # bound is within 1 % of an independent hull of the same set (cvxpy, H of (3) at zero errors, no remainder);

@@ -370,6 +370,7 @@ def test_apply_corrects_each_sample_at_its_own_temperature_within_its_bound(tmp_
     assert not (tmp_path / "c2.csv").exists()
 
 
+@pytest.mark.slow
 def test_the_thermal_file_is_in_the_frame_the_data_define_as_sharp_as_the_constant_one(tmp_path, mems):
     """The thermal file is written in the frame the data define (lower-triangular at t0, as the constant file),
     so no mounting premise lands in it: at t0 its per-sample bounds are within 3x of those of the constant file
