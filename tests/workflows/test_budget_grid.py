@@ -1,10 +1,10 @@
-"""The geometry garant budget's figures between grid attitudes rest on (workflows/budget.py `_sups`), checked here
-independently of `budget.stretch`: the cube-sphere grid's cells, their triangles, and how far a unit vector is
-from a triangle's hull along its ray."""
+"""The geometry garant budget's figures between grid attitudes rest on (workflows/budget.py `_sups`,
+workflows/attitudes.py), checked here independently of `attitudes.stretch`: the cube-sphere grid's cells, their
+triangles, and how far a unit vector is from a triangle's hull along its ray."""
 import numpy as np
 import pytest
 
-from garant.verify.workflows import budget
+from garant.verify.workflows.attitudes import grid, stretch
 
 
 @pytest.mark.parametrize("side", [3, 6, pytest.param(24, marks=pytest.mark.slow)])
@@ -15,7 +15,7 @@ def test_every_unit_vector_is_a_point_of_a_grid_triangles_hull_stretched_by_at_m
     # cube face the ray crosses, its cell on that face (the grid's attitudes are the cells' corners, normalised),
     # the cell's triangle (split along the diagonal (0, 0)-(1, 1)) holding the ray, and m where the ray meets the
     # plane of the triangle's normalised corners: m inside the triangle (barycentric weights >= 0), every corner an
-    # attitude of budget.grid, and 1 <= t <= budget.stretch(side), and not far above the largest t found. Red
+    # attitude of attitudes.grid, and 1 <= t <= attitudes.stretch(side), and not far above the largest t found. Red
     # with stretch returning 1 (no stretch: the figures would miss the part between attitudes).
     rng = np.random.default_rng(side)
     n = rng.normal(size=(200_000, 3))
@@ -46,8 +46,8 @@ def test_every_unit_vector_is_a_point_of_a_grid_triangles_hull_stretched_by_at_m
     mm = n / t[:, None]
     weights = np.linalg.solve(np.stack([a, b, c], axis=2), mm[:, :, None])[:, :, 0]
     assert weights.min() >= -1e-9
-    attitudes, _ = budget.grid(side)
+    attitudes, _ = grid(side)
     for p in (a[:2000], b[:2000], c[:2000]):                 # each corner an attitude of the grid
         assert np.linalg.norm(p[:, None] - attitudes[None], axis=2).min(axis=1).max() < 1e-12
     assert t.min() >= 1 - 1e-12
-    assert t.max() <= budget.stretch(side) <= 1 + 1.5 * (t.max() - 1)
+    assert t.max() <= stretch(side) <= 1 + 1.5 * (t.max() - 1)

@@ -33,6 +33,7 @@ from ..solve import hull, support
 from . import sample_set
 from .peer_files import garant_frame, peer
 from .norm_information import lower
+from .attitudes import grid, stretch
 
 #: Cube-sphere cells per face side of the attitudes: every unit vector within sqrt(2) / N_SIDE (chord) of one.
 N_SIDE = 24
@@ -40,19 +41,6 @@ HORIZONS_S = (1, 10, 60)
 EPS = np.finfo(float).eps
 PERP = 16                                                # directions across n: |e_perp| <= sec(pi/16) times their max
 MG = 1e3 / 9.80665                                       # mg per m/s^2 (standard gravity)
-
-
-def grid(side):
-    """(N, 3) unit directions of the cube-sphere grid with `side` cells per face side, and its covering chord: a
-    point of a face lies within sqrt(2) / side of a grid point in face coordinates, and the radial map onto the
-    sphere (the projection onto the unit ball) is 1-Lipschitz."""
-    t = np.linspace(-1.0, 1.0, side + 1)
-    u, v = (x.ravel() for x in np.meshgrid(t, t))
-    one = np.ones_like(u)
-    faces = [np.column_stack(c) for s in (1.0, -1.0) for c in ((s * one, u, v), (u, s * one, v), (u, v, s * one))]
-    P = np.vstack(faces)
-    P = np.unique(np.round(P, 12), axis=0)
-    return P / np.linalg.norm(P, axis=1)[:, None], np.sqrt(2.0) / side
 
 
 class Model:
@@ -269,23 +257,6 @@ def _sups(model, filt, extra, progress=None):
             "perp": min(float((across + here * delta).max()) + slack_norm, e_sup),
             "par": min(float((along + here * delta).max()) + slack_norm, e_sup), "u": u,
             "worst": N[int(np.argmax(here))], "attitudes": len(N), "delta": delta}
-
-
-def stretch(side):
-    """The largest t = 1 / (the distance of a grid triangle's plane from 0) over the triangles of `grid(side)` (each
-    face cell split along either diagonal; the faces are alike): every unit vector is t m with m in a triangle's
-    hull and 1 <= t <= it."""
-    t = np.linspace(-1.0, 1.0, side + 1)
-    u, v = np.meshgrid(t, t, indexing="ij")
-    P = np.stack([np.ones_like(u), u, v], axis=-1)
-    P /= np.linalg.norm(P, axis=-1, keepdims=True)
-    a, b, c, d = P[:-1, :-1], P[1:, :-1], P[1:, 1:], P[:-1, 1:]
-    near = np.inf
-    for x, y, z in ((a, b, c), (a, c, d), (a, b, d), (b, c, d)):
-        normal = np.cross(y - x, z - x)
-        normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
-        near = min(near, float(np.abs((normal * x).sum(axis=-1)).min()))
-    return (1.0 / near) * (1 + 16 * EPS)
 
 
 #: |e| at an attitude over nets of directions: cube-sphere grids with these many cells per face side (5: every unit
