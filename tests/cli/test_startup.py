@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 
+from conftest import REAL, needs_real
 from garant.verify.cli import COMMANDS
 
 HEAVY = ("numpy", "sympy", "cvxpy", "matplotlib", "highspy", "scipy", "pandas")
@@ -38,3 +39,15 @@ def test_help_and_argument_errors_load_no_numerics():
     assert got["heavy"] == [], got
     assert got["codes"][:len(COMMANDS) + 2] == [0] * (len(COMMANDS) + 2)
     assert all(c == 2 for c in got["codes"][len(COMMANDS) + 2:]), got["codes"]
+
+
+@needs_real
+def test_a_small_log_s_calibration_loads_no_masked_arrays():
+    # numpy.ma costs 8 ms to import, a twentieth of calibrate-norm on a small log (the batch and the peer's ratio on
+    # repeat session 4 and the Xsens log, docs/bench.md), and np.unique loads it: hull.stacked merged the multipliers'
+    # rows with it. Red when any step of a small calibration calls np.unique (or another function that loads it).
+    code = ("import sys; from garant.verify.cli import main; main(['calibrate-norm', sys.argv[1], '--g', '9.81744']); "
+            "print('numpy.ma' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(REAL / "repeat_session4_acc.txt")], capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "False"

@@ -49,9 +49,16 @@ def sparse(lam):
     return Multipliers(rows, L[..., rows])
 
 
+def distinct(x):
+    """The distinct values of x, increasing: np.unique without its import of numpy.ma (8 ms, a twentieth of a small
+    log's calibrate-norm)."""
+    x = np.sort(np.asarray(x).ravel())
+    return x[np.r_[True, x[1:] != x[:-1]]] if len(x) else x
+
+
 def stacked(lams):
     """One Multipliers holding a list of them (one vector each) as a stack over the union of their rows."""
-    rows = np.unique(np.concatenate([m.rows for m in lams])) if lams else NONE.rows
+    rows = distinct(np.concatenate([m.rows for m in lams])) if lams else NONE.rows
     values = np.zeros((len(lams), len(rows)))
     for i, m in enumerate(lams):
         values[i, np.searchsorted(rows, m.rows)] = m.values
