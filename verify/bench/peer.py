@@ -163,6 +163,7 @@ def profile():
     from garant.verify.cli import main as garant         # the installed package's modules, as the command runs them
     from garant.verify.io import recordings
     from garant.verify.solve import highs, hull
+    from garant.verify.workflows import stills
     spent, count = {"solves": 0.0, "read": 0.0, "still": 0.0}, {"solves": 0, "unsolved": 0}
 
     def timing(owner, name, key):
@@ -185,9 +186,9 @@ def profile():
             count["unsolved"] += 2 * len(np.atleast_2d(a[5])) - (count["solves"] - before)
             raise
     plain_ranges = hull.ranges
-    patches = [(highs, "run", *timing(highs, "run", "solves")), (recordings, "read_log",
-               *timing(recordings, "read_log", "read")), (recordings, "still_intervals",
-               *timing(recordings, "still_intervals", "still")), (hull, "ranges", plain_ranges, ranges)]
+    patches = [(highs, "solve", *timing(highs, "solve", "solves")), (recordings, "read_log",
+               *timing(recordings, "read_log", "read")), (stills, "still_intervals",
+               *timing(stills, "still_intervals", "still")), (hull, "ranges", plain_ranges, ranges)]
     with tempfile.TemporaryDirectory() as tmp:
         logs = _batch_logs(tmp)
         argv = ["calibrate-norm", *map(str, logs), "--g", str(G_LOGS), "--out", f"{tmp}/out", "--jobs", "1"]
