@@ -29,6 +29,7 @@ import numpy as np
 
 from ..defaults import SIGMA_WIDER
 from ..solve import highs, hull, taylor
+from . import subdivide
 from .premises import Premises
 from .remainder import EPS, ROUNDING, Remainder, _columns, _extra, linear_parameters
 
@@ -145,12 +146,20 @@ def linearise(mod, positions, z, A, premises, at_zero=False):
         q0, fit = np.zeros(m), float(np.abs(z - highs.chebyshev_fit(A, z)[2]).max())
     else:
         q0, fit = exact_fit(mod, positions, z, A, premises.g, L[:, :m])
-    value, J = taylor.jacobian(mod, positions.radians, L, L[:, :m] @ q0, positions.mounts, _extra(mod, positions))
+    return at(Linearisation(mod, positions, premises, L, keep, T, q0, None, None, None, fit), q0)
+
+
+def at(lin, q0):
+    """The Linearisation `lin` moved to the centre q0 (t = 0): z_exact and its Jacobian there (the fit quality
+    kept: it is the data's, not the centre's)."""
+    mod, positions, m = lin.mod, lin.positions, len(q0)
+    value, J = taylor.jacobian(mod, positions.radians, lin.L, lin.L[:, :m] @ q0, positions.mounts,
+                               _extra(mod, positions))
     kw = {"mount": positions.mounts} if positions.mounts is not None else {}
     z0 = (value - mod.up_nominal(*positions.radians, **kw).T).reshape(-1)
     K = J.shape[0] * 3
-    return Linearisation(mod, positions, premises, L, keep, T, q0, z0, J[:, :, :m].reshape(K, m).T,
-                         J[:, :, m:].reshape(K, -1), fit)
+    return Linearisation(mod, positions, lin.premises, lin.L, lin.keep, lin.T, np.asarray(q0, float), z0,
+                         J[:, :, :m].reshape(K, m).T, J[:, :, m:].reshape(K, -1), lin.minimax_exact)
 
 
 def box(lin, q=None, e=None):
@@ -352,8 +361,10 @@ SIGMA_TOLERANCE = 0.01     # relative: the smallest supported sigma is bracketed
 #: absorbed) is within this fraction of its linear part: a smaller box lowers no bound by more.
 BOX_GAIN = 0.001
 #: No further box of the information set once what the box sets (the remainder left at each reading, through
-#: the estimator's weights, and the absorbed curvature) is within this fraction of each q's half-width.
-INFO_GAIN = 0.01
+#: the estimator's weights, and the absorbed curvature) is within this fraction of each q's half-width (at 0.01 a
+#: single-axis stand's bounds grew by up to 9e-4 of themselves when readings were added; at 0.001, 5e-5:
+#: tests/workflows/test_single_axis_prior.py).
+INFO_GAIN = 0.001
 
 
 def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
@@ -401,19 +412,40 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
         one_by_one = not rem.interpolates()
         rb = np.zeros(len(y))
         rb[cols], cb = rem(lo, hi, support, one_by_one)
-        for _ in range(steps):
-            lin_e, rem_e, parts, _ = errors(s, rb + rem.t_residual, cb, None)
-            if np.all(parts["left_after_absorption"] + parts["absorbed_into_q"] <= BOX_GAIN * lin_e):
-                break                                # a smaller box would lower no bound by BOX_GAIN
-            lo2, hi2 = box(lin, lin.q0 + dq, lin_e + rem_e)
-            lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
-            nq = len(lin.keep)                      # t keeps its a-priori bounds: only q's boxes shrink
-            shrink = np.min((hi2 - lo2)[:nq] / np.maximum(hi - lo, 1e-300)[:nq], initial=1.0)
-            lo, hi = lo2, hi2
-            rb_s, cb_s = rem(lo, hi, support, one_by_one)
-            rb[cols], cb = np.minimum(rb[cols], rb_s), np.minimum(cb, cb_s)
-            if shrink > 0.9:                         # no box shrank by a tenth: the next would gain little
-                break
+
+        def contract(lo, hi, cb):
+            """The a posteriori boxes from [lo, hi] (rb in place); and, when they stop with a q whose estimator
+            interval, its remainder part the larger, spans the box (the box then proves nothing of it), the
+            estimator's box of every q (lo, hi) (else None)."""
+            for step in range(steps):
+                lin_e, rem_e, parts, _ = errors(s, rb + rem.t_residual, cb, None)
+                if np.all(parts["left_after_absorption"] + parts["absorbed_into_q"] <= BOX_GAIN * lin_e):
+                    break                            # a smaller box would lower no bound by BOX_GAIN
+                lo2, hi2 = box(lin, lin.q0 + dq, lin_e + rem_e)
+                lo2, hi2 = np.maximum(lo2, lo), np.minimum(hi2, hi)
+                nq = len(lin.keep)                  # t keeps its a-priori bounds: only q's boxes shrink
+                shrink = np.min((hi2 - lo2)[:nq] / np.maximum(hi - lo, 1e-300)[:nq], initial=1.0)
+                lo, hi = lo2, hi2
+                rb_s, cb_s = rem(lo, hi, support, one_by_one)
+                rb[cols], cb = np.minimum(rb[cols], rb_s), np.minimum(cb, cb_s)
+                if shrink > 0.9:                     # no box shrank by a tenth: the next would gain little
+                    kept, half = lin.keep, 0.5 * (hi - lo)[:nq]
+                    spans = ((lin_e + rem_e)[kept] >= half) & (rem_e > lin_e)[kept]
+                    stuck = (lin.q0 + dq - lin_e - rem_e, lin.q0 + dq + lin_e + rem_e) if spans.any() else None
+                    return lo, hi, cb, stuck
+            return lo, hi, cb, None
+        lo, hi, cb, stuck = contract(lo, hi, cb)
+        if stuck is not None:                        # the premise box too wide to contract from: split it
+            q_lo, q_hi = lin.q_box
+            q_lo, q_hi = np.maximum(stuck[0], q_lo), np.minimum(stuck[1], q_hi)
+            q_lo[lin.keep], q_hi[lin.keep] = lo[:len(lin.keep)], hi[:len(lin.keep)]
+            found = subdivide.proven_box(lin, z, s - sharp, (q_lo, q_hi), lambda q: at(lin, q))
+            if found is not None:                    # with the centre: the remainder is proven about it
+                centre = np.r_[lin.q0[lin.keep], np.zeros(len(lin.T))]
+                lo, hi = np.minimum(found[0], centre), np.maximum(found[1], centre)
+                rb_s, cb_s = rem(lo, hi, support, one_by_one)
+                rb[cols], cb = np.minimum(rb[cols], rb_s), np.minimum(cb, cb_s)
+                lo, hi, cb, _ = contract(lo, hi, cb)
         rb_all, cb_all = rem(lo, hi)
         rb_all[cols] = np.minimum(rb_all[cols], rb[cols])
         if rem.interpolates():
