@@ -507,8 +507,8 @@ def own(cal, path, progress=None):
                         "carries no information_set and is not budgeted; budget the constant calibration of the same "
                         "readings", param="calibration")
     if "information_set" not in cal:
-        raise DataError(f"{path}: holds no information_set (a two-axis stand with --gamma symmetric, or a set too "
-                        "large for a file): give --log LOG to judge it against a log's own set", param="calibration")
+        raise DataError(f"{path}: holds no information_set (a set too large for a file): give --log LOG to judge it "
+                        "against a log's own set", param="calibration")
     if "thermal" in cal and "block_columns" in cal["information_set"]:
         raise DataError(f"{path}: a stand's calibration over temperature in the block's axes (three-axis, single-axis) "
                         "is not budgeted yet; budget the constant calibration of the same readings",

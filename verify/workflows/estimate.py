@@ -238,6 +238,11 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
             out["_set"] = thermal_file.lower_set(mod, remount, out["mount"], v.info, q, v.interval,
                                                  _own(premises).get("Delta_g", 0.0), g, out["physical"]["Gamma"],
                                                  out["physical"]["bias"])
+        elif out.get("gamma") == "symmetric" and "physical" in out:
+            from . import thermal_file
+            out["_set"] = thermal_file.symmetric_set(remount, out["mount"], v.info, q,
+                                                     _own(premises).get("Delta_g", 0.0), g, out["physical"]["Gamma"],
+                                                     out["physical"]["bias"], out["physical_bound_premises"])
     return out
 
 

@@ -33,6 +33,7 @@ from ..solve import interval
 from . import mounting, sample_set, thermal
 
 PAD = 1 + 1e-12
+EPS = np.finfo(float).eps
 
 
 def pieces(lo, hi):
@@ -140,6 +141,29 @@ def lower_set(mod, remount, mount, info, q_hat, interval_q, u, g, G0, b0):
     """The information_set of a constant two-axis file in the frame the data define (`_lower` at degree 0)."""
     parts = _lower(mod, remount, mount, info, q_hat, interval_q, 0, u, g, G0, b0)
     return _with_rows(info, q_hat, parts, g, u, parts["at_s1"][None])
+
+
+def symmetric_set(remount, mount, info, q_hat, u, g, G0, b0, premised):
+    """The information_set of a constant two-axis file with --gamma symmetric: each entry of Gamma and each bias
+    is linear in q by the remount formulas ((28)-(29) of 000, K's rows), within what the premises alone set
+    (`premised`, mounting.recover's: the split's gap and Delta_beta; its Delta_g/g part, E Delta_g/g of (29), taken
+    out: the error of g is apart, |s - 1| <= u, as in `lower_set`) and the file's offset from K q_hat (G0, b0 in
+    m/s^2: the file's own, the midpoints of the ranges)."""
+    nq, names = len(q_hat), list(remount.OUTPUTS)
+    K = np.zeros((len(names), nq))
+    K[:, :remount.recovery_matrix(mount, "symmetric").shape[1]] = remount.recovery_matrix(mount, "symmetric")
+    gi = [names.index(f"Gamma{i}{j}") for i in (1, 2, 3) for j in (1, 2, 3)]
+    rows = K[gi].reshape(3, 3, 1, nq)
+    brows = K[[names.index(f"bias{i}") for i in (1, 2, 3)]][:, None]
+    G0, b0 = np.asarray(G0, float), np.asarray(b0, float)
+    P_G, P_b = np.asarray(premised["Gamma"], float), np.asarray(premised["bias"], float)
+    by_g = np.abs(remount.neglected(mount, 1.0, 0.0, "symmetric"))[gi].reshape(3, 3) * u
+    at_hat, b_hat = rows[:, :, 0] @ q_hat, g * (brows[:, 0] @ q_hat)
+    rounding = 8 * (nq + 2) * EPS * (np.abs(rows[:, :, 0]) @ np.abs(q_hat) + np.abs(G0) + P_G + by_g)
+    rest_G = np.abs(at_hat - G0) + np.maximum(P_G - by_g, 0.0) + rounding
+    b_off = (np.abs(b_hat - b0) + P_b + 8 * (nq + 2) * EPS * (g * np.abs(brows[:, 0]) @ np.abs(q_hat) + np.abs(b0)
+                                                              + P_b))
+    return _with_rows(info, q_hat, {"rows": rows, "brows": brows, "b_off": b_off}, g, u, rest_G[None])
 
 
 def lower_section(mod, remount, mount, info, q_hat, interval_q, T, t0, degree, u, g, G0, b0):
