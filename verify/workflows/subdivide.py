@@ -11,8 +11,10 @@ halving), and the set of P
 holds every q of P that fits the readings, as the whole box's set does (remainder.py, guarantee.InformationSet).
 A piece is dropped when a proof says no q of it fits (the least tau with every row within (1 + tau) of its bound,
 proven above 0 by weak duality: solve/hull.py), cut to the hull of Q_P when that shrinks it, and else halved along
-its widest q. The truth lies in one piece, in its set: the hull of what is left holds every q that fits, whenever
-the premises hold. A budget of pieces (work, not time) bounds the search; the pieces not taken up are kept whole.
+its widest q; a piece whose remainder is within the noise bound, or not lowered by the halving it came from (the
+parameters no plan separates set it then, not the q box), is kept as it is. The truth lies in one piece, in its set:
+the hull of what is left holds every q that fits, whenever the premises hold. A budget of pieces (work, not time)
+bounds the search; the pieces not taken up are kept whole.
 """
 import numpy as np
 
@@ -24,6 +26,9 @@ PIECES = 128
 #: A piece is cut to the hull of its set (and taken up again) when no q keeps more than this fraction of its width;
 #: else it is halved.
 CUT = 0.7
+#: A piece is kept as it is when its remainder is above this fraction of that of the piece it came from: the q box
+#: does not set it (the parameters t no plan separates do, within their a-priori bounds), so halving gains nothing.
+SETTLED = 0.9
 
 
 def proven_box(lin, z, noise, outer, at):
@@ -35,34 +40,34 @@ def proven_box(lin, z, noise, outer, at):
     t = lin.t_bound
     q_lo, q_hi = (np.array(b, float) for b in outer)
     start = (np.r_[q_lo[keep], -t], np.r_[q_hi[keep], t])
-    todo, left, pieces = [start], [], 0
+    todo, left, pieces = [(*start, np.inf)], [], 0
     while todo and pieces < PIECES:
-        lo, hi = todo.pop()
+        lo, hi, before = todo.pop()                    # before: the remainder of the piece it was made from
         pieces += 1
         got = _piece(lin, z, noise, q_lo, q_hi, lo, hi, at)
         if got is None:
             continue                                   # no q of this piece fits: refuted
-        cut_lo, cut_hi, settled = got
+        cut_lo, cut_hi, rb = got
         shrink = (cut_hi - cut_lo)[:nk] / np.maximum(hi - lo, 1e-300)[:nk]
-        if settled:
-            left.append((cut_lo, cut_hi))
+        if rb <= noise.min() or rb > SETTLED * before:
+            left.append((cut_lo, cut_hi))              # within the noise, or a smaller piece does not lower it
         elif shrink.max() <= CUT:
-            todo.append((cut_lo, cut_hi))
+            todo.append((cut_lo, cut_hi, rb))
         else:
             j = int(np.argmax((cut_hi - cut_lo)[:nk]))
             mid = 0.5 * (cut_lo[j] + cut_hi[j])
             a_hi, b_lo = cut_hi.copy(), cut_lo.copy()
             a_hi[j], b_lo[j] = mid, mid
-            todo += [(b_lo, cut_hi), (cut_lo, a_hi)]
-    left += todo
+            todo += [(b_lo, cut_hi, rb), (cut_lo, a_hi, rb)]
+    left += [(lo, hi) for lo, hi, _ in todo]
     if not left:
         return None
     return np.min([b[0] for b in left], axis=0), np.max([b[1] for b in left], axis=0)
 
 
 def _piece(lin, z, noise, q_lo, q_hi, lo, hi, at):
-    """(lo, hi, settled) of the piece [lo, hi] cut to the hull of its set, or None when a proof refutes it. settled:
-    its remainder is within the noise bound, so halving it gains little."""
+    """(lo, hi, the largest remainder of a reading) of the piece [lo, hi] cut to the hull of its set, or None when a
+    proof refutes it."""
     keep, nk = list(lin.keep), len(lin.keep)
     ql, qh = q_lo.copy(), q_hi.copy()
     ql[keep], qh[keep] = lo[:nk], hi[:nk]
@@ -85,17 +90,17 @@ def _piece(lin, z, noise, q_lo, q_hi, lo, hi, at):
         tau_lo, _ = hull.ranges(B, np.r_[y - s, -inf], np.r_[inf, y + s], np.r_[w_lo, 0.0], np.r_[w_hi, tau_max],
                                 tau)
     except hull.Empty:                                 # to HiGHS's tolerance only: no proof, the piece stays
-        return lo, hi, False
+        return lo, hi, float(rb.max())
     if tau_lo[0] > 0:
         return None
     try:
         w_min, w_max = hull.ranges(At, y - s, y + s, w_lo, w_hi, np.eye(At.shape[1]))
     except hull.Empty:
-        return lo, hi, False
+        return lo, hi, float(rb.max())
     pad = shift + taylor.SUM_ERROR * np.abs(qc) + 4 * EPS * (np.abs(w_min) + np.abs(w_max))
     cut_lo, cut_hi = lo.copy(), hi.copy()
     cut_lo[:nk] = np.maximum(lo[:nk], (qc + w_min - pad)[keep])
     cut_hi[:nk] = np.minimum(hi[:nk], (qc + w_max + pad)[keep])
     if np.any(cut_lo[:nk] > cut_hi[:nk]):
         return None                                    # its set's proven hull misses the piece
-    return cut_lo, cut_hi, bool(rb.max() <= noise.min())
+    return cut_lo, cut_hi, float(rb.max())
