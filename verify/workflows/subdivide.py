@@ -11,7 +11,7 @@ halving), and the set of P
 holds every q of P that fits the readings, as the whole box's set does (remainder.py, guarantee.InformationSet).
 A piece is dropped when a proof says no q of it fits (the least tau with every row within (1 + tau) of its bound,
 proven above 0 by weak duality: solve/hull.py), cut to the hull of Q_P when that shrinks it, and else halved along
-its widest q; a piece whose remainder is within the noise bound, or not lowered by the halving it came from (the
+its widest q; a piece whose remainder is within the noise bound, or not lowered by the two halvings it came from (the
 parameters no plan separates set it then, not the q box), is kept as it is. The truth lies in one piece, in its set:
 the hull of what is left holds every q that fits, whenever the premises hold. A budget of pieces (work, not time)
 bounds the search; the pieces not taken up are kept whole.
@@ -21,13 +21,14 @@ import numpy as np
 from ..solve import hull, taylor
 from .remainder import EPS, Remainder
 
-#: Pieces examined at most: the single-axis stand at --prior 1e-2 settles in 35 (12 or 36 positions).
-PIECES = 128
+#: Pieces examined at most: the single-axis stand on its 12 positions settles in 35 at --prior 1e-2, 152 at 1.5e-2.
+PIECES = 256
 #: A piece is cut to the hull of its set (and taken up again) when no q keeps more than this fraction of its width;
 #: else it is halved.
 CUT = 0.7
-#: A piece is kept as it is when its remainder is above this fraction of that of the piece it came from: the q box
-#: does not set it (the parameters t no plan separates do, within their a-priori bounds), so halving gains nothing.
+#: A piece is kept as it is when its remainder is above this fraction of that of the piece two halvings before it:
+#: the q box does not set it (the parameters t no plan separates do, within their a-priori bounds), so halving gains
+#: nothing. (One halving of five equally wide q lowers it by about a tenth: the single-axis stand at --prior 1.5e-2.)
 SETTLED = 0.9
 
 
@@ -40,25 +41,25 @@ def proven_box(lin, z, noise, outer, at):
     t = lin.t_bound
     q_lo, q_hi = (np.array(b, float) for b in outer)
     start = (np.r_[q_lo[keep], -t], np.r_[q_hi[keep], t])
-    todo, left, pieces = [(*start, np.inf)], [], 0
+    todo, left, pieces = [(*start, (np.inf, np.inf))], [], 0
     while todo and pieces < PIECES:
-        lo, hi, before = todo.pop()                    # before: the remainder of the piece it was made from
+        lo, hi, before = todo.pop()                    # before: the remainders of the two pieces it was made from
         pieces += 1
         got = _piece(lin, z, noise, q_lo, q_hi, lo, hi, at)
         if got is None:
             continue                                   # no q of this piece fits: refuted
         cut_lo, cut_hi, rb = got
         shrink = (cut_hi - cut_lo)[:nk] / np.maximum(hi - lo, 1e-300)[:nk]
-        if rb <= noise.min() or rb > SETTLED * before:
-            left.append((cut_lo, cut_hi))              # within the noise, or a smaller piece does not lower it
+        if rb <= noise.min() or rb > SETTLED * before[1]:
+            left.append((cut_lo, cut_hi))              # within the noise, or two halvings did not lower it
         elif shrink.max() <= CUT:
-            todo.append((cut_lo, cut_hi, rb))
+            todo.append((cut_lo, cut_hi, (rb, before[0])))
         else:
             j = int(np.argmax((cut_hi - cut_lo)[:nk]))
             mid = 0.5 * (cut_lo[j] + cut_hi[j])
             a_hi, b_lo = cut_hi.copy(), cut_lo.copy()
             a_hi[j], b_lo[j] = mid, mid
-            todo += [(b_lo, cut_hi, rb), (cut_lo, a_hi, rb)]
+            todo += [(b_lo, cut_hi, (rb, before[0])), (cut_lo, a_hi, (rb, before[0]))]
     left += [(lo, hi) for lo, hi, _ in todo]
     if not left:
         return None
