@@ -141,3 +141,30 @@ def test_the_single_axis_stand_under_a_wider_prior_is_split_until_it_settles():
     r = estimate(mod, Positions("grid", P, f, m), SIGMA, G, premises=prem)
     q, e = (np.array([r[key][name] for name in mod.Q_NAMES]) for key in ("q", "guaranteed_error"))
     assert e.max() < 3 * SIGMA and np.all(np.abs(q - models.q_of(mod, p)) <= e), e / SIGMA
+
+
+@pytest.mark.slow
+def test_the_split_is_said_and_refutes_a_noise_bound_the_readings_exceed(tmp_path, capsys):
+    # As a user runs it: a single-axis unit with mounting and stand errors of 1e-2 and noise within 1e-5, estimated
+    # under --prior 1e-2. At --sigma 1e-5 the split is said on stderr and every bound is within 3 sigma, the truth
+    # inside. At --sigma 5e-6 every piece is refuted: that refutes sigma (or a premise), exit 3, said so with no
+    # reading named (`split_refuted` in the JSON), and the sigma the data support lies between the two (the noise's
+    # own minimax). Before, the remainder over the whole box (0.19) hid it: "consistent", bounds the box's.
+    import json
+    from garant.verify.cli import main
+    data = tmp_path / "s.csv"
+    assert main(["simulate", "--model", "single-axis", "--sigma", "1e-5", "--plan", "grid:30", "--size",
+                 "stand=1e-2,mounting=1e-2,block=1e-4,bias=1e-4", "--seed", "2", "-o", str(data)]) == 0
+    truth = json.loads((tmp_path / "s.truth.json").read_text())["q"]
+    capsys.readouterr()
+    assert main(["estimate", "--model", "single-axis", str(data), "--sigma", "1e-5", "--prior", "1e-2", "--json",
+                 str(tmp_path / "r.json")]) == 0
+    assert "the a-priori box is too wide for the remainder to contract from: splitting it" in capsys.readouterr().err
+    r = json.loads((tmp_path / "r.json").read_text())
+    assert all(abs(r["q"][k] - truth[k]) <= e < 3e-5 for k, e in r["guaranteed_error"].items())
+    assert main(["estimate", "--model", "single-axis", str(data), "--sigma", "5e-6", "--prior", "1e-2", "--json",
+                 str(tmp_path / "x.json")]) == 3
+    out = capsys.readouterr().out
+    x = json.loads((tmp_path / "x.json").read_text())
+    assert "no q of any piece fits every reading within sigma" in " ".join(out.split()) and "disagree" not in out
+    assert x["split_refuted"] is True and 5e-6 < x["sigma_min_supported"] < 1e-5

@@ -91,12 +91,17 @@ def print_verdict(res, mod, path):
                   + f") f{x['component']} spread {x['spread']:.3g}" for x in d[:5]))
         print(f"premises: {res['premises']['statement']}")
         return Exit.REFUTED
-    print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): no q fits every reading within sigma plus the "
-          f"proven remainder left after absorption into q ({res['remainder_left_bound']:.2e}); the data support "
+    how = ("the a-priori box, too wide for the remainder to contract from, split into pieces with the remainder proven "
+           "over each: no q of any piece fits every reading within sigma" if res.get("split_refuted") else
+           "no q fits every reading within sigma plus the proven remainder left after absorption into q "
+           f"({res['remainder_left_bound']:.2e})")
+    print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): {how}; the data support "
           f"sigma >= {res['sigma_min_supported']:.3g} (to {res['sigma_min_tolerance']:.0%}). "
           "No bound is given. Look for the missing effect with `garant diagnose`.")
     print(f"premises: {res['premises']['statement']}")
     d = res["disagreements"]
+    if not d:
+        return Exit.REFUTED
     print(f"{len(d)} residual components disagree, e.g. " + "; ".join(
         f"position {x['position']} (" + ", ".join(f"{x[a + '_deg']:g}" for a in names) + f") f{x['component']}"
         for x in d[:5]))

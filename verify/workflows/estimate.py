@@ -186,7 +186,8 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
     say("the optimal estimators (LP (7)-(8)) at the linearisation")
     W, method = choose_estimator(mod, positions, lin.A)
     say("the verdict and the proven remainder")
-    v = guarantee.verdict(lin, z.reshape(-1), sigma, W, sharper=_sharper(spread, moved, g, Q, positions))
+    v = guarantee.verdict(lin, z.reshape(-1), sigma, W, sharper=_sharper(spread, moved, g, Q, positions),
+                          progress=progress)
     out = {                                    # arrays stay arrays until a JSON file is written
         "model": mod.__name__.rsplit(".", 1)[-1], "g": g, "sigma": sigma,
         "premises": unrefutable_premises(lin, premises.to_dict()),
@@ -205,6 +206,8 @@ def estimate(mod, positions, sigma, g, remount=None, mount=None, gamma="lower", 
             {"position": int(k // 3) + 1, **{f"{a}_deg": float(positions.angles_deg[k // 3, i])
                                              for i, a in enumerate(names)}, "component": int(k % 3) + 1}
             for k in v.disagree]
+        if v.split_refuted:
+            out["split_refuted"] = True
         return out
     y = z.reshape(-1) - lin.z0
     q_apriori, e_apriori = lin.q0 + W @ y, v.guaranteed_error

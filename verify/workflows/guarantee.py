@@ -349,6 +349,7 @@ class Verdict:
     info: "InformationSet" = None        # the information set: what these readings prove (with an estimator)
     interval: tuple = None               # (lo, hi) per q printed: the information set's hull within the a-priori bound
     interval_wider: tuple = None         # the same had sigma been SIGMA_WIDER times larger (the remainder as for sigma)
+    split_refuted: bool = False          # every piece of the split premise box refuted (subdivide.py)
 
     @property
     def guaranteed_error(self):
@@ -367,11 +368,13 @@ BOX_GAIN = 0.001
 INFO_GAIN = 0.001
 
 
-def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
+def verdict(lin, z, sigma, W=None, steps=8, sharper=None, progress=None):
     """The consistency verdict on the residuals z and, with an estimator W (m x 3N, q = q0 + W (z - z0)),
     the guaranteed errors with the proven remainder. `sharper` (3N, units of g): how much below the noise
     bound each residual is known (repeated readings joined by their intersection, estimate.sharper); a
-    noise bound s then bounds residual k by s - sharper_k (none below what the repeats themselves allow)."""
+    noise bound s then bounds residual k by s - sharper_k (none below what the repeats themselves allow).
+    A premise box too wide to contract from is split (subdivide.py): when every piece is refuted, so is sigma
+    (or a premise). `progress(text)`, when given, hears of the split."""
     rem = Remainder(lin, boxes=[box(lin)])
     y = z - lin.z0
     sharp = np.zeros(len(y)) if sharper is None else np.asarray(sharper, float)
@@ -439,7 +442,8 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
             q_lo, q_hi = lin.q_box
             q_lo, q_hi = np.maximum(stuck[0], q_lo), np.minimum(stuck[1], q_hi)
             q_lo[lin.keep], q_hi[lin.keep] = lo[:len(lin.keep)], hi[:len(lin.keep)]
-            found = subdivide.proven_box(lin, z, s - sharp, (q_lo, q_hi), lambda q: at(lin, q))
+            found = subdivide.proven_box(lin, z, s - sharp, (q_lo, q_hi), lambda q: at(lin, q), progress)
+            split_refuted[0] = found is None         # no q of the box fits within s: s, or a premise, refuted
             if found is not None:                    # with the centre: the remainder is proven about it
                 centre = np.r_[lin.q0[lin.keep], np.zeros(len(lin.T))]
                 lo, hi = np.minimum(found[0], centre), np.maximum(found[1], centre)
@@ -477,18 +481,28 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None):
             info = InformationSet(lin, y, s - sharp + rb_all + rem.t_residual,
                                   cb * (1 + taylor.SUM_ERROR) + unseparable_q, W, info.binding)
         return rb_all + rem.t_residual, cb, (errs, (lo, hi), info)
+    def slack(s):
+        """Each residual's slack at s (its remainder less what the repeats sharpen), or None where the split of
+        the premise box refutes s."""
+        split_refuted[0] = False
+        rb = proven(s)[0]
+        return None if split_refuted[0] else rb - sharp
+    split_refuted = [False]
     rb, cb, out = proven(sigma)
+    by_split = split_refuted[0]
     errs, last_box, info = out if out is not None else (None, None, None)
     # the slack of each residual is its remainder less what the repeats sharpen: |r_k| <= s - sharper_k + rb_k
     t, _, r = _weighted_minimax(lin.A, y, rb - sharp)
     t_lin = highs.chebyshev_fit(lin.A, y)[1]
     floor = float(sharp.max(initial=0.0))      # below it the repeats alone refute the noise bound
-    consistent = bool(t <= sigma) and floor <= sigma
+    consistent = bool(t <= sigma) and floor <= sigma and not by_split
     supported = sigma if consistent else _smallest_sigma(
-        lin.A, y, sigma, max(t_lin + floor, floor), lambda s: proven(s)[0] - sharp, float(t), floor)
+        lin.A, y, sigma, max(t_lin + floor, floor), slack, t_lin / (1 + SIGMA_TOLERANCE / 2) if by_split else float(t),
+        floor)
     v = Verdict(consistent=consistent, sigma=sigma, sigma_min_supported=supported,
                 minimax_less_remainder=float(t), minimax_linear=t_lin, minimax_exact=lin.minimax_exact,
-                remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb + sharp > sigma * (1 + 1e-9)), residual=r)
+                remainder=rb, disagree=np.flatnonzero(np.abs(r) - rb + sharp > sigma * (1 + 1e-9)), residual=r,
+                split_refuted=by_split)
     if W is not None:
         v.error_linear, v.error_remainder, v.parts, v.q_shift = errs
         v.box, v.info = last_box, info
@@ -522,11 +536,15 @@ def _smallest_sigma(A, y, refuted, supported, proven, guess=None, floor=0.0):
     residual, plus `floor`, always is), until the bracket is within SIGMA_TOLERANCE: its upper end. `guess`,
     the fit at the refuted sigma, is tried first with the point SIGMA_TOLERANCE below it: the remainder
     changes little with sigma, so these two usually close the bracket (each end still decided by its own
-    proof). `proven(s)`: each residual's slack at s; below `floor` the repeated readings refute s."""
+    proof). `proven(s)`: each residual's slack at s, or None where another proof refutes s; below `floor` the
+    repeated readings refute s."""
     lo, hi = refuted, supported
 
     def fits(s):
-        return s >= floor and _weighted_minimax(A, y, proven(s))[0] <= s
+        if s < floor:
+            return False
+        slack = proven(s)
+        return slack is not None and _weighted_minimax(A, y, slack)[0] <= s
     if guess is not None and lo < guess < hi:
         if fits(guess):
             hi = guess

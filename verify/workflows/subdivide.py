@@ -23,6 +23,8 @@ from .remainder import EPS, Remainder
 
 #: Pieces examined at most: the single-axis stand on its 12 positions settles in 35 at --prior 1e-2, 152 at 1.5e-2.
 PIECES = 256
+#: Pieces between two progress lines.
+SAY_EVERY = 32
 #: A piece is cut to the hull of its set (and taken up again) when no q keeps more than this fraction of its width;
 #: else it is halved.
 CUT = 0.7
@@ -32,11 +34,14 @@ CUT = 0.7
 SETTLED = 0.9
 
 
-def proven_box(lin, z, noise, outer, at):
+def proven_box(lin, z, noise, outer, at, progress=None):
     """The box of v = (q kept, t) that holds every q the readings allow within the premise box `outer` ((lo, hi) of
     every q, finite: the a-priori estimator's), or None when every piece is refuted (the premises are, then). `z`:
     the residuals; `noise`: each reading's bound (the noise bound less what repeats sharpen); `at(q)`: the
-    Linearisation moved to the centre q (guarantee.at)."""
+    Linearisation moved to the centre q (guarantee.at); `progress(text)`, when given, hears of the split's start
+    and of every SAY_EVERY pieces."""
+    say = progress or (lambda text: None)
+    say(f"the a-priori box is too wide for the remainder to contract from: splitting it (at most {PIECES} pieces)")
     keep, nk = list(lin.keep), len(lin.keep)
     t = lin.t_bound
     q_lo, q_hi = (np.array(b, float) for b in outer)
@@ -45,6 +50,8 @@ def proven_box(lin, z, noise, outer, at):
     while todo and pieces < PIECES:
         lo, hi, before = todo.pop()                    # before: the remainders of the two pieces it was made from
         pieces += 1
+        if pieces % SAY_EVERY == 0:
+            say(f"piece {pieces}: {len(left)} kept, {len(todo)} to examine")
         got = _piece(lin, z, noise, q_lo, q_hi, lo, hi, at)
         if got is None:
             continue                                   # no q of this piece fits: refuted
