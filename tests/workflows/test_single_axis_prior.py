@@ -168,3 +168,6 @@ def test_the_split_is_said_and_refutes_a_noise_bound_the_readings_exceed(tmp_pat
     x = json.loads((tmp_path / "x.json").read_text())
     assert "no q of any piece fits every reading within sigma" in " ".join(out.split()) and "disagree" not in out
     assert x["split_refuted"] is True and 5e-6 < x["sigma_min_supported"] < 1e-5
+    from garant.verify.io import schemas
+    schemas.validate(x, "estimate", tmp_path / "x.json")              # its keys are the schema's (docs/fields.md)
+    assert "split_refuted" in schemas.fields("estimate")
