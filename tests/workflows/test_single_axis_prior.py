@@ -149,7 +149,8 @@ def test_the_split_is_said_and_refutes_a_noise_bound_the_readings_exceed(tmp_pat
     # under --prior 1e-2. At --sigma 1e-5 the split is said on stderr and every bound is within 3 sigma, the truth
     # inside. At --sigma 5e-6 every piece is refuted: that refutes sigma (or a premise), exit 3, said so with no
     # reading named (`split_refuted` in the JSON), and the sigma the data support lies between the two (the noise's
-    # own minimax). Before, the remainder over the whole box (0.19) hid it: "consistent", bounds the box's.
+    # own minimax). Before, the remainder over the whole box (0.19) hid it: "consistent", bounds the box's. A unit
+    # beyond the stated bounds is refuted the same way, and said to refute the bounds, not sigma.
     import json
     from garant.verify.cli import main
     data = tmp_path / "s.csv"
@@ -171,3 +172,9 @@ def test_the_split_is_said_and_refutes_a_noise_bound_the_readings_exceed(tmp_pat
     from garant.verify.io import schemas
     schemas.validate(x, "estimate", tmp_path / "x.json")              # its keys are the schema's (docs/fields.md)
     assert "split_refuted" in schemas.fields("estimate")
+    # a block of 3e-2 beyond the stated 1e-2: every piece refuted though a fit within sigma exists, outside the box
+    assert main(["simulate", "--model", "single-axis", "--sigma", "1e-5", "--plan", "grid:30", "--size",
+                 "stand=1e-2,mounting=1e-2,block=3e-2,bias=1e-4", "--seed", "2", "-o", str(data)]) == 0
+    capsys.readouterr()
+    assert main(["estimate", "--model", "single-axis", str(data), "--sigma", "1e-5", "--prior", "1e-2"]) == 3
+    assert "it is the a-priori bounds that the data refute" in " ".join(capsys.readouterr().out.split())

@@ -95,8 +95,10 @@ def print_verdict(res, mod, path):
            "over each: no q of any piece fits every reading within sigma" if res.get("split_refuted") else
            "no q fits every reading within sigma plus the proven remainder left after absorption into q "
            f"({res['remainder_left_bound']:.2e})")
-    print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): {how}; the data support "
-          f"sigma >= {res['sigma_min_supported']:.3g} (to {res['sigma_min_tolerance']:.0%}). "
+    support = (f"the data support sigma >= {res['sigma_min_supported']:.3g} (to {res['sigma_min_tolerance']:.0%})"
+               if res["sigma_min_supported"] > s else "the fit lies within sigma outside that box: it is the a-priori "
+               "bounds that the data refute (raise them: --prior, --bound)")
+    print(f"INCONSISTENT: the data refute sigma = {s:g} (or a premise): {how}; {support}. "
           "No bound is given. Look for the missing effect with `garant diagnose`.")
     print(f"premises: {res['premises']['statement']}")
     d = res["disagreements"]

@@ -481,6 +481,7 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None, progress=None):
             info = InformationSet(lin, y, s - sharp + rb_all + rem.t_residual,
                                   cb * (1 + taylor.SUM_ERROR) + unseparable_q, W, info.binding)
         return rb_all + rem.t_residual, cb, (errs, (lo, hi), info)
+
     def slack(s):
         """Each residual's slack at s (its remainder less what the repeats sharpen), or None where the split of
         the premise box refutes s."""
