@@ -442,7 +442,7 @@ def verdict(lin, z, sigma, W=None, steps=8, sharper=None, progress=None):
             q_lo, q_hi = lin.q_box
             q_lo, q_hi = np.maximum(stuck[0], q_lo), np.minimum(stuck[1], q_hi)
             q_lo[lin.keep], q_hi[lin.keep] = lo[:len(lin.keep)], hi[:len(lin.keep)]
-            found = subdivide.proven_box(lin, z, s - sharp, (q_lo, q_hi), lambda q: at(lin, q), progress)
+            found = subdivide.proven_box(lin, z, s - sharp, (q_lo, q_hi), at, progress)
             split_refuted[0] = found is None         # no q of the box fits within s: s, or a premise, refuted
             if found is not None:                    # with the centre: the remainder is proven about it
                 centre = np.r_[lin.q0[lin.keep], np.zeros(len(lin.T))]

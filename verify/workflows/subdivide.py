@@ -16,13 +16,19 @@ parameters no plan separates set it then, not the q box), is kept as it is. The 
 the hull of what is left holds every q that fits, whenever the premises hold. A budget of pieces (work, not time)
 bounds the search; the pieces not taken up are kept whole.
 """
+import dataclasses
+
 import numpy as np
 
-from ..solve import hull, taylor
-from .remainder import EPS, Remainder
+from ..io.positions import Positions
+from ..solve import highs, hull, taylor
+from .remainder import EPS, Remainder, _columns
 
 #: Pieces examined at most: the single-axis stand on its 12 positions settles in 35 at --prior 1e-2, 152 at 1.5e-2.
 PIECES = 256
+#: Positions a piece is judged on at most, spread over all (a set over fewer readings holds the set over all, so a
+#: piece refuted on them is refuted): the split's cost stops growing with the log.
+POSITIONS = 64
 #: Pieces between two progress lines.
 SAY_EVERY = 32
 #: A piece is cut to the hull of its set (and taken up again) when no q keeps more than this fraction of its width;
@@ -37,10 +43,11 @@ SETTLED = 0.9
 def proven_box(lin, z, noise, outer, at, progress=None):
     """The box of v = (q kept, t) that holds every q the readings allow within the premise box `outer` ((lo, hi) of
     every q, finite: the a-priori estimator's), or None when every piece is refuted (the premises are, then). `z`:
-    the residuals; `noise`: each reading's bound (the noise bound less what repeats sharpen); `at(q)`: the
-    Linearisation moved to the centre q (guarantee.at); `progress(text)`, when given, hears of the split's start
-    and of every SAY_EVERY pieces."""
+    the residuals; `noise`: each reading's bound (the noise bound less what repeats sharpen); `at`: the
+    Linearisation moved to the centre q (guarantee.at: at(lin, q)); `progress(text)`, when given, hears of the
+    split's start and of every SAY_EVERY pieces. The pieces are judged on at most POSITIONS positions."""
     say = progress or (lambda text: None)
+    lin, z, noise = _spread(lin, z, noise)
     say(f"the a-priori box is too wide for the remainder to contract from: splitting it (at most {PIECES} pieces)")
     keep, nk = list(lin.keep), len(lin.keep)
     t = lin.t_bound
@@ -52,7 +59,7 @@ def proven_box(lin, z, noise, outer, at, progress=None):
         pieces += 1
         if pieces % SAY_EVERY == 0:
             say(f"piece {pieces}: {len(left)} kept, {len(todo)} to examine")
-        got = _piece(lin, z, noise, q_lo, q_hi, lo, hi, at)
+        got = _piece(lin, z, noise, q_lo, q_hi, lo, hi, lambda q: at(lin, q))
         if got is None:
             continue                                   # no q of this piece fits: refuted
         cut_lo, cut_hi, rb = got
@@ -112,3 +119,16 @@ def _piece(lin, z, noise, q_lo, q_hi, lo, hi, at):
     if np.any(cut_lo[:nk] > cut_hi[:nk]):
         return None                                    # its set's proven hull misses the piece
     return cut_lo, cut_hi, float(rb.max())
+
+
+def _spread(lin, z, noise):
+    """(lin, z, noise) on at most POSITIONS positions spread over all (highs.spread)."""
+    n = len(lin.positions.f)
+    if n <= POSITIONS:
+        return lin, z, noise
+    rows = highs.spread(n, POSITIONS)
+    cols, pos = _columns(rows), lin.positions
+    sub = Positions(pos.path, pos.angles_deg[rows], pos.f[rows], None if pos.mounts is None else pos.mounts[rows],
+                    {k: np.asarray(v)[rows] for k, v in pos.extra.items()})
+    return (dataclasses.replace(lin, positions=sub, z0=lin.z0[cols], A=lin.A[:, cols], Jt=lin.Jt[cols]), z[cols],
+            noise[cols])
