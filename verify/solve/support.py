@@ -13,6 +13,8 @@ tolerance); a sample whose proven end is farther than GAP of its width from that
 in the next, finer round, within a budget of LPs counted, not timed; past it, a cell is proven by the multipliers
 of the nearest cell solved (sound, less sharp).
 """
+import functools
+
 import numpy as np
 
 from . import hull
@@ -63,7 +65,7 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, x0, solved=None, seen_too=False
         # a cell is its rounded direction, named by a fixed 64-bit hash of it (two cells that share a name are
         # one: a proof holds for any c, so that costs sharpness at most, never soundness)
         rounded = np.round(C[todo] / size[todo, None] / step).astype(np.int64)
-        keys, first, cell = np.unique(rounded @ _HASH[:C.shape[1]], return_index=True, return_inverse=True)
+        keys, first, cell = np.unique(rounded @ _hash()[:C.shape[1]], return_index=True, return_inverse=True)
         cell = cell.ravel()
         names = [(r, int(k)) for k in keys]
         new = [j for j, name in enumerate(names) if name not in solved.cells]
@@ -139,8 +141,11 @@ def _nearest(reps, solved):
 
 #: LP points whose values at every sample are taken at once (the memory of that step: samples x this).
 POINTS_AT_ONCE = 16
-#: Odd 64-bit multipliers of a cell's rounded coordinates (wrapping sums): its name.
-_HASH = np.random.default_rng(20261129).integers(1, 2 ** 62, 256, dtype=np.int64) * 2 + 1
+@functools.cache
+def _hash():
+    """Odd 64-bit multipliers of a cell's rounded coordinates (wrapping sums): its name. Made at first use: numpy.random
+    is 9 ms of a small log's calibrate-norm, which never names a cell."""
+    return np.random.default_rng(20261129).integers(1, 2 ** 62, 256, dtype=np.int64) * 2 + 1
 
 
 def _bases(B, ends):

@@ -9,7 +9,6 @@ summary, never the end of the batch.
 """
 import os
 import sys
-import tomllib
 
 import numpy as np
 
@@ -33,6 +32,7 @@ def read_spec(path):
     [bound_limits] (the guaranteed error itself at most this), each with keys scale, misalignment, bias; and,
     for logs in raw counts, [nominal] sensitivity (counts per g: one number, or one per axis), to which the
     scale is relative, and offset (counts, the reading at zero: the biases are relative to it; default 0)."""
+    import tomllib                                   # (here: a calibration without --spec does not load it)
     from ..io import files
     files.regular(path, "the specification", 1_000_000, param="spec")
     try:
@@ -155,7 +155,6 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
     """Each log calibrated as `calibrate_norm(path, **kwargs)` (a process pool of `jobs`, default every core;
     the same results whatever `jobs`), in the order given: a list of rows (log, status, message, the
     result or None, verdict and reason against `spec` when given). `progress(done, total)` hears of each."""
-    from concurrent.futures import ProcessPoolExecutor
     work = [(p if _in_memory(p) else str(p), kwargs) for p in paths]
     jobs = max(1, min(jobs or cores(), len(work)))
     if jobs == 1:
@@ -164,8 +163,9 @@ def calibrate_many(paths, jobs=None, spec=None, progress=None, **kwargs):
             outcomes.append(_one(w))
             if progress:
                 progress(k, len(work))
-    else:
+    else:                                            # (the pool's modules loaded only here: 10 ms of a log's run)
         import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
         from .. import models                                 # loaded once, here: the forked workers share them
         from ..io import calibration, recordings             # noqa: F401
         from ..solve import hull                             # noqa: F401
