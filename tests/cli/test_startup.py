@@ -47,8 +47,10 @@ def test_a_small_log_s_calibration_loads_no_masked_arrays():
     # repeat session 4 and the Xsens log, docs/bench.md), and np.unique loads it: hull.stacked merged the multipliers'
     # rows with it. Red when any step of a small calibration calls np.unique (or another function that loads it).
     # So for numpy.random (9 ms: support's cell names were drawn at import), the process pool and tomllib (10 ms:
-    # loaded by batch.py for one log without --spec): red when any is imported for one log again.
-    unused = ["numpy.ma", "numpy.random", "concurrent.futures", "multiprocessing", "tomllib"]
+    # loaded by batch.py for one log without --spec), the effects' and thermal modules (for a log without
+    # temperature or effects): red when any is imported for one log again.
+    unused = ["numpy.ma", "numpy.random", "concurrent.futures", "multiprocessing", "tomllib",
+              "garant.verify.workflows.norm_effects", "garant.verify.workflows.norm_thermal"]
     code = ("import sys; from garant.verify.cli import main; main(['calibrate-norm', sys.argv[1], '--g', '9.81744']); "
             f"print([m for m in {unused!r} if m in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code, str(REAL / "repeat_session4_acc.txt")], capture_output=True,

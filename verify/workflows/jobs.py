@@ -305,9 +305,11 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
     thermal degree's, built once), or, for a still warm-up (one orientation), the result of the still-only path.
     `still`: (window, k, min_still) of the stillness detector, for the line that refuses too few intervals."""
     from ..io import recordings
-    from . import norm_effects, norm_problem, norm_thermal
+    from . import norm_problem                      # (the effects' and thermal modules only where they are used)
     mod = models.load("norm")
     thermal = None
+    if temperature is not None or data.temp is not None:
+        from . import norm_thermal
     if temperature is not None:
         norm_thermal.check_degree(temperature)
         if data.temp is None:
@@ -330,6 +332,8 @@ def _norm_problem(data, stills, note, g, params, delta_sigma, bound, effects, te
                        thermal_range=t_range)
     temps, rates = (None, None) if data.temp is None else norm_thermal.of_intervals(data, stills)
     ext = None
+    if effects is not None or thermal is not None:
+        from . import norm_effects
     if effects is not None:
         ext = norm_effects.Extension(mod, norm_effects.parse(effects, mod), stills, temps, data.path, rates)
     elif thermal is not None:
