@@ -104,9 +104,9 @@ def test_a_box_whose_remainder_no_split_lowers_is_split_no_further(monkeypatch):
     # The two-axis stand under --prior 3e-2 on its 96-position grid: a q's estimator interval spans its box with
     # the remainder the larger part, so the box is split, but the remainder is set by the parameters no plan
     # separates (t, within their a-priori bounds), not by the q box: halving a piece does not lower it. Such a
-    # piece is kept as it is (subdivide.SETTLED, over two halvings): 7 pieces, not the budget's 256 (a piece costs
-    # about 0.19 s here); the bounds no wider, the truth inside. Red without the rule (256 pieces). Each piece is
-    # judged on 64 of the 96 positions (subdivide.POSITIONS: 360 positions split in 4.8 s CPU, not 15 s).
+    # piece is kept as it is (subdivide.SETTLED, over two halvings): 7 pieces, not the budget's 256 (the estimate
+    # 1.0 s CPU); the bounds no wider, the truth inside. Red without the rule (256 pieces). Each piece is judged on
+    # 64 of the 96 positions (subdivide.POSITIONS: 360 positions split in 4.8 s CPU, not 15 s; red with all: {96}).
     from garant.verify.power import mems_grid
     from garant.verify.workflows import subdivide
     mod = models.load("two-axis")

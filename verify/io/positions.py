@@ -37,6 +37,12 @@ class Positions:
         """Each angle as read, radians, one array per angle."""
         return tuple(np.deg2rad(self.angles_deg[:, i]) for i in range(self.angles_deg.shape[1]))
 
+    def at(self, rows):
+        """The positions at these rows (indices), every column with them."""
+        return Positions(self.path, self.angles_deg[rows], self.f[rows],
+                         None if self.mounts is None else self.mounts[rows],
+                         {k: np.asarray(v)[rows] for k, v in self.extra.items()})
+
 
 def _number(text, path, line, col):
     try:

@@ -297,8 +297,7 @@ def _moves(lin, j, size=1e-2, count=24):
     mod, pos = lin.mod, lin.positions
     rng = np.random.default_rng(0)
     rows = rng.choice(len(pos.f), min(count, len(pos.f)), replace=False)
-    sub = Positions(pos.path, pos.angles_deg[rows], pos.f[rows], None if pos.mounts is None else pos.mounts[rows],
-                    {k: np.asarray(v)[rows] for k, v in pos.extra.items()})
+    sub = pos.at(rows)
     p = rng.uniform(-size, size, lin.L.shape[0])
     step = lin.L[:, lin.A.shape[0] + j] * lin.t_bound[j]
     return bool(np.abs(guarantee._z_exact(mod, sub, p + step, lin.premises.g)

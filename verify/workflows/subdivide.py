@@ -20,7 +20,6 @@ import dataclasses
 
 import numpy as np
 
-from ..io.positions import Positions
 from ..solve import highs, hull, taylor
 from .remainder import EPS, Remainder, _columns
 
@@ -127,8 +126,6 @@ def _spread(lin, z, noise):
     if n <= POSITIONS:
         return lin, z, noise
     rows = highs.spread(n, POSITIONS)
-    cols, pos = _columns(rows), lin.positions
-    sub = Positions(pos.path, pos.angles_deg[rows], pos.f[rows], None if pos.mounts is None else pos.mounts[rows],
-                    {k: np.asarray(v)[rows] for k, v in pos.extra.items()})
-    return (dataclasses.replace(lin, positions=sub, z0=lin.z0[cols], A=lin.A[:, cols], Jt=lin.Jt[cols]), z[cols],
-            noise[cols])
+    cols = _columns(rows)
+    return (dataclasses.replace(lin, positions=lin.positions.at(rows), z0=lin.z0[cols], A=lin.A[:, cols],
+                                Jt=lin.Jt[cols]), z[cols], noise[cols])
