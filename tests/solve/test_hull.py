@@ -246,3 +246,35 @@ def test_the_row_generation_measures_only_rows_that_can_be_violated_and_misses_n
         top = np.argsort(-V[:, j])[:per_end]
         want |= set(top[V[top, j] > hull.TOLERANCE].tolist())
     assert sorted(want) == got.tolist() and 0 < len(want) < rows - 50
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_objectives_that_are_multiples_of_one_share_its_lps_and_each_end_stays_above_the_exact_optimum(seed):
+    # An effect's term on one axis at every interval is t_k e_j: objectives multiples of one another. Those equal in
+    # floats once scaled to largest entry 1 (t e_j always; c times a power of 2) cost one LP pair: 4 LPs for these 6
+    # rows, sign flips among them. Each end is proven by its own multipliers (the shared ones times t): above the
+    # exact optimum in rationals, and what the row gives alone. Red when every row is solved (12 LPs) or when a
+    # flipped row takes the other end's multipliers (a wrong bound).
+    rng = np.random.default_rng(seed)
+    B, x0, lo, hi = _polytope(rng, 12, 2)
+    xl, xh = x0 - 5, x0 + 5
+    c = rng.normal(size=2)
+    C = np.array([c, -2.0 * c, 0.25 * c, [c[0], 0.0], [-7e-3, 0.0], [5.0, 0.0]])
+    solved = []
+    inner = highs.solve
+
+    def counted(h, *a, **k):
+        solved.append(1)
+        return inner(h, *a, **k)
+    highs.solve = counted
+    try:
+        got_lo, got_hi = hull.ranges(B, lo, hi, xl, xh, C)
+    finally:
+        highs.solve = inner
+    assert len(solved) == 4                               # c's pair and [c_1, 0]'s
+    for k, row in enumerate(C):
+        top, bottom = _exact_max(row, B, lo, hi, xl, xh), -_exact_max(-row, B, lo, hi, xl, xh)
+        assert Fraction(got_hi[k]) >= top and Fraction(got_lo[k]) <= bottom
+        alone_lo, alone_hi = hull.ranges(B, lo, hi, xl, xh, row[None])
+        assert abs(got_hi[k] - alone_hi[0]) <= 1e-9 * (1 + abs(alone_hi[0]))
+        assert abs(got_lo[k] - alone_lo[0]) <= 1e-9 * (1 + abs(alone_lo[0]))

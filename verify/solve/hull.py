@@ -112,7 +112,8 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     the rest unsolved; an end within them is what it would be without. `sweep`: the ends solved every maximum,
     then every minimum in reverse, each LP warm-started from its neighbour's basis (for many objectives that change
     little from row to row: half the simplex iterations of alternating max and min); else each row's two ends in
-    turn."""
+    turn. Rows of C that are multiples of one another share one LP pair (`_alike`); each end is still proven by
+    its own multipliers (the shared ones times the multiple)."""
     B = np.asarray(B, float)
     C = np.atleast_2d(np.asarray(C, float))
     row_lo, row_hi = np.asarray(row_lo, float), np.asarray(row_hi, float)
@@ -141,8 +142,10 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
     unit = np.abs(Cs).max(axis=1)                  # each objective handed over at unit size: HiGHS's optimality
     unit = np.where(unit > 0, unit, 1.0)           # tolerances are absolute (its duals are scaled back below)
     Cs = Cs / unit[:, None]
-    ends = ([(k, 1.0) for k in range(len(C))] + [(k, -1.0) for k in reversed(range(len(C)))] if sweep else
-            [(k, sign) for k in range(len(C)) for sign in (1.0, -1.0)])
+    rep, flip = _alike(Cs) if beyond is None else (np.arange(len(C)), np.ones(len(C)))
+    own = [k for k in range(len(C)) if rep[k] == k]   # the rows solved; a multiple of one shares its LPs
+    ends = ([(k, 1.0) for k in own] + [(k, -1.0) for k in reversed(own)] if sweep else
+            [(k, sign) for k in own for sign in (1.0, -1.0)])
     found = {}                                     # (k, sign) -> (row duals over S as it then was, x), or None
     norms = None                                   # each scaled row's 2-norm, once rows are generated
     todo = ends
@@ -170,6 +173,9 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
         V = _violation(Bs[new], X, lo_s[new], hi_s[new])
         todo = [e for e, col in zip(keys, V.T) if col.max() > TOLERANCE] + [e for e in ends if found[e] is None]
     K = len(C)
+    for k in np.flatnonzero(rep != np.arange(K)):     # c_k = t c_rep: max c_k is max (or min) c_rep, its x the same,
+        for sign in (1.0, -1.0):                       # its lambda that one's times |t| (unit[k] below)
+            found[k, sign] = found[rep[k], sign * flip[k]]
     signs = np.array([1.0, -1.0])
     objectives = (signs[None, :, None] * C[:, None, :]).reshape(2 * K, -1)     # (k, +), (k, -), ...
     lam = [_multipliers(found[k, sign], S, unit[k], r) for k in range(K) for sign in signs]
@@ -184,6 +190,19 @@ def ranges(B, row_lo, row_hi, col_lo, col_hi, C, points=False, multipliers=False
            for k in range(K)]
     lams = [(used[2 * k + 1], used[2 * k]) for k in range(K)]
     return (out_lo, out_hi) + ((pts,) if points else ()) + ((lams,) if multipliers else ())
+
+
+def _alike(Cs):
+    """(rep, flip) for objectives Cs (one a row, each scaled to largest |entry| 1): rep[k] the first row equal to
+    row k times flip[k] (+1 or -1), exactly in floats; k itself when none comes before. Objectives that are multiples
+    of one another (an effect's term on one axis at every interval, t_k e_j) then cost one LP pair, not one each."""
+    K = len(Cs)
+    lead = Cs[np.arange(K), np.argmax(np.abs(Cs), axis=1)] if K else np.zeros(0)
+    sign = np.where(lead < 0, -1.0, 1.0)
+    first, rep = {}, np.arange(K)
+    for k, row in enumerate(Cs * sign[:, None] + 0.0):            # + 0.0: -0.0 and 0.0 alike
+        rep[k] = first.setdefault(row.tobytes(), k)
+    return rep, sign * sign[rep]
 
 
 def _violation(Bs, X, lo_s, hi_s):
