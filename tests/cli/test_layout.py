@@ -3,6 +3,7 @@
 Read statically (ast), function-level imports included, so a lazy import cannot hide a circle.
 """
 import ast
+import functools
 import shutil
 import subprocess
 import sys
@@ -30,6 +31,12 @@ def modules():
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def parsed(path):
+    """The module's syntax tree, parsed once for every test of this file (none changes it)."""
+    return ast.parse(path.read_text())
+
+
 def _at_import_time(tree):
     """The nodes that run when the module is imported: everything but the bodies of functions."""
     todo = list(tree.body)
@@ -46,7 +53,7 @@ def imports(name, path, known, at_import=False):
     is_pkg = path.name == "__init__.py"
     here = name.split(".") if is_pkg else name.split(".")[:-1]
     found = set()
-    tree = ast.parse(path.read_text())
+    tree = parsed(path)
     for node in (_at_import_time(tree) if at_import else ast.walk(tree)):
         if isinstance(node, ast.Import):
             targets = [a.name for a in node.names]
@@ -64,6 +71,7 @@ def imports(name, path, known, at_import=False):
     return found
 
 
+@functools.lru_cache(maxsize=None)
 def graph():
     known = modules()
     return {n: imports(n, p, known) for n, p in known.items()}
@@ -225,7 +233,7 @@ def test_only_commands_print_and_only_io_plots():
         rel = str(path.relative_to(ROOT))
         if rel.startswith(allowed):
             continue
-        tree = ast.parse(path.read_text())
+        tree = parsed(path)
         main_blocks = {id(n) for node in tree.body if isinstance(node, ast.If) and "__main__" in ast.unparse(node.test)
                        for n in ast.walk(node)}
         for node in ast.walk(tree):
@@ -243,7 +251,7 @@ def test_every_public_definition_has_a_docstring():
     # (141 of 494 had none).
     missing = []
     for name, path in modules().items():
-        tree = ast.parse(path.read_text())
+        tree = parsed(path)
         for node in tree.body:
             for it in [node] + (node.body if isinstance(node, ast.ClassDef) else []):
                 if isinstance(it, (ast.FunctionDef, ast.ClassDef)) and not it.name.startswith("_") \

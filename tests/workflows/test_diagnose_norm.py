@@ -33,16 +33,18 @@ def static_log(path, effect, seed=0, directions=36, noise=2e-5, rate=100, still_
     rng = np.random.default_rng(seed)
     truth = np.concatenate([rng.uniform(-2e-3, 2e-3, 9), np.zeros(7)])
     dirs = rng.normal(size=(directions, 3))
-    rows, now = [], 0.0
-    for m in dirs / np.linalg.norm(dirs, axis=1, keepdims=True):
-        for _ in range(int(still_s * rate)):
-            f = G * N.readings(m, truth) + EFFECTS[effect](G * m, now) + G * rng.uniform(-noise, noise, 3)
-            rows.append([now, *f, _warm_up(now)])
-            now += 1 / rate
-        for _ in range(int(move_s * rate)):
-            rows.append([now, *(G * rng.normal(size=3)), _warm_up(now)])
-            now += 1 / rate
-    rows = np.array(rows)
+    n_still, n_move = int(still_s * rate), int(move_s * rate)
+    t, now = [], 0.0                      # time by repeated steps of 1/rate (as a sample-by-sample loop makes it)
+    for _ in range(directions * (n_still + n_move)):
+        t.append(now)
+        now += 1 / rate
+    t = np.array(t).reshape(directions, n_still + n_move)
+    blocks = []
+    for m, tk in zip(dirs / np.linalg.norm(dirs, axis=1, keepdims=True), t):   # a direction's samples at once,
+        still = tk[:n_still, None]                                                # drawn in the same order
+        f = G * N.readings(m, truth) + EFFECTS[effect](G * m, still) + G * rng.uniform(-noise, noise, (n_still, 3))
+        blocks += [f, G * rng.normal(size=(n_move, 3))]
+    rows = np.column_stack([t.ravel(), np.vstack(blocks), _warm_up(t.ravel())])
     np.savetxt(path, rows if temperature else rows[:, :4], delimiter=",", comments="", fmt="%.10g",
                header="time_s,ax,ay,az" + (",temp_c" if temperature else ""))
     return path
