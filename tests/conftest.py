@@ -112,3 +112,10 @@ def warm_truth_readings(truth, g, count, lo, hi, seed):
                for x, th in truth["effects"].items())
     return m, T, np.linalg.solve(np.array(truth["matrix"]), g * (m + term)).T + np.array(truth["bias"])
 
+
+
+def fast_first(cases, keep=1):
+    """Parametrize cases with the first `keep` in the fast lane and the rest marked slow (`pytest -m "not slow"` runs a
+    case of the test, the whole suite every case). A case of several arguments is a tuple."""
+    return [c if k < keep else pytest.param(*(c if isinstance(c, tuple) else (c,)), marks=pytest.mark.slow)
+            for k, c in enumerate(cases)]

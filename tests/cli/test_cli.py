@@ -24,6 +24,7 @@ def run(argv, capsys):
     return rc, out.out, out.err
 
 
+@pytest.mark.slow
 def test_plan_json(tmp_path, capsys):
     rc, out, _ = run(["plan", "--model", "two-axis", "--json", str(tmp_path / "p.json")], capsys)
     d = json.loads((tmp_path / "p.json").read_text())

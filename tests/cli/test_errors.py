@@ -24,6 +24,7 @@ def _names_its_parameter(call):
             or any(isinstance(n, ast.Call) and getattr(n.func, "id", None) == "opt" for n in ast.walk(call)))
 
 
+@pytest.mark.slow
 def test_every_data_error_names_its_parameter():
     # Red when a DataError is raised with no param (46 of 242 sites named one before).
     sites = list(_sites())

@@ -126,6 +126,7 @@ def test_oversized_or_undecodable_description_refused_fast(tmp_path, capsys, mak
     refused(["plan", "--model", path], capsys, *words)
 
 
+@pytest.mark.slow
 def test_description_with_bom_is_read(tmp_path, capsys):
     (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbf" + BASE.encode())
     code, err = run(["derive", tmp_path / "s.toml", "--out", tmp_path / "out"], capsys)
@@ -171,6 +172,7 @@ def test_non_finite_numbers_refused(tmp_path, capsys, option, value):
     assert e.value.code == 2 and len(err) == 1 and option in err[0]
 
 
+@pytest.mark.slow
 def test_output_paths_checked_before_any_work(tmp_path, capsys):
     sim = tmp_path / "d.csv"
     assert main(["simulate", "--model", "two-axis", "--plan", "optimal10", "--sigma", "1e-5", "-o", str(sim)]) == 0
@@ -569,6 +571,7 @@ def _checked(path, capsys):
     return code, capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_the_plan_certificates_of_a_detent_stand_hold(wedge_certificates, capsys):
     # The other side of the forgeries below: what `garant plan --certificates` wrote holds.
     for path in sorted((wedge_certificates / "c").glob("*.json")):

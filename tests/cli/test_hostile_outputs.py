@@ -288,6 +288,7 @@ def test_a_noise_bound_below_what_doubles_resolve_is_refused(tmp_path, capsys):
     assert e.value.code == 2 and err.count("\n") == 1 and "'5e-324' must be at least 1e-12" in err
 
 
+@pytest.mark.slow
 def test_a_file_name_of_nested_mathtext_draws_as_written(tmp_path, capsys):
     # A file name with nested $\sqrt{...}$ ended every plot in RecursionError.
     name = "a$" + "\\sqrt{" * 30 + "x" + "}" * 30 + "$.csv"
@@ -375,6 +376,7 @@ def test_a_plot_of_another_format_is_refused_before_any_work(tmp_path, capsys):
             "name the file .png, .svg or .pdf", outputs=[tmp_path / "p.txt", tmp_path / "p.json"])
 
 
+@pytest.mark.slow
 def test_a_folder_in_the_way_of_a_report_file_is_named(tmp_path, capsys):
     # A report folder whose residuals.png is a folder gave an error naming a temporary .part path.
     (tmp_path / "rep" / "residuals.png").mkdir(parents=True)
@@ -461,6 +463,7 @@ def test_a_spec_of_deeply_nested_arrays_is_one_line_before_any_log(tmp_path, cap
     ("axis = [0, 1, 1]", "axis = [0.123456789012345, 0.98765432109876, 0.5555555555555]"),
     ("axis = [0, 1, 1]", "axis = [999983, 999979, 999961]"),
 ])
+@pytest.mark.slow
 def test_a_turning_axis_of_many_digits_derives(tmp_path, capsys, old, new):
     # These axes took 49 s and 18.5 s to derive: each is now an ordinary derivation (the work bounded by the
     # derivation's own budgets, not timed here).

@@ -75,6 +75,7 @@ def test_a_temperature_that_is_no_celsius_is_refused_in_one_line(tmp_path, capsy
     assert err.count("\n") == 1 and "is not in C within -100 to 200 (a kelvin column? give C)" in err
 
 
+@pytest.mark.slow
 def test_effects_twice_join_and_effects_on_12_parameters_are_refused_in_one_line(tmp_path, capsys):
     # Case 11: `--effect bias_drift --effect scale_quadratic` dropped the first; case 8: `--effect scale_quadratic
     # --params 12` ended in a broadcasting ValueError, exit 1.

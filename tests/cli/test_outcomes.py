@@ -51,6 +51,7 @@ def test_a_parameter_a_stand_cannot_observe_is_said_from_the_exception_not_its_t
     assert e.value.names == ("kappa",) and "cannot be observed" in e.value.why and ": " not in e.value.why[:9]
 
 
+@pytest.mark.slow
 def test_no_status_or_verdict_is_spelt_as_a_string_outside_outcomes():
     # A status or verdict compared with, or given as a status/verdict, a bare string ("premise refuted", "pass")
     # drifts from the one declaration; red when a module writes `row["status"] == "refuted"`, `status="done"` or

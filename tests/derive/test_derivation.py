@@ -102,6 +102,7 @@ def test_small_turn_is_E_plus_hat_to_first_order(theta):
     assert np.abs(R - E_hat).max() <= 2 * max(abs(t) for t in theta) ** 2 + 1e-15
 
 
+@pytest.mark.slow
 def test_trig_degree_counts_links_and_effect_powers():
     # The readings are a trigonometric polynomial of degree (links driven by the angle) x (the power of
     # the specific force in the sensor effects); no polynomial with a harmonic encoder error or |w|.

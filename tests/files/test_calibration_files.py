@@ -46,6 +46,7 @@ def test_round_trip_norm_calibration(tmp_path, name):
 
 
 @needs_real
+@pytest.mark.slow
 def test_apply_command_writes_corrected_log(tmp_path, capsys):
     cal, out = tmp_path / "c.json", tmp_path / "a.csv"
     log = str(REAL / "repeat_session2_acc.txt")
@@ -204,6 +205,7 @@ def test_outputs_honour_the_umask(tmp_path):
     assert mode("a.json") == mode("b.png") == 0o644 and mode("c.csv") == 0o600
 
 
+@pytest.mark.slow
 def test_a_known_g_keeps_the_scale_factor_bounds_of_the_estimate(tmp_path, capsys):
     # Delta_g cannot be separated from the scale factors, so a stand calibration's diagonal bound
     # carries Delta_g's a-priori bound; it came from --prior (1e-3) while the estimate said 1.3e-5. With

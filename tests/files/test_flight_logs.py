@@ -10,7 +10,7 @@ import pytest
 from garant.verify.cli import main
 from garant.verify.errors import DataError
 from garant.verify.io import flight, recordings
-from conftest import REAL, ROOT, flat, needs_real
+from conftest import REAL, ROOT, flat, needs_real, fast_first
 
 FLIGHT = REAL / "flight"
 G = 9.81
@@ -144,6 +144,7 @@ def _warm_ulog(tmp_path, parameters=None, instance=0, samples=None):
 
 
 @needs_real
+@pytest.mark.slow
 def test_a_warm_up_in_a_ulog_calibrates_into_the_slot_px4_will_use(tmp_path, capsys):
     # Done when of the flight-log issue: `calibrate-norm LOG.ulg --imu 2424842 --thermal-degree 1 --export-px4
     # tc.params` without --px4-device-id puts the thermal rows in slot 0 (the vehicle's CAL_ACC0 holds 2424842),
@@ -233,7 +234,7 @@ def _still(tmp_path, S=2e-5):
     return log, beta
 
 
-@pytest.mark.parametrize("S, degree", [(2e-5, 1), (None, 1), (2e-5, 2)])
+@pytest.mark.parametrize("S, degree", fast_first([(2e-5, 1), (None, 1), (2e-5, 2)]))
 def test_a_still_warm_up_writes_the_stacks_offset_polynomials_under_the_scale_drift_premise(tmp_path, capsys, S,
                                                                                             degree):
     # PX4's and ArduPilot's own procedure (the board still while it heats) was refused any file. Now the offset
@@ -323,6 +324,7 @@ def test_the_flight_controller_example_of_the_docs_runs_as_written(tmp_path, mon
 
 
 @needs_real
+@pytest.mark.slow
 def test_imu_all_calibrates_each_accelerometer_of_a_ulog_and_says_which_cannot(tmp_path, capsys):
     # --imu all on the warm-up ULog: instance 0 (the warm-up) calibrates; 1 and 2 (6 samples each, as logged) are
     # each said in a line and the others go on, as a batch does; the exit status says some could not be calibrated.
@@ -335,6 +337,7 @@ def test_imu_all_calibrates_each_accelerometer_of_a_ulog_and_says_which_cannot(t
     assert res["IMU 0"]["consistent"] and "only 6 samples" in res["IMU 1"]["error"]
 
 
+@pytest.mark.slow
 def test_a_ros_bag_calibrates_as_its_csv_twin(tmp_path, capsys):
     # Kalibr's users record sensor_msgs/Imu in a bag: a hand-turned log written into a ROS 1 bag (rosbags' writer,
     # the header stamps the times) and the same samples as a csv (times and readings written to round-trip exactly)

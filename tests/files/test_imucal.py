@@ -40,6 +40,7 @@ def test_imucals_own_calibration_lies_inside_garants_bounds(calibrated):
     assert np.all(np.abs(np.asarray(info.b_a) - np.asarray(g["b"])) <= np.asarray(g["bound_bias"]))
 
 
+@pytest.mark.slow
 def test_the_imucal_export_loads_in_imucal_and_corrects_as_garant_apply(calibrated, tmp_path, capsys):
     # --export-imucal writes imucal's FerrarisCalibrationInfo; imucal's load_calibration_info reads
     # it and its calibrate_df gives `garant apply`'s output.
@@ -118,6 +119,7 @@ def test_imucals_session_calibrates_scale_and_bias_with_the_misalignment_premise
     assert "takes bounds of the misalignments alpha, beta, gamma" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_dataframe_in_gives_a_calibrated_copy_out(calibrated):
     # imucal's habit, calibrate_df: a DataFrame with acc_x, acc_y, acc_z (no time: rate over
     # its index) is corrected into a copy, its other columns kept, the bounds beside.

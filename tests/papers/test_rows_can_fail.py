@@ -117,6 +117,7 @@ def test_norm_estimators_red_on_a_broken_estimator():
     assert failed(norm_001.estimators(variant(NORM, ESTIMATOR_TERMS=terms)))
 
 
+@pytest.mark.slow
 def test_norm_continuum_red_on_a_wrong_dual():
     duals = np.array(NORM.DUALS, float)
     duals[9, 7] = 0.0                                    # the Chebyshev polynomial loses a term

@@ -2,6 +2,7 @@
 import ast
 
 import highspy
+import pytest
 
 from conftest import ROOT
 from garant.verify.solve import highs
@@ -61,6 +62,7 @@ def test_a_failure_carries_the_solvers_status():
     assert str(e) == "dual (9)-(10): Iteration limit reached" and e.status == "iteration limit reached"
 
 
+@pytest.mark.slow
 def test_highs_is_run_only_through_solve():
     # The three hand-written retry dances (hull, l1 estimators, the scheduler) are one function now; red when a
     # function other than solve/highs.py's `solve` calls a HiGHS's run() or clearSolver() again (hull.py as it was;

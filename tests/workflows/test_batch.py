@@ -123,6 +123,7 @@ def test_a_recording_that_proves_nothing_is_retest_not_fail(tmp_path, capsys):
 
 
 @needs_real
+@pytest.mark.slow
 def test_a_log_in_raw_counts_is_judged_against_its_nominal_sensitivity(tmp_path, capsys):
     """The Xsens log in raw counts had no verdict at all (always undecided). With [nominal] sensitivity and
     offset in the spec, its parameters relative to the nominal are judged: the same unit's log converted to

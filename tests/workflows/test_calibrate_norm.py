@@ -10,7 +10,7 @@ from garant.verify.workflows.stills import _segment, still_intervals
 from garant.verify.workflows import calibrate_norm, norm_bounds, norm_information
 from garant.verify.cli import main
 from garant.verify.workflows.norm_problem import problem
-from conftest import G_REAL as G, REAL, needs_real, flat
+from conftest import G_REAL as G, REAL, needs_real, flat, fast_first
 
 
 def synthetic_log(path, params, directions, noise, seed=0, still_s=3.0, move_s=2.0, rate=100):
@@ -343,7 +343,7 @@ def _independent_hull(res):
     return np.array(half)
 
 
-@pytest.mark.parametrize("n, seed", [(24, 1), (96, 2), pytest.param(400, 3, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("n, seed", fast_first([(24, 1), (96, 2), (400, 3)]))
 def test_the_norm_bounds_sit_at_the_limit_the_readings_prove(tmp_path, n, seed):
     # q of (2.2) of 001 at the limit: logs of 24 to 400 still intervals in random directions (noise within 1e-4
     # g, errors of 2e-3): the median printed bound is within 1 % of an independent hull of the same set (cvxpy:

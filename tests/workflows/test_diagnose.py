@@ -58,12 +58,14 @@ def test_two_hidden_effects_both_named(tmp_path):
     assert sorted(res["effects"]) == ["bias_drift", "scale_quadratic"] and res["consistent_after"]
 
 
+@pytest.mark.slow
 def test_invisible_effect_is_blind_not_guessed(tmp_path):
     # u_i u_j = 0 at every quarter-turn position: cross-coupling cannot show on quarter16.
     res = run(tmp_path, "quarter16", [("cross_coupling", [10 * S] * 6)], 0)
     assert "cross_coupling" in res["blind_to"] and res["effects"] == [] and res["consistent_before"]
 
 
+@pytest.mark.slow
 def test_indistinguishable_on_quarter_turns(tmp_path):
     # |u_i| = u_i^2 on quarter turns: asymmetry and quadratic scale explain the data equally.
     res = run(tmp_path, "quarter16", [("scale_asymmetry", [10 * S, 0, 0])], 0)

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import STANDS, write_csv
+from conftest import STANDS, write_csv, fast_first
 from garant.verify import models
 from garant.verify.cli import main
 from garant.verify.io import calibration
@@ -60,7 +60,7 @@ def _independent_hull(mod, pos):
     return np.array(half)
 
 
-@pytest.mark.parametrize("n, seed", [(24, 1), (96, 2), pytest.param(400, 3, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("n, seed", fast_first([(96, 2), (24, 1), (400, 3)]))
 def test_the_bounds_sit_at_the_limit_the_readings_prove(n, seed):
     # q at the limit: at 24 to 400 random positions (uniform noise within sigma, a small unit) the median printed
     # bound is within 1 % of an independent hull of the same set (cvxpy, H of (3) at zero errors, no remainder);
@@ -111,6 +111,7 @@ def test_more_readings_never_widen_a_bound(tmp_path):
     assert np.median(e_big / e_small) < 0.7
 
 
+@pytest.mark.slow
 def test_repeated_readings_prove_what_every_row_proves():
     # Rows read again at the same position were averaged and kept within sigma: three readings of 24 positions
     # printed bounds 1.2-2.4x those of their first readings alone (a subset). Each row within sigma of one
@@ -142,7 +143,8 @@ def test_repeated_readings_prove_what_every_row_proves():
     assert np.all(np.abs(q - models.q_of(mod, p)) <= e) and e.max() < 1e-3 * SIGMA, e / SIGMA
 
 
-@pytest.mark.parametrize("model, prior", [("single-axis", 1e-4), ("single-axis", 5e-3), ("three-axis", 1.5e-2)])
+@pytest.mark.parametrize("model, prior", fast_first([("single-axis", 5e-3), ("single-axis", 1e-4),
+                                                     ("three-axis", 1.5e-2)]))
 def test_a_stand_under_a_prior_contracts_and_more_readings_never_widen(model, prior):
     # The single-axis stand under --prior 5e-3 printed 1.2e4-4.6e5 sigma on its 12 positions read 3 times, 9,108x
     # its own 8-position plan: the mounting its absorbed turn leaves was bounded by 0.091 rad (premises._turned,
@@ -358,6 +360,7 @@ def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
     assert np.all(np.abs(got - Gamma) <= bound), np.abs(got - Gamma) / np.maximum(bound, 1e-300)
 
 
+@pytest.mark.slow
 def test_a_premise_no_data_can_check_is_named():
     # Where a premise remains that the data cannot refute, the premises line names it. On the
     # 90-degree wedge (only Delta_g absorbed: its instrument-side link turns about z, which the mounting's theta1

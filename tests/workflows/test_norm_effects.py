@@ -10,7 +10,7 @@ from garant.generated import norm as N
 from garant.verify.cli import main
 from garant.verify.io import schemas
 from garant.verify.workflows import jobs
-from conftest import G_REAL, REAL, ROOT, needs_real, flat, command_line
+from conftest import G_REAL, REAL, ROOT, needs_real, flat, command_line, fast_first
 from test_diagnose_norm import EFFECTS, G, _warm_up, static_log
 
 #: The hidden effects' parameters as the generator of test_diagnose_norm.py adds them (over g, the units of the
@@ -42,7 +42,7 @@ def test_the_true_effects_are_the_generators():
         np.testing.assert_allclose(mine, theirs, rtol=1e-12, atol=1e-15)
 
 
-@pytest.mark.parametrize("effect", list(TRUE))
+@pytest.mark.parametrize("effect", fast_first(list(TRUE)))
 def test_the_named_effect_is_added_and_the_truth_lies_in_every_bound(tmp_path, effect):
     # Each log refutes the 9-parameter model; the diagnosis ends with the set whose whole calibration is consistent,
     # the hidden effect (a quadratic scale factor is named as cross-coupling to first order, and the second order
@@ -74,6 +74,7 @@ def test_a_log_without_an_effect_names_nothing_and_adds_nothing(tmp_path):
     assert d["named"] == [] and d["add"] is None and d["checked"] == {}
 
 
+@pytest.mark.slow
 def test_the_cross_coupling_log_is_not_said_to_be_a_quadratic_scale_factor(tmp_path):
     # The quadratic scale factor is nested in cross-coupling (n_i^3 = n_i - n_i n_j^2 - n_i n_k^2 on the sphere),
     # but a log with cross-coupling the quadratic one cannot fit (worst residual 77 noise bounds) tells them apart:
@@ -275,6 +276,7 @@ def test_a_warm_up_calibrates_over_temperature_and_the_flight_stacks_files_remov
     assert "--thermal-degree needs each sample's temperature" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_still_only_warm_up_gives_each_axis_drift_and_names_what_it_cannot_separate(tmp_path, capsys):
     # ArduPilot's procedure: the board still, level, while it heats 20 -> 48 C over 20 min, each axis's reading
     # drifting by g x (2e-5, -2e-5, 1.5e-5) per C, noise within 2e-4 m/s^2. `calibrate-norm --thermal-degree 1` cuts

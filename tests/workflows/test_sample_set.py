@@ -476,6 +476,7 @@ def test_a_single_axis_file_over_temperature_bounds_each_sample_by_the_sup_over_
     assert main(["budget", str(cal_path)]) == 2          # not read as a two-axis file's rows: refused in one line
 
 
+@pytest.mark.slow
 def test_a_set_too_large_for_a_file_keeps_the_rows_that_can_bind_and_is_the_same_set():
     # A set over MAX_ENTRIES numbers was not carried (the box bound alone; a 3,000-interval norm log's file held
     # none). The rows that cannot bind are dropped (sample_set.binding: strictly inside over the box, or by their

@@ -39,6 +39,7 @@ def assert_thermal_truth(th, truth):
     return worst
 
 
+@pytest.mark.slow
 def test_simulate_makes_a_warm_up_that_degree_1_calibrates_with_the_truth_inside(tmp_path, capsys):
     # A user who wants to see the warm-up path work had to write a generator. `garant simulate --model norm` writes
     # the log of a unit turned by hand through 36 orientations while it warms from 20 towards 45 C (csv with temp_c)
@@ -62,6 +63,7 @@ def test_simulate_makes_a_warm_up_that_degree_1_calibrates_with_the_truth_inside
     assert_thermal_truth(res["thermal"], truth["thermal"])
 
 
+@pytest.mark.slow
 def test_apply_corrects_the_warm_up_it_came_from_and_counts_what_lies_outside(tmp_path, capsys, monkeypatch):
     # `apply CAL WARMUP.csv` refused the whole log: its first samples (before the first still interval) are below
     # the calibrated range. Now they are dropped and counted on the summary line (exit 0); every sample written is
@@ -184,6 +186,7 @@ def test_a_warm_up_too_short_for_its_degree_says_what_to_record(tmp_path, capsys
 @pytest.mark.parametrize("effects", [
     {"cross_coupling": [1.5e-4, 0, 0, 1.5e-4, -1.5e-4, 0], "bias_temperature": [3e-6, -3e-6, 2e-6]},
     {"scale_asymmetry": [1.5e-4, -1.5e-4, 1e-4], "scale_temperature": [1e-5, -1e-5, 1e-5]}])
+@pytest.mark.slow
 def test_effect_pairs_with_temperature_calibrate_with_the_truth_inside(tmp_path, effects):
     # Pairs that include temperature, on 36 intervals of a MEMS warm-up (3e-2 errors): consistent, every base
     # parameter and every effect parameter within its bound, in the convention printed.
