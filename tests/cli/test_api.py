@@ -23,6 +23,7 @@ def test_plan_of_the_api_is_the_plan_of_the_command(tmp_path, capsys, model):
     assert garant.plan(model, count_nodes=5) == json.loads(out.read_text())
 
 
+@pytest.mark.slow
 def test_estimate_takes_an_array_or_a_file_alike(tmp_path):
     from garant.generated import two_axis as mod
     P = np.array([(a, b) for a in range(0, 360, 45) for b in range(0, 360, 45)], float)
@@ -37,6 +38,7 @@ def test_estimate_takes_an_array_or_a_file_alike(tmp_path):
         garant.estimate("two-axis", np.column_stack([P, f]), -1.0)
 
 
+@pytest.mark.slow
 def test_results_are_objects_with_the_documented_fields(tmp_path):
     # Like scipy's OptimizeResult: fields as keys and attributes, arrays kept as arrays, to_dict() the
     # command's JSON itself (the same code path), a short repr, an HTML table; docs/api.md lists every field

@@ -131,6 +131,7 @@ def test_a_command_that_fails_after_writing_leaves_every_old_file_and_no_new_one
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.csv", "r.json"]     # no p.png, rep/, .part
 
 
+@pytest.mark.slow
 def test_a_write_past_ulimit_f_keeps_the_old_file(tmp_path):
     # `ulimit -f` truncated an output in place (and killed the process with SIGXFSZ).
     import resource
@@ -234,6 +235,7 @@ def test_next_draws_its_plot_when_done(tmp_path, capsys):
     assert (tmp_path / "n.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_next_stops_when_repeated_readings_already_refute_sigma(tmp_path, capsys):
     # Readings repeated 2000 sigma apart, before every q has an estimator, still gave a position.
     P, f = _plan_rows()

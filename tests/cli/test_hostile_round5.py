@@ -220,6 +220,7 @@ def test_a_batch_never_replaces_an_earlier_batch_nor_writes_through_a_link_plant
     assert (planted / "summary.csv").read_bytes() == log.read_bytes()
 
 
+@pytest.mark.slow
 def test_candidates_from_detents_are_held_to_max_candidates_before_any_work(tmp_path, capsys):
     # Case 25: 72 detents on each of two angles gave 5,184 candidates per mounting whatever --max-candidates said
     # (a --grid of that size was refused at once); three mountings, 15,552, ran out of time or memory.

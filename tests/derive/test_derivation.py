@@ -209,6 +209,7 @@ def test_the_effects_jacobian_bound_holds_over_the_unit_cube_and_is_reached_at_a
                 np.testing.assert_allclose(at[:8].max(axis=0), bound[j], rtol=1e-12, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_the_effects_slope_bound_holds_over_its_box_and_is_reached_at_a_vertex():
     # generated/norm.py effect_slope_bound (_runtime.effect_slope with size |w| + r) against SymPy's own Jacobian of
     # each effect's basis, evaluated at the 8 vertices of the box |z - w| <= r and 50 points inside: never below

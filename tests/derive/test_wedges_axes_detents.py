@@ -97,6 +97,7 @@ def test_diagnose_advises_only_reachable_positions(tmp_path, capsys):
             assert deg in (0, 90, 180, 270)
 
 
+@pytest.mark.slow
 def test_identifiability_on_the_reachable_set(tmp_path):
     """A wedge table with one detent reaches one position: 3 readings, so 3 combinations (not the 9 of
     the free angle), and estimate identifies every one of them there."""

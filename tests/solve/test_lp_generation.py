@@ -18,6 +18,7 @@ def problem():
     return A, z
 
 
+@pytest.mark.slow
 def test_l1_estimators_by_generation_equal_the_full_lp(problem, monkeypatch):
     A, _ = problem
     Phi, err = highs.l1_estimators(A)

@@ -226,6 +226,7 @@ def test_remainder_with_many_positions_equals_the_remainder_position_by_position
     assert rb.max() <= 1.5 * rb_direct.max() and rb_direct.max() <= 1.5 * rb.max()   # as tight, either way
 
 
+@pytest.mark.slow
 def test_a_large_estimate_says_what_it_is_doing(tmp_path, monkeypatch, capsys):
     # Seconds of work are announced on standard error, stage by stage; a small file stays quiet.
     from garant.verify.workflows import estimate as workflow

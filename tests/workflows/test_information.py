@@ -143,7 +143,7 @@ def test_repeated_readings_prove_what_every_row_proves():
     assert np.all(np.abs(q - models.q_of(mod, p)) <= e) and e.max() < 1e-3 * SIGMA, e / SIGMA
 
 
-@pytest.mark.parametrize("model, prior", fast_first([("single-axis", 5e-3), ("single-axis", 1e-4),
+@pytest.mark.parametrize("model, prior", fast_first([("single-axis", 1e-4), ("single-axis", 5e-3),
                                                      ("three-axis", 1.5e-2)]))
 def test_a_stand_under_a_prior_contracts_and_more_readings_never_widen(model, prior):
     # The single-axis stand under --prior 5e-3 printed 1.2e4-4.6e5 sigma on its 12 positions read 3 times, 9,108x
@@ -328,6 +328,7 @@ def test_the_instrument_side_offset_is_no_premise(name, offset):
         assert np.all(np.abs(np.array(r["block"]["Gamma"]) - Gamma) <= np.array(r["block"]["Gamma_bound"]))
 
 
+@pytest.mark.slow
 def test_the_mems_calibration_file_of_the_split_is_as_tight_as_the_q(tmp_path):
     # The target: the MEMS example's calibration file (two-axis, the 30 x 45 grid, --g) has
     # Gamma bounds within 1.5x of the bounds of the q they are made of. Before, the linear split (29) of 000 paid

@@ -49,6 +49,7 @@ def a_priori(r):
     return np.array(list(r["a_priori"]["guaranteed_error"].values()))
 
 
+@pytest.mark.slow
 def test_a_mems_block_through_the_command_is_bounded_with_its_premises(tmp_path):
     # As a user runs it: `garant estimate --g 9.81` on a MEMS block, stand errors of
     # 2e-5 rad, the 30x45 grid, noise at +-sigma: exit 0, every q inside its bound, the premises in the
@@ -146,6 +147,7 @@ PLAN10 = np.array([[0, 0], [0, 180], [180, 90], [180, 270], [90, 90], [270, 90],
                    [90, 0]], float)   # the starred rows of Table 2 of 000
 
 
+@pytest.mark.slow
 def test_a_minimal_plan_says_which_estimators_it_cannot_check(tmp_path, capsys):
     # On the 10-position plan of 000, offsets of 10 sigma shaped like q3's estimator are
     # fitted exactly, so the verdict passes and q3 misses its bound: the output must say that
@@ -292,6 +294,7 @@ def test_the_gap_to_the_literal_q_is_bounded_at_the_vertices():
     assert dataclasses.asdict(prem)["split"]["theta2"] == (5e-3, "stand description")
 
 
+@pytest.mark.slow
 def test_a_turn_about_the_mountings_axis_is_absorbed_where_its_identities_hold():
     # derive/model.py `Turn`: mountings that all turn about one axis n (the three cyclic ones: n = (1,1,1)/sqrt 3)
     # commute with a turn about n, and theta1 joins an instrument-side link about axis 1 with an offset. Both
