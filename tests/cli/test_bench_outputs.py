@@ -50,6 +50,16 @@ def test_a_loosened_bound_or_a_changed_word_fails(tmp_path):
         assert not passed, lines
 
 
+def test_a_ratio_to_a_bound_is_no_bound(tmp_path):
+    # The verdict's worst_over_bound (the worst residual over its interval's bound) grows when a remainder is proven
+    # smaller: not a bound that loosened. Red when a key naming "bound" is read as one whatever it is.
+    before, after = _folders(tmp_path, lambda d: {**d, "worst_over_bound": 0.5 * (1 + 2e-9)})
+    doc = json.loads((before / "r.json").read_text())
+    (before / "r.json").write_text(json.dumps({**doc, "worst_over_bound": 0.5}))
+    lines, passed = compare(before, after)
+    assert passed and lines[1] == "bounds: 0 changed, 0 tighter, 0 looser", lines
+
+
 def test_the_command_exits_1_on_a_loosened_bound(tmp_path):
     before, after = _folders(tmp_path, lambda d: {**d, "guaranteed_error": {"a": 3e-5}})
     run = subprocess.run([sys.executable, "-m", "verify.bench.outputs", "--compare", str(before), str(after)],
