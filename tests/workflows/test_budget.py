@@ -2,8 +2,9 @@
 allows, computed here independently: the error of a still unit's corrected reading at attitude n for a unit q of
 the set from the calibration file's own model (norm_bounds.fold for a norm file: the truth is the fit corrected
 by q, (2.2) of 001; (E + Gamma)^-1 (f - g beta) for a stand's, 000), its derivative by the unknowns by finite
-differences, and its largest value by scipy's LP over the set the file carries, at attitudes and error
-directions of a grid: a lower bound of the set's largest, which the printed figure must not exceed by 1.25x."""
+differences, and its largest value by an LP over the set the file carries (conftest.set_max: HiGHS), at
+attitudes and error directions of a grid: a lower bound of the set's largest, which the printed figure must not
+exceed by 1.25x."""
 import json
 import subprocess
 
@@ -16,23 +17,14 @@ from garant.verify.bench.peer import imu_tk_binary
 from garant.verify.cli import main
 from garant.verify.io import calibration, schemas
 from garant.verify.workflows import budget, norm_bounds, peer_files
-from conftest import G_REAL, REAL, flat, needs_real, warm_truth_readings
+from conftest import G_REAL, REAL, flat, needs_real, set_max, warm_truth_readings
 
 G = 9.81
 
 
 def _sup(st, c, off):
-    """max over the set of off + c^T z (z = x + s; scipy on x over its half-widths, rows over their bound)."""
-    R, s, bd = (np.array(st[k]) for k in ("rows", "centre", "bound"))
-    lo, hi, shift = (np.array(st[k]) for k in ("box_lo", "box_hi", "shift"))
-    xc, dc = (lo + hi) / 2, (hi - lo) / 2
-    cs = c * dc
-    k = max(np.abs(cs).max(), 1e-300)
-    r = linprog(-cs / k, A_ub=np.vstack([R * dc / bd[:, None], -R * dc / bd[:, None]]),
-                b_ub=np.r_[(s - R @ xc) / bd + 1, 1 - (s - R @ xc) / bd], bounds=[(-1, 1)] * len(c), method="highs",
-                options={"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10})
-    assert r.status == 0
-    return off - r.fun * k + c @ xc + np.abs(c) @ shift
+    """max over the set of off + c^T z (z = x + s: conftest.set_max on x, |c|^T shift for s)."""
+    return off + set_max(st, c)[0] + np.abs(c) @ np.asarray(st["shift"], float)
 
 
 def _norm_error(cal):
@@ -446,15 +438,8 @@ def _warm_error(cal):
 
 
 def _argmax(st, c):
-    """A unit of the set (z = x + s) where c^T z is largest (scipy's LP on x, the shift's corner for s)."""
-    R, s, bd = (np.array(st[k]) for k in ("rows", "centre", "bound"))
-    lo, hi, shift = (np.array(st[k]) for k in ("box_lo", "box_hi", "shift"))
-    xc, dc = (lo + hi) / 2, (hi - lo) / 2
-    k = max(np.abs(c * dc).max(), 1e-300)
-    r = linprog(-c * dc / k, A_ub=np.vstack([R * dc / bd[:, None], -R * dc / bd[:, None]]),
-                b_ub=np.r_[(s - R @ xc) / bd + 1, 1 - (s - R @ xc) / bd], bounds=[(-1, 1)] * len(c), method="highs")
-    assert r.status == 0
-    return xc + r.x * dc + np.sign(c) * shift
+    """A unit of the set (z = x + s) where c^T z is largest (conftest.set_max on x, the shift's corner for s)."""
+    return set_max(st, c)[1] + np.sign(c) * np.asarray(st["shift"], float)
 
 
 @pytest.mark.slow

@@ -20,7 +20,7 @@ def test_a_two_axis_file_over_temperature_is_budgeted_over_its_range(tmp_path):
     # the set, M(T) about the range's middle and the rest outward (workflows/budget.py lower_thermal_figures): the
     # unit's own errors at 1,000 random attitudes and temperatures of the range within every figure (in the frame
     # the data define), and each figure within 1.25x of a lower bound of the set's largest (the file's correction of
-    # a unit q differentiated here, scipy's LP, at a grid's attitudes and the range's ends, the tilt's by a local
+    # a unit q differentiated here, HiGHS's LP, at a grid's attitudes and the range's ends, the tilt's by a local
     # ascent from the grid's best). Red with the drift left out of the Models (the control point at t0 alone): the
     # per-axis figures 0.47-0.84x that lower bound (the truth check alone passes: this unit's own errors are small).
     from test_sample_set import lower_jacobian

@@ -1,7 +1,7 @@
 """garant budget of stand files (000): the block's calibration over its set (three-axis), a two-axis file in the frame
 the data define (its q's set, the LQ split's rest outward), constant and over temperature; each figure against the
 truth of a simulated unit and against a lower bound of the largest the information set allows, computed here
-independently (test_budget.py's helpers: the error's derivative by finite differences, scipy's LP over the set)."""
+independently (test_budget.py's helpers: the error's derivative by finite differences, HiGHS's LP over the set)."""
 import json
 
 import numpy as np

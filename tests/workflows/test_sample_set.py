@@ -1,39 +1,26 @@
 """apply's per-sample bound against the largest error the calibration's information set allows at that sample,
 computed here independently: the error's derivative by the correction q from finite differences of the fold
-(norm_bounds.fold: the truth is the fit corrected by some q of the set, (2.2) of 001), its range by scipy's LP
+(norm_bounds.fold: the truth is the fit corrected by some q of the set, (2.2) of 001), its range by HiGHS's LP
 over the set the file carries, scaled so that the solver's tolerances are small against it; with |Delta_g/g| <= u
 the error of g adds u |a_k| (it scales a corrected sample by 1 + d, |d| <= u, independently of q)."""
 import json
 
 import numpy as np
 import pytest
-from scipy.optimize import linprog
 
 from garant.verify.cli import main
 from garant.verify.io import calibration
 from garant.verify.workflows import jobs, norm_bounds, norm_effects, sample_set
-from conftest import flat
+from conftest import flat, set_max
 
 G = 9.81
 
 
 def _set_sup(st, c):
-    """max |c^T (q - q_m)| over the file's set, q = x + s: scipy's LP on x (columns over their half-width, rows over
-    their bound), |c|^T shift for s."""
-    R, s, bd = (np.array(st[k]) for k in ("rows", "centre", "bound"))
-    lo, hi, shift, q_m = (np.array(st[k]) for k in ("box_lo", "box_hi", "shift", "estimate"))
-    xc, dc = (lo + hi) / 2, (hi - lo) / 2
-    Rs, mid = R * dc / bd[:, None], (s - R @ xc) / bd
-    cs = c * dc
-    k = np.abs(cs).max()
-    ends = []
-    for sign in (1.0, -1.0):
-        r = linprog(-sign * cs / k, A_ub=np.vstack([Rs, -Rs]), b_ub=np.r_[mid + 1, 1 - mid], bounds=[(-1, 1)] * len(c),
-                    method="highs", options={"primal_feasibility_tolerance": 1e-10,
-                                             "dual_feasibility_tolerance": 1e-10})
-        assert r.status == 0
-        ends.append(-r.fun * k + sign * c @ (xc - q_m))
-    return max(ends) + np.abs(c) @ shift
+    """max |c^T (q - q_m)| over the file's set, q = x + s: conftest.set_max on x (each sign), |c|^T shift for s."""
+    q_m = np.asarray(st["estimate"], float)
+    return max(set_max(st, sign * c)[0] - sign * c @ q_m for sign in (1.0, -1.0)) + np.abs(c) @ np.asarray(
+        st["shift"], float)
 
 
 def _fold_jacobian(cal, raw, h=1e-7):
@@ -252,7 +239,7 @@ def test_a_two_axis_file_bounds_each_sample_by_the_sup_over_its_set(tmp_path):
     # entries are not linear in q, so its per-sample bound was the box's, (I - B)^-1 (B |a| + bound_bias). The file
     # now carries the set of q and each entry's part linear in q (Gamma_rows: the split's gradient at the estimate),
     # the rest bounded in interval arithmetic (rest_Gamma), and apply bounds each sample's error over the set:
-    # within 1.25x of the sup computed here (`lower_jacobian`, scipy's LP; the error of g, |s - 1| <= u = 1e-5 with
+    # within 1.25x of the sup computed here (`lower_jacobian`, HiGHS's LP; the error of g, |s - 1| <= u = 1e-5 with
     # --g, adds u |a_k|), never below it, at the stand's positions and at random directions (measured 1.00003-
     # 1.015x; the box's was up to 1.9x); the truth inside. Red with rest_Gamma left out: 0.64x.
     from garant.verify import models
@@ -295,7 +282,7 @@ def test_a_symmetric_two_axis_file_bounds_each_sample_by_the_sup_over_its_set(tm
     # A two-axis file with --gamma symmetric carried no set: Gamma = sym(Q G(q) Q^T) ((29) of 000) is linear in q,
     # within what the premises alone set (the split's gap, Delta_beta; physical_bound_premises), and the file now
     # carries the set with those rows; apply bounds each sample over it, the error of g apart (|s - 1| <= u). Against
-    # the sup computed here (the derivative of (E + sym(G(q)))^-1 (f - g q_b) by central differences, scipy's LP
+    # the sup computed here (the derivative of (E + sym(G(q)))^-1 (f - g q_b) by central differences, HiGHS's LP
     # over the set, plus the premises' box |M| P |a| + |M| P_b and u |a|): within 1.25x, never below (measured
     # 1.0012-1.0062; the box's 1.0037-1.041: the premises' part dominates both on a unit of 1e-3). Red with
     # the premises' part left out of rest_Gamma: 0.033x.
@@ -342,7 +329,7 @@ def test_a_stand_file_bounds_each_sample_by_the_sup_over_its_set(tmp_path, model
     # bound of Gamma and the biases: up to several times the largest error the set allows, since the set ties
     # them (a scale factor and its bias along one axis). Now the file carries the block's set (the physical
     # parameters' LP, workflows/block.py) and apply bounds each sample's error over it: within 1.25x of the sup
-    # computed here (the derivative of (E + Gamma)^-1 (f - g beta) by finite differences, scipy's LP over the
+    # computed here (the derivative of (E + Gamma)^-1 (f - g beta) by finite differences, HiGHS's LP over the
     # set's columns), never below it, at the stand's own positions and at random directions; the truth inside.
     from garant.verify import models
     from garant.verify.solve import plans
@@ -424,7 +411,7 @@ def test_a_single_axis_file_over_temperature_bounds_each_sample_by_the_sup_over_
     # apply's bound was the piece's box, (I - B(T))^-1 (B(T) |a| + bound_bias(T)), here up to 6.1x the largest error
     # the set allows. It carries the block's set with each power's columns (block_powers, workflows/thermal_file.py)
     # and apply bounds each sample over it at its own temperature (sample_set.block_thermal_bound): within 1.25x of
-    # the sup computed here (the derivative of (E + Gamma(T))^-1 (f - g beta(T)) by central differences, scipy's LP
+    # the sup computed here (the derivative of (E + Gamma(T))^-1 (f - g beta(T)) by central differences, HiGHS's LP
     # over the set), never below it (measured 1.0002-1.015x); the truth inside at the chamber's readings. Red with
     # the power columns left out of the objectives (below 1).
     from garant.verify import models

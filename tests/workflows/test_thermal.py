@@ -449,7 +449,7 @@ def test_the_thermal_file_is_within_twice_the_constant_file_on_random_chamber_un
 def test_the_thermal_file_bounds_each_sample_by_the_sup_over_its_set(mems):
     """apply's per-sample bound of the thermal file against the largest error its information set allows at that
     sample and temperature, computed here independently (test_sample_set.py `lower_jacobian`: the exact correction
-    of a unit q at T differentiated by central differences; `_set_sup`: scipy's LP over the set); the error of g
+    of a unit q at T differentiated by central differences; `_set_sup`: HiGHS's LP over the set); the error of g
     (|s - 1| <= u = 1e-5 with --g) adds u |a_k|. Within 1.25x of it and never below, at 40 random attitudes and
     temperatures of the range (measured 1.001-1.014x). Red with the rest of each entry (rest_Gamma) left out of the
     bound: 0.75x."""
