@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 
 from garant.verify.workflows.attitudes import grid, stretch
+from conftest import fast_first
 
 
-@pytest.mark.parametrize("side", [3, 6, pytest.param(24, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("side", fast_first([3, 6, 24], 2))
 def test_every_unit_vector_is_a_point_of_a_grid_triangles_hull_stretched_by_at_most_stretch(side):
     # Per axis and |e| are convex in n for a calibration without catalogue effects, so over the hull of a grid
     # triangle they are at most their largest at its corners; a unit vector n is t m with m in that hull and t =
